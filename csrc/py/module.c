@@ -1,0 +1,35 @@
+/* mechpy._core: module init.  Merges the per-topic method tables, turns
+ * GSL's abort-by-default error handler off, creates the exception classes. */
+#define MP_PY_MODULE_C
+#include "mp_py.h"
+
+#include <gsl/gsl_errno.h>
+#include <gsl/gsl_version.h>
+
+static struct PyModuleDef mp_core_module = {
+    PyModuleDef_HEAD_INIT, "mechpy._core",
+    "mechpy's C core (integrators, scenes, inertia, rotations, normal modes).", -1, NULL,
+};
+
+PyMODINIT_FUNC PyInit__core(void)
+{
+    PyMethodDef *tables[] = {
+        mp_py_ode_methods, mp_py_scene_methods, mp_py_inertia_methods,
+        mp_py_rotation_methods, mp_py_modes_methods,
+    };
+    import_array();
+    /* GSL must never abort the interpreter: every GSL status is checked. */
+    gsl_set_error_handler_off();
+
+    PyObject *m = PyModule_Create(&mp_core_module);
+    if (!m) return NULL;
+    for (size_t i = 0; i < sizeof tables / sizeof tables[0]; i++) {
+        if (PyModule_AddFunctions(m, tables[i]) < 0) goto fail;
+    }
+    if (mp_py_errors_init(m) < 0) goto fail;
+    if (PyModule_AddStringConstant(m, "gsl_version", GSL_VERSION) < 0) goto fail;
+    return m;
+fail:
+    Py_DECREF(m);
+    return NULL;
+}

@@ -1,0 +1,10 @@
+"""mechpy: classical mechanics with a fast C core.
+
+``import mechpy as mp``; see ``mp.solve``, ``mp.scenes``, ``mp.inertia``,
+``mp.stress``, ``mp.rotation``, ``mp.modes``.
+"""
+from . import _core
+from .errors import *  # noqa: F401,F403
+from . import inertia, modes, rotation, stress  # noqa: F401
+
+__version__ = "0.1.0"

@@ -1,0 +1,122 @@
+"""Argument validation: one helper per concern, shared by every module.
+
+Each helper names the argument in its message and says what was expected.
+Non-numeric input is a ``TypeError``; wrong shapes, non-finite values and
+out-of-domain numbers are ``ValueError``.  Results are C-contiguous float64
+arrays, ready to hand to the C core.
+"""
+from __future__ import annotations
+
+import numbers
+import operator
+
+import numpy as np
+
+__all__ = ["as_array", "as_scalar", "as_int", "as_vector3", "as_symmetric", "as_square"]
+
+
+def as_array(x, name: str, *, ndim=None, shape=None, min_ndim=None, finite=True,
+             positive=False, nonnegative=False, allow_empty=False) -> np.ndarray:
+    """Convert *x* to a C-contiguous float64 array and check it.
+
+    ``shape`` may contain ``None`` (any length) and ``-1`` entries are not
+    used; ``ndim`` fixes the number of dimensions, ``min_ndim`` bounds it.
+    """
+    if isinstance(x, (str, bytes)) or x is None:
+        raise TypeError(f"{name} must be a real numeric array, got {type(x).__name__}")
+    try:
+        a = np.asarray(x)
+    except Exception as exc:  # ragged sequences and the like
+        raise ValueError(f"{name} must be a rectangular numeric array ({exc})") from None
+    if a.dtype == object:
+        raise TypeError(f"{name} must be a real numeric array, got objects "
+                        "(a ragged or non-numeric sequence)")
+    if a.dtype.kind not in "biuf":
+        raise TypeError(f"{name} must be a real numeric array, got dtype {a.dtype}")
+    a = np.ascontiguousarray(a, dtype=np.float64)
+    if ndim is not None and a.ndim != ndim:
+        raise ValueError(f"{name} must have {ndim} dimension(s), got shape {a.shape}")
+    if min_ndim is not None and a.ndim < min_ndim:
+        raise ValueError(f"{name} must have at least {min_ndim} dimension(s), got shape {a.shape}")
+    if shape is not None:
+        ok = a.ndim == len(shape) and all(s is None or s == d for s, d in zip(shape, a.shape))
+        if not ok:
+            want = "(" + ", ".join("n" if s is None else str(s) for s in shape) + ")"
+            raise ValueError(f"{name} must have shape {want}, got {a.shape}")
+    if not allow_empty and a.size == 0:
+        raise ValueError(f"{name} must not be empty")
+    if finite and not np.all(np.isfinite(a)):
+        raise ValueError(f"{name} must be finite (it contains NaN or inf)")
+    if positive and not np.all(a > 0):
+        raise ValueError(f"{name} must be positive")
+    if nonnegative and not np.all(a >= 0):
+        raise ValueError(f"{name} must be non-negative")
+    return a
+
+
+def as_scalar(x, name: str, *, positive=False, nonnegative=False, finite=True,
+              lo=None, hi=None) -> float:
+    """A real number, checked (bools are refused)."""
+    if isinstance(x, (bool, np.bool_)) or not isinstance(x, (numbers.Real, np.ndarray)):
+        raise TypeError(f"{name} must be a real number, got {type(x).__name__}")
+    if isinstance(x, np.ndarray):
+        if x.ndim != 0 or x.dtype.kind not in "iuf":
+            raise TypeError(f"{name} must be a real scalar, got an array of shape {x.shape}")
+    v = float(x)
+    if finite and not np.isfinite(v):
+        raise ValueError(f"{name} must be finite, got {v}")
+    if positive and not v > 0:
+        raise ValueError(f"{name} must be positive, got {v}")
+    if nonnegative and not v >= 0:
+        raise ValueError(f"{name} must be non-negative, got {v}")
+    if lo is not None and v < lo:
+        raise ValueError(f"{name} must be >= {lo}, got {v}")
+    if hi is not None and v > hi:
+        raise ValueError(f"{name} must be <= {hi}, got {v}")
+    return v
+
+
+def as_int(x, name: str, *, minimum=None, maximum=None) -> int:
+    """An integer (numpy integers accepted, floats and bools refused)."""
+    if isinstance(x, (bool, np.bool_)):
+        raise TypeError(f"{name} must be an integer, got bool")
+    try:
+        v = operator.index(x)
+    except TypeError:
+        raise TypeError(f"{name} must be an integer, got {type(x).__name__}") from None
+    if minimum is not None and v < minimum:
+        raise ValueError(f"{name} must be >= {minimum}, got {v}")
+    if maximum is not None and v > maximum:
+        raise ValueError(f"{name} must be <= {maximum}, got {v}")
+    return v
+
+
+def as_vector3(x, name: str, **kw) -> np.ndarray:
+    """A 3-vector or a stack of them (..., 3)."""
+    a = as_array(x, name, min_ndim=1, **kw)
+    if a.shape[-1] != 3:
+        raise ValueError(f"{name} must have a last axis of length 3, got shape {a.shape}")
+    return a
+
+
+def as_square(x, name: str, *, n=None, batch=False, **kw) -> np.ndarray:
+    """A square matrix (n, n), or a stack (..., n, n) when ``batch``."""
+    a = as_array(x, name, min_ndim=2, **kw)
+    if (not batch and a.ndim != 2) or a.shape[-1] != a.shape[-2]:
+        raise ValueError(f"{name} must be a square matrix{' stack' if batch else ''}, "
+                         f"got shape {a.shape}")
+    if n is not None and a.shape[-1] != n:
+        raise ValueError(f"{name} must be {n}x{n}, got shape {a.shape}")
+    return a
+
+
+def as_symmetric(x, name: str, *, rtol=1e-10, atol=0.0, batch=False, **kw) -> np.ndarray:
+    """A symmetric matrix (or stack): asymmetry beyond ``rtol * max|A| + atol``
+    is an error; the result is exactly symmetrised."""
+    a = as_square(x, name, batch=batch, **kw)
+    at = np.swapaxes(a, -1, -2)
+    scale = np.max(np.abs(a)) if a.size else 0.0
+    if np.any(np.abs(a - at) > rtol * scale + atol):
+        raise ValueError(f"{name} must be symmetric (max |A - A^T| = "
+                         f"{float(np.max(np.abs(a - at))):.3g})")
+    return np.ascontiguousarray(0.5 * (a + at))

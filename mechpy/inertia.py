@@ -1,0 +1,1 @@
+"""mechpy.inertia (being built)."""

@@ -1,0 +1,1 @@
+"""mechpy.modes (being built)."""

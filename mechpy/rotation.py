@@ -1,0 +1,1 @@
+"""mechpy.rotation (being built)."""

@@ -1,0 +1,1 @@
+"""mechpy.stress (being built)."""
