@@ -1,10 +1,12 @@
 """mechpy: classical mechanics with a fast C core.
 
-``import mechpy as mp``; see ``mp.solve``, ``mp.scenes``, ``mp.inertia``,
-``mp.stress``, ``mp.rotation``, ``mp.modes``.
+``import mechpy as mp``: ``mp.solve``, ``mp.methods``, ``mp.scenes``,
+``mp.inertia``, ``mp.stress``, ``mp.rotation``, ``mp.modes``.
 """
 from . import _core
 from .errors import *  # noqa: F401,F403
+from . import integrate, scenes  # noqa: F401
 from . import inertia, modes, rotation, stress  # noqa: F401
+from .integrate import DenseOutput, Solution, methods, solve  # noqa: F401
 
 __version__ = "0.1.0"

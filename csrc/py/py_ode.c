@@ -1,6 +1,439 @@
-/* Binding for the integrator engine. */
+/* Binding for the integrator engine: system adapters (C scene, Python
+ * callable, C callback), argument conversion, result building.  The one
+ * callback adapter through which C calls Python lives here. */
 #include "mp_py.h"
 
+#include <math.h>
+#include <string.h>
+
+#include "models/models.h"
+#include "ode/ode.h"
+
+/* ---- Python callables (called with the GIL held) -------------------------- */
+
+typedef struct {
+    PyObject *fun;    /* borrowed: alive for the whole call */
+    PyObject *args;   /* tuple of extra arguments (borrowed) */
+    size_t n;         /* length of y */
+    size_t nout;      /* expected number of outputs */
+    const char *name; /* for messages: "fun", "jac", "events[0]" */
+} py_fn;
+
+/* Call fun(t, y, *args) and copy its float64 result (nout values) to out. */
+static int py_call(const py_fn *c, double t, const double *y, double *out)
+{
+    npy_intp dim = (npy_intp)c->n;
+    Py_ssize_t na = PyTuple_GET_SIZE(c->args);
+    PyObject *ya = PyArray_SimpleNew(1, &dim, NPY_DOUBLE);
+    if (!ya) return MP_ECALLBACK;
+    memcpy(PyArray_DATA((PyArrayObject *)ya), y, c->n * sizeof(double));
+    PyObject *targs = PyTuple_New(2 + na);
+    if (!targs) {
+        Py_DECREF(ya);
+        return MP_ECALLBACK;
+    }
+    PyTuple_SET_ITEM(targs, 0, PyFloat_FromDouble(t));
+    PyTuple_SET_ITEM(targs, 1, ya);
+    for (Py_ssize_t i = 0; i < na; i++) {
+        PyObject *a = PyTuple_GET_ITEM(c->args, i);
+        Py_INCREF(a);
+        PyTuple_SET_ITEM(targs, 2 + i, a);
+    }
+    PyObject *res = PyObject_Call(c->fun, targs, NULL);
+    Py_DECREF(targs);
+    if (!res) return MP_ECALLBACK;
+    if (c->nout == 1 && PyFloat_Check(res)) { /* an event function's scalar */
+        out[0] = PyFloat_AS_DOUBLE(res);
+        Py_DECREF(res);
+        return MP_OK;
+    }
+    PyArrayObject *ra = (PyArrayObject *)PyArray_FROM_OTF(res, NPY_DOUBLE, NPY_ARRAY_IN_ARRAY);
+    Py_DECREF(res);
+    if (!ra) {
+        PyErr_Clear();
+        PyErr_Format(PyExc_TypeError, "%s must return real numbers", c->name);
+        return MP_ECALLBACK;
+    }
+    if ((size_t)PyArray_SIZE(ra) != c->nout) {
+        PyObject *shape = PyObject_GetAttrString((PyObject *)ra, "shape");
+        PyErr_Format(PyExc_ValueError, "%s returned shape %R; expected %zu value(s)", c->name,
+                     shape ? shape : Py_None, c->nout);
+        Py_XDECREF(shape);
+        Py_DECREF(ra);
+        return MP_ECALLBACK;
+    }
+    memcpy(out, PyArray_DATA(ra), c->nout * sizeof(double));
+    Py_DECREF(ra);
+    return MP_OK;
+}
+
+static int py_rhs(double t, const double *y, double *dydt, void *data)
+{
+    return py_call((const py_fn *)data, t, y, dydt);
+}
+
+typedef struct {
+    mp_ode_problem inner; /* the system's own rhs (scene, callback or Python) */
+    py_fn jac;
+} py_with_jac;
+
+static int py_jac_rhs(double t, const double *y, double *dydt, void *data)
+{
+    const py_with_jac *w = data;
+    return w->inner.rhs(t, y, dydt, w->inner.data);
+}
+
+static int py_jac(double t, const double *y, double *J, void *data)
+{
+    return py_call(&((const py_with_jac *)data)->jac, t, y, J);
+}
+
+typedef struct {
+    py_fn *fns;
+    size_t count;
+} py_events;
+
+static int py_events_eval(double t, const double *y, double *g, void *data)
+{
+    const py_events *e = data;
+    for (size_t k = 0; k < e->count; k++) {
+        int rc = py_call(&e->fns[k], t, y, &g[k]);
+        if (rc != MP_OK) return rc;
+    }
+    return MP_OK;
+}
+
+/* ---- C callbacks: void f(double t, const double *y, double *dydt, void *ud) -- */
+
+typedef void (*mp_c_rhs_fn)(double, const double *, double *, void *);
+typedef struct {
+    mp_c_rhs_fn f;
+    void *user_data;
+} c_fn;
+
+static int c_rhs(double t, const double *y, double *dydt, void *data)
+{
+    const c_fn *c = data;
+    c->f(t, y, dydt, c->user_data);
+    return MP_OK;
+}
+
+/* ---- a system described by the Python layer --------------------------------
+ * ("scene", name, params) | ("python", fun, args) | ("cfunc", address, user_data) */
+
+typedef struct {
+    mp_ode_problem prob;
+    int holds_python;         /* calls Python: keep the GIL */
+    PyArrayObject *params;    /* scene parameters (owned) */
+    py_fn fn;
+    c_fn cfn;
+} py_system;
+
+static void py_system_clear(py_system *s) { Py_CLEAR(s->params); }
+
+static int py_system_parse(PyObject *spec, size_t n, py_system *s)
+{
+    const char *kind;
+    PyObject *a, *b;
+    memset(s, 0, sizeof *s);
+    if (!PyArg_ParseTuple(spec, "sOO", &kind, &a, &b)) return -1;
+    s->prob.n = n;
+    if (strcmp(kind, "scene") == 0) {
+        const char *name = PyUnicode_AsUTF8(a);
+        if (!name) return -1;
+        const mp_model *m = mp_model_find(name);
+        if (!m) {
+            PyErr_Format(PyExc_ValueError, "unknown scene %s", name);
+            return -1;
+        }
+        s->params = mp_py_array(b, "scene parameters", 1);
+        if (!s->params) return -1;
+        if ((size_t)PyArray_SIZE(s->params) != m->nparams ||
+            m->check(PyArray_DATA(s->params)) != MP_OK) {
+            mp_py_raise(MP_EDOM, "scene parameters");
+            return -1;
+        }
+        if (m->dim != n) {
+            PyErr_Format(PyExc_ValueError, "y0 must have %zu values for %s, got %zu", m->dim,
+                         m->name, n);
+            return -1;
+        }
+        m->bind(PyArray_DATA(s->params), &s->prob);
+    } else if (strcmp(kind, "python") == 0) {
+        if (!PyCallable_Check(a) || !PyTuple_Check(b)) {
+            PyErr_SetString(PyExc_TypeError, "system must be callable and args a tuple");
+            return -1;
+        }
+        s->fn = (py_fn){a, b, n, n, "fun"};
+        s->prob.rhs = py_rhs;
+        s->prob.data = &s->fn;
+        s->holds_python = 1;
+    } else if (strcmp(kind, "cfunc") == 0) {
+        void *addr = PyLong_AsVoidPtr(a);
+        if (!addr && PyErr_Occurred()) return -1;
+        void *ud = b == Py_None ? NULL : PyLong_AsVoidPtr(b);
+        if (PyErr_Occurred()) return -1;
+        if (!addr) {
+            PyErr_SetString(PyExc_ValueError, "C callback address is NULL");
+            return -1;
+        }
+        /* A data pointer converted to a function pointer: the one place this
+         * is done, for callbacks handed over as addresses. */
+        *(void **)&s->cfn.f = addr;
+        s->cfn.user_data = ud;
+        s->prob.rhs = c_rhs;
+        s->prob.data = &s->cfn;
+    } else {
+        PyErr_Format(PyExc_ValueError, "unknown system kind %s", kind);
+        return -1;
+    }
+    return 0;
+}
+
+/* ---- results ---------------------------------------------------------------- */
+
+static PyObject *array_from(const double *src, int nd, const npy_intp *shape)
+{
+    PyArrayObject *a = mp_py_empty(nd, shape);
+    if (!a) return NULL;
+    npy_intp sz = PyArray_SIZE(a);
+    if (sz) memcpy(PyArray_DATA(a), src, (size_t)sz * sizeof(double));
+    return (PyObject *)a;
+}
+
+static PyObject *result_to_python(const mp_ode_result *r, int dense)
+{
+    npy_intp n = (npy_intp)r->n, m = (npy_intp)r->m;
+    npy_intp s1[1] = {m}, s2[2] = {m, n};
+    PyObject *t = array_from(r->t, 1, s1), *y = array_from(r->y, 2, s2);
+    PyObject *den = NULL, *ev = NULL, *out = NULL;
+    if (!t || !y) goto fail;
+    if (dense && r->nseg) {
+        npy_intp ns[1] = {(npy_intp)r->nseg}, cs[3] = {(npy_intp)r->nseg, (npy_intp)r->ncoef, n};
+        PyObject *st = array_from(r->seg_t, 1, ns), *sh = array_from(r->seg_h, 1, ns),
+                 *sc = array_from(r->seg_c, 3, cs);
+        den = (st && sh && sc) ? Py_BuildValue("(NNN)", st, sh, sc) : NULL;
+        if (!den) {
+            Py_XDECREF(st);
+            Py_XDECREF(sh);
+            Py_XDECREF(sc);
+            goto fail;
+        }
+    } else {
+        den = Py_NewRef(Py_None);
+    }
+    ev = PyList_New((Py_ssize_t)r->n_events);
+    if (!ev) goto fail;
+    for (size_t k = 0; k < r->n_events; k++) {
+        npy_intp c = (npy_intp)r->ev_count[k];
+        npy_intp e1[1] = {c}, e2[2] = {c, n};
+        PyObject *et = array_from(r->ev_t[k], 1, e1), *ey = array_from(r->ev_y[k], 2, e2);
+        PyObject *pair = (et && ey) ? Py_BuildValue("(NN)", et, ey) : NULL;
+        if (!pair) {
+            Py_XDECREF(et);
+            Py_XDECREF(ey);
+            goto fail;
+        }
+        PyList_SET_ITEM(ev, (Py_ssize_t)k, pair);
+    }
+    out = Py_BuildValue("{s:i,s:i,s:d,s:N,s:N,s:l,s:l,s:l,s:l,s:l,s:N,s:N}", "status", r->status,
+                        "terminated", r->terminated, "t_fail", r->t_fail, "t", t, "y", y,
+                        "nfev", r->nfev, "njev", r->njev, "nlu", r->nlu, "nsteps", r->nsteps,
+                        "nreject", r->nreject, "dense", den, "events", ev);
+    return out;
+fail:
+    Py_XDECREF(t);
+    Py_XDECREF(y);
+    Py_XDECREF(den);
+    Py_XDECREF(ev);
+    return NULL;
+}
+
+/* ---- ode_solve ------------------------------------------------------------ */
+
+static PyObject *py_ode_solve(PyObject *self, PyObject *args, PyObject *kw)
+{
+    (void)self;
+    static char *kwlist[] = {"method", "system", "t0", "tf", "y0", "rtol", "atol", "t_eval",
+                             "dense", "events", "terminal", "direction", "args", "jac", "h",
+                             "first_step", "max_step", "max_steps", NULL};
+    const char *mname;
+    PyObject *spec, *y0o, *atolo, *tevo, *evo, *termo, *diro, *eargs, *jaco;
+    double t0, tf, rtol, h, first_step, max_step;
+    int dense;
+    long max_steps;
+    if (!PyArg_ParseTupleAndKeywords(args, kw, "sOddOdOOpOOOOOdddl", kwlist, &mname, &spec, &t0,
+                                     &tf, &y0o, &rtol, &atolo, &tevo, &dense, &evo, &termo, &diro,
+                                     &eargs, &jaco, &h, &first_step, &max_step, &max_steps))
+        return NULL;
+    const mp_ode_method *m = mp_ode_method_find(mname);
+    if (!m) {
+        PyErr_Format(PyExc_ValueError, "unknown method %s", mname);
+        return NULL;
+    }
+    PyArrayObject *y0 = NULL, *atol = NULL, *tev = NULL, *term = NULL, *dir = NULL;
+    PyObject *result = NULL;
+    py_system sys;
+    py_with_jac wj;
+    py_events pe = {NULL, 0};
+    int *iterm = NULL, *idir = NULL;
+    memset(&sys, 0, sizeof sys);
+
+    y0 = mp_py_array(y0o, "y0", 1);
+    if (!y0) goto out;
+    size_t n = (size_t)PyArray_SIZE(y0);
+    atol = mp_py_array(atolo, "atol", 1);
+    if (!atol) goto out;
+    if ((size_t)PyArray_SIZE(atol) != n) {
+        PyErr_SetString(PyExc_ValueError, "atol must be a scalar or have one value per state");
+        goto out;
+    }
+    if (tevo != Py_None && !(tev = mp_py_array(tevo, "t_eval", 1))) goto out;
+    if (py_system_parse(spec, n, &sys) < 0) goto out;
+    mp_ode_problem prob = sys.prob;
+    int holds_python = sys.holds_python;
+    if (jaco != Py_None) {
+        wj.inner = sys.prob;
+        wj.jac = (py_fn){jaco, eargs, n, n * n, "jac"};
+        prob.rhs = py_jac_rhs;
+        prob.jac = py_jac;
+        prob.data = &wj;
+        holds_python = 1;
+    }
+    mp_ode_options o;
+    memset(&o, 0, sizeof o);
+    o.rtol = rtol;
+    o.atol = PyArray_DATA(atol);
+    o.first_step = first_step;
+    o.max_step = max_step;
+    o.h = h;
+    o.max_steps = max_steps;
+    o.t_eval = tev ? PyArray_DATA(tev) : NULL;
+    o.n_eval = tev ? (size_t)PyArray_SIZE(tev) : 0;
+    o.dense = dense;
+    o.interrupt = mp_py_check_interrupt;
+    if (evo != Py_None) {
+        Py_ssize_t ne = PyList_Size(evo);
+        if (ne < 0) goto out;
+        if (ne > 0) {
+            term = (PyArrayObject *)PyArray_FROMANY(termo, NPY_INT, 1, 1, NPY_ARRAY_IN_ARRAY);
+            dir = (PyArrayObject *)PyArray_FROMANY(diro, NPY_INT, 1, 1, NPY_ARRAY_IN_ARRAY);
+            pe.fns = PyMem_Calloc((size_t)ne, sizeof(py_fn));
+            if (!term || !dir || !pe.fns) {
+                if (!PyErr_Occurred()) PyErr_NoMemory();
+                goto out;
+            }
+            if (PyArray_SIZE(term) != ne || PyArray_SIZE(dir) != ne) {
+                PyErr_SetString(PyExc_ValueError, "terminal and direction need one value per event");
+                goto out;
+            }
+            for (Py_ssize_t k = 0; k < ne; k++)
+                pe.fns[k] = (py_fn){PyList_GET_ITEM(evo, k), eargs, n, 1, "event function"};
+            pe.count = (size_t)ne;
+            o.n_events = (size_t)ne;
+            o.events = py_events_eval;
+            o.events_data = &pe;
+            iterm = PyArray_DATA(term);
+            idir = PyArray_DATA(dir);
+            o.terminal = iterm;
+            o.direction = idir;
+            holds_python = 1;
+        }
+    }
+
+    mp_ode_result r;
+    int rc;
+    if (holds_python) {
+        rc = mp_ode_solve(m, &prob, t0, tf, PyArray_DATA(y0), &o, &r);
+    } else {
+        Py_BEGIN_ALLOW_THREADS
+        rc = mp_ode_solve(m, &prob, t0, tf, PyArray_DATA(y0), &o, &r);
+        Py_END_ALLOW_THREADS
+    }
+    if (rc == MP_OK || rc == MP_EMAXSTEPS || rc == MP_ESTEP) {
+        result = result_to_python(&r, dense);
+    } else if (rc == MP_ENONFINITE) {
+        char detail[64];
+        snprintf(detail, sizeof detail, "near t = %.17g", r.t_fail);
+        mp_py_raise_detail(rc, "solve: the right-hand side or an event function", detail);
+    } else {
+        mp_py_raise(rc, "solve");
+    }
+    mp_ode_result_free(&r);
+out:
+    py_system_clear(&sys);
+    PyMem_Free(pe.fns);
+    Py_XDECREF(y0);
+    Py_XDECREF(atol);
+    Py_XDECREF(tev);
+    Py_XDECREF(term);
+    Py_XDECREF(dir);
+    return result;
+}
+
+static PyObject *py_ode_dense_eval(PyObject *self, PyObject *args)
+{
+    (void)self;
+    PyObject *sto, *sho, *sco, *tqo;
+    if (!PyArg_ParseTuple(args, "OOOO", &sto, &sho, &sco, &tqo)) return NULL;
+    PyArrayObject *st = mp_py_array(sto, "seg_t", 1), *sh = mp_py_array(sho, "seg_h", 1),
+                  *sc = mp_py_array(sco, "seg_c", 3), *tq = mp_py_array(tqo, "t", 1);
+    PyArrayObject *out = NULL;
+    if (!st || !sh || !sc || !tq) goto done;
+    npy_intp nseg = PyArray_DIM(sc, 0), ncoef = PyArray_DIM(sc, 1), n = PyArray_DIM(sc, 2);
+    if (PyArray_SIZE(st) != nseg || PyArray_SIZE(sh) != nseg || nseg == 0) {
+        PyErr_SetString(PyExc_ValueError, "inconsistent dense output segments");
+        goto done;
+    }
+    npy_intp shape[2] = {PyArray_SIZE(tq), n};
+    out = mp_py_empty(2, shape);
+    if (!out) goto done;
+    int rc;
+    Py_BEGIN_ALLOW_THREADS
+    rc = mp_ode_result_dense_eval((size_t)n, (size_t)ncoef, (size_t)nseg, PyArray_DATA(st),
+                                  PyArray_DATA(sh), PyArray_DATA(sc), PyArray_DATA(tq),
+                                  (size_t)shape[0], PyArray_DATA(out));
+    Py_END_ALLOW_THREADS
+    if (rc != MP_OK) {
+        Py_CLEAR(out);
+        mp_py_raise(rc, "dense output: t must be finite");
+    }
+done:
+    Py_XDECREF(st);
+    Py_XDECREF(sh);
+    Py_XDECREF(sc);
+    Py_XDECREF(tq);
+    return (PyObject *)out;
+}
+
+static PyObject *py_ode_methods(PyObject *self, PyObject *unused)
+{
+    (void)self;
+    (void)unused;
+    PyObject *lst = PyList_New(0);
+    if (!lst) return NULL;
+    for (size_t i = 0; mp_ode_methods[i]; i++) {
+        const mp_ode_method *m = mp_ode_methods[i];
+        PyObject *d = Py_BuildValue(
+            "{s:s,s:i,s:O,s:O,s:O,s:O,s:i}", "name", m->name, "order", m->order, "adaptive",
+            m->adaptive ? Py_True : Py_False, "implicit", m->implicit ? Py_True : Py_False,
+            "symplectic", m->symplectic ? Py_True : Py_False, "needs_jacobian",
+            m->needs_jacobian ? Py_True : Py_False, "dense_output", m->dense_order);
+        if (!d || PyList_Append(lst, d) < 0) {
+            Py_XDECREF(d);
+            Py_DECREF(lst);
+            return NULL;
+        }
+        Py_DECREF(d);
+    }
+    return lst;
+}
+
 PyMethodDef mp_py_ode_methods[] = {
+    {"ode_solve", (PyCFunction)(void (*)(void))py_ode_solve, METH_VARARGS | METH_KEYWORDS,
+     "Integrate an ODE system (internal; use mechpy.solve)."},
+    {"ode_dense_eval", py_ode_dense_eval, METH_VARARGS,
+     "Evaluate stored dense output (internal)."},
+    {"ode_methods", py_ode_methods, METH_NOARGS, "The method table (internal)."},
     {NULL, NULL, 0, NULL},
 };

@@ -1,6 +1,91 @@
-/* Binding for the scene models (right-hand sides, Jacobians, energies). */
+/* Binding for the scene models: their table, and vectorised evaluation of
+ * right-hand side, Jacobian and energy over many states. */
 #include "mp_py.h"
 
+#include <string.h>
+
+#include "models/models.h"
+
+static const mp_model *find_model(const char *name)
+{
+    const mp_model *m = mp_model_find(name);
+    if (!m) PyErr_Format(PyExc_ValueError, "unknown scene %s", name);
+    return m;
+}
+
+static PyObject *py_scene_info(PyObject *self, PyObject *args)
+{
+    (void)self;
+    const char *name;
+    if (!PyArg_ParseTuple(args, "s", &name)) return NULL;
+    const mp_model *m = find_model(name);
+    if (!m) return NULL;
+    PyObject *names = PyTuple_New((Py_ssize_t)m->nparams);
+    if (!names) return NULL;
+    for (size_t i = 0; i < m->nparams; i++) {
+        PyObject *s = PyUnicode_FromString(m->param_names[i]);
+        if (!s) {
+            Py_DECREF(names);
+            return NULL;
+        }
+        PyTuple_SET_ITEM(names, (Py_ssize_t)i, s);
+    }
+    return Py_BuildValue("{s:n,s:N}", "dim", (Py_ssize_t)m->dim, "params", names);
+}
+
+/* scene_eval(name, params, what, t, Y) with Y of shape (m, dim):
+ * what = "rhs" -> (m, dim), "jac" -> (m, dim, dim), "energy" -> (m,) */
+static PyObject *py_scene_eval(PyObject *self, PyObject *args)
+{
+    (void)self;
+    const char *name, *what;
+    PyObject *po, *yo;
+    double t;
+    if (!PyArg_ParseTuple(args, "sOsdO", &name, &po, &what, &t, &yo)) return NULL;
+    const mp_model *m = find_model(name);
+    if (!m) return NULL;
+    PyArrayObject *p = mp_py_array(po, "params", 1), *y = NULL, *out = NULL;
+    if (!p) return NULL;
+    if ((size_t)PyArray_SIZE(p) != m->nparams || m->check(PyArray_DATA(p)) != MP_OK) {
+        mp_py_raise(MP_EDOM, "scene parameters");
+        goto done;
+    }
+    if (!(y = mp_py_array(yo, "y", 2))) goto done;
+    npy_intp cnt = PyArray_DIM(y, 0), d = (npy_intp)m->dim;
+    if (PyArray_DIM(y, 1) != d) {
+        PyErr_Format(PyExc_ValueError, "y must have %zd components for %s, got %zd", (Py_ssize_t)d,
+                     m->name, (Py_ssize_t)PyArray_DIM(y, 1));
+        goto done;
+    }
+    int kind = strcmp(what, "rhs") == 0 ? 0 : strcmp(what, "jac") == 0 ? 1
+             : strcmp(what, "energy") == 0 ? 2 : -1;
+    if (kind < 0) {
+        PyErr_Format(PyExc_ValueError, "unknown evaluation %s", what);
+        goto done;
+    }
+    npy_intp shape[3] = {cnt, d, d};
+    out = mp_py_empty(kind == 2 ? 1 : kind + 2, shape);
+    if (!out) goto done;
+    const double *pp = PyArray_DATA(p), *yy = PyArray_DATA(y);
+    double *oo = PyArray_DATA(out);
+    mp_ode_problem prob;
+    m->bind(pp, &prob);
+    Py_BEGIN_ALLOW_THREADS
+    for (npy_intp i = 0; i < cnt; i++) {
+        const double *yi = yy + i * d;
+        if (kind == 0) prob.rhs(t, yi, oo + i * d, prob.data);
+        else if (kind == 1) prob.jac(t, yi, oo + i * d * d, prob.data);
+        else oo[i] = m->energy(pp, yi);
+    }
+    Py_END_ALLOW_THREADS
+done:
+    Py_XDECREF(p);
+    Py_XDECREF(y);
+    return (PyObject *)out;
+}
+
 PyMethodDef mp_py_scene_methods[] = {
+    {"scene_info", py_scene_info, METH_VARARGS, "Dimension and parameter names of a scene."},
+    {"scene_eval", py_scene_eval, METH_VARARGS, "Evaluate a scene over many states (internal)."},
     {NULL, NULL, 0, NULL},
 };

@@ -1,0 +1,17 @@
+/* The scene table. */
+#include "models/models.h"
+
+#include <string.h>
+
+extern const mp_model mp_model_pendulum, mp_model_vanderpol, mp_model_duffing;
+
+const mp_model *const mp_models[] = {
+    &mp_model_pendulum, &mp_model_vanderpol, &mp_model_duffing, NULL,
+};
+
+const mp_model *mp_model_find(const char *name)
+{
+    for (size_t i = 0; mp_models[i]; i++)
+        if (strcmp(mp_models[i]->name, name) == 0) return mp_models[i];
+    return NULL;
+}

@@ -1,0 +1,147 @@
+/* mechpy integrator engine: one problem type, one driver loop, a table of methods.
+ *
+ * A method is one `const mp_ode_method` row (REBOUND's integrator table):
+ * adding a method is adding one file and one row in methods.c, never another
+ * copy of the driver loop (driver.c).  Workspaces are allocated once per solve
+ * and freed on every path; nothing here is global and mutable. */
+#ifndef MP_ODE_H
+#define MP_ODE_H
+
+#include <stddef.h>
+
+#include "mp_status.h"
+
+/* Right-hand side dy/dt = f(t, y).  Returns MP_OK or a status that stops the
+ * solve (MP_ECALLBACK when a user callback failed, ...). */
+typedef int (*mp_ode_rhs)(double t, const double *y, double *dydt, void *data);
+/* Jacobian df/dy, row-major n x n: jac[i*n + j] = d f_i / d y_j. */
+typedef int (*mp_ode_jac)(double t, const double *y, double *jac, void *data);
+/* All event functions at once: g[k] = g_k(t, y). */
+typedef int (*mp_ode_events)(double t, const double *y, double *g, void *data);
+/* Interrupt check, called every few hundred steps; non-zero stops the solve. */
+typedef int (*mp_ode_interrupt)(void *ctx);
+
+typedef struct mp_ode_problem {
+    size_t n;         /* dimension */
+    mp_ode_rhs rhs;
+    mp_ode_jac jac;   /* optional: NULL means finite differences where needed */
+    void *data;       /* handed to rhs and jac */
+} mp_ode_problem;
+
+typedef struct mp_ode_options {
+    double rtol;              /* > 0 */
+    const double *atol;       /* n values >= 0 */
+    double first_step;        /* 0: Hairer's automatic guess */
+    double max_step;          /* may be inf */
+    double h;                 /* step of fixed-step methods */
+    long max_steps;           /* budget of attempted steps */
+    const double *t_eval;     /* increasing, inside [t0, tf], or NULL */
+    size_t n_eval;
+    int dense;                /* keep every step's interpolant */
+    size_t n_events;
+    mp_ode_events events;
+    void *events_data;
+    const int *terminal;      /* per event: 0 never, k > 0 stop at the k-th occurrence */
+    const int *direction;     /* per event: -1, 0, +1 (SciPy's meaning) */
+    mp_ode_interrupt interrupt;
+    void *interrupt_ctx;
+} mp_ode_options;
+
+/* Growable output storage of one solve.  Freed by mp_ode_result_free. */
+typedef struct mp_ode_result {
+    int status;               /* MP_OK or the failure */
+    int terminated;           /* a terminal event ended the solve */
+    long nfev, njev, nlu, nsteps, nreject;
+    double t_fail;            /* where a failure happened */
+    size_t n;
+    /* samples: rows of (t, y[n]); with t_eval these are the t_eval points reached */
+    size_t m, mcap;
+    double *t, *y;
+    /* dense output: segment k covers [seg_t[k], seg_t[k] + seg_h[k]] */
+    size_t ncoef, nseg, segcap;
+    double *seg_t, *seg_h, *seg_c; /* seg_c: nseg blocks of ncoef * n */
+    /* events: per event function, its crossing times and states */
+    size_t n_events;
+    size_t *ev_count, *ev_cap;
+    double **ev_t, **ev_y;
+} mp_ode_result;
+
+typedef struct mp_ode_ws mp_ode_ws;
+
+/* One integration method: a row of the table in methods.c. */
+typedef struct mp_ode_method {
+    const char *name;
+    int order;          /* classical order of the propagated solution */
+    int adaptive;       /* has an error estimate (else fixed step h) */
+    int implicit;
+    int symplectic;
+    int needs_jacobian; /* uses df/dy (analytic or finite differences) */
+    int dense_order;    /* order of its interpolant */
+    size_t ncoef;       /* coefficient vectors of the interpolant */
+    size_t nscratch;    /* n-vectors of scratch the step needs */
+    /* step-size controller (Hairer): expo = 1/(q+1), beta (PI), bounds, safety */
+    double expo, beta, fac_min, fac_max, safety;
+    int self_controlled;  /* takes its own accepted steps (GSL evolve); sets ws->h_next */
+    const void *extra;    /* method data (e.g. the GSL step type) */
+    int (*alloc)(mp_ode_ws *w);   /* optional per-solve state */
+    void (*free)(mp_ode_ws *w);
+    /* One attempt from (t, y, f) with step h into ynew; *err is the scaled
+     * error norm (<= 1 accepts) for adaptive methods. */
+    int (*step)(mp_ode_ws *w, double t, double h, double *err);
+    /* After acceptance: fnew = f(t + h, ynew) when the method or the dense
+     * output needs it, and the interpolant's coefficients when need_dense. */
+    int (*finish)(mp_ode_ws *w, double t, double h, int need_dense);
+} mp_ode_method;
+
+/* The per-solve workspace every method works in. */
+struct mp_ode_ws {
+    const mp_ode_problem *p;
+    const mp_ode_method *m;
+    const mp_ode_options *o;
+    size_t n;
+    double *y, *ynew, *f, *fnew; /* f = f(t, y); fnew = f(t + h, ynew) after finish */
+    int fnew_valid;              /* finish computed fnew */
+    double *k;                   /* nscratch * n */
+    double *coef;                /* ncoef * n: the last accepted step's interpolant */
+    double h_taken, h_next;      /* self-controlled methods */
+    long nfev, njev, nlu, nreject_inner;
+    void *state;                 /* method's own state (alloc/free) */
+};
+
+/* f(t, y) with counting; checks the result is finite. */
+int mp_ode_ws_rhs(mp_ode_ws *w, double t, const double *y, double *dydt);
+
+/* Jacobian df/dy (row-major) at (t, y): the problem's own when it has one,
+ * else forward differences with increments sqrt(eps) * max(|y_j|, atol_j/rtol);
+ * f0 = f(t, y) must be given for the differences.  Counts njev. */
+int mp_ode_ws_jac(mp_ode_ws *w, double t, const double *y, const double *f0, double *jac,
+                  double *scratch_y, double *scratch_f);
+
+/* Hairer's RMS error norm: sqrt(mean((e_i / (atol_i + rtol max(|y0_i|, |y1_i|)))^2)). */
+double mp_ode_err_norm(const mp_ode_ws *w, const double *e, const double *y0, const double *y1);
+
+/* Dense-output evaluation shared by every method: the interpolant is
+ * y(t0 + s h) = c1 + s (c2 + (1-s) (c3 + s (c4 + (1-s) (c5 + ...)))),
+ * with c = ncoef vectors of length n. */
+void mp_ode_dense_eval(const double *coef, size_t ncoef, size_t n, double s, double *out);
+/* The cubic Hermite interpolant in that form (4 vectors) from y0, y1, f0, f1. */
+void mp_ode_dense_hermite(size_t n, double h, const double *y0, const double *y1,
+                          const double *f0, const double *f1, double *coef);
+
+/* The table. */
+extern const mp_ode_method *const mp_ode_methods[];
+const mp_ode_method *mp_ode_method_find(const char *name);
+
+/* Integrate from t0 to tf (> t0).  The result is initialised here; free it
+ * with mp_ode_result_free whatever the status.  Returns r->status for
+ * integration failures (EMAXSTEPS, ESTEP, ...) as well. */
+int mp_ode_solve(const mp_ode_method *m, const mp_ode_problem *p, double t0, double tf,
+                 const double *y0, const mp_ode_options *o, mp_ode_result *r);
+void mp_ode_result_free(mp_ode_result *r);
+
+/* Evaluate stored dense output at times tq (any order); out is nq rows of n. */
+int mp_ode_result_dense_eval(size_t n, size_t ncoef, size_t nseg, const double *seg_t,
+                             const double *seg_h, const double *seg_c, const double *tq,
+                             size_t nq, double *out);
+
+#endif

@@ -1,0 +1,215 @@
+/* Explicit Runge-Kutta methods: classical rk4 (fixed step), Dormand-Prince
+ * 5(4) with Shampine's 4th-order dense output, and Hairer's DOP853 8(5,3)
+ * with 7th-order dense output.  Step-size control lives in driver.c. */
+#include "ode/ode.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "ode/dop853_tableau.h"
+
+/* out = y + h * sum_j a[j] * K[j] over the non-zero a[j] */
+static void stage_point(size_t n, const double *y, double h, const double *a,
+                        double *const *K, size_t ns, double *out)
+{
+    memcpy(out, y, n * sizeof(double));
+    for (size_t j = 0; j < ns; j++) {
+        double c = h * a[j];
+        if (c == 0.0) continue;
+        const double *kj = K[j];
+        for (size_t i = 0; i < n; i++) out[i] += c * kj[i];
+    }
+}
+
+/* ---- classical RK4 ------------------------------------------------------- */
+
+static int rk4_step(mp_ode_ws *w, double t, double h, double *err)
+{
+    size_t n = w->n;
+    double *k2 = w->k, *k3 = k2 + n, *k4 = k3 + n, *yt = k4 + n;
+    const double *y = w->y, *k1 = w->f;
+    int rc;
+    for (size_t i = 0; i < n; i++) yt[i] = y[i] + 0.5 * h * k1[i];
+    if ((rc = mp_ode_ws_rhs(w, t + 0.5 * h, yt, k2)) != MP_OK) return rc;
+    for (size_t i = 0; i < n; i++) yt[i] = y[i] + 0.5 * h * k2[i];
+    if ((rc = mp_ode_ws_rhs(w, t + 0.5 * h, yt, k3)) != MP_OK) return rc;
+    for (size_t i = 0; i < n; i++) yt[i] = y[i] + h * k3[i];
+    if ((rc = mp_ode_ws_rhs(w, t + h, yt, k4)) != MP_OK) return rc;
+    for (size_t i = 0; i < n; i++)
+        w->ynew[i] = y[i] + (h / 6.0) * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i]);
+    *err = 0.0;
+    return MP_OK;
+}
+
+/* f at the new point is the next step's first stage: computing it here costs
+ * nothing extra, and gives the cubic Hermite interpolant. */
+static int fnew_hermite_finish(mp_ode_ws *w, double t, double h, int need_dense)
+{
+    int rc = mp_ode_ws_rhs(w, t + h, w->ynew, w->fnew);
+    if (rc != MP_OK) return rc;
+    w->fnew_valid = 1;
+    if (need_dense) mp_ode_dense_hermite(w->n, h, w->y, w->ynew, w->f, w->fnew, w->coef);
+    return MP_OK;
+}
+
+const mp_ode_method mp_ode_rk4 = {
+    .name = "rk4", .order = 4, .adaptive = 0, .dense_order = 3, .ncoef = 4, .nscratch = 4,
+    .step = rk4_step, .finish = fnew_hermite_finish,
+};
+
+/* ---- Dormand-Prince 5(4) ------------------------------------------------- */
+
+static const double dp_c[7] = {0.0, 0.2, 0.3, 0.8, 8.0 / 9.0, 1.0, 1.0};
+static const double dp_a[7][6] = {
+    {0},
+    {0.2},
+    {3.0 / 40.0, 9.0 / 40.0},
+    {44.0 / 45.0, -56.0 / 15.0, 32.0 / 9.0},
+    {19372.0 / 6561.0, -25360.0 / 2187.0, 64448.0 / 6561.0, -212.0 / 729.0},
+    {9017.0 / 3168.0, -355.0 / 33.0, 46732.0 / 5247.0, 49.0 / 176.0, -5103.0 / 18656.0},
+    {35.0 / 384.0, 0.0, 500.0 / 1113.0, 125.0 / 192.0, -2187.0 / 6784.0, 11.0 / 84.0},
+};
+/* error = 5th-order minus embedded 4th-order weights (stage 7 = f(t+h, y1)) */
+static const double dp_e[7] = {71.0 / 57600.0, 0.0, -71.0 / 16695.0, 71.0 / 1920.0,
+                               -17253.0 / 339200.0, 22.0 / 525.0, -1.0 / 40.0};
+/* Shampine's dense output */
+static const double dp_d[7] = {-12715105075.0 / 11282082432.0, 0.0,
+                               87487479700.0 / 32700410799.0, -10690763975.0 / 1880347072.0,
+                               701980252875.0 / 199316789632.0, -1453857185.0 / 822651844.0,
+                               69997945.0 / 29380423.0};
+
+static void dp_stages(mp_ode_ws *w, double **K)
+{
+    size_t n = w->n;
+    K[0] = w->f;
+    for (int s = 1; s < 6; s++) K[s] = w->k + (size_t)(s - 1) * n;
+    K[6] = w->fnew;
+}
+
+static int dopri5_step(mp_ode_ws *w, double t, double h, double *err)
+{
+    size_t n = w->n;
+    double *K[7];
+    double *yt = w->k + 5 * n;
+    int rc;
+    dp_stages(w, K);
+    for (int s = 1; s < 6; s++) {
+        stage_point(n, w->y, h, dp_a[s], K, (size_t)s, yt);
+        if ((rc = mp_ode_ws_rhs(w, t + dp_c[s] * h, yt, K[s])) != MP_OK) return rc;
+    }
+    stage_point(n, w->y, h, dp_a[6], K, 6, w->ynew);
+    if ((rc = mp_ode_ws_rhs(w, t + h, w->ynew, K[6])) != MP_OK) return rc; /* FSAL */
+    for (size_t i = 0; i < n; i++) {
+        double e = 0.0;
+        for (int s = 0; s < 7; s++) e += dp_e[s] * K[s][i];
+        yt[i] = h * e;
+    }
+    *err = mp_ode_err_norm(w, yt, w->y, w->ynew);
+    return MP_OK;
+}
+
+static int dopri5_finish(mp_ode_ws *w, double t, double h, int need_dense)
+{
+    (void)t;
+    size_t n = w->n;
+    w->fnew_valid = 1; /* stage 7 */
+    if (!need_dense) return MP_OK;
+    double *K[7];
+    dp_stages(w, K);
+    double *c = w->coef;
+    for (size_t i = 0; i < n; i++) {
+        double dy = w->ynew[i] - w->y[i];
+        double c3 = h * K[0][i] - dy;
+        double d = 0.0;
+        for (int s = 0; s < 7; s++) d += dp_d[s] * K[s][i];
+        c[i] = w->y[i];
+        c[n + i] = dy;
+        c[2 * n + i] = c3;
+        c[3 * n + i] = dy - h * K[6][i] - c3;
+        c[4 * n + i] = h * d;
+    }
+    return MP_OK;
+}
+
+const mp_ode_method mp_ode_dopri5 = {
+    .name = "dopri5", .order = 5, .adaptive = 1, .dense_order = 4, .ncoef = 5, .nscratch = 6,
+    .expo = 0.2, .beta = 0.04, .fac_min = 0.2, .fac_max = 10.0, .safety = 0.9,
+    .step = dopri5_step, .finish = dopri5_finish,
+};
+
+/* ---- Dormand-Prince 8(5,3) ----------------------------------------------- */
+
+/* K[0] = f, K[1..11] scratch, K[12] = fnew, K[13..15] scratch (dense only),
+ * then one scratch vector for stage points. */
+static void d8_stages(mp_ode_ws *w, double **K, double **yt)
+{
+    size_t n = w->n;
+    K[0] = w->f;
+    for (int s = 1; s < 12; s++) K[s] = w->k + (size_t)(s - 1) * n;
+    K[12] = w->fnew;
+    for (int s = 13; s < 16; s++) K[s] = w->k + (size_t)(s - 2) * n;
+    *yt = w->k + 14 * n;
+}
+
+static int dop853_step(mp_ode_ws *w, double t, double h, double *err)
+{
+    size_t n = w->n;
+    double *K[16], *yt;
+    int rc;
+    d8_stages(w, K, &yt);
+    for (int s = 1; s < 12; s++) {
+        stage_point(n, w->y, h, mp_dop853_a[s], K, (size_t)s, yt);
+        if ((rc = mp_ode_ws_rhs(w, t + mp_dop853_c[s] * h, yt, K[s])) != MP_OK) return rc;
+    }
+    stage_point(n, w->y, h, mp_dop853_b, K, 12, w->ynew);
+    double e5s = 0.0, e3s = 0.0;
+    for (size_t i = 0; i < n; i++) {
+        double e5 = 0.0, e3 = 0.0;
+        for (int s = 0; s < 12; s++) {
+            e5 += mp_dop853_e5[s] * K[s][i];
+            e3 += mp_dop853_e3[s] * K[s][i];
+        }
+        double sk = w->o->atol[i] + w->o->rtol * fmax(fabs(w->y[i]), fabs(w->ynew[i]));
+        e5s += (e5 / sk) * (e5 / sk);
+        e3s += (e3 / sk) * (e3 / sk);
+    }
+    double deno = e5s + 0.01 * e3s;
+    if (deno <= 0.0) deno = 1.0;
+    *err = fabs(h) * e5s / sqrt(deno * (double)n);
+    return MP_OK;
+}
+
+static int dop853_finish(mp_ode_ws *w, double t, double h, int need_dense)
+{
+    size_t n = w->n;
+    double *K[16], *yt;
+    int rc;
+    d8_stages(w, K, &yt);
+    if ((rc = mp_ode_ws_rhs(w, t + h, w->ynew, K[12])) != MP_OK) return rc;
+    w->fnew_valid = 1;
+    if (!need_dense) return MP_OK;
+    for (int s = 13; s < 16; s++) {
+        stage_point(n, w->y, h, mp_dop853_a[s], K, (size_t)s, yt);
+        if ((rc = mp_ode_ws_rhs(w, t + mp_dop853_c[s] * h, yt, K[s])) != MP_OK) return rc;
+    }
+    double *c = w->coef;
+    for (size_t i = 0; i < n; i++) {
+        double dy = w->ynew[i] - w->y[i];
+        c[i] = w->y[i];
+        c[n + i] = dy;
+        c[2 * n + i] = h * K[0][i] - dy;
+        c[3 * n + i] = 2.0 * dy - h * (K[12][i] + K[0][i]);
+        for (int r = 0; r < 4; r++) {
+            double d = 0.0;
+            for (int s = 0; s < 16; s++) d += mp_dop853_d[r][s] * K[s][i];
+            c[(size_t)(4 + r) * n + i] = h * d;
+        }
+    }
+    return MP_OK;
+}
+
+const mp_ode_method mp_ode_dop853 = {
+    .name = "dop853", .order = 8, .adaptive = 1, .dense_order = 7, .ncoef = 8, .nscratch = 15,
+    .expo = 1.0 / 8.0, .beta = 0.0, .fac_min = 0.333, .fac_max = 6.0, .safety = 0.9,
+    .step = dop853_step, .finish = dop853_finish,
+};

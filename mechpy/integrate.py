@@ -1,0 +1,331 @@
+"""Initial value problems: ``mp.solve`` and the method table ``mp.methods()``.
+
+The integrators run in C (``csrc/ode``).  A system is a scene (its right-hand
+side runs in C), a Python callable with SciPy's signature ``f(t, y, *args)``,
+or a low-level C callback ``void f(double t, const double *y, double *dydt,
+void *user_data)`` given as a ctypes function pointer, a
+``scipy.LowLevelCallable`` or a numba ``cfunc``.
+"""
+from __future__ import annotations
+
+import ctypes
+import math
+from typing import Any, Callable, Sequence
+
+import numpy as np
+
+from . import _core
+from ._validate import as_array, as_int, as_scalar
+
+__all__ = ["solve", "methods", "Solution", "DenseOutput"]
+
+_MESSAGES = {
+    0: "The solver successfully reached the end of the integration interval.",
+    1: "A termination event occurred.",
+}
+
+
+class Solution(dict):
+    """Result of :func:`solve`, shaped like SciPy's ``OdeResult``.
+
+    Attributes
+    ----------
+    t : ndarray, shape (m,)
+        Time points.
+    y : ndarray, shape (n, m)
+        Values of the solution at ``t``.
+    sol : DenseOutput or None
+        Continuous solution when ``dense_output=True``.
+    t_events, y_events : list of ndarray or None
+        For each event function, the times and states at which it crossed zero.
+    nfev, njev, nlu, nsteps, nreject : int
+        Right-hand side evaluations, Jacobian evaluations, LU decompositions,
+        accepted and rejected steps.
+    status : int
+        0 end reached, 1 terminal event, -1 integration failure.
+    message : str
+    success : bool
+        ``status >= 0``.
+    """
+
+    def __getattr__(self, name):
+        try:
+            return self[name]
+        except KeyError:
+            raise AttributeError(name) from None
+
+    __setattr__ = dict.__setitem__
+
+    def __repr__(self):
+        keys = ["message", "success", "status", "t", "y", "sol", "t_events", "y_events", "nfev",
+                "njev", "nlu", "nsteps", "nreject"]
+        w = max(map(len, keys))
+        lines = []
+        for k in keys:
+            v = self.get(k)
+            s = repr(v) if not isinstance(v, np.ndarray) or v.size < 8 else \
+                f"array of shape {v.shape}"
+            lines.append(f"{k.rjust(w)}: {s}")
+        return "\n".join(lines)
+
+    def __dir__(self):
+        return list(self.keys())
+
+
+class DenseOutput:
+    """Continuous solution: ``sol(t)`` gives y at any t in ``[t_min, t_max]``.
+
+    Like SciPy's ``OdeSolution``: a scalar t gives shape (n,), an array of
+    times shape (n, len(t)).  Each step's interpolant is the method's own
+    (4th order for dopri5, 7th for dop853, cubic Hermite otherwise); it is
+    evaluated in C.
+    """
+
+    def __init__(self, seg_t, seg_h, seg_c):
+        self._seg = (np.ascontiguousarray(seg_t), np.ascontiguousarray(seg_h),
+                     np.ascontiguousarray(seg_c))
+        self.t_min = float(seg_t[0])
+        self.t_max = float(seg_t[-1] + seg_h[-1])
+        self.n_segments = len(seg_t)
+
+    def __call__(self, t):
+        t = np.asarray(t, dtype=np.float64)
+        scalar = t.ndim == 0
+        tq = np.ascontiguousarray(t.reshape(-1))
+        if not np.all(np.isfinite(tq)):
+            raise ValueError("t must be finite")
+        out = _core.ode_dense_eval(*self._seg, tq)
+        return out[0] if scalar else out.T
+
+    def __repr__(self):
+        return f"DenseOutput(t_min={self.t_min}, t_max={self.t_max}, segments={self.n_segments})"
+
+
+def methods() -> list[dict]:
+    """Every integration method: name, order, adaptive, implicit, symplectic,
+    needs_jacobian, dense_output (the order of its interpolant)."""
+    return _core.ode_methods()
+
+
+_METHOD_NAMES = None
+
+
+def _method_names():
+    global _METHOD_NAMES
+    if _METHOD_NAMES is None:
+        _METHOD_NAMES = {m["name"]: m for m in methods()}
+    return _METHOD_NAMES
+
+
+def _c_address(obj):
+    """(address, user_data) of a low-level C callback, or None if obj is not one."""
+    # scipy.LowLevelCallable: a tuple (capsule, function, user_data); the
+    # capsule's pointer is the function, its context the user data
+    if type(obj).__name__ == "LowLevelCallable" and isinstance(obj, tuple):
+        cap = tuple.__getitem__(obj, 0)
+        api = ctypes.pythonapi
+        api.PyCapsule_GetName.restype = ctypes.c_char_p
+        api.PyCapsule_GetName.argtypes = [ctypes.py_object]
+        api.PyCapsule_GetPointer.restype = ctypes.c_void_p
+        api.PyCapsule_GetPointer.argtypes = [ctypes.py_object, ctypes.c_char_p]
+        api.PyCapsule_GetContext.restype = ctypes.c_void_p
+        api.PyCapsule_GetContext.argtypes = [ctypes.py_object]
+        sig = api.PyCapsule_GetName(cap)
+        _check_signature(sig.decode() if sig else "")
+        return api.PyCapsule_GetPointer(cap, sig), api.PyCapsule_GetContext(cap)
+    # numba cfunc
+    if type(obj).__name__ == "CFunc" and hasattr(obj, "address"):
+        return obj.address, None
+    # ctypes function pointer
+    if isinstance(obj, ctypes._CFuncPtr):
+        if obj.argtypes is not None and len(obj.argtypes) != 4:
+            raise TypeError("a C callback must have the signature "
+                            "void f(double t, const double *y, double *dydt, void *user_data)")
+        return ctypes.cast(obj, ctypes.c_void_p).value, None
+    return None
+
+
+def _check_signature(sig: str):
+    s = sig.replace(" ", "")
+    ok = s.startswith("void(double,") and s.count(",") == 3 and "double*" in s
+    if not ok:
+        raise TypeError(f"LowLevelCallable signature {sig!r} does not match "
+                        "'void (double, double const *, double *, void *)'")
+
+
+def _system_spec(system, args):
+    from .scenes import Scene
+    if isinstance(system, Scene):
+        if args:
+            raise TypeError("args are not used with a scene: set its parameters instead")
+        return ("scene", system._model, system._vector()), system.dim
+    c = _c_address(system)
+    if c is not None:
+        return ("cfunc", c[0], c[1]), None
+    if callable(system):
+        return ("python", system, tuple(args)), None
+    raise TypeError(f"system must be a scene, a callable f(t, y, *args) or a C callback, "
+                    f"got {type(system).__name__}")
+
+
+def _events_spec(events):
+    if events is None:
+        return None, None, None
+    if callable(events):
+        events = [events]
+    evs = list(events)
+    term, dirs = [], []
+    for i, e in enumerate(evs):
+        if not callable(e):
+            raise TypeError(f"events[{i}] must be callable")
+        t = getattr(e, "terminal", False)
+        if isinstance(t, (bool, np.bool_)):
+            term.append(1 if t else 0)
+        else:
+            term.append(as_int(t, f"events[{i}].terminal", minimum=0))
+        d = getattr(e, "direction", 0)
+        d = as_scalar(d, f"events[{i}].direction")
+        dirs.append(int(np.sign(d)))
+    return evs, np.array(term, dtype=np.intc), np.array(dirs, dtype=np.intc)
+
+
+def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
+          rtol: float = 1e-8, atol=1e-10, t_eval=None, dense_output: bool = False,
+          events=None, args: tuple = (), h: float | None = None,
+          first_step: float | None = None, max_step: float = np.inf,
+          max_steps: int = 10_000_000, jac: Callable | None = None) -> Solution:
+    """Solve an initial value problem dy/dt = f(t, y), y(t0) = y0.
+
+    Parameters
+    ----------
+    system : Scene, callable or C callback
+        A scene from :mod:`mechpy.scenes` (its right-hand side runs in C), a
+        Python callable ``f(t, y, *args)`` returning dy/dt (SciPy's signature),
+        or a C function ``void f(double t, const double *y, double *dydt,
+        void *user_data)`` as a ctypes function pointer, a
+        ``scipy.LowLevelCallable`` or a numba ``cfunc``.
+    t_span : (t0, tf)
+        Interval of integration, ``t0 < tf``.
+    y0 : array_like, shape (n,)
+        Initial state.
+    method : str
+        See :func:`methods`: ``"dop853"`` (default), ``"dopri5"``, ``"rk4"``
+        (fixed step, needs ``h``) and GSL's steppers ``"gsl:rkf45"``,
+        ``"gsl:rk8pd"``, ``"gsl:msadams"``, ``"gsl:msbdf"``, ``"gsl:bsimp"``, ...
+    rtol, atol : float or array_like
+        Relative and absolute tolerances: the local error estimate e of each
+        step satisfies ``rms(e / (atol + rtol |y|)) <= 1``.
+    t_eval : array_like, optional
+        Increasing times in ``t_span`` at which to store the solution, filled
+        from each step's interpolant (the steps are never forced onto them).
+    dense_output : bool
+        Return a continuous solution in ``sol``.
+    events : callable or list of callables
+        ``g(t, y, *args)``; a zero crossing is located to round-off on the
+        interpolant.  Attributes ``terminal`` (bool, or the number of
+        crossings after which to stop) and ``direction`` as in SciPy.
+    args : tuple
+        Extra arguments for a Python ``system``, ``jac`` and events.
+    h : float
+        Step of fixed-step methods.
+    first_step, max_step : float
+        Initial step (default: Hairer's estimate) and largest step.
+    max_steps : int
+        Budget of attempted steps; when it runs out the solve ends with
+        ``status = -1``.
+    jac : callable, optional
+        ``jac(t, y, *args)`` -> (n, n) Jacobian for methods that use one
+        (scenes bring their own analytic Jacobian).
+
+    Returns
+    -------
+    Solution
+        ``t`` (m,), ``y`` (n, m), ``sol``, ``t_events``, ``y_events``,
+        ``nfev``, ``njev``, ``nlu``, ``nsteps``, ``nreject``, ``status``,
+        ``message``, ``success``.
+
+    Notes
+    -----
+    Units are those of the system: t in the unit its rates are given in.
+    An exception raised by a Python callable propagates with its traceback;
+    a NaN or inf from the right-hand side raises ``NonFiniteError``; Ctrl-C
+    raises ``KeyboardInterrupt``.  Integration failures (budget exhausted,
+    step below round-off) are reported in ``status``/``message`` as SciPy does.
+    """
+    if not isinstance(method, str):
+        raise TypeError(f"method must be a string, got {type(method).__name__}")
+    names = _method_names()
+    if method not in names:
+        raise ValueError(f"unknown method {method!r}; choose one of {sorted(names)}")
+    info = names[method]
+    y0a = as_array(y0, "y0", ndim=1)
+    n = y0a.size
+    if isinstance(t_span, (str, bytes)) or not hasattr(t_span, "__len__") or len(t_span) != 2:
+        raise ValueError("t_span must be a pair (t0, tf)")
+    t0 = as_scalar(t_span[0], "t_span[0]")
+    tf = as_scalar(t_span[1], "t_span[1]")
+    if not tf > t0:
+        raise ValueError(f"t_span must be increasing with t0 < tf, got ({t0}, {tf})")
+    rtol = as_scalar(rtol, "rtol")
+    if not rtol > 0:
+        raise ValueError(f"rtol must be positive, got {rtol}")
+    atol_a = as_array(atol, "atol", nonnegative=True)
+    if atol_a.ndim == 0 or atol_a.size == 1:
+        atol_a = np.full(n, float(atol_a.reshape(-1)[0]))
+    elif atol_a.shape != (n,):
+        raise ValueError(f"atol must be a scalar or have shape ({n},), got {atol_a.shape}")
+    tev = None
+    if t_eval is not None:
+        tev = as_array(t_eval, "t_eval", ndim=1, allow_empty=True)
+        if tev.size and (tev[0] < t0 or tev[-1] > tf):
+            raise ValueError("t_eval must lie within t_span")
+        if np.any(np.diff(tev) <= 0):
+            raise ValueError("t_eval must be strictly increasing")
+    if not isinstance(dense_output, (bool, np.bool_)):
+        raise TypeError("dense_output must be a bool")
+    if not isinstance(args, tuple):
+        args = (args,) if not isinstance(args, list) else tuple(args)
+    hh = 0.0
+    if not info["adaptive"]:
+        if h is None:
+            raise ValueError(f"method {method!r} has a fixed step: give h")
+        hh = as_scalar(h, "h", positive=True)
+    elif h is not None:
+        raise ValueError(f"method {method!r} is adaptive: use first_step/max_step, not h")
+    fs = 0.0 if first_step is None else as_scalar(first_step, "first_step", positive=True)
+    ms = as_scalar(max_step, "max_step", finite=False)
+    if not ms > 0 or math.isnan(ms):
+        raise ValueError(f"max_step must be positive, got {ms}")
+    budget = as_int(max_steps, "max_steps", minimum=1)
+    if jac is not None and not callable(jac):
+        raise TypeError("jac must be callable")
+    spec, dim = _system_spec(system, args)
+    if dim is not None and dim != n:
+        raise ValueError(f"y0 must have {dim} values for {type(system).__name__}, got {n}")
+    evs, term, dirs = _events_spec(events)
+
+    r = _core.ode_solve(method, spec, t0, tf, y0a, rtol, atol_a, tev, bool(dense_output), evs,
+                        term, dirs, args, jac, hh, fs, ms, budget)
+    st = r["status"]
+    if st == 0:
+        status = 1 if r["terminated"] else 0
+        message = _MESSAGES[status]
+    else:
+        status = -1
+        if st == _core.STATUS_EMAXSTEPS:
+            message = (f"Required step budget max_steps={budget} exhausted at "
+                       f"t = {r['t_fail']!r}.")
+        else:
+            message = f"Step size fell below round-off at t = {r['t_fail']!r}."
+    sol = None
+    if dense_output and r["dense"] is not None:
+        sol = DenseOutput(*r["dense"])
+    t_events = y_events = None
+    if evs is not None:
+        t_events = [te for te, _ in r["events"]]
+        y_events = [ye for _, ye in r["events"]]
+    return Solution(t=r["t"], y=r["y"].T, sol=sol, t_events=t_events, y_events=y_events,
+                    nfev=r["nfev"], njev=r["njev"], nlu=r["nlu"], nsteps=r["nsteps"],
+                    nreject=r["nreject"], status=status, message=message,
+                    success=status >= 0)
+

@@ -1,0 +1,186 @@
+"""Scenes: physical models whose right-hand side, Jacobian and energy run in C.
+
+A scene models only what it needs: its state holds just its own coordinates,
+and an optional term that is off (damping, drive) costs nothing: the C core
+binds the cheapest right-hand side for the parameters given.
+
+Every scene has ``dim``, ``params`` (a dict), ``rhs(t, y)``,
+``jacobian(t, y)``, ``energy(y)`` (vectorised over trailing axes: ``y`` of
+shape (dim, ...) as in ``Solution.y``), ``replace(**changes)``, and pickles.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from . import _core
+from ._validate import as_array, as_scalar
+
+__all__ = ["Scene", "Pendulum", "VanDerPol", "Duffing"]
+
+
+class Scene:
+    """Base class of the C scenes (see the module docstring)."""
+
+    _model: str = ""
+    _defaults: dict = {}
+    _positive: tuple = ()
+    _nonnegative: tuple = ()
+
+    def __init__(self, **params):
+        info = _core.scene_info(self._model)
+        names = info["params"]
+        unknown = set(params) - set(names)
+        if unknown:
+            raise TypeError(f"{type(self).__name__} got unknown parameter(s) "
+                            f"{sorted(unknown)}; parameters are {list(names)}")
+        values = {}
+        for name in names:
+            if name in params:
+                v = params[name]
+            elif name in self._defaults:
+                v = self._defaults[name]
+            else:
+                raise TypeError(f"{type(self).__name__} needs parameter {name!r}")
+            values[name] = as_scalar(v, name, positive=name in self._positive,
+                                     nonnegative=name in self._nonnegative)
+        self._params = values
+        self._dim = int(info["dim"])
+
+    # -- the common interface ------------------------------------------------
+    @property
+    def dim(self) -> int:
+        """Number of state components."""
+        return self._dim
+
+    @property
+    def params(self) -> dict:
+        """The parameters (a copy)."""
+        return dict(self._params)
+
+    def replace(self, **changes) -> "Scene":
+        """A copy with some parameters changed."""
+        p = self.params
+        p.update(changes)
+        return type(self)(**p)
+
+    def _vector(self) -> np.ndarray:
+        return np.array(list(self._params.values()), dtype=np.float64)
+
+    def _eval(self, what, t, y):
+        y = as_array(y, "y", min_ndim=1)
+        if y.shape[0] != self._dim:
+            raise ValueError(f"y must have {self._dim} components along its first axis, "
+                             f"got shape {y.shape}")
+        t = as_scalar(t, "t")
+        flat = np.ascontiguousarray(y.reshape(self._dim, -1).T)
+        out = _core.scene_eval(self._model, self._vector(), what, t, flat)
+        rest = y.shape[1:]
+        if what == "energy":
+            return out.reshape(rest) if rest else float(out[0])
+        if what == "rhs":
+            return np.moveaxis(out, 0, -1).reshape(y.shape)
+        return np.moveaxis(out, 0, -1).reshape((self._dim, self._dim) + rest)
+
+    def rhs(self, t, y) -> np.ndarray:
+        """dy/dt at (t, y); y of shape (dim, ...)."""
+        return self._eval("rhs", t, y)
+
+    def __call__(self, t, y):
+        return self.rhs(t, y)
+
+    def jacobian(self, t, y) -> np.ndarray:
+        """df/dy, shape (dim, dim, ...)."""
+        return self._eval("jac", t, y)
+
+    def energy(self, y):
+        """The scene's energy for states y of shape (dim, ...) -> shape (...)."""
+        return self._eval("energy", 0.0, y)
+
+    def __repr__(self):
+        args = ", ".join(f"{k}={v!r}" for k, v in self._params.items())
+        return f"{type(self).__name__}({args})"
+
+    def __eq__(self, other):
+        return type(self) is type(other) and self._params == other._params
+
+    def __hash__(self):
+        return hash((type(self).__name__, tuple(self._params.items())))
+
+    def __reduce__(self):
+        return (_rebuild, (type(self), self._params))
+
+
+def _rebuild(cls, params):
+    return cls(**params)
+
+
+def _ellipk(m):
+    """Complete elliptic integral K(m) (parameter m = k^2) by the AGM."""
+    a, b = 1.0, np.sqrt(1.0 - m)
+    for _ in range(60):
+        if abs(a - b) <= 1e-16 * a:
+            break
+        a, b = 0.5 * (a + b), np.sqrt(a * b)
+    return np.pi / (2.0 * a)
+
+
+class Pendulum(Scene):
+    r"""The plane pendulum, optionally damped and driven.
+
+    .. math:: \ddot\theta = -\frac{g}{L}\sin\theta - b\,\dot\theta + A\cos(\Omega t)
+
+    State ``(theta, theta_dot)`` in rad and rad/s.  Parameters: ``g`` (m/s^2),
+    ``length`` L (m), ``damping`` b (1/s), ``drive_amplitude`` A (rad/s^2),
+    ``drive_frequency`` Omega (rad/s).  ``energy`` is per unit mass (J/kg):
+    :math:`E = \tfrac12 L^2\dot\theta^2 + gL(1-\cos\theta)`.
+    """
+
+    _model = "Pendulum"
+    _defaults = dict(g=9.81, length=1.0, damping=0.0, drive_amplitude=0.0, drive_frequency=0.0)
+    _positive = ("g", "length")
+    _nonnegative = ("damping", "drive_frequency")
+
+    def __init__(self, g=9.81, length=1.0, damping=0.0, drive_amplitude=0.0,
+                 drive_frequency=0.0):
+        super().__init__(g=g, length=length, damping=damping, drive_amplitude=drive_amplitude,
+                         drive_frequency=drive_frequency)
+
+    def period(self, amplitude) -> float:
+        r"""Exact period of the free, undamped pendulum released from rest at
+        ``amplitude`` (rad): :math:`T = 4\sqrt{L/g}\,K(\sin^2(\theta_0/2))` (s)."""
+        a = as_scalar(amplitude, "amplitude")
+        if not 0 < abs(a) < np.pi:
+            raise ValueError("amplitude must be in (0, pi) in magnitude")
+        p = self._params
+        return 4.0 * np.sqrt(p["length"] / p["g"]) * _ellipk(np.sin(0.5 * a) ** 2)
+
+
+class VanDerPol(Scene):
+    r"""The Van der Pol oscillator :math:`\ddot x - \mu(1-x^2)\dot x + x = 0`.
+
+    State ``(x, x_dot)`` (dimensionless); ``mu >= 0``.  ``energy`` is
+    :math:`(x^2 + \dot x^2)/2`, the energy of its harmonic part.
+    """
+
+    _model = "VanDerPol"
+    _defaults = dict(mu=1.0)
+    _nonnegative = ("mu",)
+
+    def __init__(self, mu=1.0):
+        super().__init__(mu=mu)
+
+
+class Duffing(Scene):
+    r"""The Duffing oscillator
+    :math:`\ddot x + \delta\dot x + \alpha x + \beta x^3 = \gamma\cos(\omega t)`.
+
+    State ``(x, x_dot)``.  ``energy`` is
+    :math:`\dot x^2/2 + \alpha x^2/2 + \beta x^4/4`.
+    """
+
+    _model = "Duffing"
+    _defaults = dict(delta=0.0, gamma=0.0, omega=1.0)
+    _nonnegative = ("delta",)
+
+    def __init__(self, alpha, beta, delta=0.0, gamma=0.0, omega=1.0):
+        super().__init__(alpha=alpha, beta=beta, delta=delta, gamma=gamma, omega=omega)

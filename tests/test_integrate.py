@@ -1,0 +1,447 @@
+"""mp.solve against closed forms, SciPy's solve_ivp and odeint, and bad input."""
+import ctypes
+import pickle
+import shutil
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from scipy.integrate import odeint, solve_ivp
+
+import mechpy as mp
+from ref_ode import VDP_PERIOD_MU1, pendulum_exact, pendulum_period, pendulum_rhs, vdp_rhs
+
+ADAPTIVE = ["dop853", "dopri5", "gsl:rkf45", "gsl:rk8pd", "gsl:msadams", "gsl:rkck",
+            "gsl:msbdf", "gsl:bsimp", "gsl:rk4imp"]
+THETA0 = 2.5  # a large amplitude: far from the small-angle regime
+
+
+# ---- accuracy against the exact large-amplitude pendulum ---------------------
+
+@pytest.mark.parametrize("method", ADAPTIVE)
+def test_pendulum_against_exact_solution(method):
+    p = mp.scenes.Pendulum()
+    sol = mp.solve(p, (0, 10), [THETA0, 0.0], method=method, rtol=1e-10, atol=1e-12)
+    assert sol.success and sol.status == 0 and sol.t[-1] == 10.0
+    exact = pendulum_exact(THETA0, sol.t)
+    err = np.max(np.abs(sol.y - exact))
+    # ten seconds, ~4 periods: global error a few hundred times the local tolerance
+    assert err < 2e-6, err
+
+
+@pytest.mark.parametrize("method,scipy_method", [("dop853", "DOP853"), ("dopri5", "RK45")])
+def test_agrees_with_solve_ivp_same_method(method, scipy_method):
+    t = np.linspace(0, 10, 101)
+    ours = mp.solve(mp.scenes.Pendulum(), (0, 10), [THETA0, 0.0], method=method, rtol=1e-9,
+                    atol=1e-12, t_eval=t)
+    ref = solve_ivp(pendulum_rhs, (0, 10), [THETA0, 0.0], method=scipy_method, rtol=1e-9,
+                    atol=1e-12, t_eval=t)
+    exact = pendulum_exact(THETA0, t)
+    e_ours = np.max(np.abs(ours.y - exact))
+    e_ref = np.max(np.abs(ref.y - exact))
+    # both claim ~1e-9 local accuracy; they agree within the error both make
+    assert np.max(np.abs(ours.y - ref.y)) <= 2 * max(e_ours, e_ref) + 1e-12
+    assert e_ours < 3 * e_ref + 1e-9
+    # same method, same controller family: comparable work
+    assert ours.nfev < 1.5 * ref.nfev
+
+
+def test_agrees_with_odeint_python_rhs():
+    t = np.linspace(0, 20, 201)
+    ours = mp.solve(vdp_rhs, (0, 20), [2.0, 0.0], rtol=1e-11, atol=1e-12, t_eval=t)
+    ref = odeint(vdp_rhs, [2.0, 0.0], t, rtol=1e-12, atol=1e-12, tfirst=True)
+    assert np.max(np.abs(ours.y - ref.T)) < 1e-8
+
+
+def test_python_callable_matches_scene():
+    t = np.linspace(0, 5, 11)
+    a = mp.solve(mp.scenes.Pendulum(length=2.0), (0, 5), [1.0, 0.3], t_eval=t, rtol=1e-12)
+    b = mp.solve(pendulum_rhs, (0, 5), [1.0, 0.3], t_eval=t, rtol=1e-12, args=(9.81, 2.0))
+    assert np.array_equal(a.y, b.y)  # same arithmetic, same steps
+    assert a.nfev == b.nfev
+
+
+def test_fixed_step_rk4_converges_at_fourth_order():
+    p = mp.scenes.Pendulum()
+    exact = pendulum_exact(THETA0, [2.0])[:, 0]
+    errs = []
+    for h in (0.008, 0.004, 0.002):
+        s = mp.solve(p, (0, 2), [THETA0, 0.0], method="rk4", h=h)
+        assert s.t[-1] == 2.0
+        errs.append(np.max(np.abs(s.y[:, -1] - exact)))
+    rates = np.log2(np.array(errs[:-1]) / np.array(errs[1:]))
+    assert np.all(np.abs(rates - 4) < 0.3), rates
+
+
+def test_small_angle_pendulum_is_harmonic():
+    a = 1e-5
+    t = np.linspace(0, 7, 50)
+    s = mp.solve(mp.scenes.Pendulum(length=0.5), (0, 7), [a, 0.0], t_eval=t, rtol=1e-12,
+                 atol=1e-16)
+    w = np.sqrt(9.81 / 0.5)
+    # sin(theta) ~ theta - theta^3/6: relative deviation ~ a^2/16 over these few periods
+    assert np.max(np.abs(s.y[0] - a * np.cos(w * t))) < 1e-13
+
+
+def test_damped_small_angle_pendulum_closed_form():
+    a, b = 1e-6, 0.3
+    t = np.linspace(0, 10, 60)
+    s = mp.solve(mp.scenes.Pendulum(damping=b), (0, 10), [a, 0.0], t_eval=t, rtol=1e-12,
+                 atol=1e-18)
+    w0 = np.sqrt(9.81)
+    wd = np.sqrt(w0 ** 2 - b ** 2 / 4)
+    x = a * np.exp(-b * t / 2) * (np.cos(wd * t) + b / (2 * wd) * np.sin(wd * t))
+    assert np.max(np.abs(s.y[0] - x)) < 1e-15
+
+
+def test_driven_pendulum_matches_solve_ivp():
+    p = mp.scenes.Pendulum(damping=0.5, drive_amplitude=1.2, drive_frequency=2 / 3)
+    t = np.linspace(0, 30, 31)
+    ours = mp.solve(p, (0, 30), [0.2, 0.0], t_eval=t, rtol=1e-11, atol=1e-12)
+    ref = solve_ivp(pendulum_rhs, (0, 30), [0.2, 0.0], method="DOP853", t_eval=t, rtol=1e-11,
+                    atol=1e-12, args=(9.81, 1.0, 0.5, 1.2, 2 / 3))
+    assert np.max(np.abs(ours.y - ref.y)) < 1e-7
+
+
+# ---- events, dense output ----------------------------------------------------
+
+def test_large_amplitude_period_from_events():
+    def upward(t, y):
+        return y[0]
+    upward.direction = 1
+    s = mp.solve(mp.scenes.Pendulum(), (0, 20), [THETA0, 0.0], events=upward, rtol=1e-12,
+                 atol=1e-14)
+    te = s.t_events[0]
+    assert len(te) >= 3
+    T = pendulum_period(THETA0)
+    assert np.max(np.abs(np.diff(te) - T)) < 1e-10
+    assert abs(mp.scenes.Pendulum().period(THETA0) - T) < 1e-13 * T
+    # y_events holds the state there: theta = 0, theta_dot > 0
+    assert np.all(np.abs(s.y_events[0][:, 0]) < 1e-12) and np.all(s.y_events[0][:, 1] > 0)
+
+
+def test_terminal_event_time_to_round_off():
+    def bottom(t, y):
+        return y[0]
+    bottom.terminal = True
+    s = mp.solve(mp.scenes.Pendulum(), (0, 10), [THETA0, 0.0], events=[bottom], rtol=1e-12,
+                 atol=1e-14, dense_output=True)
+    quarter = pendulum_period(THETA0) / 4
+    assert s.status == 1 and s.success
+    assert abs(s.t_events[0][0] - quarter) < 1e-12
+    assert s.t[-1] == s.t_events[0][0]
+    assert abs(s.y[0, -1]) < 1e-12
+
+
+def test_terminal_count_and_several_events():
+    def zero(t, y):
+        return y[0]
+
+    def still(t, y):
+        return y[1]
+    zero.terminal = 3
+    s = mp.solve(mp.scenes.Pendulum(), (0, 100), [1.0, 0.0], events=[zero, still], rtol=1e-11)
+    T = pendulum_period(1.0)
+    assert s.status == 1
+    assert len(s.t_events[0]) == 3
+    np.testing.assert_allclose(s.t_events[0], [T / 4, 3 * T / 4, 5 * T / 4], rtol=1e-9)
+    # turning points at T/2 and T before the third zero
+    np.testing.assert_allclose(s.t_events[1], [T / 2, T], rtol=1e-9)
+
+
+def test_several_crossings_in_one_step_are_found():
+    # a huge max step on a smooth problem: steps span several zeros of sin(5 t)
+    def g(t, y):
+        return np.sin(5 * t)
+    s = mp.solve(lambda t, y: [0.0], (0, 10), [0.0], events=g, first_step=2.0, max_step=2.0)
+    expected = np.arange(1, 16) * np.pi / 5
+    assert s.nsteps == 5  # three zeros in each step
+    np.testing.assert_allclose(s.t_events[0], expected, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("method", ["dop853", "dopri5", "gsl:rk8pd", "rk4"])
+def test_dense_output_matches_t_eval_and_exact(method):
+    t = np.linspace(0, 6, 37)
+    kw = dict(h=1e-3) if method == "rk4" else dict(rtol=1e-10, atol=1e-12)
+    s = mp.solve(mp.scenes.Pendulum(), (0, 6), [THETA0, 0.0], method=method, t_eval=t,
+                 dense_output=True, **kw)
+    np.testing.assert_allclose(s.sol(t), s.y, rtol=0, atol=1e-14)
+    assert s.sol(3.0).shape == (2,)
+    tt = np.linspace(0, 6, 1001)
+    err = np.max(np.abs(s.sol(tt) - pendulum_exact(THETA0, tt)))
+    # the interpolants' orders: 7 (dop853), 4 (dopri5), cubic Hermite (GSL rows, rk4)
+    assert err < {"dop853": 1e-8, "dopri5": 1e-7, "gsl:rk8pd": 1e-3, "rk4": 1e-7}[method], err
+
+
+def test_t_eval_is_not_forced_onto_steps():
+    few = mp.solve(mp.scenes.Pendulum(), (0, 10), [1.0, 0.0])
+    many = mp.solve(mp.scenes.Pendulum(), (0, 10), [1.0, 0.0], t_eval=np.linspace(0, 10, 5000))
+    assert many.nsteps == few.nsteps
+    assert many.y.shape == (2, 5000)
+
+
+def test_energy_of_undamped_pendulum_conserved():
+    p = mp.scenes.Pendulum(length=1.3)
+    s = mp.solve(p, (0, 50), [THETA0, 0.0], rtol=1e-12, atol=1e-14)
+    E = p.energy(s.y)
+    assert E.shape == s.t.shape
+    assert abs(E[0] - 9.81 * 1.3 * (1 - np.cos(THETA0))) < 1e-12
+    assert np.max(np.abs(E - E[0])) / E[0] < 1e-9
+
+
+def test_van_der_pol_limit_cycle_period():
+    def up(t, y):
+        return y[0]
+    up.direction = 1
+    s = mp.solve(mp.scenes.VanDerPol(mu=1.0), (0, 80), [2.0, 0.0], events=up, rtol=1e-12,
+                 atol=1e-12)
+    periods = np.diff(s.t_events[0])
+    assert abs(periods[-1] - VDP_PERIOD_MU1) < 1e-9
+    amp = np.max(np.abs(s.y[0][s.t > 40]))
+    assert abs(amp - 2.0086) < 1e-3
+
+
+# ---- scenes -------------------------------------------------------------------
+
+def test_scene_rhs_jacobian_energy_vectorised(rng):
+    p = mp.scenes.Pendulum(g=9.7, length=0.8, damping=0.2, drive_amplitude=0.5,
+                           drive_frequency=1.1)
+    Y = rng.normal(size=(2, 5, 3))
+    f = p.rhs(0.7, Y)
+    assert f.shape == Y.shape
+    ref = pendulum_rhs(0.7, Y, 9.7, 0.8, 0.2, 0.5, 1.1)
+    np.testing.assert_allclose(f, ref, rtol=1e-15)
+    J = p.jacobian(0.7, Y[:, 0, 0])
+    eps = 1e-7
+    for j in range(2):
+        d = np.zeros(2)
+        d[j] = eps
+        fd = (p.rhs(0.7, Y[:, 0, 0] + d) - p.rhs(0.7, Y[:, 0, 0] - d)) / (2 * eps)
+        np.testing.assert_allclose(J[:, j], fd, rtol=1e-7, atol=1e-8)
+    v = mp.scenes.VanDerPol(mu=3.0)
+    np.testing.assert_allclose(v.rhs(0, Y), vdp_rhs(0, Y, 3.0), rtol=1e-15)
+    assert v.energy(Y).shape == (5, 3)
+
+
+def test_scene_params_replace_pickle():
+    p = mp.scenes.Pendulum(length=2.0)
+    assert p.params == dict(g=9.81, length=2.0, damping=0.0, drive_amplitude=0.0,
+                            drive_frequency=0.0)
+    q = p.replace(damping=0.1)
+    assert q.params["damping"] == 0.1 and p.params["damping"] == 0.0
+    r = pickle.loads(pickle.dumps(q))
+    assert r == q and r.dim == 2
+    d = mp.scenes.Duffing(alpha=-1.0, beta=1.0, delta=0.3, gamma=0.5, omega=1.2)
+    assert pickle.loads(pickle.dumps(d)) == d
+
+
+def test_methods_table():
+    table = {m["name"]: m for m in mp.methods()}
+    for name in ["rk4", "dopri5", "dop853", "gsl:rkf45", "gsl:rk8pd", "gsl:msadams"]:
+        assert name in table
+    assert table["rk4"]["adaptive"] is False
+    assert table["dop853"]["order"] == 8 and table["dop853"]["dense_output"] == 7
+    assert table["gsl:msbdf"]["needs_jacobian"] and table["gsl:msbdf"]["implicit"]
+    assert set(table["dopri5"]) == {"name", "order", "adaptive", "implicit", "symplectic",
+                                    "needs_jacobian", "dense_output"}
+
+
+def test_user_jacobian_is_used():
+    calls = []
+
+    def jac(t, y, mu):
+        calls.append(t)
+        return np.array([[0.0, 1.0], [-2 * mu * y[0] * y[1] - 1, mu * (1 - y[0] ** 2)]])
+    s = mp.solve(vdp_rhs, (0, 5), [2.0, 0.0], method="gsl:bsimp", args=(2.0,), jac=jac,
+                 rtol=1e-10)
+    ref = solve_ivp(vdp_rhs, (0, 5), [2.0, 0.0], method="DOP853", args=(2.0,), rtol=1e-12,
+                    atol=1e-12)
+    assert calls and s.njev == len(calls)
+    assert np.max(np.abs(s.y[:, -1] - ref.y[:, -1])) < 1e-7
+
+
+# ---- C callbacks --------------------------------------------------------------
+
+CB = ctypes.CFUNCTYPE(None, ctypes.c_double, ctypes.POINTER(ctypes.c_double),
+                      ctypes.POINTER(ctypes.c_double), ctypes.c_void_p)
+
+
+def _ctypes_pendulum():
+    @CB
+    def f(t, y, dydt, ud):
+        dydt[0] = y[1]
+        dydt[1] = -9.81 * np.sin(y[0])
+    return f
+
+
+def test_ctypes_callback():
+    f = _ctypes_pendulum()
+    t = np.linspace(0, 3, 7)
+    s = mp.solve(f, (0, 3), [THETA0, 0.0], t_eval=t, rtol=1e-11)
+    ref = mp.solve(mp.scenes.Pendulum(), (0, 3), [THETA0, 0.0], t_eval=t, rtol=1e-11)
+    np.testing.assert_allclose(s.y, ref.y, rtol=0, atol=1e-13)
+
+
+def test_low_level_callable_with_user_data():
+    from scipy import LowLevelCallable
+
+    @CB
+    def f(t, y, dydt, ud):
+        g = ctypes.cast(ud, ctypes.POINTER(ctypes.c_double))[0]
+        dydt[0] = y[1]
+        dydt[1] = -g * np.sin(y[0])
+    g = ctypes.c_double(4.0)
+    llc = LowLevelCallable(f, ctypes.cast(ctypes.pointer(g), ctypes.c_void_p),
+                           "void (double, double *, double *, void *)")
+    s = mp.solve(llc, (0, 2), [1.0, 0.0], rtol=1e-11)
+    ref = mp.solve(mp.scenes.Pendulum(g=4.0), (0, 2), [1.0, 0.0], rtol=1e-11)
+    np.testing.assert_allclose(s.y[:, -1], ref.y[:, -1], atol=1e-12)
+
+
+@pytest.mark.skipif(shutil.which("cc") is None, reason="no C compiler")
+def test_compiled_c_callback(tmp_path):
+    src = tmp_path / "vdp.c"
+    src.write_text(
+        "void vdp(double t, const double *y, double *f, void *ud) {\n"
+        "  double mu = *(const double *)ud; (void)t;\n"
+        "  f[0] = y[1]; f[1] = mu * (1 - y[0] * y[0]) * y[1] - y[0]; }\n")
+    lib = tmp_path / "libvdp.so"
+    subprocess.run(["cc", "-O2", "-shared", "-fPIC", str(src), "-o", str(lib)], check=True)
+    so = ctypes.CDLL(str(lib))
+    fn = CB(("vdp", so))
+    from scipy import LowLevelCallable
+    mu = ctypes.c_double(1.0)
+    llc = LowLevelCallable(fn, ctypes.cast(ctypes.pointer(mu), ctypes.c_void_p))
+    s = mp.solve(llc, (0, 20), [2.0, 0.0], rtol=1e-11, atol=1e-12)
+    ref = mp.solve(mp.scenes.VanDerPol(1.0), (0, 20), [2.0, 0.0], rtol=1e-11, atol=1e-12)
+    assert np.array_equal(s.y[:, -1], ref.y[:, -1])
+
+
+# ---- budgets and failures -------------------------------------------------------
+
+def test_step_budget_ends_with_failed_status():
+    s = mp.solve(mp.scenes.VanDerPol(mu=1000.0), (0, 3000), [2.0, 0.0], max_steps=200)
+    assert s.status == -1 and not s.success
+    assert "max_steps=200" in s.message
+    assert s.nsteps + s.nreject <= 200
+
+
+# ---- bad input --------------------------------------------------------------------
+
+P = mp.scenes.Pendulum()
+
+
+@pytest.mark.parametrize("y0", [[np.nan, 0.0], [np.inf, 0.0], [0.0, -np.inf]])
+def test_non_finite_y0(y0):
+    with pytest.raises(ValueError, match="y0"):
+        mp.solve(P, (0, 1), y0)
+
+
+@pytest.mark.parametrize("y0", [[[1.0, 0.0]], [1.0, 0.0, 0.0], [], 1.0])
+def test_wrong_shapes(y0):
+    with pytest.raises(ValueError, match="y0"):
+        mp.solve(P, (0, 1), y0)
+
+
+def test_wrong_dtypes():
+    with pytest.raises(TypeError, match="y0"):
+        mp.solve(P, (0, 1), ["a", "b"])
+    with pytest.raises(TypeError, match="y0"):
+        mp.solve(P, (0, 1), [1 + 1j, 0])
+    with pytest.raises(TypeError, match="system"):
+        mp.solve(42, (0, 1), [1.0, 0.0])
+
+
+@pytest.mark.parametrize("rtol", [0.0, -1e-6, np.nan])
+def test_bad_rtol(rtol):
+    with pytest.raises(ValueError, match="rtol"):
+        mp.solve(P, (0, 1), [1.0, 0.0], rtol=rtol)
+
+
+@pytest.mark.parametrize("span", [(1.0, 0.0), (1.0, 1.0), (0.0,), (0, np.inf), "ab"])
+def test_bad_t_span(span):
+    with pytest.raises(ValueError, match="t_span"):
+        mp.solve(P, span, [1.0, 0.0])
+
+
+def test_bad_options():
+    with pytest.raises(ValueError, match="unknown method"):
+        mp.solve(P, (0, 1), [1.0, 0.0], method="euler")
+    with pytest.raises(ValueError, match="give h"):
+        mp.solve(P, (0, 1), [1.0, 0.0], method="rk4")
+    with pytest.raises(ValueError, match="h"):
+        mp.solve(P, (0, 1), [1.0, 0.0], method="rk4", h=-0.1)
+    with pytest.raises(ValueError, match="atol"):
+        mp.solve(P, (0, 1), [1.0, 0.0], atol=-1.0)
+    with pytest.raises(ValueError, match="atol"):
+        mp.solve(P, (0, 1), [1.0, 0.0], atol=[1e-6, 1e-6, 1e-6])
+    with pytest.raises(ValueError, match="t_eval"):
+        mp.solve(P, (0, 1), [1.0, 0.0], t_eval=[0.5, 2.0])
+    with pytest.raises(ValueError, match="t_eval"):
+        mp.solve(P, (0, 1), [1.0, 0.0], t_eval=[0.5, 0.2])
+    with pytest.raises(ValueError, match="max_steps"):
+        mp.solve(P, (0, 1), [1.0, 0.0], max_steps=0)
+    with pytest.raises(ValueError, match="length"):
+        mp.scenes.Pendulum(length=-1.0)
+    with pytest.raises(TypeError, match="mass"):
+        mp.scenes.Pendulum().replace(mass=2.0)
+
+
+def test_callback_exception_propagates_with_traceback():
+    class Boom(RuntimeError):
+        pass
+
+    def f(t, y):
+        if t > 0.5:
+            raise Boom("raised inside the right-hand side")
+        return [y[1], -y[0]]
+    with pytest.raises(Boom, match="inside the right-hand side") as info:
+        mp.solve(f, (0, 1), [1.0, 0.0])
+    assert any(tb.name == "f" for tb in info.traceback)
+
+
+def test_callback_wrong_return_shape():
+    with pytest.raises(ValueError, match="fun returned shape"):
+        mp.solve(lambda t, y: [1.0, 2.0, 3.0], (0, 1), [1.0, 0.0])
+    with pytest.raises(TypeError, match="fun must return real numbers"):
+        mp.solve(lambda t, y: ["x", "y"], (0, 1), [1.0, 0.0])
+
+
+def test_callback_non_finite_result():
+    def f(t, y):
+        return [np.nan if t > 0.3 else 1.0, 0.0]
+    with pytest.raises(mp.NonFiniteError, match="near t"):
+        mp.solve(f, (0, 1), [1.0, 0.0])
+
+
+def test_event_that_raises():
+    def ev(t, y):
+        raise KeyError("event")
+    with pytest.raises(KeyError):
+        mp.solve(P, (0, 1), [1.0, 0.0], events=ev)
+
+
+def test_crash_free_in_subprocess():
+    """A batch of hostile calls in a child process: it must exit normally."""
+    code = r"""
+import numpy as np, mechpy as mp
+P = mp.scenes.Pendulum()
+bad = [dict(y0=[np.nan, 0]), dict(y0=np.zeros((2, 2))), dict(y0=[1.0, 0], rtol=-1),
+       dict(y0=[1.0, 0], t_eval=[np.nan])]
+for kw in bad:
+    y0 = kw.pop("y0")
+    try:
+        mp.solve(P, (0, 1), y0, **kw)
+    except (ValueError, TypeError):
+        pass
+for f in (lambda t, y: None, lambda t, y: object(), lambda t, y: np.ones((2, 2)),
+          lambda t, y: 1 / 0):
+    try:
+        mp.solve(f, (0, 1), [1.0, 0.0])
+    except Exception:
+        pass
+print("ok")
+"""
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    assert r.returncode == 0 and r.stdout.strip() == "ok", r.stderr
