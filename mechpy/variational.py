@@ -1,0 +1,1 @@
+"""mechpy.variational (being built)."""
