@@ -317,6 +317,9 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
                        f"t = {r['t_fail']!r}.")
         else:
             message = f"Step size fell below round-off at t = {r['t_fail']!r}."
+        if r["stiff"]:
+            message += (" The problem appears stiff: try method='radau', 'auto' or "
+                        "'gsl:msbdf'.")
     sol = None
     if dense_output and r["dense"] is not None:
         sol = DenseOutput(*r["dense"])

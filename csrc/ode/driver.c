@@ -185,7 +185,7 @@ typedef struct {
 
 static int ev_at(ev_ctx *c, double s, size_t k, double *gk)
 {
-    mp_ode_dense_eval(c->w->coef, c->w->m->ncoef, c->w->n, s, c->ytmp);
+    mp_ode_dense_eval(c->w->coef, c->w->ncoef, c->w->n, s, c->ytmp);
     int rc = c->o->events(c->t + s * c->h, c->ytmp, c->gtmp, c->o->events_data);
     if (rc != MP_OK) return rc;
     *gk = c->gtmp[k];
@@ -249,7 +249,7 @@ static int ev_step(mp_ode_ws *w, mp_ode_result *r, const mp_ode_options *o, doub
         int rc;
         if (j == MP_ODE_EVENT_SUBDIV) rc = o->events(t + h, w->ynew, g_sub, o->events_data);
         else {
-            mp_ode_dense_eval(w->coef, w->m->ncoef, w->n, s1, ytmp);
+            mp_ode_dense_eval(w->coef, w->ncoef, w->n, s1, ytmp);
             rc = o->events(t + s1 * h, ytmp, g_sub, o->events_data);
         }
         if (rc != MP_OK) return rc;
@@ -270,7 +270,7 @@ static int ev_step(mp_ode_ws *w, mp_ode_result *r, const mp_ode_options *o, doub
     for (size_t i = 0; i < nh; i++) {
         size_t k = hits[i].k;
         double s = hits[i].s;
-        mp_ode_dense_eval(w->coef, w->m->ncoef, w->n, s, ytmp);
+        mp_ode_dense_eval(w->coef, w->ncoef, w->n, s, ytmp);
         int rc = push_event(r, k, t + s * h, ytmp);
         if (rc != MP_OK) return rc;
         if (o->terminal[k] > 0 && r->ev_count[k] >= (size_t)o->terminal[k]) {
@@ -352,14 +352,28 @@ int mp_ode_solve(const mp_ode_method *m, const mp_ode_problem *p, double t0, dou
         g_sub = g_old + ne;
         gtmp = g_sub + ne;
     }
+    /* a switching row runs its two methods in turn; everything else is one method */
+    const mp_ode_method *cur = m->nonstiff ? m->nonstiff : m;
     size_t nvec = 5 + m->nscratch + m->ncoef;
     buf = malloc(nvec * n * sizeof(double));
     if (!buf) { rc = MP_ENOMEM; goto done; }
-    w.p = p; w.m = m; w.o = o; w.n = n;
+    w.p = p; w.m = cur; w.o = o; w.n = n; w.ncoef = m->ncoef; w.t_end = tf;
     w.y = buf; w.ynew = buf + n; w.f = buf + 2 * n; w.fnew = buf + 3 * n; ytmp = buf + 4 * n;
     w.k = buf + 5 * n;
     w.coef = w.k + m->nscratch * n;
-    if (m->alloc && (rc = m->alloc(&w)) != MP_OK) goto done;
+    memset(w.coef, 0, m->ncoef * n * sizeof(double));
+    if (m->nonstiff) {
+        void *st = NULL;
+        if (m->stiff->alloc) {
+            w.m = m->stiff;
+            if ((rc = m->stiff->alloc(&w)) != MP_OK) goto done;
+            st = w.state;
+            w.m = cur;
+        }
+        w.state2 = st; /* the stiff method's state while the non-stiff one runs */
+        w.state = NULL;
+    }
+    if (cur->alloc && (rc = cur->alloc(&w)) != MP_OK) goto done;
 
     double t = t0;
     memcpy(w.y, y0, n * sizeof(double));
@@ -378,13 +392,13 @@ int mp_ode_solve(const mp_ode_method *m, const mp_ode_problem *p, double t0, dou
 
     double hmax = fmin(o->max_step, tf - t0);
     double h;
-    if (!m->adaptive) h = o->h;
+    if (!cur->adaptive) h = o->h;
     else if (o->first_step > 0) h = o->first_step;
     else if ((rc = first_step(&w, t0, tf, hmax, &h)) != MP_OK) goto done;
     h = fmin(h, hmax);
 
     double facold = 1e-4;
-    int rejected = 0;
+    int rejected = 0, stiff_count = 0, calm_count = 0;
     long attempts = 0;
     while (t < tf) {
         if (attempts >= o->max_steps) { rc = MP_EMAXSTEPS; break; }
@@ -393,40 +407,53 @@ int mp_ode_solve(const mp_ode_method *m, const mp_ode_problem *p, double t0, dou
             break;
         attempts++;
         int last = 0;
-        if (m->adaptive ? t + 1.01 * h >= tf : t + h * (1.0 + 1e-9) >= tf) {
+        if (cur->adaptive ? t + 1.01 * h >= tf : t + h * (1.0 + 1e-9) >= tf) {
             h = tf - t;
             last = 1;
         }
-        if (m->adaptive && !m->self_controlled && h <= 16.0 * DBL_EPSILON * fmax(fabs(t), 1e-300)) {
+        if (cur->adaptive && !cur->self_controlled &&
+            h <= 16.0 * DBL_EPSILON * fmax(fabs(t), 1e-300)) {
             rc = MP_ESTEP;
             break;
         }
         double err = 0.0, hnew = h;
         w.fnew_valid = 0;
-        rc = m->step(&w, t, h, &err);
+        w.rho = 0.0;
+        rc = cur->step(&w, t, h, &err);
         if (rc != MP_OK) break;
-        if (m->self_controlled) {
+        if (cur->self_controlled) {
             last = last && w.h_taken >= h;
             h = w.h_taken;
             hnew = w.h_next;
-        } else if (m->adaptive) {
+        } else if (cur->adaptive) {
             if (!(err <= 1.0)) { /* rejected (also when err is NaN) */
-                double fac = isfinite(err) ? fmin(1.0 / m->fac_min, pow(err, m->expo) / m->safety)
+                double fac = isfinite(err) ? fmin(1.0 / cur->fac_min,
+                                                  pow(err, cur->expo) / cur->safety)
                                            : 10.0;
                 h /= fac;
                 rejected = 1;
                 r->nreject++;
                 continue;
             }
-            double fac11 = pow(err, m->expo);
-            double fac = fac11 / pow(facold, m->beta);
-            fac = fmax(1.0 / m->fac_max, fmin(1.0 / m->fac_min, fac / m->safety));
+            double fac11 = pow(err, cur->expo);
+            double fac = fac11 / pow(facold, cur->beta);
+            fac = fmax(1.0 / cur->fac_max, fmin(1.0 / cur->fac_min, fac / cur->safety));
             hnew = h / fac;
             facold = fmax(err, 1e-4);
             if (rejected) hnew = fmin(hnew, h);
             rejected = 0;
         }
-        if ((rc = m->finish(&w, t, h, need_dense)) != MP_OK) break;
+        if ((rc = cur->finish(&w, t, h, need_dense)) != MP_OK) break;
+        /* Hairer's stiffness test on explicit steps: h |lambda| near the
+         * stability boundary for 15 of the recent steps */
+        if (w.rho > 0.0) {
+            if (w.rho > cur->stiff_rho) {
+                calm_count = 0;
+                if (++stiff_count >= 15) r->stiff = 1;
+            } else if (++calm_count >= 6) {
+                stiff_count = 0;
+            }
+        }
         double tnew = last ? tf : t + h;
         double s_stop = 2.0;
         if (ne) {
@@ -438,7 +465,7 @@ int mp_ode_solve(const mp_ode_method *m, const mp_ode_problem *p, double t0, dou
             while (ie < o->n_eval && o->t_eval[ie] <= tend) {
                 double te = o->t_eval[ie];
                 if (te == tnew) memcpy(ytmp, w.ynew, n * sizeof(double));
-                else mp_ode_dense_eval(w.coef, m->ncoef, n, (te - t) / h, ytmp);
+                else mp_ode_dense_eval(w.coef, w.ncoef, n, (te - t) / h, ytmp);
                 if ((rc = push_sample(r, te, ytmp)) != MP_OK) goto done;
                 ie++;
             }
@@ -446,7 +473,7 @@ int mp_ode_solve(const mp_ode_method *m, const mp_ode_problem *p, double t0, dou
         if (o->dense && (rc = push_segment(r, t, h, w.coef)) != MP_OK) break;
         r->nsteps++;
         if (s_stop <= 1.0) {
-            mp_ode_dense_eval(w.coef, m->ncoef, n, s_stop, ytmp);
+            mp_ode_dense_eval(w.coef, w.ncoef, n, s_stop, ytmp);
             if (o->n_eval == 0 && (rc = push_sample(r, tend, ytmp)) != MP_OK) break;
             memcpy(w.y, ytmp, n * sizeof(double));
             t = tend;
@@ -457,12 +484,39 @@ int mp_ode_solve(const mp_ode_method *m, const mp_ode_problem *p, double t0, dou
         double *sw = w.y; w.y = w.ynew; w.ynew = sw;
         if (w.fnew_valid) { sw = w.f; w.f = w.fnew; w.fnew = sw; }
         t = tnew;
-        h = fmin(m->adaptive ? hnew : o->h, hmax);
+        h = fmin(cur->adaptive ? hnew : o->h, hmax);
+        /* the switching row: to the stiff method when the test fires, back when
+         * the stiff method's steps are within the explicit stability region */
+        if (m->nonstiff) {
+            const mp_ode_method *next = cur;
+            if (cur == m->nonstiff && stiff_count >= 15) next = m->stiff;
+            else if (cur == m->stiff && w.jnorm > 0 && h * w.jnorm < 0.5 * m->nonstiff->stiff_rho) {
+                if (++calm_count >= 10) next = m->nonstiff;
+            } else if (cur == m->stiff) {
+                calm_count = 0;
+            }
+            if (next != cur) {
+                void *sw2 = w.state; w.state = w.state2; w.state2 = sw2;
+                cur = next;
+                w.m = cur;
+                if (cur->restart) cur->restart(&w);
+                if (!w.fnew_valid && (rc = mp_ode_ws_rhs(&w, t, w.y, w.f)) != MP_OK) break;
+                stiff_count = calm_count = 0;
+                facold = 1e-4;
+                rejected = 0;
+                r->nswitch++;
+            }
+        }
     }
     r->t_fail = t;
 
 done:
-    if (m->free) m->free(&w);
+    if (w.m && w.m->free) w.m->free(&w);
+    if (m->nonstiff && w.state2) { /* the method not running at the end */
+        const mp_ode_method *other = w.m == m->stiff ? m->nonstiff : m->stiff;
+        w.state = w.state2;
+        if (other->free) other->free(&w);
+    }
     r->nfev = w.nfev;
     r->njev = w.njev;
     r->nlu = w.nlu;

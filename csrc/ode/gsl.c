@@ -86,7 +86,10 @@ static void gsl_free(mp_ode_ws *w)
 static int gsl_step(mp_ode_ws *w, double t, double h, double *err)
 {
     gsl_state *st = w->state;
-    double tt = t, hh = h, t1 = t + h;
+    /* The end of the interval, not t + h, so that GSL treats the step as an
+     * ordinary one and adapts its size (it never grows a "final" step).  The
+     * step tried is h, which the driver has clamped to max_step. */
+    double tt = t, hh = h, t1 = w->t_end;
     size_t failed = st->d->e->failed_steps;
     memcpy(w->ynew, w->y, w->n * sizeof(double));
     st->status = MP_OK;
@@ -96,7 +99,7 @@ static int gsl_step(mp_ode_ws *w, double t, double h, double *err)
     if (g == GSL_EBADFUNC && st->status != MP_OK) return st->status;
     if (g == GSL_FAILURE) return MP_ESTEP; /* step size underflow */
     if (g != GSL_SUCCESS) return MP_EGSL;
-    w->h_taken = tt - t;
+    w->h_taken = tt == t1 ? h : tt - t; /* the driver sets t = t_end on a final step */
     w->h_next = hh;
     if (!(w->h_taken > 0)) return MP_ESTEP;
     return MP_OK;

@@ -26,6 +26,10 @@ typedef struct mp_ode_problem {
     mp_ode_rhs rhs;
     mp_ode_jac jac;   /* optional: NULL means finite differences where needed */
     void *data;       /* handed to rhs and jac */
+    /* Second-order split for symplectic methods: when nq > 0 the state is
+     * (q[nq], v[nq]) with q' = v and v' = a(t, q) independent of v, so the
+     * second half of rhs(t, (q, v)) is the acceleration.  0: not separable. */
+    size_t nq;
 } mp_ode_problem;
 
 typedef struct mp_ode_options {
@@ -52,6 +56,8 @@ typedef struct mp_ode_result {
     int status;               /* MP_OK or the failure */
     int terminated;           /* a terminal event ended the solve */
     long nfev, njev, nlu, nsteps, nreject;
+    int stiff;                /* Hairer's stiffness test fired on an explicit method */
+    long nswitch;             /* method switches of a switching row */
     double t_fail;            /* where a failure happened */
     size_t n;
     /* samples: rows of (t, y[n]); with t_eval these are the t_eval points reached */
@@ -82,6 +88,7 @@ typedef struct mp_ode_method {
     /* step-size controller (Hairer): expo = 1/(q+1), beta (PI), bounds, safety */
     double expo, beta, fac_min, fac_max, safety;
     int self_controlled;  /* takes its own accepted steps (GSL evolve); sets ws->h_next */
+    double stiff_rho;     /* explicit methods: h|lambda| of their stability boundary */
     const void *extra;    /* method data (e.g. the GSL step type) */
     int (*alloc)(mp_ode_ws *w);   /* optional per-solve state */
     void (*free)(mp_ode_ws *w);
@@ -91,6 +98,11 @@ typedef struct mp_ode_method {
     /* After acceptance: fnew = f(t + h, ynew) when the method or the dense
      * output needs it, and the interpolant's coefficients when need_dense. */
     int (*finish)(mp_ode_ws *w, double t, double h, int need_dense);
+    /* Optional: forget history (a switching row changed method). */
+    void (*restart)(mp_ode_ws *w);
+    /* A switching row ("auto"): the driver runs `nonstiff` and `stiff` in
+     * turn, as its stiffness tests decide; step/finish are then unused. */
+    const struct mp_ode_method *nonstiff, *stiff;
 } mp_ode_method;
 
 /* The per-solve workspace every method works in. */
@@ -103,9 +115,14 @@ struct mp_ode_ws {
     int fnew_valid;              /* finish computed fnew */
     double *k;                   /* nscratch * n */
     double *coef;                /* ncoef * n: the last accepted step's interpolant */
+    double t_end;                /* the end of the integration interval */
     double h_taken, h_next;      /* self-controlled methods */
+    double rho;                  /* explicit methods: h |lambda| estimate of the last step */
+    double jnorm;                /* implicit methods: ||J||_inf of their last Jacobian */
+    size_t ncoef;                /* vectors in coef (the row's, padded with zeros) */
     long nfev, njev, nlu, nreject_inner;
     void *state;                 /* method's own state (alloc/free) */
+    void *state2;                /* a switching row's idle method's state */
 };
 
 /* f(t, y) with counting; checks the result is finite. */

@@ -21,6 +21,19 @@ static void stage_point(size_t n, const double *y, double h, const double *a,
     }
 }
 
+/* Hairer's stiffness estimate h |lambda| ~ h |f(a) - f(b)| / |a - b| from two
+ * stages evaluated at the same time. */
+static double stiffness_ratio(size_t n, double h, const double *fa, const double *fb,
+                              const double *a, const double *b)
+{
+    double num = 0.0, den = 0.0;
+    for (size_t i = 0; i < n; i++) {
+        num += (fa[i] - fb[i]) * (fa[i] - fb[i]);
+        den += (a[i] - b[i]) * (a[i] - b[i]);
+    }
+    return den > 0.0 ? fabs(h) * sqrt(num / den) : 0.0;
+}
+
 /* ---- classical RK4 ------------------------------------------------------- */
 
 static int rk4_step(mp_ode_ws *w, double t, double h, double *err)
@@ -99,6 +112,7 @@ static int dopri5_step(mp_ode_ws *w, double t, double h, double *err)
     }
     stage_point(n, w->y, h, dp_a[6], K, 6, w->ynew);
     if ((rc = mp_ode_ws_rhs(w, t + h, w->ynew, K[6])) != MP_OK) return rc; /* FSAL */
+    w->rho = stiffness_ratio(n, h, K[6], K[5], w->ynew, yt); /* stages 6, 7 both at t + h */
     for (size_t i = 0; i < n; i++) {
         double e = 0.0;
         for (int s = 0; s < 7; s++) e += dp_e[s] * K[s][i];
@@ -134,7 +148,7 @@ static int dopri5_finish(mp_ode_ws *w, double t, double h, int need_dense)
 const mp_ode_method mp_ode_dopri5 = {
     .name = "dopri5", .order = 5, .adaptive = 1, .dense_order = 4, .ncoef = 5, .nscratch = 6,
     .expo = 0.2, .beta = 0.04, .fac_min = 0.2, .fac_max = 10.0, .safety = 0.9,
-    .step = dopri5_step, .finish = dopri5_finish,
+    .stiff_rho = 3.25, .step = dopri5_step, .finish = dopri5_finish,
 };
 
 /* ---- Dormand-Prince 8(5,3) ----------------------------------------------- */
@@ -187,6 +201,7 @@ static int dop853_finish(mp_ode_ws *w, double t, double h, int need_dense)
     d8_stages(w, K, &yt);
     if ((rc = mp_ode_ws_rhs(w, t + h, w->ynew, K[12])) != MP_OK) return rc;
     w->fnew_valid = 1;
+    w->rho = stiffness_ratio(n, h, K[12], K[11], w->ynew, yt); /* yt: stage 12's point */
     if (!need_dense) return MP_OK;
     for (int s = 13; s < 16; s++) {
         stage_point(n, w->y, h, mp_dop853_a[s], K, (size_t)s, yt);
@@ -211,5 +226,5 @@ static int dop853_finish(mp_ode_ws *w, double t, double h, int need_dense)
 const mp_ode_method mp_ode_dop853 = {
     .name = "dop853", .order = 8, .adaptive = 1, .dense_order = 7, .ncoef = 8, .nscratch = 15,
     .expo = 1.0 / 8.0, .beta = 0.0, .fac_min = 0.333, .fac_max = 6.0, .safety = 0.9,
-    .step = dop853_step, .finish = dop853_finish,
+    .stiff_rho = 6.1, .step = dop853_step, .finish = dop853_finish,
 };

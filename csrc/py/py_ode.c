@@ -236,8 +236,9 @@ static PyObject *result_to_python(const mp_ode_result *r, int dense)
         }
         PyList_SET_ITEM(ev, (Py_ssize_t)k, pair);
     }
-    out = Py_BuildValue("{s:i,s:i,s:d,s:N,s:N,s:l,s:l,s:l,s:l,s:l,s:N,s:N}", "status", r->status,
-                        "terminated", r->terminated, "t_fail", r->t_fail, "t", t, "y", y,
+    out = Py_BuildValue("{s:i,s:i,s:i,s:l,s:d,s:N,s:N,s:l,s:l,s:l,s:l,s:l,s:N,s:N}", "status",
+                        r->status, "terminated", r->terminated, "stiff", r->stiff, "nswitch",
+                        r->nswitch, "t_fail", r->t_fail, "t", t, "y", y,
                         "nfev", r->nfev, "njev", r->njev, "nlu", r->nlu, "nsteps", r->nsteps,
                         "nreject", r->nreject, "dense", den, "events", ev);
     return out;

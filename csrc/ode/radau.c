@@ -1,0 +1,383 @@
+/* Radau IIA of order 5 in the manner of Hairer & Wanner's RADAU5: the
+ * collocation system is solved by simplified Newton iterations, transformed
+ * so that one real and one complex n x n system are factorised (LAPACK);
+ * Jacobian and LU factors are reused across steps while Newton converges
+ * fast; Gustafsson's predictive step-size control; the collocation
+ * polynomial serves as dense output.  A self-controlled row: the step
+ * function repeats its own attempts until one is accepted. */
+#include "ode/ode.h"
+
+#include <complex.h>
+#include <float.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* LAPACK (Fortran calling convention) */
+extern void dgetrf_(const int *m, const int *n, double *a, const int *lda, int *ipiv, int *info);
+extern void dgetrs_(const char *trans, const int *n, const int *nrhs, const double *a,
+                    const int *lda, const int *ipiv, double *b, const int *ldb, int *info);
+extern void zgetrf_(const int *m, const int *n, double complex *a, const int *lda, int *ipiv,
+                    int *info);
+extern void zgetrs_(const char *trans, const int *n, const int *nrhs, const double complex *a,
+                    const int *lda, const int *ipiv, double complex *b, const int *ldb,
+                    int *info);
+
+#define S6 2.449489742783178098197284
+#define NEWTON_MAXITER 6
+#define MIN_FACTOR 0.2
+#define MAX_FACTOR 10.0
+
+static const double rc_c[3] = {(4.0 - S6) / 10.0, (4.0 + S6) / 10.0, 1.0};
+static const double rc_e[3] = {(-13.0 - 7.0 * S6) / 3.0, (-13.0 + 7.0 * S6) / 3.0, -1.0 / 3.0};
+/* eigen-decomposition of the inverse Radau IIA matrix: T, T^-1, eigenvalues */
+static const double rc_T[3][3] = {
+    {0.09443876248897524, -0.14125529502095421, 0.03002919410514742},
+    {0.25021312296533332, 0.20412935229379994, -0.38294211275726192},
+    {1.0, 1.0, 0.0}};
+static const double rc_TI[3][3] = {
+    {4.17871859155190428, 0.32768282076106237, 0.52337644549944951},
+    {-4.17871859155190428, -0.32768282076106237, 0.47662355450055044},
+    {0.50287263494578682, -2.57192694985560522, 0.59603920482822492}};
+/* collocation polynomial: Q = Z^T P gives y(t0 + x h) = y0 + Q (x, x^2, x^3) */
+static const double rc_P[3][3] = {
+    {13.0 / 3.0 + 7.0 * S6 / 3.0, -23.0 / 3.0 - 22.0 * S6 / 3.0, 10.0 / 3.0 + 5.0 * S6},
+    {13.0 / 3.0 - 7.0 * S6 / 3.0, -23.0 / 3.0 + 22.0 * S6 / 3.0, 10.0 / 3.0 - 5.0 * S6},
+    {1.0 / 3.0, -8.0 / 3.0, 10.0 / 3.0}};
+
+typedef struct {
+    int n;
+    double *J;              /* n x n row-major */
+    double *LUr;            /* column-major */
+    double complex *LUc;
+    int *piv_r, *piv_c;
+    int have_J, current_J, have_LU;
+    double lu_h;            /* step the LU factors were made for */
+    double *Z, *W, *F, *dW; /* 3 x n each */
+    double *Q;              /* 3 x n: last accepted step's polynomial */
+    double q_h;             /* its step; 0 when there is none */
+    double *tmp, *tmp2, *scale, *err;
+    double complex *ctmp;
+    double h_old, err_old;  /* Gustafsson's controller memory; <= 0 none */
+} radau_state;
+
+static void radau_free(mp_ode_ws *w)
+{
+    radau_state *st = w->state;
+    if (!st) return;
+    free(st->J);
+    free(st->LUr);
+    free(st->LUc);
+    free(st->piv_r);
+    free(st->piv_c);
+    free(st->Z);
+    free(st->ctmp);
+    free(st);
+    w->state = NULL;
+}
+
+static void radau_restart(mp_ode_ws *w)
+{
+    radau_state *st = w->state;
+    st->have_J = st->current_J = st->have_LU = 0;
+    st->q_h = 0.0;
+    st->h_old = st->err_old = -1.0;
+}
+
+static int radau_alloc(mp_ode_ws *w)
+{
+    size_t n = w->n;
+    if (n > 46340) return MP_EDOM; /* n*n must fit LAPACK's int */
+    radau_state *st = calloc(1, sizeof *st);
+    if (!st) return MP_ENOMEM;
+    w->state = st;
+    st->n = (int)n;
+    st->J = malloc(n * n * sizeof(double));
+    st->LUr = malloc(n * n * sizeof(double));
+    st->LUc = malloc(n * n * sizeof(double complex));
+    st->piv_r = malloc(n * sizeof(int));
+    st->piv_c = malloc(n * sizeof(int));
+    st->Z = malloc(20 * n * sizeof(double));
+    st->ctmp = malloc(n * sizeof(double complex));
+    if (!st->J || !st->LUr || !st->LUc || !st->piv_r || !st->piv_c || !st->Z || !st->ctmp)
+        return MP_ENOMEM;
+    st->W = st->Z + 3 * n;
+    st->F = st->W + 3 * n;
+    st->dW = st->F + 3 * n;
+    st->Q = st->dW + 3 * n;
+    st->tmp = st->Q + 3 * n;
+    st->tmp2 = st->tmp + n;
+    st->scale = st->tmp2 + n;
+    st->err = st->scale + n;
+    radau_restart(w);
+    return MP_OK;
+}
+
+static double rms(size_t n, const double *v, const double *scale)
+{
+    double s = 0.0;
+    for (size_t i = 0; i < n; i++) s += (v[i] / scale[i]) * (v[i] / scale[i]);
+    return sqrt(s / (double)n);
+}
+
+static int radau_jac(mp_ode_ws *w, double t)
+{
+    radau_state *st = w->state;
+    int rc = mp_ode_ws_jac(w, t, w->y, w->f, st->J, st->tmp, st->tmp2);
+    if (rc != MP_OK) return rc;
+    double jn = 0.0;
+    for (int i = 0; i < st->n; i++) {
+        double row = 0.0;
+        for (int j = 0; j < st->n; j++) row += fabs(st->J[(size_t)i * st->n + j]);
+        jn = fmax(jn, row);
+    }
+    w->jnorm = jn;
+    st->have_J = st->current_J = 1;
+    st->have_LU = 0;
+    return MP_OK;
+}
+
+static int radau_lu(mp_ode_ws *w, double h)
+{
+    radau_state *st = w->state;
+    int n = st->n, info = 0;
+    double mr = (3.0 + cbrt(9.0) - cbrt(3.0)) / h;
+    double complex mc = (3.0 + 0.5 * (cbrt(3.0) - cbrt(9.0)) -
+                         0.5 * I * (pow(3.0, 5.0 / 6.0) + pow(3.0, 7.0 / 6.0))) / h;
+    for (int j = 0; j < n; j++)
+        for (int i = 0; i < n; i++) {
+            double a = -st->J[(size_t)i * n + j];
+            st->LUr[(size_t)j * n + i] = a + (i == j ? mr : 0.0);
+            st->LUc[(size_t)j * n + i] = a + (i == j ? mc : 0.0);
+        }
+    dgetrf_(&n, &n, st->LUr, &n, st->piv_r, &info);
+    if (info < 0) return MP_EDOM;
+    int info2 = 0;
+    zgetrf_(&n, &n, st->LUc, &n, st->piv_c, &info2);
+    if (info2 < 0) return MP_EDOM;
+    w->nlu++;
+    st->have_LU = (info == 0 && info2 == 0); /* singular: the caller shrinks h */
+    st->lu_h = h;
+    return st->have_LU ? MP_OK : MP_ESINGULAR;
+}
+
+static void solve_real(radau_state *st, double *b)
+{
+    int n = st->n, one = 1, info;
+    dgetrs_("N", &n, &one, st->LUr, &n, st->piv_r, b, &n, &info);
+}
+
+static void solve_complex(radau_state *st, double complex *b)
+{
+    int n = st->n, one = 1, info;
+    zgetrs_("N", &n, &one, st->LUc, &n, st->piv_c, b, &n, &info);
+}
+
+/* Newton iterations on the collocation system; returns 1 when converged. */
+static int radau_newton(mp_ode_ws *w, double t, double h, double tol, int *iters, double *rate,
+                        int *rc)
+{
+    radau_state *st = w->state;
+    size_t n = (size_t)st->n;
+    double mr = (3.0 + cbrt(9.0) - cbrt(3.0)) / h;
+    double complex mc = (3.0 + 0.5 * (cbrt(3.0) - cbrt(9.0)) -
+                         0.5 * I * (pow(3.0, 5.0 / 6.0) + pow(3.0, 7.0 / 6.0))) / h;
+    double *Z = st->Z, *W = st->W, *F = st->F, *dW = st->dW;
+    double dw_old = -1.0;
+    *rate = -1.0;
+    *rc = MP_OK;
+    /* W = TI Z */
+    for (int a = 0; a < 3; a++)
+        for (size_t i = 0; i < n; i++)
+            W[a * n + i] = rc_TI[a][0] * Z[i] + rc_TI[a][1] * Z[n + i] + rc_TI[a][2] * Z[2 * n + i];
+    for (int k = 0; k < NEWTON_MAXITER; k++) {
+        *iters = k + 1;
+        for (int a = 0; a < 3; a++) {
+            for (size_t i = 0; i < n; i++) st->tmp[i] = w->y[i] + Z[a * n + i];
+            int r = w->p->rhs(t + rc_c[a] * h, st->tmp, F + a * n, w->p->data);
+            w->nfev++;
+            if (r != MP_OK) { *rc = r; return 0; }
+            for (size_t i = 0; i < n; i++)
+                if (!isfinite(F[a * n + i])) return 0; /* too large a step: shrink */
+        }
+        for (size_t i = 0; i < n; i++) {
+            double fr = rc_TI[0][0] * F[i] + rc_TI[0][1] * F[n + i] + rc_TI[0][2] * F[2 * n + i];
+            double fc_re = rc_TI[1][0] * F[i] + rc_TI[1][1] * F[n + i] + rc_TI[1][2] * F[2 * n + i];
+            double fc_im = rc_TI[2][0] * F[i] + rc_TI[2][1] * F[n + i] + rc_TI[2][2] * F[2 * n + i];
+            dW[i] = fr - mr * W[i];
+            st->ctmp[i] = (fc_re + I * fc_im) - mc * (W[n + i] + I * W[2 * n + i]);
+        }
+        solve_real(st, dW);
+        solve_complex(st, st->ctmp);
+        for (size_t i = 0; i < n; i++) {
+            dW[n + i] = creal(st->ctmp[i]);
+            dW[2 * n + i] = cimag(st->ctmp[i]);
+        }
+        double s = 0.0;
+        for (int a = 0; a < 3; a++)
+            for (size_t i = 0; i < n; i++) {
+                double q = dW[a * n + i] / st->scale[i];
+                s += q * q;
+            }
+        double dw = sqrt(s / (3.0 * (double)n));
+        if (dw_old >= 0.0) *rate = dw / dw_old;
+        if (*rate >= 0.0 &&
+            (*rate >= 1.0 || pow(*rate, NEWTON_MAXITER - k) / (1.0 - *rate) * dw > tol))
+            return 0;
+        for (size_t i = 0; i < 3 * n; i++) W[i] += dW[i];
+        for (int a = 0; a < 3; a++)
+            for (size_t i = 0; i < n; i++)
+                Z[a * n + i] = rc_T[a][0] * W[i] + rc_T[a][1] * W[n + i] + rc_T[a][2] * W[2 * n + i];
+        if (dw == 0.0 || (*rate >= 0.0 && *rate / (1.0 - *rate) * dw < tol)) return 1;
+        dw_old = dw;
+    }
+    return 0;
+}
+
+static double predict_factor(radau_state *st, double h, double err)
+{
+    double mult = 1.0;
+    if (st->h_old > 0 && st->err_old > 0 && err > 0)
+        mult = h / st->h_old * pow(st->err_old / err, 0.25);
+    return err > 0 ? fmin(1.0, mult) * pow(err, -0.25) : MAX_FACTOR;
+}
+
+static int radau_step(mp_ode_ws *w, double t, double h_req, double *err_out)
+{
+    radau_state *st = w->state;
+    size_t n = (size_t)st->n;
+    const mp_ode_options *o = w->o;
+    double rtol = o->rtol;
+    double tol = fmax(10.0 * DBL_EPSILON / rtol, fmin(0.03, sqrt(rtol)));
+    double t_end = t + h_req; /* never step past what the driver asked for */
+    double h = h_req;
+    int rejected = 0, rc, iters = 0;
+    double rate = -1.0, err = 0.0;
+    *err_out = 0.0;
+    if (!st->have_J && (rc = radau_jac(w, t)) != MP_OK) return rc;
+    for (int attempt = 0;; attempt++) {
+        double hmin = 10.0 * fabs(nextafter(t, INFINITY) - t);
+        if (h < hmin || attempt > 1000) return MP_ESTEP;
+        double tn = (t + h > t_end) ? t_end : t + h;
+        h = tn - t;
+        /* starting guess: the previous collocation polynomial extrapolated,
+         * Z_a = y(t + c_a h) - y(t) with y(t_prev + x h_prev) = y_prev + Q p(x) */
+        if (st->q_h > 0) {
+            for (int a = 0; a < 3; a++) {
+                double x = 1.0 + rc_c[a] * h / st->q_h;
+                for (size_t i = 0; i < n; i++) {
+                    double at = x * (st->Q[i] + x * (st->Q[n + i] + x * st->Q[2 * n + i]));
+                    double at1 = st->Q[i] + st->Q[n + i] + st->Q[2 * n + i];
+                    st->Z[a * n + i] = at - at1;
+                }
+            }
+        } else {
+            memset(st->Z, 0, 3 * n * sizeof(double));
+        }
+        for (size_t i = 0; i < n; i++) st->scale[i] = o->atol[i] + fabs(w->y[i]) * rtol;
+        int converged = 0;
+        for (;;) {
+            if (!st->have_LU || st->lu_h != h) {
+                rc = radau_lu(w, h);
+                if (rc == MP_ESINGULAR) break;
+                if (rc != MP_OK) return rc;
+            }
+            converged = radau_newton(w, t, h, tol, &iters, &rate, &rc);
+            if (rc != MP_OK) return rc;
+            if (converged || st->current_J) break;
+            if ((rc = radau_jac(w, t)) != MP_OK) return rc;
+        }
+        if (!converged) {
+            h *= 0.5;
+            st->have_LU = 0;
+            w->nreject_inner++;
+            continue;
+        }
+        /* error estimate: (M_real I - J)^-1 (f + Z^T E / h) */
+        double *ynew = w->ynew, *e = st->err, *ZE = st->tmp2;
+        for (size_t i = 0; i < n; i++) {
+            ynew[i] = w->y[i] + st->Z[2 * n + i];
+            ZE[i] = (rc_e[0] * st->Z[i] + rc_e[1] * st->Z[n + i] + rc_e[2] * st->Z[2 * n + i]) / h;
+            e[i] = w->f[i] + ZE[i];
+        }
+        solve_real(st, e);
+        for (size_t i = 0; i < n; i++)
+            st->scale[i] = o->atol[i] + fmax(fabs(w->y[i]), fabs(ynew[i])) * rtol;
+        err = rms(n, e, st->scale);
+        double safety = 0.9 * (2 * NEWTON_MAXITER + 1) / (2 * NEWTON_MAXITER + iters);
+        if (rejected && err > 1.0) { /* Hairer's improved estimate after a rejection */
+            for (size_t i = 0; i < n; i++) st->tmp[i] = w->y[i] + e[i];
+            if ((rc = mp_ode_ws_rhs(w, t, st->tmp, e)) != MP_OK) return rc;
+            for (size_t i = 0; i < n; i++) e[i] += ZE[i];
+            solve_real(st, e);
+            err = rms(n, e, st->scale);
+        }
+        if (!(err <= 1.0)) {
+            double fac = isfinite(err) ? predict_factor(st, h, err) : MIN_FACTOR;
+            h *= fmax(MIN_FACTOR, safety * fac);
+            st->have_LU = 0;
+            rejected = 1;
+            w->nreject_inner++;
+            continue;
+        }
+        /* accepted */
+        int recompute_jac = iters > 2 && rate > 1e-3;
+        double factor = fmin(MAX_FACTOR, safety * predict_factor(st, h, err));
+        if (!recompute_jac && factor < 1.2) factor = 1.0;
+        else st->have_LU = 0;
+        if ((rc = mp_ode_ws_rhs(w, t + h, ynew, w->fnew)) != MP_OK) return rc;
+        w->fnew_valid = 1;
+        /* dense output polynomial Q = Z^T P */
+        for (int a = 0; a < 3; a++)
+            for (size_t i = 0; i < n; i++)
+                st->Q[a * n + i] = st->Z[i] * rc_P[0][a] + st->Z[n + i] * rc_P[1][a] +
+                                   st->Z[2 * n + i] * rc_P[2][a];
+        st->q_h = h;
+        st->h_old = h;
+        st->err_old = err;
+        w->h_taken = h;
+        w->h_next = h * factor;
+        if (recompute_jac) {
+            /* at the new point, once the driver has moved there: mark stale */
+            st->have_J = 0;
+        } else {
+            st->current_J = 0;
+        }
+        return MP_OK;
+    }
+}
+
+/* Dense output: y0 + Q1 x + Q2 x^2 + Q3 x^3 in the driver's nested form
+ * c1 + s (c2 + (1-s)(c3 + s c4)). */
+static int radau_finish(mp_ode_ws *w, double t, double h, int need_dense)
+{
+    (void)t;
+    (void)h;
+    radau_state *st = w->state;
+    size_t n = w->n;
+    if (!need_dense) return MP_OK;
+    double *c = w->coef;
+    for (size_t i = 0; i < n; i++) {
+        double q1 = st->Q[i], q2 = st->Q[n + i], q3 = st->Q[2 * n + i];
+        c[i] = w->y[i];
+        c[n + i] = q1 + q2 + q3;
+        c[2 * n + i] = -q3 - q2;
+        c[3 * n + i] = -q3;
+    }
+    return MP_OK;
+}
+
+const mp_ode_method mp_ode_radau = {
+    .name = "radau", .order = 5, .adaptive = 1, .implicit = 1, .needs_jacobian = 1,
+    .dense_order = 3, .ncoef = 4, .nscratch = 0, .self_controlled = 1,
+    .alloc = radau_alloc, .free = radau_free, .restart = radau_restart,
+    .step = radau_step, .finish = radau_finish,
+};
+
+extern const mp_ode_method mp_ode_dop853;
+
+const mp_ode_method mp_ode_auto = {
+    .name = "auto", .order = 8, .adaptive = 1, .implicit = 1, .needs_jacobian = 1,
+    .dense_order = 3, .ncoef = 8, .nscratch = 15,
+    .nonstiff = &mp_ode_dop853, .stiff = &mp_ode_radau,
+};
