@@ -188,7 +188,7 @@ static int mp_mesh_fail(struct mp_mesh_report *rep, int defect, int64_t face, in
     rep->face = face;
     rep->v0 = v0;
     rep->v1 = v1;
-    return defect == MP_MESH_INDEX ? MP_EDOM : MP_EMESH;
+    return MP_EMESH;
 }
 
 /* Number of times `b` occurs in the outgoing list of `a`. */
@@ -330,9 +330,9 @@ int mp_inertia_mesh(size_t nv, const double *X, size_t nf, const int64_t *F,
     inertia[0] = syy + szz;
     inertia[4] = szz + sxx;
     inertia[8] = sxx + syy;
-    inertia[1] = inertia[3] = -sxy;
-    inertia[5] = inertia[7] = -syz;
-    inertia[2] = inertia[6] = -szx;
+    inertia[1] = inertia[3] = 0.0 - sxy;
+    inertia[5] = inertia[7] = 0.0 - syz;
+    inertia[2] = inertia[6] = 0.0 - szx;
     return MP_OK;
 }
 
@@ -391,8 +391,8 @@ int mp_inertia_grid(size_t nx, size_t ny, size_t nz, const double *rho, const do
     inertia[0] = syy + szz;
     inertia[4] = szz + sxx;
     inertia[8] = sxx + syy;
-    inertia[1] = inertia[3] = -sxy;
-    inertia[5] = inertia[7] = -syz;
-    inertia[2] = inertia[6] = -szx;
+    inertia[1] = inertia[3] = 0.0 - sxy;
+    inertia[5] = inertia[7] = 0.0 - syz;
+    inertia[2] = inertia[6] = 0.0 - szx;
     return MP_OK;
 }

@@ -37,7 +37,7 @@ int mp_inertia_eigh(size_t n, const double *a, double *w, double *v);
 /* Defects reported by mp_inertia_mesh (with MP_EMESH). */
 enum mp_mesh_defect {
     MP_MESH_OK = 0,
-    MP_MESH_INDEX,        /* a face index is out of range (MP_EDOM) */
+    MP_MESH_INDEX,        /* a face index is out of range */
     MP_MESH_REPEATED,     /* a face repeats a vertex */
     MP_MESH_ZERO_AREA,    /* a face has zero area */
     MP_MESH_OPEN,         /* an edge belongs to only one face */
@@ -61,8 +61,8 @@ struct mp_mesh_report {
  * each face).  vertices: nv*3, faces: nf*3 vertex indices.  The mesh is
  * validated first (indices, repeated vertices, zero-area faces, every edge
  * shared by exactly two faces traversing it in opposite directions,
- * positive volume); a defect returns MP_EMESH (MP_EDOM for a bad index)
- * and fills `report`.  O(nf) time and memory. */
+ * positive volume); a defect returns MP_EMESH and fills `report`
+ * (MP_EDOM for a non-finite vertex).  O(nf) time and memory. */
 int mp_inertia_mesh(size_t nv, const double *vertices, size_t nf, const int64_t *faces,
                     double *volume, double com[3], double inertia[9],
                     struct mp_mesh_report *report);
