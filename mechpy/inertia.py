@@ -725,7 +725,7 @@ def kinetic_energy_split(masses, positions, velocities) -> EnergySplit:
     m, x, v = _particles(masses, positions, velocities)
     if m.ndim != 1:
         raise ValueError("kinetic_energy_split takes one system: masses of shape (n,)")
-    M = m.sum()
+    M = float(m.sum())
     c = m @ x / M
     V = m @ v / M
     u = v - V
