@@ -181,6 +181,19 @@ int mp_inertia_eigh(size_t n, const double *a, double *w, double *v)
 
 /* ---------------------------------------------------------------- meshes */
 
+/* Inertia tensor from the second moments S = int rho x x^T about the same
+ * point, given as (xx, yy, zz, xy, yz, zx): I = tr(S) E - S, the diagonal
+ * formed as sums of the two other moments (no cancellation). */
+static void mp_inertia_from_moments(const double s[6], double *inertia)
+{
+    inertia[0] = s[1] + s[2];
+    inertia[4] = s[2] + s[0];
+    inertia[8] = s[0] + s[1];
+    inertia[1] = inertia[3] = 0.0 - s[3];
+    inertia[5] = inertia[7] = 0.0 - s[4];
+    inertia[2] = inertia[6] = 0.0 - s[5];
+}
+
 static int mp_mesh_fail(struct mp_mesh_report *rep, int defect, int64_t face, int64_t v0,
                         int64_t v1)
 {
@@ -269,8 +282,8 @@ int mp_inertia_mesh(size_t nv, const double *X, size_t nf, const int64_t *F,
     const size_t B = 2048;
     for (size_t f0 = 0; f0 < nf; f0 += B) {
         memset(blk, 0, sizeof blk);
-        size_t f1 = f0 + B < nf ? f0 + B : nf;
-        for (size_t f = f0; f < f1; f++) {
+        size_t fend = f0 + B < nf ? f0 + B : nf;
+        for (size_t f = f0; f < fend; f++) {
             const double *p0 = X + 3 * F[3 * f], *p1 = X + 3 * F[3 * f + 1],
                          *p2 = X + 3 * F[3 * f + 2];
             double x0 = p0[0] - ref[0], y0 = p0[1] - ref[1], z0 = p0[2] - ref[2];
@@ -327,12 +340,8 @@ int mp_inertia_mesh(size_t nv, const double *X, size_t nf, const int64_t *F,
            szx = tot[9] - V * c[2] * c[0];
     *volume = V;
     for (int k = 0; k < 3; k++) com[k] = ref[k] + c[k];
-    inertia[0] = syy + szz;
-    inertia[4] = szz + sxx;
-    inertia[8] = sxx + syy;
-    inertia[1] = inertia[3] = 0.0 - sxy;
-    inertia[5] = inertia[7] = 0.0 - syz;
-    inertia[2] = inertia[6] = 0.0 - szx;
+    const double sm[6] = {sxx, syy, szz, sxy, syz, szx};
+    mp_inertia_from_moments(sm, inertia);
     return MP_OK;
 }
 
@@ -388,11 +397,7 @@ int mp_inertia_grid(size_t nx, size_t ny, size_t nz, const double *rho, const do
     double szx = (s2[5] / s0 - c[2] * c[0]) * M;
     *mass = M;
     for (int k = 0; k < 3; k++) com[k] = origin[k] + ctr[k] + c[k];
-    inertia[0] = syy + szz;
-    inertia[4] = szz + sxx;
-    inertia[8] = sxx + syy;
-    inertia[1] = inertia[3] = 0.0 - sxy;
-    inertia[5] = inertia[7] = 0.0 - syz;
-    inertia[2] = inertia[6] = 0.0 - szx;
+    const double sm[6] = {sxx, syy, szz, sxy, syz, szx};
+    mp_inertia_from_moments(sm, inertia);
     return MP_OK;
 }
