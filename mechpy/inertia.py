@@ -197,7 +197,7 @@ def classify(I, rtol: float = 1e-9) -> str:
     w, _ = principal_axes(_as_inertia(I, batch=False))
     top = w[2]
     if top <= 0:
-        raise ValueError("I is zero (a single point on the axis): no type of top")
+        raise ValueError("I is zero (all the mass at one point): no type of top")
     tol = rtol * top
     if w[0] <= tol:
         return "rotor"
