@@ -128,7 +128,18 @@ def _warn_lock(nlock: int, n: int, seq: str) -> None:
         warnings.warn(GimbalLockWarning(
             f"gimbal lock in {nlock} of {n} rotation(s) (middle angle of {seq!r} at {which}): "
             "only the sum or difference of the first and third angles is determined; "
-            "the third angle was set to 0"), stacklevel=3)
+            "the third angle was set to 0"), stacklevel=4)
+
+
+def _angles_of(core_fn, x, item_ndim, seq, passive, *tols):
+    """Run a C matrix/quaternion -> angles conversion on the batch x; warn at lock."""
+    seq = _seq(seq)
+    passive = _flag(passive, "passive")
+    shape = x.shape[:x.ndim - item_ndim]
+    k = int(np.prod(x.shape[x.ndim - item_ndim:]))
+    out, nlock = core_fn(x.reshape(-1, k), seq, passive, *tols)
+    _warn_lock(nlock, out.shape[0], seq)
+    return out.reshape(shape + (3,))
 
 
 def euler_matrix(phi, theta=None, psi=None, seq: str = "ZXZ", passive: bool = True
@@ -215,15 +226,9 @@ def euler_angles(R, seq: str = "ZXZ", passive: bool = True, *, orth_tol: float =
     ndarray, shape (..., 3)
         ``(phi, theta, psi)`` in rad.
     """
-    seq = _seq(seq)
-    passive = _flag(passive, "passive")
     R = _matrices(R)
-    shape = R.shape[:-2]
-    out, nlock = _core.rotation_euler_angles(R.reshape(-1, 9), seq, passive,
-                                             _tol(orth_tol, "orth_tol"),
-                                             _tol(lock_tol, "lock_tol"))
-    _warn_lock(nlock, out.shape[0], seq)
-    return out.reshape(shape + (3,))
+    return _angles_of(_core.rotation_euler_angles, R, 2, seq, passive,
+                      _tol(orth_tol, "orth_tol"), _tol(lock_tol, "lock_tol"))
 
 
 def quat_from_matrix(R, *, orth_tol: float = ORTH_TOL) -> np.ndarray:
@@ -381,14 +386,9 @@ def euler_from_quat(quat, seq: str = "ZXZ", passive: bool = True, *,
     ndarray, shape (..., 3)
         ``(phi, theta, psi)`` in rad.
     """
-    seq = _seq(seq)
-    passive = _flag(passive, "passive")
     q = _vectors(quat, "quat", 4)
-    shape = q.shape[:-1]
-    out, nlock = _core.rotation_euler_from_quat(q.reshape(-1, 4), seq, passive,
-                                                _tol(lock_tol, "lock_tol"))
-    _warn_lock(nlock, out.shape[0], seq)
-    return out.reshape(shape + (3,))
+    return _angles_of(_core.rotation_euler_from_quat, q, 1, seq, passive,
+                      _tol(lock_tol, "lock_tol"))
 
 
 def _pair(angles, other, name: str):

@@ -51,28 +51,115 @@ static PyObject *raise_at(int status, const char *context, size_t bad)
     return mp_py_raise_detail(status, context, detail);
 }
 
-static PyObject *py_euler_matrix(PyObject *self, PyObject *args)
-{
-    (void)self;
-    PyObject *obj;
-    const char *text;
-    int passive;
+/* The parameters a one-array conversion may need. */
+struct call {
     struct mp_rotation_seq seq;
-    if (!PyArg_ParseTuple(args, "Osp", &obj, &text, &passive)) return NULL;
-    if (parse_seq(text, &seq) < 0) return NULL;
-    PyArrayObject *a = batch(obj, "angles", 3);
+    int passive;
+    double orth_tol, lock_tol;
+};
+
+/* One array of n rows in, one out; *nlock counts gimbal locks. */
+typedef int (*kernel)(const struct call *c, size_t n, const double *in, double *out,
+                      size_t *nlock, size_t *bad);
+
+static int k_euler_matrix(const struct call *c, size_t n, const double *in, double *out,
+                          size_t *nlock, size_t *bad)
+{
+    (void)nlock;
+    (void)bad;
+    return mp_rotation_euler_matrix(n, in, &c->seq, c->passive, out);
+}
+
+static int k_euler_angles(const struct call *c, size_t n, const double *in, double *out,
+                          size_t *nlock, size_t *bad)
+{
+    return mp_rotation_euler_angles(n, in, &c->seq, c->passive, c->orth_tol, c->lock_tol, out,
+                                    nlock, bad);
+}
+
+static int k_quat_from_matrix(const struct call *c, size_t n, const double *in, double *out,
+                              size_t *nlock, size_t *bad)
+{
+    (void)nlock;
+    return mp_rotation_quat_from_matrix(n, in, c->orth_tol, out, bad);
+}
+
+static int k_matrix_from_quat(const struct call *c, size_t n, const double *in, double *out,
+                              size_t *nlock, size_t *bad)
+{
+    (void)c;
+    (void)nlock;
+    return mp_rotation_matrix_from_quat(n, in, out, bad);
+}
+
+static int k_quat_normalize(const struct call *c, size_t n, const double *in, double *out,
+                            size_t *nlock, size_t *bad)
+{
+    (void)c;
+    (void)nlock;
+    return mp_rotation_quat_normalize(n, in, out, bad);
+}
+
+static int k_quat_from_euler(const struct call *c, size_t n, const double *in, double *out,
+                             size_t *nlock, size_t *bad)
+{
+    (void)nlock;
+    (void)bad;
+    return mp_rotation_quat_from_euler(n, in, &c->seq, c->passive, out);
+}
+
+static int k_euler_from_quat(const struct call *c, size_t n, const double *in, double *out,
+                             size_t *nlock, size_t *bad)
+{
+    return mp_rotation_euler_from_quat(n, in, &c->seq, c->passive, c->lock_tol, out, nlock,
+                                       bad);
+}
+
+#define NOT_ROTATION "R is not a rotation matrix (|R R^T - I| > orth_tol or det <= 0)"
+#define ZERO_QUAT "quat must have a non-zero norm"
+
+/* Convert obj (n, k_in), run f with the GIL released, return the (n, k_out)
+ * result, or (result, nlock) when with_nlock. */
+static PyObject *run(PyObject *obj, const char *name, npy_intp k_in, npy_intp k_out, kernel f,
+                     const struct call *c, const char *errctx, int with_nlock)
+{
+    PyArrayObject *a = batch(obj, name, k_in);
     if (!a) return NULL;
     npy_intp n = PyArray_DIM(a, 0);
-    PyArrayObject *R = result(n, 9);
-    if (!R) {
+    PyArrayObject *out = result(n, k_out);
+    if (!out) {
         Py_DECREF(a);
         return NULL;
     }
+    size_t nlock = 0, bad = 0;
+    int st;
     Py_BEGIN_ALLOW_THREADS
-    mp_rotation_euler_matrix((size_t)n, PyArray_DATA(a), &seq, passive, PyArray_DATA(R));
+    st = f(c, (size_t)n, PyArray_DATA(a), PyArray_DATA(out), &nlock, &bad);
     Py_END_ALLOW_THREADS
     Py_DECREF(a);
-    return (PyObject *)R;
+    if (st != MP_OK) {
+        Py_DECREF(out);
+        return raise_at(st, errctx, bad);
+    }
+    if (with_nlock) return Py_BuildValue("Nn", out, (Py_ssize_t)nlock);
+    return (PyObject *)out;
+}
+
+/* (angles, seq, passive) -> (n, k_out) through f. */
+static PyObject *from_euler(PyObject *args, npy_intp k_out, kernel f, const char *ctx)
+{
+    PyObject *obj;
+    const char *text;
+    struct call c = {0};
+    if (!PyArg_ParseTuple(args, "Osp", &obj, &text, &c.passive)) return NULL;
+    if (parse_seq(text, &c.seq) < 0) return NULL;
+    return run(obj, "angles", 3, k_out, f, &c, ctx, 0);
+}
+
+static PyObject *py_euler_matrix(PyObject *self, PyObject *args)
+{
+    (void)self;
+    return from_euler(args, 9, k_euler_matrix, "euler_matrix");
 }
 
 static PyObject *py_euler_angles(PyObject *self, PyObject *args)
@@ -80,88 +167,51 @@ static PyObject *py_euler_angles(PyObject *self, PyObject *args)
     (void)self;
     PyObject *obj;
     const char *text;
-    int passive;
-    double orth_tol, lock_tol;
-    struct mp_rotation_seq seq;
-    if (!PyArg_ParseTuple(args, "Ospdd", &obj, &text, &passive, &orth_tol, &lock_tol))
+    struct call c = {0};
+    if (!PyArg_ParseTuple(args, "Ospdd", &obj, &text, &c.passive, &c.orth_tol, &c.lock_tol))
         return NULL;
-    if (parse_seq(text, &seq) < 0) return NULL;
-    PyArrayObject *R = batch(obj, "R", 9);
-    if (!R) return NULL;
-    npy_intp n = PyArray_DIM(R, 0);
-    PyArrayObject *out = result(n, 3);
-    if (!out) {
-        Py_DECREF(R);
-        return NULL;
-    }
-    size_t nlock = 0, bad = 0;
-    int st;
-    Py_BEGIN_ALLOW_THREADS
-    st = mp_rotation_euler_angles((size_t)n, PyArray_DATA(R), &seq, passive, orth_tol, lock_tol,
-                                  PyArray_DATA(out), &nlock, &bad);
-    Py_END_ALLOW_THREADS
-    Py_DECREF(R);
-    if (st != MP_OK) {
-        Py_DECREF(out);
-        return raise_at(st, "R is not a rotation matrix (|R R^T - I| > orth_tol or det <= 0)",
-                        bad);
-    }
-    return Py_BuildValue("Nn", out, (Py_ssize_t)nlock);
+    if (parse_seq(text, &c.seq) < 0) return NULL;
+    return run(obj, "R", 9, 3, k_euler_angles, &c, NOT_ROTATION, 1);
 }
 
 static PyObject *py_quat_from_matrix(PyObject *self, PyObject *args)
 {
     (void)self;
     PyObject *obj;
-    double orth_tol;
-    if (!PyArg_ParseTuple(args, "Od", &obj, &orth_tol)) return NULL;
-    PyArrayObject *R = batch(obj, "R", 9);
-    if (!R) return NULL;
-    npy_intp n = PyArray_DIM(R, 0);
-    PyArrayObject *out = result(n, 4);
-    if (!out) {
-        Py_DECREF(R);
-        return NULL;
-    }
-    size_t bad = 0;
-    int st;
-    Py_BEGIN_ALLOW_THREADS
-    st = mp_rotation_quat_from_matrix((size_t)n, PyArray_DATA(R), orth_tol, PyArray_DATA(out),
-                                      &bad);
-    Py_END_ALLOW_THREADS
-    Py_DECREF(R);
-    if (st != MP_OK) {
-        Py_DECREF(out);
-        return raise_at(st, "R is not a rotation matrix (|R R^T - I| > orth_tol or det <= 0)",
-                        bad);
-    }
-    return (PyObject *)out;
+    struct call c = {0};
+    if (!PyArg_ParseTuple(args, "Od", &obj, &c.orth_tol)) return NULL;
+    return run(obj, "R", 9, 4, k_quat_from_matrix, &c, NOT_ROTATION, 0);
 }
 
-static PyObject *py_matrix_from_quat(PyObject *self, PyObject *args)
+static PyObject *py_matrix_from_quat(PyObject *self, PyObject *obj)
+{
+    (void)self;
+    struct call c = {0};
+    return run(obj, "quat", 4, 9, k_matrix_from_quat, &c, ZERO_QUAT, 0);
+}
+
+static PyObject *py_quat_normalize(PyObject *self, PyObject *obj)
+{
+    (void)self;
+    struct call c = {0};
+    return run(obj, "quat", 4, 4, k_quat_normalize, &c, ZERO_QUAT, 0);
+}
+
+static PyObject *py_quat_from_euler(PyObject *self, PyObject *args)
+{
+    (void)self;
+    return from_euler(args, 4, k_quat_from_euler, "quat_from_euler");
+}
+
+static PyObject *py_euler_from_quat(PyObject *self, PyObject *args)
 {
     (void)self;
     PyObject *obj;
-    if (!PyArg_ParseTuple(args, "O", &obj)) return NULL;
-    PyArrayObject *q = batch(obj, "quat", 4);
-    if (!q) return NULL;
-    npy_intp n = PyArray_DIM(q, 0);
-    PyArrayObject *out = result(n, 9);
-    if (!out) {
-        Py_DECREF(q);
-        return NULL;
-    }
-    size_t bad = 0;
-    int st;
-    Py_BEGIN_ALLOW_THREADS
-    st = mp_rotation_matrix_from_quat((size_t)n, PyArray_DATA(q), PyArray_DATA(out), &bad);
-    Py_END_ALLOW_THREADS
-    Py_DECREF(q);
-    if (st != MP_OK) {
-        Py_DECREF(out);
-        return raise_at(st, "quat must have a non-zero norm", bad);
-    }
-    return (PyObject *)out;
+    const char *text;
+    struct call c = {0};
+    if (!PyArg_ParseTuple(args, "Ospd", &obj, &text, &c.passive, &c.lock_tol)) return NULL;
+    if (parse_seq(text, &c.seq) < 0) return NULL;
+    return run(obj, "quat", 4, 3, k_euler_from_quat, &c, ZERO_QUAT, 1);
 }
 
 static PyObject *py_quat_multiply(PyObject *self, PyObject *args)
@@ -193,87 +243,6 @@ static PyObject *py_quat_multiply(PyObject *self, PyObject *args)
     Py_DECREF(p);
     Py_DECREF(q);
     return (PyObject *)out;
-}
-
-static PyObject *py_quat_normalize(PyObject *self, PyObject *args)
-{
-    (void)self;
-    PyObject *obj;
-    if (!PyArg_ParseTuple(args, "O", &obj)) return NULL;
-    PyArrayObject *q = batch(obj, "quat", 4);
-    if (!q) return NULL;
-    npy_intp n = PyArray_DIM(q, 0);
-    PyArrayObject *out = result(n, 4);
-    if (!out) {
-        Py_DECREF(q);
-        return NULL;
-    }
-    size_t bad = 0;
-    int st;
-    Py_BEGIN_ALLOW_THREADS
-    st = mp_rotation_quat_normalize((size_t)n, PyArray_DATA(q), PyArray_DATA(out), &bad);
-    Py_END_ALLOW_THREADS
-    Py_DECREF(q);
-    if (st != MP_OK) {
-        Py_DECREF(out);
-        return raise_at(st, "quat must have a non-zero norm", bad);
-    }
-    return (PyObject *)out;
-}
-
-static PyObject *py_quat_from_euler(PyObject *self, PyObject *args)
-{
-    (void)self;
-    PyObject *obj;
-    const char *text;
-    int passive;
-    struct mp_rotation_seq seq;
-    if (!PyArg_ParseTuple(args, "Osp", &obj, &text, &passive)) return NULL;
-    if (parse_seq(text, &seq) < 0) return NULL;
-    PyArrayObject *a = batch(obj, "angles", 3);
-    if (!a) return NULL;
-    npy_intp n = PyArray_DIM(a, 0);
-    PyArrayObject *out = result(n, 4);
-    if (out) {
-        Py_BEGIN_ALLOW_THREADS
-        mp_rotation_quat_from_euler((size_t)n, PyArray_DATA(a), &seq, passive,
-                                    PyArray_DATA(out));
-        Py_END_ALLOW_THREADS
-    }
-    Py_DECREF(a);
-    return (PyObject *)out;
-}
-
-static PyObject *py_euler_from_quat(PyObject *self, PyObject *args)
-{
-    (void)self;
-    PyObject *obj;
-    const char *text;
-    int passive;
-    double lock_tol;
-    struct mp_rotation_seq seq;
-    if (!PyArg_ParseTuple(args, "Ospd", &obj, &text, &passive, &lock_tol)) return NULL;
-    if (parse_seq(text, &seq) < 0) return NULL;
-    PyArrayObject *q = batch(obj, "quat", 4);
-    if (!q) return NULL;
-    npy_intp n = PyArray_DIM(q, 0);
-    PyArrayObject *out = result(n, 3);
-    if (!out) {
-        Py_DECREF(q);
-        return NULL;
-    }
-    size_t nlock = 0, bad = 0;
-    int st;
-    Py_BEGIN_ALLOW_THREADS
-    st = mp_rotation_euler_from_quat((size_t)n, PyArray_DATA(q), &seq, passive, lock_tol,
-                                     PyArray_DATA(out), &nlock, &bad);
-    Py_END_ALLOW_THREADS
-    Py_DECREF(q);
-    if (st != MP_OK) {
-        Py_DECREF(out);
-        return raise_at(st, "quat must have a non-zero norm", bad);
-    }
-    return Py_BuildValue("Nn", out, (Py_ssize_t)nlock);
 }
 
 /* Shared by angular_velocity (inverse = 0) and euler_rates (inverse = 1). */
@@ -351,11 +320,11 @@ PyMethodDef mp_py_rotation_methods[] = {
      "rotation_euler_angles(R (n,9), seq, passive, orth_tol, lock_tol) -> ((n,3), nlock)"},
     {"rotation_quat_from_matrix", py_quat_from_matrix, METH_VARARGS,
      "rotation_quat_from_matrix(R (n,9), orth_tol) -> (n,4)"},
-    {"rotation_matrix_from_quat", py_matrix_from_quat, METH_VARARGS,
+    {"rotation_matrix_from_quat", py_matrix_from_quat, METH_O,
      "rotation_matrix_from_quat(q (n,4)) -> (n,9)"},
     {"rotation_quat_multiply", py_quat_multiply, METH_VARARGS,
      "rotation_quat_multiply(p (n,4), q (n,4)) -> (n,4)"},
-    {"rotation_quat_normalize", py_quat_normalize, METH_VARARGS,
+    {"rotation_quat_normalize", py_quat_normalize, METH_O,
      "rotation_quat_normalize(q (n,4)) -> (n,4)"},
     {"rotation_quat_from_euler", py_quat_from_euler, METH_VARARGS,
      "rotation_quat_from_euler(angles (n,3), seq, passive) -> (n,4)"},
