@@ -74,9 +74,9 @@ def _seq(seq) -> str:
 
 
 def _flag(x, name: str) -> bool:
-    if not isinstance(x, (bool, np.bool_)):
-        raise TypeError(f"{name} must be True or False, got {type(x).__name__}")
-    return bool(x)
+    if isinstance(x, (bool, np.bool_)) or (isinstance(x, (int, np.integer)) and x in (0, 1)):
+        return bool(x)
+    raise TypeError(f"{name} must be True or False, got {x!r}")
 
 
 def _frame(frame) -> bool:
@@ -142,8 +142,8 @@ def _angles_of(core_fn, x, item_ndim, seq, passive, *tols):
     return out.reshape(shape + (3,))
 
 
-def euler_matrix(phi, theta=None, psi=None, seq: str = "ZXZ", passive: bool = True
-                 ) -> np.ndarray:
+def euler_matrix(phi, theta=None, psi=None, seq: str = "ZXZ", passive: bool = True, *,
+                 degrees: bool = False) -> np.ndarray:
     r"""Rotation matrix from Euler angles.
 
     For an intrinsic sequence ``"ABC"`` the active matrix is
@@ -163,6 +163,8 @@ def euler_matrix(phi, theta=None, psi=None, seq: str = "ZXZ", passive: bool = Tr
     passive : bool
         True (default): the coordinate transformation ``x_body = L x_space``;
         False: SciPy's active matrix, ``Rotation.from_euler(seq, angles).as_matrix()``.
+    degrees : bool
+        Angles in degrees instead of radians (as SciPy's ``degrees``).
 
     Returns
     -------
@@ -177,6 +179,8 @@ def euler_matrix(phi, theta=None, psi=None, seq: str = "ZXZ", passive: bool = Tr
     True
     """
     angles, seq, passive = _angles(phi, theta, psi, seq, passive)
+    if _flag(degrees, "degrees"):
+        angles = np.radians(angles)
     seq = _seq(seq)
     passive = _flag(passive, "passive")
     shape = angles.shape[:-1]
@@ -184,8 +188,8 @@ def euler_matrix(phi, theta=None, psi=None, seq: str = "ZXZ", passive: bool = Tr
     return R.reshape(shape + (3, 3))
 
 
-def euler_angles(R, seq: str = "ZXZ", passive: bool = True, *, orth_tol: float = ORTH_TOL,
-                 lock_tol: float = LOCK_TOL) -> np.ndarray:
+def euler_angles(R, seq: str = "ZXZ", passive: bool = True, *, degrees: bool = False,
+                 orth_tol: float = ORTH_TOL, lock_tol: float = LOCK_TOL) -> np.ndarray:
     r"""Euler angles of rotation matrices (the inverse of :func:`euler_matrix`).
 
     The matrix is turned into a quaternion (Markley/Shepperd) and the angles
@@ -215,6 +219,8 @@ def euler_angles(R, seq: str = "ZXZ", passive: bool = True, *, orth_tol: float =
         One of :data:`SEQUENCES`; default ``"ZXZ"``.
     passive : bool
         Whether ``R`` is the passive matrix (default) or the active one.
+    degrees : bool
+        Return degrees instead of radians (``lock_tol`` stays in radians).
     orth_tol : float
         ``R`` must satisfy ``max|R R^T - I| <= orth_tol`` (default 1e-6) and
         ``det R > 0``; otherwise :class:`mechpy.DomainError` (a ValueError).
@@ -227,8 +233,9 @@ def euler_angles(R, seq: str = "ZXZ", passive: bool = True, *, orth_tol: float =
         ``(phi, theta, psi)`` in rad.
     """
     R = _matrices(R)
-    return _angles_of(_core.rotation_euler_angles, R, 2, seq, passive,
-                      _tol(orth_tol, "orth_tol"), _tol(lock_tol, "lock_tol"))
+    out = _angles_of(_core.rotation_euler_angles, R, 2, seq, passive,
+                     _tol(orth_tol, "orth_tol"), _tol(lock_tol, "lock_tol"))
+    return np.degrees(out) if _flag(degrees, "degrees") else out
 
 
 def quat_from_matrix(R, *, orth_tol: float = ORTH_TOL) -> np.ndarray:
@@ -330,8 +337,8 @@ def quat_normalize(quat) -> np.ndarray:
     return _core.rotation_quat_normalize(q.reshape(-1, 4)).reshape(shape + (4,))
 
 
-def quat_from_euler(phi, theta=None, psi=None, seq: str = "ZXZ", passive: bool = True
-                    ) -> np.ndarray:
+def quat_from_euler(phi, theta=None, psi=None, seq: str = "ZXZ", passive: bool = True, *,
+                    degrees: bool = False) -> np.ndarray:
     r"""Unit quaternions of the matrices :func:`euler_matrix` gives.
 
     Products of elementary quaternions
@@ -349,6 +356,8 @@ def quat_from_euler(phi, theta=None, psi=None, seq: str = "ZXZ", passive: bool =
         One of :data:`SEQUENCES`; default ``"ZXZ"``.
     passive : bool
         Default True (the textbook's coordinate transformation).
+    degrees : bool
+        Angles in degrees instead of radians.
 
     Returns
     -------
@@ -356,6 +365,8 @@ def quat_from_euler(phi, theta=None, psi=None, seq: str = "ZXZ", passive: bool =
         Unit quaternions, scalar last (dimensionless).
     """
     angles, seq, passive = _angles(phi, theta, psi, seq, passive)
+    if _flag(degrees, "degrees"):
+        angles = np.radians(angles)
     seq = _seq(seq)
     passive = _flag(passive, "passive")
     shape = angles.shape[:-1]
@@ -363,7 +374,7 @@ def quat_from_euler(phi, theta=None, psi=None, seq: str = "ZXZ", passive: bool =
     return q.reshape(shape + (4,))
 
 
-def euler_from_quat(quat, seq: str = "ZXZ", passive: bool = True, *,
+def euler_from_quat(quat, seq: str = "ZXZ", passive: bool = True, *, degrees: bool = False,
                     lock_tol: float = LOCK_TOL) -> np.ndarray:
     """Euler angles of quaternions (need not be unit): Bernardes and Viollet (2022).
 
@@ -378,6 +389,8 @@ def euler_from_quat(quat, seq: str = "ZXZ", passive: bool = True, *,
         One of :data:`SEQUENCES`; default ``"ZXZ"``.
     passive : bool
         Whether ``quat`` stands for the passive matrix (default) or the active one.
+    degrees : bool
+        Return degrees instead of radians.
     lock_tol : float
         Gimbal-lock band (rad), default 1e-12.
 
@@ -387,8 +400,9 @@ def euler_from_quat(quat, seq: str = "ZXZ", passive: bool = True, *,
         ``(phi, theta, psi)`` in rad.
     """
     q = _vectors(quat, "quat", 4)
-    return _angles_of(_core.rotation_euler_from_quat, q, 1, seq, passive,
-                      _tol(lock_tol, "lock_tol"))
+    out = _angles_of(_core.rotation_euler_from_quat, q, 1, seq, passive,
+                     _tol(lock_tol, "lock_tol"))
+    return np.degrees(out) if _flag(degrees, "degrees") else out
 
 
 def _pair(angles, other, name: str):

@@ -402,3 +402,17 @@ def test_zero_quaternion_rejected():
     for f in (rot.matrix_from_quat, rot.quat_normalize, rot.euler_from_quat):
         with pytest.raises(mp.DomainError, match="non-zero"):
             f([[0, 0, 0, 1], [0, 0, 0, 0]])
+
+
+def test_degrees_like_scipy(rng):
+    a = rng.uniform(-170, 170, (20, 3))
+    a[:, 1] = rng.uniform(5, 175, 20)
+    np.testing.assert_allclose(rot.euler_matrix(a, seq="zxz", passive=False, degrees=True),
+                               Rotation.from_euler("zxz", a, degrees=True).as_matrix(),
+                               atol=2e-15)
+    np.testing.assert_allclose(rot.quat_from_euler(a, seq="XYX", passive=False, degrees=True),
+                               Rotation.from_euler("XYX", a, degrees=True).as_quat(), atol=1e-15)
+    L = rot.euler_matrix(a, degrees=True)
+    np.testing.assert_allclose(rot.euler_angles(L, degrees=True), a, atol=1e-11)
+    np.testing.assert_allclose(rot.euler_from_quat(rot.quat_from_euler(a, degrees=True),
+                                                   degrees=True), a, atol=1e-11)
