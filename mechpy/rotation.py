@@ -122,6 +122,15 @@ def _angles(phi, theta, psi, seq, passive):
     return np.stack([p, t, s], axis=-1), seq, passive
 
 
+def _from_angles(core_fn, item_shape, phi, theta, psi, seq, passive, degrees):
+    """Run a C angles -> matrix/quaternion conversion on the batch of angles."""
+    angles, seq, passive = _angles(phi, theta, psi, seq, passive)
+    if _flag(degrees, "degrees"):
+        angles = np.radians(angles)
+    out = core_fn(angles.reshape(-1, 3), _seq(seq), _flag(passive, "passive"))
+    return out.reshape(angles.shape[:-1] + item_shape)
+
+
 def _warn_lock(nlock: int, n: int, seq: str) -> None:
     if nlock:
         which = "0 or pi" if seq[0].lower() == seq[2].lower() else "+-pi/2"
@@ -178,14 +187,7 @@ def euler_matrix(phi, theta=None, psi=None, seq: str = "ZXZ", passive: bool = Tr
     >>> np.allclose(L @ L.T, np.eye(3))
     True
     """
-    angles, seq, passive = _angles(phi, theta, psi, seq, passive)
-    if _flag(degrees, "degrees"):
-        angles = np.radians(angles)
-    seq = _seq(seq)
-    passive = _flag(passive, "passive")
-    shape = angles.shape[:-1]
-    R = _core.rotation_euler_matrix(angles.reshape(-1, 3), seq, passive)
-    return R.reshape(shape + (3, 3))
+    return _from_angles(_core.rotation_euler_matrix, (3, 3), phi, theta, psi, seq, passive, degrees)
 
 
 def euler_angles(R, seq: str = "ZXZ", passive: bool = True, *, degrees: bool = False,
@@ -364,14 +366,7 @@ def quat_from_euler(phi, theta=None, psi=None, seq: str = "ZXZ", passive: bool =
     ndarray, shape (..., 4)
         Unit quaternions, scalar last (dimensionless).
     """
-    angles, seq, passive = _angles(phi, theta, psi, seq, passive)
-    if _flag(degrees, "degrees"):
-        angles = np.radians(angles)
-    seq = _seq(seq)
-    passive = _flag(passive, "passive")
-    shape = angles.shape[:-1]
-    q = _core.rotation_quat_from_euler(angles.reshape(-1, 3), seq, passive)
-    return q.reshape(shape + (4,))
+    return _from_angles(_core.rotation_quat_from_euler, (4,), phi, theta, psi, seq, passive, degrees)
 
 
 def euler_from_quat(quat, seq: str = "ZXZ", passive: bool = True, *, degrees: bool = False,
