@@ -1,1 +1,494 @@
-"""mechpy.rotation (being built)."""
+"""Rotations: Euler angles, quaternions and angular velocity.
+
+Sequences are named as SciPy names them: three letters from ``xyz``, upper
+case intrinsic (rotations about the moving axes, ``"ZXZ"``), lower case
+extrinsic (about the fixed axes, ``"zxz"``); the twelve proper Euler and
+Tait-Bryan sequences of each kind (:data:`SEQUENCES`).
+
+The default is the textbook's (Marion & Thornton, section 5 of the course
+notes): ``seq="ZXZ"`` with ``passive=True``, the coordinate transformation
+
+.. math:: \\lambda = \\lambda_\\psi \\lambda_\\theta \\lambda_\\phi, \\qquad x = \\lambda x',
+
+from fixed components :math:`x'` to body components :math:`x`.  It is the
+transpose of the *active* matrix that SciPy builds:
+``euler_matrix(phi, theta, psi) == Rotation.from_euler("ZXZ", [phi, theta,
+psi]).as_matrix().T``.  ``passive=False`` gives SciPy's active matrix
+:math:`R = \\lambda^T` (body components to space components).
+
+Quaternions are scalar-last ``(x, y, z, w)`` as in SciPy; a quaternion
+stands for the matrix that :func:`matrix_from_quat` makes of it.
+
+Every function is vectorised over leading batch axes and runs its loop in C
+with the GIL released.  Angles are in radians, rates and angular velocities
+in rad/s (any consistent time unit).
+"""
+from __future__ import annotations
+
+import re
+import warnings
+
+import numpy as np
+
+from . import _core
+from ._validate import as_array, as_scalar, as_square, as_vector3
+from .errors import SingularityError  # noqa: F401  (raised by euler_rates)
+
+__all__ = [
+    "euler_matrix", "euler_angles", "angular_velocity", "euler_rates",
+    "quat_from_matrix", "matrix_from_quat", "quat_multiply", "quat_normalize",
+    "quat_from_euler", "euler_from_quat", "GimbalLockWarning", "SEQUENCES",
+    "ORTH_TOL", "LOCK_TOL",
+]
+
+#: Every accepted sequence: 12 intrinsic (upper case), then 12 extrinsic.
+SEQUENCES = tuple(s for case in (str.upper, str.lower)
+                  for s in (case(a + b + c) for a in "xyz" for b in "xyz" for c in "xyz")
+                  if s[0] != s[1] and s[1] != s[2])
+
+#: Default tolerance on ``max|R R^T - I|`` for a matrix to count as a rotation.
+ORTH_TOL = 1e-6
+#: Default distance (radians) of the middle angle from its singular values
+#: (0 or pi for proper Euler sequences, +-pi/2 for Tait-Bryan ones) within
+#: which a configuration counts as gimbal lock.
+LOCK_TOL = 1e-12
+
+_SEQ_RE = re.compile(r"^([XYZ]{3}|[xyz]{3})$")
+
+
+class GimbalLockWarning(UserWarning):
+    """The first and third rotation axes coincide; the third angle was set to 0.
+
+    Silence it with ``warnings.simplefilter("ignore", GimbalLockWarning)``.
+    """
+
+
+def _seq(seq) -> str:
+    if not isinstance(seq, str):
+        raise TypeError(f"seq must be a string such as 'ZXZ', got {type(seq).__name__}")
+    if not _SEQ_RE.match(seq) or seq[0] == seq[1] or seq[1] == seq[2]:
+        raise ValueError("seq must be three axis letters, all upper case (intrinsic) or all "
+                         "lower case (extrinsic), no two consecutive alike, one of "
+                         f"{', '.join(SEQUENCES)}; got {seq!r}")
+    return seq
+
+
+def _flag(x, name: str) -> bool:
+    if isinstance(x, (bool, np.bool_)) or (isinstance(x, (int, np.integer)) and x in (0, 1)):
+        return bool(x)
+    raise TypeError(f"{name} must be True or False, got {x!r}")
+
+
+def _frame(frame) -> bool:
+    if frame not in ("body", "space"):
+        raise ValueError(f"frame must be 'body' or 'space', got {frame!r}")
+    return frame == "space"
+
+
+def _tol(x, name: str) -> float:
+    return as_scalar(x, name, nonnegative=True)
+
+
+def _vectors(x, name: str, k: int) -> np.ndarray:
+    a = as_array(x, name, min_ndim=1, allow_empty=True)
+    if a.shape[-1] != k:
+        raise ValueError(f"{name} must have a last axis of length {k}, got shape {a.shape}")
+    return a
+
+
+def _matrices(R, name: str = "R") -> np.ndarray:
+    return as_square(R, name, n=3, batch=True, allow_empty=True)
+
+
+def _angles(phi, theta, psi, seq, passive):
+    """Accept (angles[..., 3]) or (phi, theta, psi); a string in theta's place is seq."""
+    if isinstance(theta, str):
+        if psi is not None:
+            passive = psi
+        seq, theta, psi = theta, None, None
+    if theta is None and psi is None:
+        return _vectors(phi, "angles", 3), seq, passive
+    if theta is None or psi is None:
+        raise TypeError("give either angles (..., 3) or all three of phi, theta, psi")
+    # as_array returns at least 1-d; keep a scalar's shape ()
+    p = as_array(phi, "phi", allow_empty=True).reshape(np.shape(phi))
+    t = as_array(theta, "theta", allow_empty=True).reshape(np.shape(theta))
+    s = as_array(psi, "psi", allow_empty=True).reshape(np.shape(psi))
+    try:
+        p, t, s = np.broadcast_arrays(p, t, s)
+    except ValueError:
+        raise ValueError(f"phi, theta and psi must broadcast together, got shapes "
+                         f"{p.shape}, {t.shape}, {s.shape}") from None
+    return np.stack([p, t, s], axis=-1), seq, passive
+
+
+def _from_angles(core_fn, item_shape, phi, theta, psi, seq, passive, degrees):
+    """Run a C angles -> matrix/quaternion conversion on the batch of angles."""
+    angles, seq, passive = _angles(phi, theta, psi, seq, passive)
+    if _flag(degrees, "degrees"):
+        angles = np.radians(angles)
+    out = core_fn(angles.reshape(-1, 3), _seq(seq), _flag(passive, "passive"))
+    return out.reshape(angles.shape[:-1] + item_shape)
+
+
+def _warn_lock(nlock: int, n: int, seq: str) -> None:
+    if nlock:
+        which = "0 or pi" if seq[0].lower() == seq[2].lower() else "+-pi/2"
+        warnings.warn(GimbalLockWarning(
+            f"gimbal lock in {nlock} of {n} rotation(s) (middle angle of {seq!r} at {which}): "
+            "only the sum or difference of the first and third angles is determined; "
+            "the third angle was set to 0"), stacklevel=4)
+
+
+def _angles_of(core_fn, x, item_ndim, seq, passive, *tols):
+    """Run a C matrix/quaternion -> angles conversion on the batch x; warn at lock."""
+    seq = _seq(seq)
+    passive = _flag(passive, "passive")
+    shape = x.shape[:x.ndim - item_ndim]
+    k = int(np.prod(x.shape[x.ndim - item_ndim:]))
+    out, nlock = core_fn(x.reshape(-1, k), seq, passive, *tols)
+    _warn_lock(nlock, out.shape[0], seq)
+    return out.reshape(shape + (3,))
+
+
+def euler_matrix(phi, theta=None, psi=None, seq: str = "ZXZ", passive: bool = True, *,
+                 degrees: bool = False) -> np.ndarray:
+    r"""Rotation matrix from Euler angles.
+
+    For an intrinsic sequence ``"ABC"`` the active matrix is
+    :math:`R = R_A(\phi) R_B(\theta) R_C(\psi)`, for an extrinsic ``"abc"``
+    it is :math:`R = R_c(\psi) R_b(\theta) R_a(\phi)`, with
+    :math:`R_z(\alpha) = [[\cos\alpha, -\sin\alpha, 0], [\sin\alpha, \cos\alpha, 0], [0, 0, 1]]`.
+    The passive matrix (default) is :math:`\lambda = R^T`; for ``"ZXZ"`` it
+    is the textbook's :math:`\lambda = \lambda_\psi \lambda_\theta \lambda_\phi`.
+
+    Parameters
+    ----------
+    phi, theta, psi : array_like
+        The first, second and third angles (rad); broadcast together.  Or
+        give one array ``angles`` of shape (..., 3) as ``phi`` alone.
+    seq : str
+        One of :data:`SEQUENCES`; default ``"ZXZ"``.
+    passive : bool
+        True (default): the coordinate transformation ``x_body = L x_space``;
+        False: SciPy's active matrix, ``Rotation.from_euler(seq, angles).as_matrix()``.
+    degrees : bool
+        Angles in degrees instead of radians (as SciPy's ``degrees``).
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+        Orthogonal matrices with determinant +1 (dimensionless).
+
+    Examples
+    --------
+    >>> import numpy as np, mechpy as mp
+    >>> L = mp.rotation.euler_matrix(0.3, 0.2, 0.1)      # lambda_psi lambda_theta lambda_phi
+    >>> np.allclose(L @ L.T, np.eye(3))
+    True
+    """
+    return _from_angles(_core.rotation_euler_matrix, (3, 3), phi, theta, psi, seq, passive, degrees)
+
+
+def euler_angles(R, seq: str = "ZXZ", passive: bool = True, *, degrees: bool = False,
+                 orth_tol: float = ORTH_TOL, lock_tol: float = LOCK_TOL) -> np.ndarray:
+    r"""Euler angles of rotation matrices (the inverse of :func:`euler_matrix`).
+
+    The matrix is turned into a quaternion (Markley/Shepperd) and the angles
+    are read from it by the direct method of Bernardes and Viollet (2022),
+    the method SciPy's ``Rotation.as_euler`` uses, with the middle angle
+    computed as :math:`\theta = 2\,\mathrm{atan2}(\sqrt{c^2+d^2}, \sqrt{a^2+b^2})`
+    so that it is accurate to round-off next to 0 and pi.
+
+    Ranges: the first and third angles in [-pi, pi]; the middle one in
+    [0, pi] for proper Euler sequences (``"ZXZ"``, ...) and [-pi/2, pi/2]
+    for Tait-Bryan ones (``"XYZ"``, ...).
+
+    At gimbal lock (the middle angle within ``lock_tol`` of 0 or pi, or of
+    +-pi/2 for Tait-Bryan sequences) only the sum or difference of the first
+    and third angles is determined: the third is set to 0, the triple still
+    reproduces the matrix, and one :class:`GimbalLockWarning` is issued per
+    call.  Just outside ``lock_tol`` the triple is still exact for the
+    matrix (``euler_matrix(euler_angles(R))`` equals ``R`` to round-off),
+    though the first and third angles are individually ill-conditioned.
+
+    Parameters
+    ----------
+    R : array_like, shape (..., 3, 3)
+        Rotation matrices (passive, i.e. coordinate transformations, when
+        ``passive`` is True).
+    seq : str
+        One of :data:`SEQUENCES`; default ``"ZXZ"``.
+    passive : bool
+        Whether ``R`` is the passive matrix (default) or the active one.
+    degrees : bool
+        Return degrees instead of radians (``lock_tol`` stays in radians).
+    orth_tol : float
+        ``R`` must satisfy ``max|R R^T - I| <= orth_tol`` (default 1e-6) and
+        ``det R > 0``; otherwise :class:`mechpy.DomainError` (a ValueError).
+    lock_tol : float
+        Gimbal-lock band (rad), default 1e-12.
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        ``(phi, theta, psi)`` in rad.
+    """
+    R = _matrices(R)
+    out = _angles_of(_core.rotation_euler_angles, R, 2, seq, passive,
+                     _tol(orth_tol, "orth_tol"), _tol(lock_tol, "lock_tol"))
+    return np.degrees(out) if _flag(degrees, "degrees") else out
+
+
+def quat_from_matrix(R, *, orth_tol: float = ORTH_TOL) -> np.ndarray:
+    r"""Unit quaternions (x, y, z, w) of rotation matrices.
+
+    Markley's variant of Shepperd's method: the largest of
+    :math:`(\mathrm{tr} R, R_{00}, R_{11}, R_{22})` selects the formula, e.g.
+    :math:`q = (R_{21}-R_{12}, R_{02}-R_{20}, R_{10}-R_{01}, 1+\mathrm{tr} R)/|\cdot|`,
+    so that no division by a small number occurs; the sign matches
+    ``scipy.spatial.transform.Rotation.from_matrix(R).as_quat()``.
+
+    Parameters
+    ----------
+    R : array_like, shape (..., 3, 3)
+        Rotation matrices; ``max|R R^T - I| <= orth_tol`` and ``det R > 0``
+        are required (:class:`mechpy.DomainError` otherwise).
+    orth_tol : float
+        Default 1e-6.
+
+    Returns
+    -------
+    ndarray, shape (..., 4)
+        Unit quaternions, scalar last (dimensionless); ``matrix_from_quat``
+        of them gives ``R`` back.
+    """
+    R = _matrices(R)
+    shape = R.shape[:-2]
+    q = _core.rotation_quat_from_matrix(R.reshape(-1, 9), _tol(orth_tol, "orth_tol"))
+    return q.reshape(shape + (4,))
+
+
+def matrix_from_quat(quat) -> np.ndarray:
+    r"""Rotation matrices of quaternions (x, y, z, w), normalised first.
+
+    .. math:: R = I + 2 w [v]_\times + 2 [v]_\times^2, \qquad v = (x, y, z),\ |q| = 1.
+
+    Parameters
+    ----------
+    quat : array_like, shape (..., 4)
+        Non-zero quaternions, scalar last.
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+        The active rotation matrices (dimensionless), as
+        ``Rotation.from_quat(quat).as_matrix()``.
+    """
+    q = _vectors(quat, "quat", 4)
+    shape = q.shape[:-1]
+    return _core.rotation_matrix_from_quat(q.reshape(-1, 4)).reshape(shape + (3, 3))
+
+
+def quat_multiply(p, q) -> np.ndarray:
+    r"""Hamilton product :math:`p q` (scalar last); broadcast over batch axes.
+
+    .. math:: (p q)_w = p_w q_w - \vec p\cdot\vec q, \qquad
+              \vec{(p q)} = p_w \vec q + q_w \vec p + \vec p \times \vec q.
+
+    The product is the composition "q first, then p":
+    ``matrix_from_quat(quat_multiply(p, q)) == matrix_from_quat(p) @ matrix_from_quat(q)``,
+    as SciPy's ``Rotation.from_quat(p) * Rotation.from_quat(q)``.
+
+    Parameters
+    ----------
+    p, q : array_like, shape (..., 4)
+        Quaternions, scalar last (not normalised here).
+
+    Returns
+    -------
+    ndarray, shape (..., 4)
+        The products (dimensionless).
+    """
+    p = _vectors(p, "p", 4)
+    q = _vectors(q, "q", 4)
+    try:
+        shape = np.broadcast_shapes(p.shape[:-1], q.shape[:-1])
+    except ValueError:
+        raise ValueError(f"p and q must broadcast together, got shapes {p.shape}, "
+                         f"{q.shape}") from None
+    pb = np.ascontiguousarray(np.broadcast_to(p, shape + (4,))).reshape(-1, 4)
+    qb = np.ascontiguousarray(np.broadcast_to(q, shape + (4,))).reshape(-1, 4)
+    return _core.rotation_quat_multiply(pb, qb).reshape(shape + (4,))
+
+
+def quat_normalize(quat) -> np.ndarray:
+    r"""Unit quaternions :math:`q / |q|` (overflow-safe); a zero quaternion is an error.
+
+    Parameters
+    ----------
+    quat : array_like, shape (..., 4)
+
+    Returns
+    -------
+    ndarray, shape (..., 4)
+        Quaternions of unit norm (dimensionless).
+    """
+    q = _vectors(quat, "quat", 4)
+    shape = q.shape[:-1]
+    return _core.rotation_quat_normalize(q.reshape(-1, 4)).reshape(shape + (4,))
+
+
+def quat_from_euler(phi, theta=None, psi=None, seq: str = "ZXZ", passive: bool = True, *,
+                    degrees: bool = False) -> np.ndarray:
+    r"""Unit quaternions of the matrices :func:`euler_matrix` gives.
+
+    Products of elementary quaternions
+    :math:`q_A(\alpha) = (\sin\tfrac{\alpha}{2}\,\hat e_A, \cos\tfrac{\alpha}{2})`:
+    :math:`q_A(\phi) q_B(\theta) q_C(\psi)` for intrinsic ``"ABC"``,
+    :math:`q_c(\psi) q_b(\theta) q_a(\phi)` for extrinsic ``"abc"``; the passive
+    quaternion is the conjugate.  With ``passive=False`` this is
+    ``Rotation.from_euler(seq, angles).as_quat()`` (sign included).
+
+    Parameters
+    ----------
+    phi, theta, psi : array_like
+        Angles (rad), broadcast together; or one array (..., 3) as ``phi``.
+    seq : str
+        One of :data:`SEQUENCES`; default ``"ZXZ"``.
+    passive : bool
+        Default True (the textbook's coordinate transformation).
+    degrees : bool
+        Angles in degrees instead of radians.
+
+    Returns
+    -------
+    ndarray, shape (..., 4)
+        Unit quaternions, scalar last (dimensionless).
+    """
+    return _from_angles(_core.rotation_quat_from_euler, (4,), phi, theta, psi, seq, passive, degrees)
+
+
+def euler_from_quat(quat, seq: str = "ZXZ", passive: bool = True, *, degrees: bool = False,
+                    lock_tol: float = LOCK_TOL) -> np.ndarray:
+    """Euler angles of quaternions (need not be unit): Bernardes and Viollet (2022).
+
+    Ranges, gimbal-lock handling and the :class:`GimbalLockWarning` are those
+    of :func:`euler_angles`.
+
+    Parameters
+    ----------
+    quat : array_like, shape (..., 4)
+        Non-zero quaternions, scalar last.
+    seq : str
+        One of :data:`SEQUENCES`; default ``"ZXZ"``.
+    passive : bool
+        Whether ``quat`` stands for the passive matrix (default) or the active one.
+    degrees : bool
+        Return degrees instead of radians.
+    lock_tol : float
+        Gimbal-lock band (rad), default 1e-12.
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        ``(phi, theta, psi)`` in rad.
+    """
+    q = _vectors(quat, "quat", 4)
+    out = _angles_of(_core.rotation_euler_from_quat, q, 1, seq, passive,
+                     _tol(lock_tol, "lock_tol"))
+    return np.degrees(out) if _flag(degrees, "degrees") else out
+
+
+def _pair(angles, other, name: str):
+    a = as_vector3(angles, "angles", allow_empty=True)
+    v = as_vector3(other, name, allow_empty=True)
+    try:
+        shape = np.broadcast_shapes(a.shape[:-1], v.shape[:-1])
+    except ValueError:
+        raise ValueError(f"angles and {name} must broadcast together, got shapes {a.shape}, "
+                         f"{v.shape}") from None
+    a = np.ascontiguousarray(np.broadcast_to(a, shape + (3,))).reshape(-1, 3)
+    v = np.ascontiguousarray(np.broadcast_to(v, shape + (3,))).reshape(-1, 3)
+    return a, v, shape
+
+
+def angular_velocity(angles, rates, seq: str = "ZXZ", frame: str = "body") -> np.ndarray:
+    r"""Angular velocity from Euler angles and their time derivatives.
+
+    With :math:`R` the active matrix of the angles (body to space),
+    :math:`[\omega_{space}]_\times = \dot R R^T` and
+    :math:`[\omega_{body}]_\times = R^T \dot R = -\dot\lambda \lambda^T`.
+    For intrinsic ``"ABC"``:
+    :math:`\omega_{space} = \dot\phi\,\hat e_A + \dot\theta\,R_A \hat e_B + \dot\psi\,R_A R_B \hat e_C`.
+    For the default ``"ZXZ"`` the body components are the textbook's
+
+    .. math::
+        \omega_1 = \dot\phi \sin\theta \sin\psi + \dot\theta \cos\psi, \quad
+        \omega_2 = \dot\phi \sin\theta \cos\psi - \dot\theta \sin\psi, \quad
+        \omega_3 = \dot\phi \cos\theta + \dot\psi.
+
+    Parameters
+    ----------
+    angles : array_like, shape (..., 3)
+        ``(phi, theta, psi)`` in rad.
+    rates : array_like, shape (..., 3)
+        Their time derivatives (rad/s); broadcast with ``angles``.
+    seq : str
+        One of :data:`SEQUENCES`; default ``"ZXZ"``.
+    frame : {"body", "space"}
+        Components along the body axes (default) or the fixed axes.
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        Angular velocity (rad/s).
+    """
+    seq = _seq(seq)
+    space = _frame(frame)
+    a, r, shape = _pair(angles, rates, "rates")
+    return _core.rotation_angular_velocity(a, r, seq, space).reshape(shape + (3,))
+
+
+def euler_rates(angles, omega, seq: str = "ZXZ", frame: str = "body", *,
+                lock_tol: float = LOCK_TOL) -> np.ndarray:
+    r"""Euler-angle rates from the angular velocity (inverse of :func:`angular_velocity`).
+
+    Solves :math:`J(\phi, \theta, \psi)\,(\dot\phi, \dot\theta, \dot\psi)^T = \omega`;
+    :math:`\det J = \pm\sin\theta` for proper Euler sequences and
+    :math:`\pm\cos\theta` for Tait-Bryan ones.  For ``"ZXZ"``, body frame:
+
+    .. math::
+        \dot\phi = \frac{\omega_1 \sin\psi + \omega_2 \cos\psi}{\sin\theta}, \quad
+        \dot\theta = \omega_1 \cos\psi - \omega_2 \sin\psi, \quad
+        \dot\psi = \omega_3 - \dot\phi \cos\theta.
+
+    Parameters
+    ----------
+    angles : array_like, shape (..., 3)
+        ``(phi, theta, psi)`` in rad.
+    omega : array_like, shape (..., 3)
+        Angular velocity (rad/s) in ``frame`` components; broadcast with ``angles``.
+    seq : str
+        One of :data:`SEQUENCES`; default ``"ZXZ"``.
+    frame : {"body", "space"}
+        The components ``omega`` is given in.
+    lock_tol : float
+        :class:`mechpy.SingularityError` is raised where ``|det J| <= lock_tol``
+        (default 1e-12).
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        ``(phi_dot, theta_dot, psi_dot)`` in rad/s.
+
+    Raises
+    ------
+    mechpy.SingularityError
+        At gimbal lock, where the rates are not determined by omega.
+    """
+    seq = _seq(seq)
+    space = _frame(frame)
+    a, w, shape = _pair(angles, omega, "omega")
+    out = _core.rotation_euler_rates(a, w, seq, space, _tol(lock_tol, "lock_tol"))
+    return out.reshape(shape + (3,))
