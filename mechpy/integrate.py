@@ -17,7 +17,30 @@ import numpy as np
 from . import _core
 from ._validate import as_array, as_int, as_scalar
 
-__all__ = ["solve", "methods", "Solution", "DenseOutput"]
+__all__ = ["solve", "methods", "Solution", "DenseOutput", "SecondOrder"]
+
+
+class SecondOrder:
+    """A second-order system q'' = a(t, q) for the symplectic methods.
+
+    ``accel`` is a Python callable ``a(t, q, *args)`` returning the
+    acceleration (same length as q), or a C callback ``void a(double t,
+    const double *q, double *acc, void *user_data)`` (ctypes, LowLevelCallable
+    or numba cfunc).  The state is ``y = (q, v)``: give ``y0`` of even length
+    2 len(q).  Every method accepts it; ``verlet``, ``yoshida4`` and
+    ``yoshida6`` need it (or an undamped scene).
+
+    Example: ``mp.solve(mp.SecondOrder(lambda t, q: -q), (0, 10), [1, 0],
+    method="yoshida4", h=0.01)``.
+    """
+
+    def __init__(self, accel):
+        if _c_address(accel) is None and not callable(accel):
+            raise TypeError("accel must be callable or a C callback")
+        self.accel = accel
+
+    def __repr__(self):
+        return f"SecondOrder({self.accel!r})"
 
 _MESSAGES = {
     0: "The solver successfully reached the end of the integration interval.",
@@ -155,6 +178,11 @@ def _check_signature(sig: str):
 
 def _system_spec(system, args):
     from .scenes import Scene
+    if isinstance(system, SecondOrder):
+        c = _c_address(system.accel)
+        if c is not None:
+            return ("cfunc2", c[0], c[1]), None
+        return ("python2", system.accel, tuple(args)), None
     if isinstance(system, Scene):
         if args:
             raise TypeError("args are not used with a scene: set its parameters instead")
@@ -209,9 +237,14 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
     y0 : array_like, shape (n,)
         Initial state.
     method : str
-        See :func:`methods`: ``"dop853"`` (default), ``"dopri5"``, ``"rk4"``
-        (fixed step, needs ``h``) and GSL's steppers ``"gsl:rkf45"``,
-        ``"gsl:rk8pd"``, ``"gsl:msadams"``, ``"gsl:msbdf"``, ``"gsl:bsimp"``, ...
+        See :func:`methods`: ``"dop853"`` (default), ``"dopri5"``; stiff
+        ``"radau"`` (Radau IIA, order 5) and ``"auto"`` (dop853, switching to
+        radau and back as Hairer's stiffness test decides); fixed-step ``"rk4"``
+        and the geometric ``"verlet"``, ``"yoshida4"``, ``"yoshida6"``
+        (symplectic, for q'' = a(t, q): an undamped scene or
+        :class:`SecondOrder`) and ``"gauss4"`` (implicit, symplectic), which
+        need ``h``; GSL's steppers ``"gsl:rkf45"``, ``"gsl:rk8pd"``,
+        ``"gsl:msadams"``, ``"gsl:msbdf"``, ``"gsl:bsimp"``, ...
     rtol, atol : float or array_like
         Relative and absolute tolerances: the local error estimate e of each
         step satisfies ``rms(e / (atol + rtol |y|)) <= 1``.

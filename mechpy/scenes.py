@@ -15,7 +15,7 @@ import numpy as np
 from . import _core
 from ._validate import as_array, as_scalar
 
-__all__ = ["Scene", "Pendulum", "VanDerPol", "Duffing"]
+__all__ = ["Scene", "Pendulum", "VanDerPol", "Duffing", "Kepler", "RestrictedThreeBody"]
 
 
 class Scene:
@@ -114,9 +114,10 @@ def _rebuild(cls, params):
     return cls(**params)
 
 
-def _ellipk(m):
-    """Complete elliptic integral K(m) (parameter m = k^2) by the AGM."""
-    a, b = 1.0, np.sqrt(1.0 - m)
+def _ellipk_from_complement(kc):
+    """Complete elliptic integral K for complementary modulus kc = sqrt(1 - k^2),
+    by the arithmetic-geometric mean (accurate near k = 1, where 1 - k^2 cancels)."""
+    a, b = 1.0, abs(kc)
     for _ in range(60):
         if abs(a - b) <= 1e-16 * a:
             break
@@ -152,7 +153,7 @@ class Pendulum(Scene):
         if not 0 < abs(a) < np.pi:
             raise ValueError("amplitude must be in (0, pi) in magnitude")
         p = self._params
-        return 4.0 * np.sqrt(p["length"] / p["g"]) * _ellipk(np.sin(0.5 * a) ** 2)
+        return 4.0 * np.sqrt(p["length"] / p["g"]) * _ellipk_from_complement(np.cos(0.5 * a))
 
 
 class VanDerPol(Scene):
@@ -184,3 +185,46 @@ class Duffing(Scene):
 
     def __init__(self, alpha, beta, delta=0.0, gamma=0.0, omega=1.0):
         super().__init__(alpha=alpha, beta=beta, delta=delta, gamma=gamma, omega=omega)
+
+
+class Kepler(Scene):
+    r"""The Kepler problem in a plane: :math:`\ddot{\mathbf r} = -\mu\,\mathbf r/|\mathbf r|^3`.
+
+    State ``(x, y, vx, vy)``; ``mu`` = GM (length^3/time^2).  Separable: the
+    symplectic methods apply.  ``energy`` is the specific orbital energy
+    :math:`|\mathbf v|^2/2 - \mu/r`.
+    """
+
+    _model = "Kepler"
+    _defaults = dict(mu=1.0)
+    _positive = ("mu",)
+
+    def __init__(self, mu=1.0):
+        super().__init__(mu=mu)
+
+    def initial_state(self, eccentricity, a=1.0):
+        """State at pericentre of the orbit with semi-major axis ``a`` and the
+        given eccentricity (0 <= e < 1); its period is 2 pi sqrt(a^3/mu)."""
+        e = as_scalar(eccentricity, "eccentricity", nonnegative=True, hi=1.0 - 1e-15)
+        a = as_scalar(a, "a", positive=True)
+        mu = self._params["mu"]
+        return np.array([a * (1 - e), 0.0, 0.0, np.sqrt(mu / a * (1 + e) / (1 - e))])
+
+
+class RestrictedThreeBody(Scene):
+    r"""The planar circular restricted three-body problem, rotating frame.
+
+    .. math:: \ddot x = x + 2\dot y - \mu'\frac{x+\mu}{r_1^3} - \mu\frac{x-\mu'}{r_2^3},\quad
+              \ddot y = y - 2\dot x - \mu'\frac{y}{r_1^3} - \mu\frac{y}{r_2^3}
+
+    with :math:`\mu' = 1-\mu` (dimensionless units; the default mass ratio is
+    the Earth-Moon value of Arenstorf's orbits).  State ``(x, y, vx, vy)``;
+    ``energy`` is the Jacobi integral in energy form
+    :math:`|\mathbf v|^2/2 - (x^2+y^2)/2 - \mu'/r_1 - \mu/r_2`.
+    """
+
+    _model = "RestrictedThreeBody"
+    _defaults = dict(mu=0.012277471)
+
+    def __init__(self, mu=0.012277471):
+        super().__init__(mu=mu)

@@ -3,10 +3,12 @@
 
 #include <string.h>
 
-extern const mp_model mp_model_pendulum, mp_model_vanderpol, mp_model_duffing;
+extern const mp_model mp_model_pendulum, mp_model_vanderpol, mp_model_duffing, mp_model_kepler,
+    mp_model_r3b;
 
 const mp_model *const mp_models[] = {
-    &mp_model_pendulum, &mp_model_vanderpol, &mp_model_duffing, NULL,
+    &mp_model_pendulum, &mp_model_vanderpol, &mp_model_duffing, &mp_model_kepler, &mp_model_r3b,
+    NULL,
 };
 
 const mp_model *mp_model_find(const char *name)

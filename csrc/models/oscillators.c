@@ -60,6 +60,7 @@ static void pendulum_bind(const double *p, mp_ode_problem *prob)
     prob->rhs = p[PA] != 0.0 ? pendulum_driven : p[PB] != 0.0 ? pendulum_damped : pendulum_free;
     prob->jac = pendulum_jac;
     prob->data = (void *)p;
+    prob->nq = p[PB] == 0.0 ? 1 : 0; /* separable unless damped */
 }
 
 /* energy per unit mass: L^2 theta'^2 / 2 + g L (1 - cos theta)  [J/kg] */
@@ -103,6 +104,7 @@ static void vdp_bind(const double *p, mp_ode_problem *prob)
     prob->rhs = vdp_rhs;
     prob->jac = vdp_jac;
     prob->data = (void *)p;
+    prob->nq = 0; /* the friction term depends on x' */
 }
 
 /* the harmonic part's energy (x^2 + x'^2) / 2 */
@@ -160,6 +162,7 @@ static void duffing_bind(const double *p, mp_ode_problem *prob)
     prob->rhs = p[DG] != 0.0 ? duffing_driven : duffing_free;
     prob->jac = duffing_jac;
     prob->data = (void *)p;
+    prob->nq = p[DD] == 0.0 ? 1 : 0;
 }
 
 /* x'^2/2 + alpha x^2/2 + beta x^4/4 */

@@ -145,6 +145,10 @@ void mp_ode_dense_eval(const double *coef, size_t ncoef, size_t n, double s, dou
 void mp_ode_dense_hermite(size_t n, double h, const double *y0, const double *y1,
                           const double *f0, const double *f1, double *coef);
 
+/* A finish for methods without an interpolant of their own: fnew = f(t+h,
+ * ynew) (the next step's first stage) and the cubic Hermite interpolant. */
+int mp_ode_finish_fnew_hermite(mp_ode_ws *w, double t, double h, int need_dense);
+
 /* The table. */
 extern const mp_ode_method *const mp_ode_methods[];
 const mp_ode_method *mp_ode_method_find(const char *name);

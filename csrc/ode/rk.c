@@ -56,7 +56,7 @@ static int rk4_step(mp_ode_ws *w, double t, double h, double *err)
 
 /* f at the new point is the next step's first stage: computing it here costs
  * nothing extra, and gives the cubic Hermite interpolant. */
-static int fnew_hermite_finish(mp_ode_ws *w, double t, double h, int need_dense)
+int mp_ode_finish_fnew_hermite(mp_ode_ws *w, double t, double h, int need_dense)
 {
     int rc = mp_ode_ws_rhs(w, t + h, w->ynew, w->fnew);
     if (rc != MP_OK) return rc;
@@ -67,7 +67,7 @@ static int fnew_hermite_finish(mp_ode_ws *w, double t, double h, int need_dense)
 
 const mp_ode_method mp_ode_rk4 = {
     .name = "rk4", .order = 4, .adaptive = 0, .dense_order = 3, .ncoef = 4, .nscratch = 4,
-    .step = rk4_step, .finish = fnew_hermite_finish,
+    .step = rk4_step, .finish = mp_ode_finish_fnew_hermite,
 };
 
 /* ---- Dormand-Prince 5(4) ------------------------------------------------- */

@@ -72,6 +72,14 @@ static int py_rhs(double t, const double *y, double *dydt, void *data)
     return py_call((const py_fn *)data, t, y, dydt);
 }
 
+/* second-order systems q'' = a(t, q): y = (q, v), f = (v, a(t, q)) */
+static int py_rhs2(double t, const double *y, double *dydt, void *data)
+{
+    const py_fn *c = data; /* c->n = c->nout = nq: a(t, q, *args) */
+    memcpy(dydt, y + c->n, c->n * sizeof(double));
+    return py_call(c, t, y, dydt + c->n);
+}
+
 typedef struct {
     mp_ode_problem inner; /* the system's own rhs (scene, callback or Python) */
     py_fn jac;
@@ -118,16 +126,48 @@ static int c_rhs(double t, const double *y, double *dydt, void *data)
     return MP_OK;
 }
 
+/* a C acceleration a(t, q, acc, user_data) as a first-order system */
+typedef struct {
+    c_fn fn;
+    size_t nq;
+} c_fn2;
+
+static int c_rhs2(double t, const double *y, double *dydt, void *data)
+{
+    const c_fn2 *c = data;
+    memcpy(dydt, y + c->nq, c->nq * sizeof(double));
+    c->fn.f(t, y, dydt + c->nq, c->fn.user_data);
+    return MP_OK;
+}
+
 /* ---- a system described by the Python layer --------------------------------
- * ("scene", name, params) | ("python", fun, args) | ("cfunc", address, user_data) */
+ * ("scene", name, params) | ("python", fun, args) | ("cfunc", address, user_data)
+ * and the second-order ("python2", accel, args) | ("cfunc2", address, user_data) */
 
 typedef struct {
     mp_ode_problem prob;
     int holds_python;         /* calls Python: keep the GIL */
     PyArrayObject *params;    /* scene parameters (owned) */
     py_fn fn;
-    c_fn cfn;
+    c_fn2 cfn;
 } py_system;
+
+static int c_address(PyObject *a, PyObject *b, c_fn *out)
+{
+    void *addr = PyLong_AsVoidPtr(a);
+    if (!addr && PyErr_Occurred()) return -1;
+    void *ud = b == Py_None ? NULL : PyLong_AsVoidPtr(b);
+    if (PyErr_Occurred()) return -1;
+    if (!addr) {
+        PyErr_SetString(PyExc_ValueError, "C callback address is NULL");
+        return -1;
+    }
+    /* A data pointer converted to a function pointer: the one place this is
+     * done, for callbacks handed over as addresses. */
+    *(void **)&out->f = addr;
+    out->user_data = ud;
+    return 0;
+}
 
 static void py_system_clear(py_system *s) { Py_CLEAR(s->params); }
 
@@ -159,30 +199,33 @@ static int py_system_parse(PyObject *spec, size_t n, py_system *s)
             return -1;
         }
         m->bind(PyArray_DATA(s->params), &s->prob);
-    } else if (strcmp(kind, "python") == 0) {
+    } else if (strcmp(kind, "python") == 0 || strcmp(kind, "python2") == 0) {
+        int second = kind[6] == '2';
         if (!PyCallable_Check(a) || !PyTuple_Check(b)) {
             PyErr_SetString(PyExc_TypeError, "system must be callable and args a tuple");
             return -1;
         }
-        s->fn = (py_fn){a, b, n, n, "fun"};
-        s->prob.rhs = py_rhs;
-        s->prob.data = &s->fn;
-        s->holds_python = 1;
-    } else if (strcmp(kind, "cfunc") == 0) {
-        void *addr = PyLong_AsVoidPtr(a);
-        if (!addr && PyErr_Occurred()) return -1;
-        void *ud = b == Py_None ? NULL : PyLong_AsVoidPtr(b);
-        if (PyErr_Occurred()) return -1;
-        if (!addr) {
-            PyErr_SetString(PyExc_ValueError, "C callback address is NULL");
+        if (second && n % 2) {
+            PyErr_SetString(PyExc_ValueError, "y0 of a second-order system is (q, v): even length");
             return -1;
         }
-        /* A data pointer converted to a function pointer: the one place this
-         * is done, for callbacks handed over as addresses. */
-        *(void **)&s->cfn.f = addr;
-        s->cfn.user_data = ud;
-        s->prob.rhs = c_rhs;
-        s->prob.data = &s->cfn;
+        size_t nf = second ? n / 2 : n;
+        s->fn = (py_fn){a, b, nf, nf, second ? "accel" : "fun"};
+        s->prob.rhs = second ? py_rhs2 : py_rhs;
+        s->prob.data = &s->fn;
+        s->prob.nq = second ? n / 2 : 0;
+        s->holds_python = 1;
+    } else if (strcmp(kind, "cfunc") == 0 || strcmp(kind, "cfunc2") == 0) {
+        int second = kind[5] == '2';
+        if (c_address(a, b, &s->cfn.fn) < 0) return -1;
+        if (second && n % 2) {
+            PyErr_SetString(PyExc_ValueError, "y0 of a second-order system is (q, v): even length");
+            return -1;
+        }
+        s->cfn.nq = second ? n / 2 : 0;
+        s->prob.rhs = second ? c_rhs2 : c_rhs;
+        s->prob.data = second ? (void *)&s->cfn : (void *)&s->cfn.fn;
+        s->prob.nq = s->cfn.nq;
     } else {
         PyErr_Format(PyExc_ValueError, "unknown system kind %s", kind);
         return -1;
@@ -293,6 +336,13 @@ static PyObject *py_ode_solve(PyObject *self, PyObject *args, PyObject *kw)
     if (py_system_parse(spec, n, &sys) < 0) goto out;
     mp_ode_problem prob = sys.prob;
     int holds_python = sys.holds_python;
+    if (m->symplectic && !m->implicit && prob.nq == 0) {
+        PyErr_Format(PyExc_ValueError,
+                     "method %s needs a separable system q'' = a(t, q) with y = (q, v): an "
+                     "undamped scene (Pendulum, Duffing, Kepler) or mp.SecondOrder(accel)",
+                     m->name);
+        goto out;
+    }
     if (jaco != Py_None) {
         wj.inner = sys.prob;
         wj.jac = (py_fn){jaco, eargs, n, n * n, "jac"};

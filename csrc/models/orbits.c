@@ -1,0 +1,122 @@
+/* Orbits: the Kepler problem and the planar circular restricted three-body
+ * problem in the rotating frame (Arenstorf's orbits). */
+#include "models/models.h"
+
+#include <math.h>
+
+/* ---- Kepler: r'' = -mu r / |r|^3, state (x, y, vx, vy) ----------------------- */
+static const char *const kepler_names[] = {"mu"};
+
+static int kepler_check(const double *p) { return isfinite(p[0]) && p[0] > 0 ? MP_OK : MP_EDOM; }
+
+static int kepler_rhs(double t, const double *y, double *f, void *d)
+{
+    const double mu = *(const double *)d;
+    (void)t;
+    double r2 = y[0] * y[0] + y[1] * y[1];
+    double k = -mu / (r2 * sqrt(r2));
+    f[0] = y[2];
+    f[1] = y[3];
+    f[2] = k * y[0];
+    f[3] = k * y[1];
+    return MP_OK;
+}
+
+static int kepler_jac(double t, const double *y, double *J, void *d)
+{
+    const double mu = *(const double *)d;
+    (void)t;
+    double x = y[0], yy = y[1], r2 = x * x + yy * yy, r = sqrt(r2);
+    double r3 = r2 * r, r5 = r3 * r2;
+    for (int i = 0; i < 16; i++) J[i] = 0.0;
+    J[0 * 4 + 2] = 1.0;
+    J[1 * 4 + 3] = 1.0;
+    J[2 * 4 + 0] = -mu * (1.0 / r3 - 3.0 * x * x / r5);
+    J[2 * 4 + 1] = 3.0 * mu * x * yy / r5;
+    J[3 * 4 + 0] = 3.0 * mu * x * yy / r5;
+    J[3 * 4 + 1] = -mu * (1.0 / r3 - 3.0 * yy * yy / r5);
+    return MP_OK;
+}
+
+static void kepler_bind(const double *p, mp_ode_problem *prob)
+{
+    prob->n = 4;
+    prob->rhs = kepler_rhs;
+    prob->jac = kepler_jac;
+    prob->data = (void *)p;
+    prob->nq = 2;
+}
+
+/* specific energy |v|^2/2 - mu/r */
+static double kepler_energy(const double *p, const double *y)
+{
+    return 0.5 * (y[2] * y[2] + y[3] * y[3]) - p[0] / hypot(y[0], y[1]);
+}
+
+const mp_model mp_model_kepler = {"Kepler", 4, 1, kepler_names, kepler_check, kepler_bind,
+                                  kepler_energy};
+
+/* ---- restricted three-body problem, rotating frame -------------------------
+ * x'' = x + 2 y' - mu' (x + mu)/r1^3 - mu (x - mu')/r2^3
+ * y'' = y - 2 x' - mu' y / r1^3 - mu y / r2^3,   mu' = 1 - mu */
+static const char *const r3b_names[] = {"mu"};
+
+static int r3b_check(const double *p)
+{
+    return isfinite(p[0]) && p[0] > 0 && p[0] < 1 ? MP_OK : MP_EDOM;
+}
+
+static int r3b_rhs(double t, const double *y, double *f, void *d)
+{
+    const double mu = *(const double *)d, mp1 = 1.0 - mu;
+    (void)t;
+    double u = y[0] + mu, w = y[0] - mp1, y2 = y[1] * y[1];
+    double r1 = u * u + y2, r2 = w * w + y2;
+    double d1 = r1 * sqrt(r1), d2 = r2 * sqrt(r2);
+    f[0] = y[2];
+    f[1] = y[3];
+    f[2] = y[0] + 2.0 * y[3] - mp1 * u / d1 - mu * w / d2;
+    f[3] = y[1] - 2.0 * y[2] - mp1 * y[1] / d1 - mu * y[1] / d2;
+    return MP_OK;
+}
+
+static int r3b_jac(double t, const double *y, double *J, void *d)
+{
+    const double mu = *(const double *)d, mp1 = 1.0 - mu;
+    (void)t;
+    double u = y[0] + mu, w = y[0] - mp1, yy = y[1];
+    double r1s = u * u + yy * yy, r2s = w * w + yy * yy;
+    double r1 = sqrt(r1s), r2 = sqrt(r2s);
+    double i3a = 1.0 / (r1s * r1), i5a = i3a / r1s, i3b = 1.0 / (r2s * r2), i5b = i3b / r2s;
+    for (int i = 0; i < 16; i++) J[i] = 0.0;
+    J[0 * 4 + 2] = 1.0;
+    J[1 * 4 + 3] = 1.0;
+    J[2 * 4 + 0] = 1.0 - mp1 * (i3a - 3.0 * u * u * i5a) - mu * (i3b - 3.0 * w * w * i5b);
+    J[2 * 4 + 1] = 3.0 * (mp1 * u * yy * i5a + mu * w * yy * i5b);
+    J[2 * 4 + 3] = 2.0;
+    J[3 * 4 + 0] = J[2 * 4 + 1];
+    J[3 * 4 + 1] = 1.0 - mp1 * (i3a - 3.0 * yy * yy * i5a) - mu * (i3b - 3.0 * yy * yy * i5b);
+    J[3 * 4 + 2] = -2.0;
+    return MP_OK;
+}
+
+static void r3b_bind(const double *p, mp_ode_problem *prob)
+{
+    prob->n = 4;
+    prob->rhs = r3b_rhs;
+    prob->jac = r3b_jac;
+    prob->data = (void *)p;
+    prob->nq = 0; /* Coriolis terms depend on the velocity */
+}
+
+/* the Jacobi integral in energy form: |v|^2/2 - (x^2 + y^2)/2 - mu'/r1 - mu/r2 */
+static double r3b_energy(const double *p, const double *y)
+{
+    double mu = p[0], mp1 = 1.0 - mu;
+    double r1 = hypot(y[0] + mu, y[1]), r2 = hypot(y[0] - mp1, y[1]);
+    return 0.5 * (y[2] * y[2] + y[3] * y[3]) - 0.5 * (y[0] * y[0] + y[1] * y[1]) - mp1 / r1 -
+           mu / r2;
+}
+
+const mp_model mp_model_r3b = {"RestrictedThreeBody", 4, 1, r3b_names, r3b_check, r3b_bind,
+                               r3b_energy};
