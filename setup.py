@@ -43,11 +43,13 @@ def _flags():
 
 sources = sorted(glob.glob("csrc/**/*.c", recursive=True))
 inc, libdirs, libs = _flags()
-extra = ["-std=c11", "-O2", "-Wall", "-Wextra", "-Wno-missing-field-initializers",
+extra = ["-std=c11", "-O2", "-pthread", "-Wall", "-Wextra", "-Wno-missing-field-initializers",
          "-Wno-cast-function-type"]
 if os.environ.get("MECHPY_SANITIZE"):
     extra += ["-fsanitize=address,undefined", "-fno-omit-frame-pointer", "-O1", "-g"]
-link_extra = ["-fsanitize=address,undefined"] if os.environ.get("MECHPY_SANITIZE") else []
+link_extra = ["-pthread"]
+if os.environ.get("MECHPY_SANITIZE"):
+    link_extra += ["-fsanitize=address,undefined"]
 
 setup(
     ext_modules=[

@@ -33,7 +33,7 @@ def as_array(x, name: str, *, ndim=None, shape=None, min_ndim=None, finite=True,
                         "(a ragged or non-numeric sequence)")
     if a.dtype.kind not in "biuf":
         raise TypeError(f"{name} must be a real numeric array, got dtype {a.dtype}")
-    a = np.ascontiguousarray(a, dtype=np.float64)
+    a = np.asarray(a, dtype=np.float64, order="C")  # keeps 0-d input 0-d
     if ndim is not None and a.ndim != ndim:
         raise ValueError(f"{name} must have {ndim} dimension(s), got shape {a.shape}")
     if min_ndim is not None and a.ndim < min_ndim:

@@ -17,7 +17,8 @@ import numpy as np
 from . import _core
 from ._validate import as_array, as_int, as_scalar
 
-__all__ = ["solve", "methods", "Solution", "DenseOutput", "SecondOrder"]
+__all__ = ["solve", "solve_many", "methods", "Solution", "EnsembleSolution", "DenseOutput",
+           "SecondOrder"]
 
 
 class SecondOrder:
@@ -217,6 +218,58 @@ def _events_spec(events):
     return evs, np.array(term, dtype=np.intc), np.array(dirs, dtype=np.intc)
 
 
+def _as_args(args) -> tuple:
+    if isinstance(args, tuple):
+        return args
+    return tuple(args) if isinstance(args, list) else (args,)
+
+
+def _common(method, t_span, rtol, atol, n, h, first_step, max_step, max_steps):
+    """Validate the arguments solve and solve_many share."""
+    if not isinstance(method, str):
+        raise TypeError(f"method must be a string, got {type(method).__name__}")
+    names = _method_names()
+    if method not in names:
+        raise ValueError(f"unknown method {method!r}; choose one of {sorted(names)}")
+    info = names[method]
+    if isinstance(t_span, (str, bytes)) or not hasattr(t_span, "__len__") or len(t_span) != 2:
+        raise ValueError("t_span must be a pair (t0, tf)")
+    t0 = as_scalar(t_span[0], "t_span[0]")
+    tf = as_scalar(t_span[1], "t_span[1]")
+    if not tf > t0:
+        raise ValueError(f"t_span must be increasing with t0 < tf, got ({t0}, {tf})")
+    rtol = as_scalar(rtol, "rtol")
+    if not rtol > 0:
+        raise ValueError(f"rtol must be positive, got {rtol}")
+    atol_a = as_array(atol, "atol", nonnegative=True)
+    if atol_a.ndim == 0 or atol_a.size == 1:
+        atol_a = np.full(n, float(atol_a.reshape(-1)[0]))
+    elif atol_a.shape != (n,):
+        raise ValueError(f"atol must be a scalar or have shape ({n},), got {atol_a.shape}")
+    hh = 0.0
+    if not info["adaptive"]:
+        if h is None:
+            raise ValueError(f"method {method!r} has a fixed step: give h")
+        hh = as_scalar(h, "h", positive=True)
+    elif h is not None:
+        raise ValueError(f"method {method!r} is adaptive: use first_step/max_step, not h")
+    fs = 0.0 if first_step is None else as_scalar(first_step, "first_step", positive=True)
+    ms = as_scalar(max_step, "max_step", finite=False)
+    if not ms > 0 or math.isnan(ms):
+        raise ValueError(f"max_step must be positive, got {ms}")
+    budget = as_int(max_steps, "max_steps", minimum=1)
+    return method, t0, tf, rtol, atol_a, hh, fs, ms, budget
+
+
+def _t_eval(t_eval, t0, tf):
+    tev = as_array(t_eval, "t_eval", ndim=1, allow_empty=True)
+    if tev.size and (tev[0] < t0 or tev[-1] > tf):
+        raise ValueError("t_eval must lie within t_span")
+    if np.any(np.diff(tev) <= 0):
+        raise ValueError("t_eval must be strictly increasing")
+    return tev
+
+
 def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
           rtol: float = 1e-8, atol=1e-10, t_eval=None, dense_output: bool = False,
           events=None, args: tuple = (), h: float | None = None,
@@ -285,51 +338,14 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
     raises ``KeyboardInterrupt``.  Integration failures (budget exhausted,
     step below round-off) are reported in ``status``/``message`` as SciPy does.
     """
-    if not isinstance(method, str):
-        raise TypeError(f"method must be a string, got {type(method).__name__}")
-    names = _method_names()
-    if method not in names:
-        raise ValueError(f"unknown method {method!r}; choose one of {sorted(names)}")
-    info = names[method]
     y0a = as_array(y0, "y0", ndim=1)
     n = y0a.size
-    if isinstance(t_span, (str, bytes)) or not hasattr(t_span, "__len__") or len(t_span) != 2:
-        raise ValueError("t_span must be a pair (t0, tf)")
-    t0 = as_scalar(t_span[0], "t_span[0]")
-    tf = as_scalar(t_span[1], "t_span[1]")
-    if not tf > t0:
-        raise ValueError(f"t_span must be increasing with t0 < tf, got ({t0}, {tf})")
-    rtol = as_scalar(rtol, "rtol")
-    if not rtol > 0:
-        raise ValueError(f"rtol must be positive, got {rtol}")
-    atol_a = as_array(atol, "atol", nonnegative=True)
-    if atol_a.ndim == 0 or atol_a.size == 1:
-        atol_a = np.full(n, float(atol_a.reshape(-1)[0]))
-    elif atol_a.shape != (n,):
-        raise ValueError(f"atol must be a scalar or have shape ({n},), got {atol_a.shape}")
-    tev = None
-    if t_eval is not None:
-        tev = as_array(t_eval, "t_eval", ndim=1, allow_empty=True)
-        if tev.size and (tev[0] < t0 or tev[-1] > tf):
-            raise ValueError("t_eval must lie within t_span")
-        if np.any(np.diff(tev) <= 0):
-            raise ValueError("t_eval must be strictly increasing")
+    method, t0, tf, rtol, atol_a, hh, fs, ms, budget = _common(
+        method, t_span, rtol, atol, n, h, first_step, max_step, max_steps)
+    tev = None if t_eval is None else _t_eval(t_eval, t0, tf)
     if not isinstance(dense_output, (bool, np.bool_)):
         raise TypeError("dense_output must be a bool")
-    if not isinstance(args, tuple):
-        args = (args,) if not isinstance(args, list) else tuple(args)
-    hh = 0.0
-    if not info["adaptive"]:
-        if h is None:
-            raise ValueError(f"method {method!r} has a fixed step: give h")
-        hh = as_scalar(h, "h", positive=True)
-    elif h is not None:
-        raise ValueError(f"method {method!r} is adaptive: use first_step/max_step, not h")
-    fs = 0.0 if first_step is None else as_scalar(first_step, "first_step", positive=True)
-    ms = as_scalar(max_step, "max_step", finite=False)
-    if not ms > 0 or math.isnan(ms):
-        raise ValueError(f"max_step must be positive, got {ms}")
-    budget = as_int(max_steps, "max_steps", minimum=1)
+    args = _as_args(args)
     if jac is not None and not callable(jac):
         raise TypeError("jac must be callable")
     spec, dim = _system_spec(system, args)
@@ -365,3 +381,105 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
                     nreject=r["nreject"], status=status, message=message,
                     success=status >= 0)
 
+
+
+class EnsembleSolution(Solution):
+    """Result of :func:`solve_many`: ``t`` (m,), ``y`` (k, n, m), ``success``
+    (k,), ``status`` (k,) (0 end reached, -1 step budget or step size failure,
+    -2 a NaN or inf in the right-hand side), ``nfev`` (k,)."""
+
+    def __repr__(self):
+        return (f"EnsembleSolution(k={self['y'].shape[0]}, n={self['y'].shape[1]}, "
+                f"m={self['t'].size}, all success={bool(np.all(self['success']))})")
+
+
+def _ensemble_params(system, params, k):
+    from .scenes import Scene
+    if params is None:
+        return None
+    if isinstance(params, dict):
+        if not isinstance(system, Scene):
+            raise TypeError("params as a dict of names needs a scene")
+        base = system.params
+        unknown = set(params) - set(base)
+        if unknown:
+            raise ValueError(f"unknown parameter(s) {sorted(unknown)}; the scene has "
+                             f"{list(base)}")
+        cols = []
+        for name, v in base.items():
+            col = as_array(params.get(name, v), f"params[{name!r}]", min_ndim=0)
+            cols.append(np.broadcast_to(col, (k,)) if col.ndim == 0 else col)
+        for name, c in zip(base, cols):
+            if c.shape != (k,):
+                raise ValueError(f"params[{name!r}] must have shape ({k},), got {c.shape}")
+        return np.ascontiguousarray(np.stack(cols, axis=1))
+    p = as_array(params, "params", ndim=2)
+    if p.shape[0] != k:
+        raise ValueError(f"params must have {k} rows (one per trajectory), got {p.shape}")
+    return p
+
+
+def solve_many(system, t_span: Sequence[float], y0s, *, params=None, t_eval=None,
+               method: str = "dop853", rtol: float = 1e-8, atol=1e-10,
+               threads: int | None = None, progress: bool = False, args: tuple = (),
+               h: float | None = None, first_step: float | None = None,
+               max_step: float = np.inf, max_steps: int = 10_000_000) -> EnsembleSolution:
+    """Integrate k initial states (an ensemble) in C, on several threads.
+
+    Parameters
+    ----------
+    system : Scene, callable or C callback
+        As for :func:`solve`.  Scenes and C callbacks run with the GIL released
+        on ``threads`` threads; a Python callable runs on one thread.
+    t_span : (t0, tf)
+    y0s : array_like, shape (k, n)
+        Initial states.
+    params : array_like (k, p) or dict, optional
+        Per-trajectory parameters: for a scene, rows of its parameters in the
+        order of ``scene.params`` (or a dict ``{name: (k,) array}`` overriding
+        some of them); for a Python callable, extra leading arguments
+        ``f(t, y, *params[i], *args)``; for a C callback, ``user_data`` points
+        to row i (p doubles).
+    t_eval : array_like (m,), optional
+        Sample times; only these are stored.  Default: the final time only.
+    threads : int, optional
+        Threads to use (default: all cores).
+    progress : bool
+        Print a progress line to stderr.
+
+    Returns
+    -------
+    EnsembleSolution
+        ``t`` (m,), ``y`` (k, n, m), ``success`` (k,), ``status`` (k,),
+        ``nfev`` (k,).
+
+    Notes
+    -----
+    Each trajectory is an ordinary solve with the same method and tolerances
+    as :func:`solve`, so its samples equal ``solve(...).y`` exactly.  The inputs
+    pickle (scenes, arrays), so a sweep can be split across processes or a
+    dask cluster, each worker calling ``solve_many`` on its share.
+    """
+    import os
+    Y0 = as_array(y0s, "y0s", ndim=2, allow_empty=True)
+    k, n = Y0.shape
+    if n == 0:
+        raise ValueError("y0s must have at least one state component")
+    method, t0, tf, rtol, atol_a, hh, fs, ms, budget = _common(
+        method, t_span, rtol, atol, n, h, first_step, max_step, max_steps)
+    tev = np.array([tf]) if t_eval is None else _t_eval(t_eval, t0, tf)
+    args = _as_args(args)
+    spec, dim = _system_spec(system, args)
+    if dim is not None and dim != n:
+        raise ValueError(f"y0s must have {dim} columns for {type(system).__name__}, got {n}")
+    par = _ensemble_params(system, params, k)
+    if threads is None:
+        nthreads = os.cpu_count() or 1
+    else:
+        nthreads = as_int(threads, "threads", minimum=1)
+    if not isinstance(progress, (bool, np.bool_)):
+        raise TypeError("progress must be a bool")
+    yout, st, nfev = _core.ode_solve_many(method, spec, t0, tf, Y0, rtol, atol_a, tev, par, args,
+                                          hh, fs, ms, budget, int(nthreads), bool(progress))
+    status = np.where(st == 0, 0, np.where(st == _core.STATUS_ENONFINITE, -2, -1))
+    return EnsembleSolution(t=tev, y=yout, success=status == 0, status=status, nfev=nfev)

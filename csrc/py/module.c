@@ -29,7 +29,8 @@ PyMODINIT_FUNC PyInit__core(void)
     if (mp_py_errors_init(m) < 0) goto fail;
     if (PyModule_AddStringConstant(m, "gsl_version", GSL_VERSION) < 0) goto fail;
     if (PyModule_AddIntConstant(m, "STATUS_EMAXSTEPS", MP_EMAXSTEPS) < 0 ||
-        PyModule_AddIntConstant(m, "STATUS_ESTEP", MP_ESTEP) < 0)
+        PyModule_AddIntConstant(m, "STATUS_ESTEP", MP_ESTEP) < 0 ||
+        PyModule_AddIntConstant(m, "STATUS_ENONFINITE", MP_ENONFINITE) < 0)
         goto fail;
     return m;
 fail:

@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "models/models.h"
+#include "ode/ensemble.h"
 #include "ode/ode.h"
 
 /* ---- Python callables (called with the GIL held) -------------------------- */
@@ -422,6 +423,194 @@ out:
     return result;
 }
 
+/* ---- ode_solve_many ----------------------------------------------------- */
+
+static void many_progress(size_t done, size_t total, void *ctx)
+{
+    size_t *last = ctx;
+    if (done != total && done * 100 / total == *last * 100 / total) return;
+    *last = done;
+    PyGILState_STATE g = PyGILState_Ensure();
+    PySys_WriteStderr("\rsolve_many: %zu/%zu trajectories%s", done, total, done == total ? "\n" : "");
+    PyGILState_Release(g);
+}
+
+static PyObject *py_ode_solve_many(PyObject *self, PyObject *args, PyObject *kw)
+{
+    (void)self;
+    static char *kwlist[] = {"method", "system", "t0", "tf", "y0s", "rtol", "atol", "t_eval",
+                             "params", "args", "h", "first_step", "max_step", "max_steps",
+                             "threads", "progress", NULL};
+    const char *mname;
+    PyObject *spec, *y0o, *atolo, *tevo, *paro, *eargs;
+    double t0, tf, rtol, h, first_step, max_step;
+    long max_steps;
+    int threads, progress;
+    if (!PyArg_ParseTupleAndKeywords(args, kw, "sOddOdOOOOdddlip", kwlist, &mname, &spec, &t0,
+                                     &tf, &y0o, &rtol, &atolo, &tevo, &paro, &eargs, &h,
+                                     &first_step, &max_step, &max_steps, &threads, &progress))
+        return NULL;
+    const mp_ode_method *m = mp_ode_method_find(mname);
+    if (!m) return PyErr_Format(PyExc_ValueError, "unknown method %s", mname);
+    PyArrayObject *y0s = NULL, *atol = NULL, *tev = NULL, *par = NULL, *yout = NULL,
+                  *st = NULL, *nf = NULL;
+    PyObject *result = NULL, **tuples = NULL;
+    mp_ode_problem *probs = NULL;
+    py_fn *fns = NULL;
+    c_fn *cfns = NULL;
+    int *status = NULL;
+    long *nfev = NULL;
+    py_system sys;
+    memset(&sys, 0, sizeof sys);
+    size_t k = 0, np = 0;
+
+    if (!(y0s = mp_py_array(y0o, "y0s", 2)) || !(atol = mp_py_array(atolo, "atol", 1)) ||
+        !(tev = mp_py_array(tevo, "t_eval", 1)))
+        goto out;
+    k = (size_t)PyArray_DIM(y0s, 0);
+    size_t n = (size_t)PyArray_DIM(y0s, 1), nt = (size_t)PyArray_SIZE(tev);
+    if (paro != Py_None) {
+        if (!(par = mp_py_array(paro, "params", 2))) goto out;
+        if ((size_t)PyArray_DIM(par, 0) != k) {
+            PyErr_SetString(PyExc_ValueError, "params must have one row per trajectory");
+            goto out;
+        }
+        np = (size_t)PyArray_DIM(par, 1);
+    }
+    if (py_system_parse(spec, n, &sys) < 0) goto out;
+    if (m->symplectic && !m->implicit && sys.prob.nq == 0) {
+        PyErr_Format(PyExc_ValueError, "method %s needs a separable system q'' = a(t, q)", m->name);
+        goto out;
+    }
+    probs = PyMem_Calloc(k ? k : 1, sizeof *probs);
+    status = PyMem_Calloc(k ? k : 1, sizeof *status);
+    nfev = PyMem_Calloc(k ? k : 1, sizeof *nfev);
+    if (!probs || !status || !nfev) {
+        PyErr_NoMemory();
+        goto out;
+    }
+    const char *spec_kind = PyUnicode_AsUTF8(PyTuple_GET_ITEM(spec, 0));
+    for (size_t i = 0; i < k; i++) probs[i] = sys.prob;
+    if (par && strcmp(spec_kind, "scene") == 0) {
+        const mp_model *mod = mp_model_find(PyUnicode_AsUTF8(PyTuple_GET_ITEM(spec, 1)));
+        if (np != mod->nparams) {
+            PyErr_Format(PyExc_ValueError, "params must have %zu columns (%s's parameters)",
+                         mod->nparams, mod->name);
+            goto out;
+        }
+        for (size_t i = 0; i < k; i++) {
+            const double *row = (const double *)PyArray_DATA(par) + i * np;
+            if (mod->check(row) != MP_OK) {
+                char ctx[64];
+                snprintf(ctx, sizeof ctx, "params[%zu]", i);
+                mp_py_raise(MP_EDOM, ctx);
+                goto out;
+            }
+            mod->bind(row, &probs[i]);
+        }
+    } else if (par && sys.holds_python) {
+        /* a Python system gets its row as leading extra arguments */
+        fns = PyMem_Calloc(k, sizeof *fns);
+        tuples = PyMem_Calloc(k, sizeof *tuples);
+        if (!fns || !tuples) {
+            PyErr_NoMemory();
+            goto out;
+        }
+        Py_ssize_t na = PyTuple_GET_SIZE(eargs);
+        for (size_t i = 0; i < k; i++) {
+            const double *row = (const double *)PyArray_DATA(par) + i * np;
+            PyObject *tup = PyTuple_New((Py_ssize_t)np + na);
+            if (!tup) goto out;
+            tuples[i] = tup;
+            for (size_t j = 0; j < np; j++) {
+                PyObject *v = PyFloat_FromDouble(row[j]);
+                if (!v) goto out;
+                PyTuple_SET_ITEM(tup, (Py_ssize_t)j, v);
+            }
+            for (Py_ssize_t j = 0; j < na; j++) {
+                PyObject *v = PyTuple_GET_ITEM(eargs, j);
+                Py_INCREF(v);
+                PyTuple_SET_ITEM(tup, (Py_ssize_t)np + j, v);
+            }
+            fns[i] = sys.fn;
+            fns[i].args = tup;
+            probs[i].data = &fns[i];
+        }
+    } else if (par) {
+        /* a C callback gets a pointer to its row as user_data */
+        if (sys.cfn.nq) {
+            PyErr_SetString(PyExc_ValueError, "params are not supported for SecondOrder C callbacks");
+            goto out;
+        }
+        cfns = PyMem_Calloc(k, sizeof *cfns);
+        if (!cfns) {
+            PyErr_NoMemory();
+            goto out;
+        }
+        for (size_t i = 0; i < k; i++) {
+            cfns[i] = sys.cfn.fn;
+            cfns[i].user_data = (double *)PyArray_DATA(par) + i * np;
+            probs[i].data = &cfns[i];
+        }
+    }
+    mp_ode_options o;
+    memset(&o, 0, sizeof o);
+    o.rtol = rtol;
+    o.atol = PyArray_DATA(atol);
+    o.first_step = first_step;
+    o.max_step = max_step;
+    o.h = h;
+    o.max_steps = max_steps;
+    o.t_eval = PyArray_DATA(tev);
+    o.n_eval = nt;
+    o.interrupt = mp_py_check_interrupt;
+    npy_intp shape[3] = {(npy_intp)k, (npy_intp)n, (npy_intp)nt};
+    if (!(yout = mp_py_empty(3, shape))) goto out;
+    size_t last = 0;
+    int rc;
+    if (sys.holds_python) {
+        rc = mp_ode_solve_many(m, probs, k, t0, tf, PyArray_DATA(y0s), &o, 1, PyArray_DATA(yout),
+                               status, nfev, progress ? many_progress : NULL, &last);
+    } else {
+        Py_BEGIN_ALLOW_THREADS
+        rc = mp_ode_solve_many(m, probs, k, t0, tf, PyArray_DATA(y0s), &o, threads,
+                               PyArray_DATA(yout), status, nfev,
+                               progress ? many_progress : NULL, &last);
+        Py_END_ALLOW_THREADS
+    }
+    if (rc != MP_OK) {
+        mp_py_raise(rc, "solve_many");
+        goto out;
+    }
+    npy_intp ks[1] = {(npy_intp)k};
+    st = (PyArrayObject *)PyArray_SimpleNew(1, ks, NPY_INT);
+    nf = (PyArrayObject *)PyArray_SimpleNew(1, ks, NPY_LONG);
+    if (!st || !nf) goto out;
+    for (size_t i = 0; i < k; i++) {
+        ((int *)PyArray_DATA(st))[i] = status[i];
+        ((long *)PyArray_DATA(nf))[i] = nfev[i];
+    }
+    result = Py_BuildValue("(OOO)", yout, st, nf);
+out:
+    if (tuples)
+        for (size_t i = 0; i < k; i++) Py_XDECREF(tuples[i]);
+    PyMem_Free(tuples);
+    PyMem_Free(fns);
+    PyMem_Free(cfns);
+    PyMem_Free(probs);
+    PyMem_Free(status);
+    PyMem_Free(nfev);
+    py_system_clear(&sys);
+    Py_XDECREF(y0s);
+    Py_XDECREF(atol);
+    Py_XDECREF(tev);
+    Py_XDECREF(par);
+    Py_XDECREF(yout);
+    Py_XDECREF(st);
+    Py_XDECREF(nf);
+    return result;
+}
+
 static PyObject *py_ode_dense_eval(PyObject *self, PyObject *args)
 {
     (void)self;
@@ -483,6 +672,8 @@ static PyObject *py_ode_methods(PyObject *self, PyObject *unused)
 PyMethodDef mp_py_ode_methods[] = {
     {"ode_solve", (PyCFunction)(void (*)(void))py_ode_solve, METH_VARARGS | METH_KEYWORDS,
      "Integrate an ODE system (internal; use mechpy.solve)."},
+    {"ode_solve_many", (PyCFunction)(void (*)(void))py_ode_solve_many,
+     METH_VARARGS | METH_KEYWORDS, "Integrate an ensemble (internal; use mechpy.solve_many)."},
     {"ode_dense_eval", py_ode_dense_eval, METH_VARARGS,
      "Evaluate stored dense output (internal)."},
     {"ode_methods", py_ode_methods, METH_NOARGS, "The method table (internal)."},

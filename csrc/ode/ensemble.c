@@ -1,0 +1,124 @@
+/* Ensembles: many independent solves of one method, spread over threads.
+ * Each trajectory is an ordinary mp_ode_solve (the one driver loop); only the
+ * t_eval samples are kept.  Nothing is shared between threads but the
+ * read-only inputs, a work counter and a stop flag. */
+#include "ode/ensemble.h"
+
+#include <math.h>
+#include <pthread.h>
+#include <stdatomic.h>
+#include <stdlib.h>
+#include <string.h>
+
+typedef struct {
+    const mp_ode_method *m;
+    const mp_ode_problem *probs;
+    size_t k, n, nt;
+    double t0, tf;
+    const double *y0s;
+    const mp_ode_options *o;
+    double *yout;
+    int *status;
+    long *nfev;
+    atomic_size_t next, done;
+    atomic_int stop;    /* set on interrupt or a fatal error */
+    int fatal;          /* first fatal status (written once, under stop) */
+    mp_ode_interrupt interrupt; /* the main thread's check (may be NULL) */
+    void *interrupt_ctx;
+    void (*progress)(size_t done, size_t total, void *ctx);
+    void *progress_ctx;
+} ens_ctx;
+
+static int worker_interrupt(void *ctx) { return atomic_load(&((ens_ctx *)ctx)->stop) ? MP_EINTR : MP_OK; }
+
+typedef struct {
+    ens_ctx *e;
+    int is_main;
+} ens_arg;
+
+static int main_interrupt(void *ctx)
+{
+    ens_ctx *e = ctx;
+    if (atomic_load(&e->stop)) return MP_EINTR;
+    if (e->interrupt && e->interrupt(e->interrupt_ctx) != MP_OK) {
+        atomic_store(&e->stop, 1);
+        return MP_EINTR;
+    }
+    return MP_OK;
+}
+
+static void *ens_run(void *argp)
+{
+    ens_arg *a = argp;
+    ens_ctx *e = a->e;
+    mp_ode_options o = *e->o;
+    o.interrupt = a->is_main ? main_interrupt : worker_interrupt;
+    o.interrupt_ctx = e;
+    for (;;) {
+        if (atomic_load(&e->stop)) break;
+        size_t i = atomic_fetch_add(&e->next, 1);
+        if (i >= e->k) break;
+        mp_ode_result r;
+        int rc = mp_ode_solve(e->m, &e->probs[i], e->t0, e->tf, e->y0s + i * e->n, &o, &r);
+        e->nfev[i] = r.nfev;
+        double *dst = e->yout + i * e->n * e->nt; /* (n, nt) block */
+        for (size_t j = 0; j < e->nt; j++)
+            for (size_t c = 0; c < e->n; c++)
+                dst[c * e->nt + j] = j < r.m ? r.y[j * e->n + c] : NAN;
+        e->status[i] = rc;
+        mp_ode_result_free(&r);
+        if (rc == MP_EINTR || rc == MP_ECALLBACK || rc == MP_ENOMEM) {
+            if (!atomic_exchange(&e->stop, 1)) e->fatal = rc;
+            break;
+        }
+        size_t d = atomic_fetch_add(&e->done, 1) + 1;
+        if (a->is_main && e->progress) e->progress(d, e->k, e->progress_ctx);
+        if (a->is_main && main_interrupt(e) != MP_OK) break;
+    }
+    return NULL;
+}
+
+int mp_ode_solve_many(const mp_ode_method *m, const mp_ode_problem *probs, size_t k, double t0,
+                      double tf, const double *y0s, const mp_ode_options *o, int threads,
+                      double *yout, int *status, long *nfev,
+                      void (*progress)(size_t, size_t, void *), void *progress_ctx)
+{
+    if (k == 0) return MP_OK;
+    ens_ctx e;
+    memset(&e, 0, sizeof e);
+    e.m = m;
+    e.probs = probs;
+    e.k = k;
+    e.n = probs[0].n;
+    e.nt = o->n_eval;
+    e.t0 = t0;
+    e.tf = tf;
+    e.y0s = y0s;
+    e.o = o;
+    e.yout = yout;
+    e.status = status;
+    e.nfev = nfev;
+    e.interrupt = o->interrupt;
+    e.interrupt_ctx = o->interrupt_ctx;
+    e.progress = progress;
+    e.progress_ctx = progress_ctx;
+    atomic_init(&e.next, 0);
+    atomic_init(&e.done, 0);
+    atomic_init(&e.stop, 0);
+    for (size_t i = 0; i < k; i++) status[i] = -1; /* not run */
+    if (threads < 1) threads = 1;
+    if ((size_t)threads > k) threads = (int)k;
+    pthread_t *tid = threads > 1 ? malloc((size_t)(threads - 1) * sizeof *tid) : NULL;
+    if (threads > 1 && !tid) return MP_ENOMEM;
+    ens_arg wa = {&e, 0}, ma = {&e, 1};
+    int started = 0;
+    for (int i = 0; i < threads - 1; i++) {
+        if (pthread_create(&tid[i], NULL, ens_run, &wa) != 0) break;
+        started++;
+    }
+    ens_run(&ma); /* the calling thread works too, and watches for interrupts */
+    for (int i = 0; i < started; i++) pthread_join(tid[i], NULL);
+    free(tid);
+    if (e.fatal) return e.fatal;
+    return atomic_load(&e.stop) ? MP_EINTR : MP_OK;
+}
