@@ -483,8 +483,12 @@ int mp_variational_solve(const mp_var_problem *pb, double *y, double *lambda, mp
                 break;
             }
             if (s2 == MP_OK) {
-                double ok = minimise ? (w.J <= J0 + 1e-4 * alpha * slope)
-                                     : (var_merit(pb, &w) <= (1.0 - 2e-4 * alpha) * m0);
+                /* near the solution the decrease of J drowns in round-off: the
+                   residual's decrease decides there */
+                int resid_ok = var_merit(pb, &w) <= (1.0 - 2e-4 * alpha) * m0;
+                int ok = minimise ? (w.J <= J0 + 1e-4 * alpha * slope ||
+                                     (fabs(slope) <= 1e-10 * (1.0 + fabs(J0)) && resid_ok))
+                                  : resid_ok;
                 if (ok || small) {
                     accepted = 1;
                     break;
