@@ -183,7 +183,8 @@ def _solve(spec, x, y0, cons=(), values=(), lam0=(), stationary=False, tol=_TOL,
 
 
 def minimize_functional(F: Callable, x_span, y_ends, n: int = 200, *, constraints=(),
-                        guess=None, stationary: bool = False, tol: float = _TOL,
+                        guess=None, multipliers=None, stationary: bool = False,
+                        tol: float = _TOL,
                         max_iter: int = _MAX_ITER) -> Extremal:
     r"""Extremal of :math:`J[y] = \int_a^b F(x, y, y')\,dx` with fixed ends.
 
@@ -210,6 +211,9 @@ def minimize_functional(F: Callable, x_span, y_ends, n: int = 200, *, constraint
     guess : array (n + 1,), optional
         Initial path (its ends are replaced by ``y_ends``); a straight line
         by default.
+    multipliers : array (k,), optional
+        Initial Lagrange multipliers (zeros by default; give a guess when F
+        is linear in y', where lambda = 0 makes the Newton matrix singular).
     stationary : bool
         Look for any stationary point (Newton on the residual) rather than a
         minimum (descent on J with a positive-definite shifted Hessian).
@@ -250,7 +254,9 @@ def minimize_functional(F: Callable, x_span, y_ends, n: int = 200, *, constraint
             raise TypeError(f"constraints[{i}][0] must be a callable G(x, y, yp)")
         cons.append(_fd_integrand(G))
         vals.append(as_scalar(v, f"constraints[{i}] value"))
-    y, lam, info = _solve(_fd_integrand(F), x, y0, cons, vals, np.zeros(len(cons)),
+    lam0 = np.zeros(len(cons)) if multipliers is None else \
+        as_array(multipliers, "multipliers", shape=(len(cons),), allow_empty=True)
+    y, lam, info = _solve(_fd_integrand(F), x, y0, cons, vals, lam0,
                           stationary, tol, max_iter)
     return Extremal(x, y, info["J"], lam, info["iterations"], info["residual"])
 
@@ -745,7 +751,10 @@ def _partials(L, q, qdot, which):
             args[which] = zz
             if one:
                 args = [a[0] for a in args]
-            vals.append(np.asarray(L(*args), dtype=float))
+            val = np.asarray(L(*args), dtype=float)
+            if not one and q.shape[0] == 1 and val.shape == q.shape:
+                val = val[0]     # a one-coordinate L that keeps the leading axis
+            vals.append(val)
         out[i] = (8 * (vals[0] - vals[1]) - (vals[2] - vals[3])) / (12 * hh)
     return out[0] if one else out
 
@@ -757,7 +766,8 @@ def generalized_momenta(L: Callable, q, qdot) -> np.ndarray:
     ----------
     L : callable ``L(q, qdot)`` or a scene
         Vectorised: q and qdot of shape (d, ...) (or scalars for one
-        coordinate).
+        coordinate); a scene has one coordinate, and q of any shape holds
+        samples of it.
     q, qdot : array_like
         Coordinates and velocities, same shape.
 
@@ -766,6 +776,10 @@ def generalized_momenta(L: Callable, q, qdot) -> np.ndarray:
     ndarray
         Same shape as q (units of L times s per unit of q).
     """
+    from .scenes import Scene
+    if isinstance(L, Scene):     # one coordinate: q of any shape
+        q, qdot = _split(q, qdot)
+        return _partials(lagrangian(L), q[None], qdot[None], 1)[0]
     return _partials(_as_lagrangian(L), q, qdot, 1)
 
 
