@@ -312,12 +312,8 @@ class Brachistochrone(NamedTuple):
 
 def _cycloid_theta(ratio: float) -> float:
     """theta in (0, 2 pi) with (theta - sin theta) / (1 - cos theta) = ratio."""
-    from scipy.optimize import brentq
-
-    def f(t):
-        return _t_minus_sin(t) - ratio * 2 * np.sin(0.5 * t) ** 2
-    # near 0 the ratio is about t/3: f < 0 at min(1.5 ratio, 1)
-    return brentq(f, min(1.5 * ratio, 1.0), 2 * np.pi, xtol=1e-15, rtol=1e-15, maxiter=200)
+    return float(_cycloid_solve(np.array([ratio]), 1.0, np.array([0.0]),
+                                np.array([2 * np.pi]), ratio=True)[0])
 
 
 def _t_minus_sin(t):
@@ -328,27 +324,37 @@ def _t_minus_sin(t):
     return np.where(np.abs(t) < 0.1, series, t - np.sin(t))
 
 
-def _cycloid_theta_of_x(x, a, theta_end):
-    """Invert x = a (theta - sin theta) on [0, theta_end] (vectorised Newton,
-    bracketed by bisection)."""
-    x = np.asarray(x, dtype=np.float64)
-    lo, hi = np.zeros_like(x), np.full_like(x, theta_end)
-    t = np.cbrt(6 * x / a)
-    t = np.clip(t, lo, hi)
-    for _ in range(100):
-        f = a * _t_minus_sin(t) - x
+def _cycloid_solve(target, a, lo, hi, ratio=False):
+    """Safeguarded Newton (vectorised) for a (t - sin t) = target on [lo, hi],
+    or, with ``ratio``, for (t - sin t) - target (1 - cos t) = 0."""
+    lo, hi = lo.copy(), hi.copy()
+    t = np.clip(np.cbrt(6 * target / a) if not ratio else 3 * target, lo, hi)
+    t = np.where((t <= lo) | (t >= hi), 0.5 * (lo + hi), t)
+    for _ in range(200):
+        vers = 2 * np.sin(0.5 * t) ** 2          # 1 - cos t
+        if ratio:
+            f = _t_minus_sin(t) - target * vers
+            d = vers - target * np.sin(t)
+        else:
+            f = a * _t_minus_sin(t) - target
+            d = a * vers
         lo = np.where(f < 0, t, lo)
         hi = np.where(f > 0, t, hi)
-        d = 2 * a * np.sin(0.5 * t) ** 2
         with np.errstate(divide="ignore", invalid="ignore"):
             tn = t - f / d
-        bad = ~((tn > lo) & (tn < hi))
-        tn = np.where(bad, 0.5 * (lo + hi), tn)
-        if np.all(np.abs(tn - t) <= 1e-15 * (1 + t)):
-            t = tn
-            break
+        tn = np.where((tn > lo) & (tn < hi), tn, 0.5 * (lo + hi))
+        tn = np.where(f == 0, t, tn)
+        done = np.all((np.abs(tn - t) <= 1e-15 * (1 + t)) | (hi - lo <= 4e-16 * (1 + t)))
         t = tn
+        if done:
+            break
     return t
+
+
+def _cycloid_theta_of_x(x, a, theta_end):
+    """Invert x = a (theta - sin theta) on [0, theta_end]."""
+    x = np.asarray(x, dtype=np.float64)
+    return _cycloid_solve(x, a, np.zeros_like(x), np.full_like(x, theta_end))
 
 
 def brachistochrone(x_end: float, y_end: float, g: float = 9.81, n: int = 200, *,
