@@ -342,7 +342,7 @@ def _cycloid_solve(target, a, lo, hi, ratio=False):
         hi = np.where(f > 0, t, hi)
         with np.errstate(divide="ignore", invalid="ignore"):
             tn = t - f / d
-        tn = np.where((tn > lo) & (tn < hi), tn, 0.5 * (lo + hi))
+        tn = np.where((tn >= lo) & (tn <= hi), tn, 0.5 * (lo + hi))
         tn = np.where(f == 0, t, tn)
         done = np.all((np.abs(tn - t) <= 1e-15 * (1 + t)) | (hi - lo <= 4e-16 * (1 + t)))
         t = tn
