@@ -329,7 +329,6 @@ def _cycloid_solve(target, a, lo, hi, ratio=False):
     or, with ``ratio``, for (t - sin t) - target (1 - cos t) = 0."""
     lo, hi = lo.copy(), hi.copy()
     t = np.clip(np.cbrt(6 * target / a) if not ratio else 3 * target, lo, hi)
-    t = np.where((t <= lo) | (t >= hi), 0.5 * (lo + hi), t)
     for _ in range(200):
         vers = 2 * np.sin(0.5 * t) ** 2          # 1 - cos t
         if ratio:
