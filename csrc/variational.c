@@ -251,6 +251,7 @@ typedef struct {
     double *d, *e;            /* tridiagonal Hessian of Phi */
     double *Gv;               /* nc: G_k values */
     double J;
+    double gscale;            /* max over nodes of the summands' size in g (round-off scale) */
     /* solve workspace */
     double *rhs;              /* N (nc + 1) */
     double *w1, *w2, *w3, *w4;
@@ -328,7 +329,7 @@ static int var_assemble(const mp_var_problem *pb, var_ws *w, const double *y,
         memset(w->d, 0, N * sizeof(double));
         memset(w->e, 0, N * sizeof(double));
     }
-    double J = 0.0;
+    double J = 0.0, gscale = 0.0;
     for (size_t k = 0; k < nc; k++) w->Gv[k] = 0.0;
     for (size_t i = 0; i < n; i++) {
         double h = w->h[i];
@@ -349,6 +350,7 @@ static int var_assemble(const mp_var_problem *pb, var_ws *w, const double *y,
             Fpp += lam[k] * Q[5 * n + i];
         }
         /* interval i couples nodes i and i + 1 = unknowns i - 1 and i */
+        gscale = fmax(gscale, fabs(0.5 * h * Fy) + fabs(Fp));
         if (i >= 1) w->g[i - 1] += 0.5 * h * Fy - Fp;
         if (i + 1 <= N) w->g[i] += 0.5 * h * Fy + Fp;
         if (hess) {
@@ -358,6 +360,7 @@ static int var_assemble(const mp_var_problem *pb, var_ws *w, const double *y,
         }
     }
     w->J = J;
+    w->gscale = gscale;
     if (!isfinite(J)) return MP_ENONFINITE;
     for (size_t j = 0; j < N; j++)
         if (!isfinite(w->g[j])) return MP_ENONFINITE;
@@ -468,6 +471,18 @@ int mp_variational_solve(const mp_var_problem *pb, double *y, double *lambda, mp
         for (size_t k = 0; k < nc; k++) {
             lmax = fmax(lmax, fabs(lambda[k]));
             dlmax = fmax(dlmax, fabs(w.dl[k]));
+        }
+        double gmax = 0.0, cmax = 0.0, vmax = 0.0;
+        for (size_t j = 0; j < N; j++) gmax = fmax(gmax, fabs(w.g[j]));
+        for (size_t k = 0; k < nc; k++) {
+            cmax = fmax(cmax, fabs(w.Gv[k] - pb->value[k]));
+            vmax = fmax(vmax, fabs(pb->value[k]));
+        }
+        /* a residual at round-off level also ends the iteration (a nearly
+           singular Hessian can keep the step from shrinking) */
+        if (gmax <= 1e-13 * w.gscale && cmax <= 1e-13 * (1.0 + vmax)) {
+            converged = 1;
+            break;
         }
         int small = dmax <= tol * (1.0 + ymax) && dlmax <= tol * (1.0 + lmax);
         double J0 = w.J, m0 = var_merit(pb, &w), alpha = 1.0;
