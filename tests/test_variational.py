@@ -1,0 +1,393 @@
+"""mechpy.variational against closed forms, SciPy shooting and conservation laws."""
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+from scipy.optimize import brentq, fsolve
+
+import mechpy as mp
+
+V = mp.variational
+G = 9.81
+
+
+def _order(errors):
+    """Observed orders log2(e_n / e_2n) for n doubling."""
+    e = np.asarray(errors)
+    return np.log2(e[:-1] / e[1:])
+
+
+# ---- references (independent of the code under test) --------------------------
+
+def _cycloid_ref(X, Y):
+    """(theta_end, a, time) of the cycloid through (X, Y), y downward."""
+    th = brentq(lambda t: (t - np.sin(t)) / (1 - np.cos(t)) - X / Y, 1e-3, 2 * np.pi - 1e-6,
+                xtol=1e-15)
+    a = Y / (1 - np.cos(th))
+    return th, a, th * np.sqrt(a / G)
+
+
+def _cycloid_y(x, a, th_end):
+    out = []
+    for xi in x:
+        if xi == 0:
+            out.append(0.0)
+            continue
+        t = brentq(lambda t: a * (t - np.sin(t)) - xi, 0, th_end + 1e-12, xtol=1e-15)
+        out.append(a * (1 - np.cos(t)))
+    return np.array(out)
+
+
+def _catenary_ref(xa, ya, xb, yb, L):
+    """y = A cosh((x - x0)/A) + c through both ends with arc length L (fsolve)."""
+    def eqs(v):
+        A, x0, c = v
+        return [A * np.cosh((xa - x0) / A) + c - ya, A * np.cosh((xb - x0) / A) + c - yb,
+                A * (np.sinh((xb - x0) / A) - np.sinh((xa - x0) / A)) - L]
+    # A from sqrt(L^2 - v^2) = 2 A sinh(H / 2A), then fsolve on all three equations
+    H, v = xb - xa, yb - ya
+    A0 = brentq(lambda A: 2 * A * np.sinh(H / (2 * A)) - np.sqrt(L * L - v * v), H / 50, 1e3)
+    x00 = 0.5 * (xa + xb) - A0 * np.arcsinh(v / (2 * A0 * np.sinh(H / (2 * A0))))
+    c0 = ya - A0 * np.cosh((xa - x00) / A0)
+    sol = fsolve(eqs, [A0, x00, c0], xtol=1e-12)
+    assert np.max(np.abs(eqs(sol))) < 1e-11
+    return sol
+
+
+def _shoot(f, qa, qb, T, v_lo, v_hi, t_eval):
+    """Shooting with solve_ivp (DOP853) + brentq on the initial velocity."""
+    def miss(v):
+        return solve_ivp(f, (0, T), [qa, v], method="DOP853", rtol=1e-12, atol=1e-12).y[0, -1] - qb
+    v = brentq(miss, v_lo, v_hi, xtol=1e-13)
+    s = solve_ivp(f, (0, T), [qa, v], method="DOP853", rtol=1e-12, atol=1e-12, t_eval=t_eval)
+    return s.y[0]
+
+
+def _action(L, t, q):
+    """Midpoint discrete action sum h L(mid q, dq/h)."""
+    h = np.diff(t)
+    return np.sum(h * L(0.5 * (q[1:] + q[:-1]), np.diff(q) / h))
+
+
+# ---- brachistochrone ------------------------------------------------------------------
+
+def test_brachistochrone_published_values_and_order():
+    r = V.brachistochrone(2.0, 1.0, n=50)
+    assert abs(r.time_exact - 0.8055638295) < 1e-10
+    assert abs(r.time_line - 1.00964) < 5e-6
+    th, a, t_ref = _cycloid_ref(2.0, 1.0)
+    assert abs(r.radius - a) < 1e-12 and abs(r.theta_end - th) < 1e-12
+    errs, cerrs = [], []
+    for n in (25, 50, 100, 200, 400):
+        r = V.brachistochrone(2.0, 1.0, n=n)
+        errs.append(abs(r.time - 0.8055638295163989))
+        cerrs.append(np.max(np.abs(r.y - _cycloid_y(r.x, a, th))))
+    assert errs[-1] < 1e-7 and cerrs[-1] < 1e-6          # 5.3e-8 s, 2.5e-7 m measured
+    assert np.all(np.abs(_order(errs) - 2) < 0.1), errs  # second order in 1/n
+    assert np.all(_order(cerrs) > 1.8), cerrs
+    assert r.time < r.time_line
+    assert r.x[0] == 0 and r.y[0] == 0 and abs(r.x[-1] - 2) < 1e-15 and abs(r.y[-1] - 1) < 1e-14
+
+
+@pytest.mark.parametrize("X, Y", [(10.0, 1.0), (0.3, 2.0), (1.0, 1.0)])
+def test_brachistochrone_other_ends(X, Y):
+    _, _, t_ref = _cycloid_ref(X, Y)
+    errs = [abs(V.brachistochrone(X, Y, n=n).time - t_ref) for n in (100, 200, 400)]
+    assert errs[-1] < 1e-5 * t_ref, errs       # 2.1e-6 relative for (10, 1), a deep dip
+    assert np.all(np.abs(_order(errs) - 2) < 0.1), errs
+    assert V.brachistochrone(X, Y, n=50).time < V.brachistochrone(X, Y, n=50).time_line
+
+
+def test_brachistochrone_is_a_minimum_of_the_discrete_time():
+    r = V.brachistochrone(2.0, 1.0, n=100)
+    s = np.cbrt(r.x / 2.0)
+    c = 1 / np.sqrt(2 * G)
+
+    def J(u):   # the discrete functional in (s, u = sqrt y), written out here
+        h = np.diff(s)
+        sm, um, up = 0.5 * (s[1:] + s[:-1]), 0.5 * (u[1:] + u[:-1]), np.diff(u) / h
+        return np.sum(h * c * np.sqrt((6 * sm * sm) ** 2 + 4 * um * um * up * up) / um)
+    u = np.sqrt(r.y)
+    assert abs(J(u) - r.time) < 1e-14
+    rng = np.random.default_rng(1)
+    for _ in range(20):
+        eta = np.zeros_like(u)
+        eta[1:-1] = rng.standard_normal(len(u) - 2) * np.sin(np.pi * s[1:-1])
+        eps = 1e-5
+        d2 = J(u + eps * eta) - J(u)
+        assert d2 > 0
+        # first variation vanishes: the symmetric difference is O(eps^3)
+        assert abs(J(u + eps * eta) - J(u - eps * eta)) < 1e-3 * d2
+
+
+# ---- catenary ----------------------------------------------------------------------------
+
+@pytest.mark.parametrize("a, b, L", [(0.0, 2.0, 2.2), (0.0, 2.0, 3.0), (0.0, 2.0, 6.0),
+                                     ((0.0, 0.0), (2.0, 1.0), 3.0), ((-1.0, 2.0), (1.5, 0.5), 4.0)])
+def test_catenary_against_cosh(a, b, L):
+    xa, ya = (a, 0.0) if np.ndim(a) == 0 else a
+    xb, yb = (b, 0.0) if np.ndim(b) == 0 else b
+    A, x0, c = _catenary_ref(xa, ya, xb, yb, L)
+    errs = []
+    for n in (50, 100, 200):
+        r = V.catenary(a, b, L, n=n)
+        y_ref = A * np.cosh((r.x - x0) / A) + c
+        errs.append(np.max(np.abs(r.y - y_ref)))
+        assert abs(r.length - L) < 1e-11
+    assert np.all(np.abs(_order(errs) - 2) < 0.15), errs
+    assert errs[-1] < 1e-4 * L
+    assert abs(r.a - A) < 1e-10 * A and abs(r.c - c) < 1e-9 * (1 + abs(c))
+    assert np.max(np.abs(r.y_exact - (A * np.cosh((r.x - x0) / A) + c))) < 1e-9
+    # the multiplier is -c (tension per weight T/w = y + lambda = A cosh), to O(h^2)
+    assert abs(r.multiplier - (-c)) < 2e-4 * (1 + abs(c))
+    assert abs(r.horizontal_tension - A) < 2e-4 * A
+
+
+def test_catenary_lower_energy_than_other_chains_of_same_length():
+    r = V.catenary(0.0, 2.0, 3.0, n=100)
+    rng = np.random.default_rng(2)
+    x = r.x
+
+    def length(y):
+        return np.sum(np.hypot(np.diff(x), np.diff(y)))
+
+    def energy(y):
+        return np.sum(0.5 * (y[1:] + y[:-1]) * np.hypot(np.diff(x), np.diff(y)))
+    for _ in range(10):
+        eta = np.zeros_like(x)
+        eta[1:-1] = rng.standard_normal(len(x) - 2) * 1e-2
+        y = r.y + eta
+        # stay on the constraint: y_s = s * y (ends are at 0), s fixed by the length
+        s = brentq(lambda s: length(s * y) - 3.0, 0.2, 5.0)
+        assert energy(s * y) > r.energy
+
+
+# ---- least action -------------------------------------------------------------------------
+
+def test_harmonic_oscillator_path_closed_form_and_order():
+    def L(q, v):
+        return 0.5 * v * v - 0.5 * q * q
+    qa, qb, T = 0.3, 0.7, 2.0
+    errs = []
+    for n in (50, 100, 200):
+        r = V.stationary_path(L, qa, qb, T, n)
+        exact = (qa * np.sin(T - r.t) + qb * np.sin(r.t)) / np.sin(T)
+        errs.append(np.max(np.abs(r.q - exact)))
+    assert errs[-1] < 2e-5
+    assert np.all(np.abs(_order(errs) - 2) < 0.05), errs
+    # the scene route (Duffing with beta = 0 in C) gives the same discrete path
+    d = V.stationary_path(mp.scenes.Duffing(alpha=1.0, beta=0.0), qa, qb, T, 200)
+    assert np.max(np.abs(d.q - r.q)) < 1e-9
+    # velocity and momentum from the discrete Legendre transform
+    v_exact = (-qa * np.cos(T - r.t) + qb * np.cos(r.t)) / np.sin(T)
+    assert np.max(np.abs(d.qdot - v_exact)) < 1e-4
+
+
+def test_action_minimum_before_conjugate_point_saddle_after():
+    def L(q, v):
+        return 0.5 * v * v - 0.5 * q * q
+    rng = np.random.default_rng(3)
+    for T, is_min in ((2.0, True), (4.0, False)):   # conjugate point at T = pi
+        r = V.stationary_path(L, 0.1, 0.2, T, 100)
+        S0 = _action(L, r.t, r.q)
+        assert abs(S0 - r.action) < 1e-12
+        d2 = []
+        for _ in range(20):
+            eta = np.zeros_like(r.q)
+            eta[1:-1] = rng.standard_normal(len(r.q) - 2)
+            e = 1e-3
+            plus, minus = _action(L, r.t, r.q + e * eta), _action(L, r.t, r.q - e * eta)
+            assert abs(plus - minus) < 1e-9                 # first variation = 0
+            d2.append(plus + minus - 2 * S0)
+        mode = np.sin(np.pi * (r.t - r.t[0]) / T)            # the lowest mode
+        dm = _action(L, r.t, r.q + 1e-3 * mode) - S0
+        if is_min:
+            assert min(d2) > 0 and dm > 0
+        else:
+            assert dm < 0
+
+
+@pytest.mark.parametrize("damping", [0.0, 0.3])
+def test_pendulum_path_against_solve_ivp_shooting(damping):
+    p = mp.scenes.Pendulum(damping=damping)
+    qa, qb, T = 0.2, -0.5, 1.0
+    errs = []
+    for n in (100, 200, 400):
+        r = V.stationary_path(p, qa, qb, T, n)
+        ref = _shoot(lambda t, y: [y[1], -G * np.sin(y[0]) - damping * y[1]], qa, qb, T,
+                     -10, 5, r.t)
+        errs.append(np.max(np.abs(r.q - ref)))
+    assert errs[-1] < 2e-5, errs        # 1.3e-5 at n = 400
+    assert np.all(np.abs(_order(errs) - 2) < 0.1), errs
+    # mp.solve from the path's initial state lands on q_b
+    s = mp.solve(p, (0, T), [qa, r.qdot[0]], rtol=1e-12, atol=1e-12)
+    assert abs(s.y[0, -1] - qb) < 1e-4
+
+
+# ---- variational integrator -----------------------------------------------------------------
+
+def test_variational_integrator_energy_bounded_and_symplectic():
+    p = mp.scenes.Pendulum()
+    h = 0.05
+    r = V.variational_integrate(p, (0, 2000), 2.0, 0.0, h)
+    E = r.energy
+    dE = np.abs(E - E[0])
+    k = len(E) // 10
+    assert dE.max() < 0.05 * abs(E[0])                         # O(h^2), no drift
+    assert dE[-k:].max() < 1.5 * dE[:k].max() + 1e-12           # bounded over 40000 steps
+    # classical RK4 with the same step drifts
+    rk = mp.solve(p, (0, 2000), [2.0, 0.0], method="rk4", h=h)
+    dErk = np.abs(p.energy(rk.y) - p.energy(rk.y[:, 0]))
+    kk = len(dErk) // 10
+    assert dErk[-kk:].max() > 5 * dErk[:kk].max()            # grows with time
+
+    # symplectic: the (q, p) map over 200 steps has unit Jacobian determinant
+    def flow(q0, p0):
+        from mechpy import _core
+        q, pp = _core.variational_integrate(("pendulum", [G, 1.0, 0, 0, 0]), 0.0, h, 200, q0,
+                                            p0)
+        return np.array([q[-1], pp[-1]])
+    z = np.array([1.0, 0.5])
+    d = 1e-6
+    Jm = np.column_stack([(flow(*(z + d * e)) - flow(*(z - d * e))) / (2 * d)
+                          for e in np.eye(2)])
+    assert abs(np.linalg.det(Jm) - 1) < 1e-6
+
+
+def test_variational_integrator_second_order_and_python_lagrangian():
+    p = mp.scenes.Pendulum()
+    ref = solve_ivp(lambda t, y: [y[1], -G * np.sin(y[0])], (0, 2), [1.0, 0.0], method="DOP853",
+                    rtol=1e-12, atol=1e-12).y[:, -1]
+    errs = [abs(V.variational_integrate(p, (0, 2), 1.0, 0.0, h).q[-1] - ref[0])
+            for h in (0.02, 0.01, 0.005)]
+    assert np.all(np.abs(_order(errs) - 2) < 0.1), errs
+    a = V.variational_integrate(lambda q, v: 0.5 * v * v + G * np.cos(q), (0, 2), 1.0, 0.0, 0.01)
+    b = V.variational_integrate(p, (0, 2), 1.0, 0.0, 0.01)
+    assert np.max(np.abs(a.q - b.q)) < 1e-8
+    assert np.max(np.abs(a.p - b.p)) < 1e-8
+
+
+# ---- momenta, cyclic coordinates -------------------------------------------------------------
+
+def test_central_force_cyclic_angle_and_conserved_momentum():
+    cf = V.CentralForce(m=2.0, k=3.0)
+    s = mp.solve(cf.rhs, (0, 20), [1.0, 0.0, 0.1, 1.1], rtol=1e-11, atol=1e-12,
+                 t_eval=np.linspace(0, 20, 201))
+    q, qd = s.y[:2], s.y[2:]
+    assert V.cyclic_coordinates(cf, q, qd) == (1,)
+    pm = V.generalized_momenta(cf, q, qd)
+    assert np.max(np.abs(pm - cf.momenta(s.y))) < 1e-9
+    assert np.ptp(pm[1]) < 1e-8                 # p_phi conserved
+    assert np.ptp(pm[0]) > 0.1                  # p_r is not
+
+
+def test_pendulum_momentum_and_hoop_has_no_cyclic_coordinate():
+    p = mp.scenes.Pendulum(length=2.0)
+    th, thd = np.array([0.1, 0.7]), np.array([1.0, -2.0])
+    assert np.allclose(V.generalized_momenta(p, th, thd), 4.0 * thd, rtol=1e-10)
+    assert V.cyclic_coordinates(p, th[None], thd[None]) == ()
+    hoop = V.RotatingHoop(R=0.5, omega=6.0)
+    s = mp.solve(hoop.rhs, (0, 10), [0.3, 0.0], rtol=1e-11, atol=1e-12,
+                 t_eval=np.linspace(0, 10, 101))
+    assert V.cyclic_coordinates(hoop, s.y[:1], s.y[1:]) == ()
+    h = hoop.jacobi_integral(s.y)
+    assert np.ptp(h) < 1e-8
+    E = 0.5 * hoop.R ** 2 * (s.y[1] ** 2 + (hoop.omega * np.sin(s.y[0])) ** 2) \
+        - G * hoop.R * np.cos(s.y[0])
+    assert np.ptp(E) > 0.1                      # the energy itself is not conserved
+
+
+# ---- constraint forces ------------------------------------------------------------------------
+
+def test_pendulum_tension_matches_newton():
+    p = mp.scenes.Pendulum(length=1.5)
+    s = mp.solve(p, (0, 5), [2.5, 0.0], rtol=1e-10, atol=1e-12, t_eval=np.linspace(0, 5, 101))
+    m = 0.7
+    T = V.pendulum_tension(p, s.y, mass=m)
+    newton = m * (G * np.cos(s.y[0]) + 1.5 * s.y[1] ** 2)
+    assert np.max(np.abs(T - newton)) < 1e-12 * np.max(np.abs(newton))
+    assert T.min() < 0 < T.max()     # the string goes slack near the top at 2.5 rad
+
+
+def test_hoop_normal_force_matches_newton():
+    hoop = V.RotatingHoop(R=0.5, omega=6.0, m=0.2)
+    s = mp.solve(hoop.rhs, (0, 3), [0.3, 0.0], rtol=1e-12, atol=1e-13, dense_output=True)
+    t = np.linspace(0.1, 2.9, 29)
+    N = hoop.normal_force(t, s.sol(t))
+
+    def pos(tt):
+        th = s.sol(tt)[0]
+        w = hoop.omega
+        return hoop.R * np.stack([np.sin(th) * np.cos(w * tt), np.sin(th) * np.sin(w * tt),
+                                  -np.cos(th)])
+    d = 1e-3   # acceleration by a fourth-order central difference of the position
+    acc = (-pos(t + 2 * d) + 16 * pos(t + d) - 30 * pos(t) + 16 * pos(t - d)
+           - pos(t - 2 * d)) / (12 * d * d)
+    Fn = hoop.m * acc - hoop.m * np.array([0, 0, -G])[:, None]   # Newton: N = m a - m g
+    r = pos(t) / hoop.R
+    ph = np.stack([-np.sin(6 * t), np.cos(6 * t), 0 * t])
+    assert np.max(np.abs(N[0] - np.sum(Fn * r, 0))) < 1e-5
+    assert np.max(np.abs(N[1] - np.sum(Fn * ph, 0))) < 1e-5
+    assert np.max(np.abs(N[2])) < 1e-12
+    assert np.max(np.abs(N[1])) > 0.1           # the hoop pushes the bead around
+
+
+# ---- the general minimiser ----------------------------------------------------------------------
+
+def test_minimal_surface_of_revolution_is_a_catenoid():
+    r = V.minimize_functional(lambda x, y, yp: y * np.sqrt(1 + yp * yp), (-0.5, 0.5), (1.0, 1.0),
+                              200)
+    A = brentq(lambda A: A * np.cosh(0.5 / A) - 1, 0.6, 1.0)   # the stable (shallow) catenoid
+    assert np.max(np.abs(r.y - A * np.cosh(r.x / A))) < 1e-5
+
+
+def test_isoperimetric_arc_is_a_circle():
+    L = 2.5    # maximise the area under a curve of fixed length over [-1, 1]
+    r = V.minimize_functional(lambda x, y, yp: -y, (-1, 1), (0, 0), 200,
+                              constraints=[(lambda x, y, yp: np.sqrt(1 + yp * yp), L)],
+                              guess=0.5 * np.cos(np.pi * np.linspace(-1, 1, 201) / 2),
+                              multipliers=[1.0])
+    # circle through (+-1, 0) of arc length L: radius R with 2 R asin(1/R) = L
+    R = brentq(lambda R: 2 * R * np.arcsin(1 / R) - L, 1.0 + 1e-12, 100)
+    yc = np.sqrt(R * R - 1)
+    assert np.max(np.abs(r.y - (np.sqrt(R * R - r.x ** 2) - yc))) < 1e-4
+    assert abs(abs(r.multipliers[0]) - R) < 1e-3   # the multiplier is the radius
+
+
+# ---- bad input -----------------------------------------------------------------------------------
+
+def test_bad_input():
+    with pytest.raises(ValueError, match="not longer"):
+        V.catenary(0.0, 2.0, 1.5)
+    with pytest.raises(ValueError, match="not longer"):
+        V.catenary((0, 0), (3, 4), 5.0)
+    with pytest.raises(ValueError, match="cannot be reached"):
+        V.brachistochrone(2.0, -1.0)
+    with pytest.raises(ValueError, match="cannot be reached"):
+        V.brachistochrone(2.0, 0.0)
+    with pytest.raises(ValueError, match="x_end"):
+        V.brachistochrone(0.0, 1.0)
+    for bad_n in (0, 2, 3):
+        with pytest.raises(ValueError, match="too small"):
+            V.brachistochrone(2.0, 1.0, n=bad_n)
+        with pytest.raises(ValueError, match="too small"):
+            V.catenary(0, 1, 2, n=bad_n)
+    with pytest.raises(TypeError):
+        V.brachistochrone(2.0, 1.0, n=10.5)
+    with pytest.raises(ValueError):
+        V.brachistochrone(np.nan, 1.0)
+    with pytest.raises(ValueError):
+        V.catenary(0, 2, np.inf)
+    with pytest.raises(ValueError):
+        V.stationary_path(mp.scenes.Pendulum(), 0, 1, -1.0, 50)
+    with pytest.raises(TypeError):
+        V.stationary_path(mp.scenes.VanDerPol(), 0, 1, 1.0, 50)
+    with pytest.raises(TypeError):
+        V.stationary_path("pendulum", 0, 1, 1.0, 50)
+    with pytest.raises(mp.ConvergenceError):
+        V.brachistochrone(2.0, 1.0, n=100, max_iter=1)
+    with pytest.raises(ZeroDivisionError):
+        V.stationary_path(lambda q, v: 1 / 0, 0, 1, 1.0, 20)
+    with pytest.raises(ValueError):
+        V.pendulum_tension(mp.scenes.Pendulum(), np.zeros((3, 4)))
+    with pytest.raises(ValueError):
+        V.constraint_forces(-1.0, [0, 0], [[1, 0]], [0])
