@@ -443,7 +443,12 @@ int mp_ode_solve(const mp_ode_method *m, const mp_ode_problem *p, double t0, dou
             if (rejected) hnew = fmin(hnew, h);
             rejected = 0;
         }
-        if ((rc = cur->finish(&w, t, h, need_dense)) != MP_OK) break;
+        double tnew = last ? tf : t + h;
+        /* the interpolant is built only for a step that needs it: one holding a
+         * t_eval point, with events to locate, or when all steps are kept */
+        int dense_now = need_dense && (o->dense || ne > 0 ||
+                                       (ie < o->n_eval && o->t_eval[ie] < tnew));
+        if ((rc = cur->finish(&w, t, h, dense_now)) != MP_OK) break;
         /* Hairer's stiffness test on explicit steps: h |lambda| near the
          * stability boundary for 15 of the recent steps */
         if (w.rho > 0.0) {
@@ -454,7 +459,6 @@ int mp_ode_solve(const mp_ode_method *m, const mp_ode_problem *p, double t0, dou
                 stiff_count = 0;
             }
         }
-        double tnew = last ? tf : t + h;
         double s_stop = 2.0;
         if (ne) {
             rc = ev_step(&w, r, o, t, h, g_old, g_sub, ytmp, gtmp, hits, &s_stop);

@@ -1,0 +1,102 @@
+"""Bench: ensembles (solve_many) and the fixed-step overhead, beside SciPy and plain C."""
+import os
+import shutil
+import subprocess
+import tempfile
+import time
+
+import numpy as np
+
+import mechpy as mp
+from mechpy._timing import median_time
+
+TITLE = "Ensembles and overhead"
+ORDER = 15
+
+_PLAIN_RK4 = r"""
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <time.h>
+static void f(double t, const double *y, double *d) { (void)t; d[0] = y[1]; d[1] = -9.81 * sin(y[0]); }
+int main(int argc, char **argv) {
+    long n = atol(argv[1]); double h = atof(argv[2]);
+    double y[2] = {1.0, 0.0}, k1[2], k2[2], k3[2], k4[2], yt[2], t = 0;
+    struct timespec a, b; clock_gettime(CLOCK_MONOTONIC, &a);
+    for (long s = 0; s < n; s++) {
+        f(t, y, k1);
+        for (int i = 0; i < 2; i++) yt[i] = y[i] + 0.5 * h * k1[i];
+        f(t + 0.5 * h, yt, k2);
+        for (int i = 0; i < 2; i++) yt[i] = y[i] + 0.5 * h * k2[i];
+        f(t + 0.5 * h, yt, k3);
+        for (int i = 0; i < 2; i++) yt[i] = y[i] + h * k3[i];
+        f(t + h, yt, k4);
+        for (int i = 0; i < 2; i++) y[i] += h / 6 * (k1[i] + 2 * (k2[i] + k3[i]) + k4[i]);
+        t += h;
+    }
+    clock_gettime(CLOCK_MONOTONIC, &b);
+    printf("%.9f %.17g %.17g\n", (b.tv_sec - a.tv_sec) + 1e-9 * (b.tv_nsec - a.tv_nsec), y[0], y[1]);
+    return 0;
+}
+"""
+
+
+def _plain_rk4(nsteps, h):
+    cc = shutil.which("cc") or shutil.which("gcc")
+    if not cc:
+        return None
+    with tempfile.TemporaryDirectory() as d:
+        src, exe = os.path.join(d, "rk4.c"), os.path.join(d, "rk4")
+        with open(src, "w") as fh:
+            fh.write(_PLAIN_RK4)
+        subprocess.run([cc, "-O2", src, "-o", exe, "-lm"], check=True)
+        times, y = [], None
+        for _ in range(5):
+            out = subprocess.run([exe, str(nsteps), repr(h)], capture_output=True, text=True,
+                                 check=True).stdout.split()
+            times.append(float(out[0]))
+            y = np.array([float(out[1]), float(out[2])])
+        return float(np.median(times)), y
+
+
+def run(quick: bool):
+    from scipy.integrate import solve_ivp
+    rows = []
+    p = mp.scenes.Pendulum()
+    k = 2000 if quick else 10_000
+    y0s = np.column_stack([np.linspace(0.1, 3.0, k), np.zeros(k)])
+    te = np.linspace(0, 10, 11)
+    name = f"{k} pendulum trajectories, t=10, rtol=1e-8 (11 samples each)"
+    for th in (1, 2):
+        fn = lambda th=th: mp.solve_many(p, (0, 10), y0s, t_eval=te, rtol=1e-8,  # noqa: E731
+                                         threads=th)
+        rows.append(dict(problem=name, impl=f"mechpy solve_many, {th} thread(s)",
+                         time=median_time(fn, repeat=5), error=float("nan")))
+    sub = 20 if quick else 100
+
+    def f(t, y):
+        return [y[1], -9.81 * np.sin(y[0])]
+
+    def loop():
+        for i in range(sub):
+            solve_ivp(f, (0, 10), y0s[i * (k // sub)], method="DOP853", rtol=1e-8,
+                      t_eval=te)
+    t_loop = median_time(loop, repeat=1, warmup=0) * (k / sub)
+    rows.append(dict(problem=name, impl="Python loop of scipy solve_ivp DOP853", time=t_loop,
+                     error=float("nan"),
+                     note=f"{sub} trajectories timed, scaled to {k}"))
+
+    # fixed-step rk4 on a C scene beside a plain C loop doing the same arithmetic
+    nsteps, h = (200_000 if quick else 2_000_000), 1e-4
+    T = nsteps * h
+    plain = _plain_rk4(nsteps, h)
+    name = f"rk4, h=1e-4, {nsteps} steps, pendulum (C scene)"
+    fn = lambda: mp.solve(p, (0, T), [1.0, 0.0], method="rk4", h=h, t_eval=[T])  # noqa: E731
+    ours = fn().y[:, -1]
+    rows.append(dict(problem=name, impl="mechpy solve rk4 (C scene)", time=median_time(fn),
+                     error=float("nan")))
+    if plain is not None:
+        rows.append(dict(problem=name, impl="plain C loop (cc -O2)", time=plain[0],
+                         error=float(np.max(np.abs(plain[1] - ours))),
+                         note="error = difference from mechpy's result"))
+    return rows
