@@ -1,0 +1,1 @@
+"""Phase space and chaos (placeholder, filled below)."""
