@@ -15,7 +15,7 @@ import numpy as np
 from . import _core
 from ._validate import as_array, as_scalar
 
-__all__ = ["Scene", "Pendulum", "VanDerPol", "Duffing", "Kepler", "RestrictedThreeBody"]
+__all__ = ["Scene", "Pendulum", "VanDerPol", "Duffing", "Kepler", "RestrictedThreeBody", "Foucault"]
 
 
 class Scene:
@@ -228,3 +228,37 @@ class RestrictedThreeBody(Scene):
 
     def __init__(self, mu=0.012277471):
         super().__init__(mu=mu)
+
+
+class Foucault(Scene):
+    r"""The Foucault pendulum at a latitude, small swings, in the local
+    horizontal plane (Marion & Thornton, Example 10.5):
+
+    .. math:: \ddot x = -\frac{g}{L}x + 2\Omega_z\dot y,\qquad
+              \ddot y = -\frac{g}{L}y - 2\Omega_z\dot x,\qquad
+              \Omega_z = \Omega\sin\lambda
+
+    x east, y north.  State ``(x, y, vx, vy)`` in m and m/s.  Parameters:
+    ``latitude`` (degrees, in [-90, 90]), ``length`` L (m), ``g`` (m/s^2),
+    ``omega`` Omega (rad/s, the Earth's sidereal rate by default).  The plane
+    of swing turns clockwise (seen from above) in the north at
+    :math:`\Omega\sin\lambda`.  ``energy`` is per unit mass (J/kg),
+    :math:`(v_x^2+v_y^2)/2 + (g/L)(x^2+y^2)/2`, conserved (Coriolis does no work).
+    """
+
+    _model = "Foucault"
+    _defaults = dict(g=9.81, omega=7.2921159e-5)
+    _positive = ("length", "g")
+
+    def __init__(self, latitude, length, g=9.81, omega=7.2921159e-5):
+        lat = as_scalar(latitude, "latitude")
+        if not -90.0 <= lat <= 90.0:
+            raise ValueError(f"latitude must lie in [-90, 90] degrees, got {latitude!r}")
+        super().__init__(latitude=lat, length=length, g=g, omega=omega)
+
+    @property
+    def precession_rate(self) -> float:
+        """Rate at which the plane of swing turns, Omega sin(latitude) [rad/s]
+        (positive: clockwise seen from above)."""
+        p = self._params
+        return p["omega"] * float(np.sin(np.radians(p["latitude"])))

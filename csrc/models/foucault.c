@@ -1,0 +1,74 @@
+/* The Foucault pendulum on the rotating Earth, small swings, in the local
+ * horizontal plane (Marion & Thornton, Example 10.5): x east, y north,
+ *
+ *   x'' = -(g/L) x + 2 Omega_z y',   y'' = -(g/L) y - 2 Omega_z x',
+ *
+ * with Omega_z = omega sin(latitude).  State (x, y, vx, vy) in m and m/s;
+ * parameters latitude (degrees, in [-90, 90]), length L (m), g (m/s^2),
+ * omega (rad/s). */
+#include "models/models.h"
+
+#include <math.h>
+
+enum { FLAT, FLEN, FG, FOM, FN };
+static const char *const foucault_names[] = {"latitude", "length", "g", "omega"};
+
+static int foucault_check(const double *p)
+{
+    for (int i = 0; i < FN; i++)
+        if (!isfinite(p[i])) return MP_EDOM;
+    return (p[FLAT] >= -90.0 && p[FLAT] <= 90.0 && p[FLEN] > 0 && p[FG] > 0) ? MP_OK : MP_EDOM;
+}
+
+/* the vertical component of the Earth's rotation [rad/s] */
+static double foucault_omega_z(const double *p)
+{
+    return p[FOM] * sin(p[FLAT] * (3.14159265358979323846 / 180.0));
+}
+
+static int foucault_rhs(double t, const double *y, double *f, void *d)
+{
+    const double *p = d;
+    const double w2 = p[FG] / p[FLEN], oz = foucault_omega_z(p);
+    (void)t;
+    f[0] = y[2];
+    f[1] = y[3];
+    f[2] = -w2 * y[0] + 2.0 * oz * y[3];
+    f[3] = -w2 * y[1] - 2.0 * oz * y[2];
+    return MP_OK;
+}
+
+static int foucault_jac(double t, const double *y, double *J, void *d)
+{
+    const double *p = d;
+    const double w2 = p[FG] / p[FLEN], oz = foucault_omega_z(p);
+    (void)t;
+    (void)y;
+    for (int i = 0; i < 16; i++) J[i] = 0.0;
+    J[0 * 4 + 2] = 1.0;
+    J[1 * 4 + 3] = 1.0;
+    J[2 * 4 + 0] = -w2;
+    J[2 * 4 + 3] = 2.0 * oz;
+    J[3 * 4 + 1] = -w2;
+    J[3 * 4 + 2] = -2.0 * oz;
+    return MP_OK;
+}
+
+static void foucault_bind(const double *p, mp_ode_problem *prob)
+{
+    prob->n = 4;
+    prob->rhs = foucault_rhs;
+    prob->jac = foucault_jac;
+    prob->data = (void *)p;
+    prob->nq = 0; /* the Coriolis term depends on the velocity */
+}
+
+/* per unit mass: (vx^2 + vy^2)/2 + (g/L)(x^2 + y^2)/2 [J/kg]; the Coriolis
+ * force does no work, so this is conserved. */
+static double foucault_energy(const double *p, const double *y)
+{
+    return 0.5 * (y[2] * y[2] + y[3] * y[3]) + 0.5 * (p[FG] / p[FLEN]) * (y[0] * y[0] + y[1] * y[1]);
+}
+
+const mp_model mp_model_foucault = {"Foucault", 4, 4, foucault_names, foucault_check,
+                                    foucault_bind, foucault_energy};

@@ -1,0 +1,242 @@
+r"""Rotating reference frames (Marion & Thornton, chapter 10).
+
+In a frame turning with angular velocity :math:`\boldsymbol\omega(t)` about a
+fixed origin, a particle feels, per unit mass,
+
+.. math:: \mathbf a_{\rm rot} = \mathbf a_{\rm in}
+          \underbrace{-\,2\boldsymbol\omega\times\mathbf v_{\rm rot}}_{\rm Coriolis}
+          \underbrace{-\,\boldsymbol\omega\times(\boldsymbol\omega\times\mathbf r)}_{\rm centrifugal}
+          \underbrace{-\,\dot{\boldsymbol\omega}\times\mathbf r}_{\rm Euler}.
+
+Local Earth frame used by :func:`drop`, :func:`projectile` and
+:func:`projectile_drift`: x east, y north, z up; there
+:math:`\boldsymbol\omega = \Omega(0, \cos\lambda, \sin\lambda)` at latitude
+:math:`\lambda`, and g (the effective gravity, centrifugal term included)
+points along -z.
+
+Units: SI (m, s, rad/s); latitudes in degrees.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ._validate import as_array, as_scalar, as_vector3
+
+__all__ = ["OMEGA_EARTH", "fictitious", "to_rotating", "from_rotating", "foucault_period",
+           "earth_omega", "eastward_deflection", "drop", "projectile_drift", "projectile"]
+
+#: The Earth's sidereal rotation rate [rad/s].
+OMEGA_EARTH = 7.2921159e-5
+
+
+def fictitious(omega, r, v, omega_dot=(0.0, 0.0, 0.0)) -> dict:
+    r"""Fictitious accelerations in a frame rotating at ``omega``.
+
+    Parameters
+    ----------
+    omega : array_like, shape (..., 3)
+        Angular velocity of the frame [rad/s] at the instant considered (any
+        omega(t): pass its value at t).
+    r, v : array_like, shape (..., 3)
+        Position [m] and velocity [m/s] measured in the rotating frame.
+    omega_dot : array_like, shape (..., 3)
+        Angular acceleration of the frame [rad/s^2].
+
+    Returns
+    -------
+    dict
+        ``"coriolis"`` :math:`-2\omega\times v`, ``"centrifugal"``
+        :math:`-\omega\times(\omega\times r)`, ``"euler"``
+        :math:`-\dot\omega\times r` and their sum ``"total"``, each (..., 3)
+        in m/s^2 (per unit mass), broadcast over leading axes.
+    """
+    w = as_vector3(omega, "omega")
+    r = as_vector3(r, "r")
+    v = as_vector3(v, "v")
+    wd = as_vector3(omega_dot, "omega_dot")
+    cor = -2.0 * np.cross(w, v)
+    cen = -np.cross(w, np.cross(w, r))
+    eul = -np.cross(wd, r)
+    return {"coriolis": cor, "centrifugal": cen, "euler": eul, "total": cor + cen + eul}
+
+
+def _rotation(omega, t):
+    """R(t) = exp(t [omega]x), the frame's attitude (Rodrigues), shape (..., 3, 3)."""
+    w = as_vector3(omega, "omega")
+    t = _arr(t, "t")
+    wt = w * t[..., None]
+    ang = np.linalg.norm(wt, axis=-1)
+    safe = np.where(ang > 0, ang, 1.0)
+    k = wt / safe[..., None]
+    K = np.zeros(k.shape[:-1] + (3, 3))
+    K[..., 0, 1], K[..., 0, 2] = -k[..., 2], k[..., 1]
+    K[..., 1, 0], K[..., 1, 2] = k[..., 2], -k[..., 0]
+    K[..., 2, 0], K[..., 2, 1] = -k[..., 1], k[..., 0]
+    s = np.sin(ang)[..., None, None]
+    c = np.cos(ang)[..., None, None]
+    return np.eye(3) + s * K + (1.0 - c) * (K @ K), w
+
+
+def to_rotating(r, v, omega, t):
+    r"""Inertial position and velocity -> the frame rotating at constant ``omega``.
+
+    The frames coincide at t = 0; the rotating frame's attitude is
+    :math:`R(t) = \exp(t[\omega]_\times)`, so
+    :math:`r' = R^T r` and :math:`v' = R^T(v - \omega\times r)`.
+
+    Parameters
+    ----------
+    r, v : array_like, shape (..., 3)
+        Inertial position [m] and velocity [m/s].
+    omega : array_like, shape (3,) or (..., 3)
+        Constant angular velocity of the rotating frame [rad/s], inertial axes.
+    t : float or array_like
+        Time [s] (broadcast with the leading axes).
+
+    Returns
+    -------
+    r_rot, v_rot : ndarray, shape (..., 3)
+        Components on the rotating axes.
+    """
+    r = as_vector3(r, "r")
+    v = as_vector3(v, "v")
+    R, w = _rotation(omega, t)
+    Rt = np.swapaxes(R, -1, -2)
+    return (Rt @ r[..., None])[..., 0], (Rt @ (v - np.cross(w, r))[..., None])[..., 0]
+
+
+def from_rotating(r_rot, v_rot, omega, t):
+    r"""Rotating-frame position and velocity -> inertial; the inverse of
+    :func:`to_rotating`: :math:`r = R r'`, :math:`v = R v' + \omega\times r`.
+
+    Units as in :func:`to_rotating`.
+    """
+    rr = as_vector3(r_rot, "r_rot")
+    vr = as_vector3(v_rot, "v_rot")
+    R, w = _rotation(omega, t)
+    r = (R @ rr[..., None])[..., 0]
+    return r, (R @ vr[..., None])[..., 0] + np.cross(w, r)
+
+
+def _arr(x, name, **kw):
+    """as_array keeping a scalar 0-d."""
+    return as_array(x, name, **kw).reshape(np.shape(x))
+
+
+def _latitude(latitude):
+    lat = _arr(latitude, "latitude")
+    if np.any(np.abs(lat) > 90.0):
+        raise ValueError(f"latitude must lie in [-90, 90] degrees, got {latitude!r}")
+    return lat
+
+
+def foucault_period(latitude, omega=OMEGA_EARTH):
+    r"""Time for a Foucault pendulum's plane of swing to turn once.
+
+    .. math:: T = \frac{2\pi}{\Omega\,|\sin\lambda|}
+
+    Parameters
+    ----------
+    latitude : float or array_like
+        Degrees in [-90, 90] (north positive); at the equator T is infinite.
+    omega : float
+        Rotation rate of the planet [rad/s] (default: the Earth's sidereal rate).
+
+    Returns
+    -------
+    float or ndarray
+        Period in seconds (31.78 h at Paris, 48.857 N).
+    """
+    lat = _latitude(latitude)
+    om = as_scalar(omega, "omega", positive=True)
+    s = np.abs(np.sin(np.radians(lat)))
+    with np.errstate(divide="ignore"):
+        T = np.where(s > 0, 2.0 * np.pi / (om * np.where(s > 0, s, 1.0)), np.inf)
+    return float(T) if T.ndim == 0 else T
+
+
+def earth_omega(latitude, omega=OMEGA_EARTH) -> np.ndarray:
+    r"""The planet's angular velocity in the local frame (east, north, up):
+    :math:`\Omega(0, \cos\lambda, \sin\lambda)` [rad/s]; latitude in degrees."""
+    lat = np.radians(_latitude(latitude))
+    om = as_scalar(omega, "omega", nonnegative=True)
+    return om * np.stack([np.zeros_like(lat), np.cos(lat), np.sin(lat)], axis=-1)
+
+
+def eastward_deflection(height, latitude, g=9.81, omega=OMEGA_EARTH):
+    r"""Closed-form eastward deflection of a body dropped from rest (M&T Example 10.4).
+
+    .. math:: d = \frac{\Omega\cos\lambda}{3}\sqrt{\frac{8h^3}{g}}
+
+    to first order in :math:`\Omega`, no air drag.  ``height`` h in m,
+    ``latitude`` in degrees, ``g`` in m/s^2, ``omega`` in rad/s; returns m
+    (positive: east).
+    """
+    h = _arr(height, "height", nonnegative=True)
+    lat = np.radians(_latitude(latitude))
+    g = as_scalar(g, "g", positive=True)
+    om = as_scalar(omega, "omega", nonnegative=True)
+    d = om * np.cos(lat) / 3.0 * np.sqrt(8.0 * h ** 3 / g)
+    return float(d) if d.ndim == 0 else d
+
+
+def _coriolis_flight(r0, v0, latitude, g, omega, rtol):
+    """Integrate r'' = g - 2 omega x v in the local frame until z = 0."""
+    from .integrate import solve
+    w = earth_omega(latitude, omega)
+    gv = np.array([0.0, 0.0, -g])
+
+    def f(t, y):
+        return np.concatenate([y[3:], gv - 2.0 * np.cross(w, y[3:])])
+
+    def ground(t, y):
+        return y[2]
+    ground.terminal = True
+    ground.direction = -1
+    # a generous time bound: the vacuum flight time, doubled
+    vz = v0[2]
+    T = 2.0 * (vz + np.sqrt(vz * vz + 2.0 * g * max(r0[2], 0.0))) / g + 1.0
+    s = solve(f, (0.0, T), np.concatenate([r0, v0]), rtol=rtol, atol=1e-12, events=ground)
+    if not s.t_events[0].size:
+        raise RuntimeError("the body did not reach the ground")
+    return s.y_events[0][0, :3], float(s.t_events[0][0])
+
+
+def drop(height, latitude, g=9.81, omega=OMEGA_EARTH, *, rtol=1e-11):
+    """Numerically drop a body from rest at ``height`` (m) in the rotating frame
+    (Coriolis term in full, no drag) and return its landing point (east, north,
+    0) in m and the fall time in s.  Compare :func:`eastward_deflection`."""
+    h = as_scalar(height, "height", positive=True)
+    g = as_scalar(g, "g", positive=True)
+    return _coriolis_flight(np.array([0.0, 0.0, h]), np.zeros(3), latitude, g, omega, rtol)
+
+
+def projectile_drift(v0, t, latitude, g=9.81, omega=OMEGA_EARTH) -> np.ndarray:
+    r"""Closed-form Coriolis drift of a projectile, first order in :math:`\Omega`.
+
+    .. math:: \Delta\mathbf r(t) = -\boldsymbol\omega\times\mathbf v_0\,t^2
+              - \tfrac13\,\boldsymbol\omega\times\mathbf g\,t^3
+
+    the displacement from the non-rotating parabola
+    :math:`\mathbf v_0 t + \mathbf g t^2/2`.  ``v0`` (3,) in m/s on (east,
+    north, up); ``t`` in s (array-like, broadcast); latitude in degrees.
+    Returns (..., 3) in m.
+    """
+    v0 = as_vector3(v0, "v0")
+    t = _arr(t, "t")[..., None]
+    w = earth_omega(latitude, omega)
+    gv = np.array([0.0, 0.0, -as_scalar(g, "g", positive=True)])
+    return -np.cross(w, v0) * t ** 2 - np.cross(w, gv) * t ** 3 / 3.0
+
+
+def projectile(v0, latitude, g=9.81, omega=OMEGA_EARTH, *, rtol=1e-11):
+    """Numerically fly a projectile launched from the ground with velocity
+    ``v0`` (east, north, up; m/s, up-component > 0) in the rotating frame and
+    return its landing point (m) and flight time (s).  Its offset from the
+    vacuum range ``v0_h * 2 v0_z / g`` is the Coriolis drift of
+    :func:`projectile_drift`."""
+    v0 = as_vector3(v0, "v0")
+    if v0.shape != (3,) or not v0[2] > 0:
+        raise ValueError("v0 must be one 3-vector with a positive upward component")
+    g = as_scalar(g, "g", positive=True)
+    return _coriolis_flight(np.zeros(3), v0, latitude, g, omega, rtol)

@@ -1,0 +1,449 @@
+r"""Phase space and chaos (Marion & Thornton chapter 4; course notes sections 2-3).
+
+The state of a system :math:`\dot{\mathbf y} = \mathbf f(t, \mathbf y)` is a
+point moving in the vector field :math:`\mathbf f`.  This module evaluates the
+field on grids, finds and classifies fixed points from the Jacobian, measures
+limit cycles, takes Poincaré sections and bifurcation diagrams of driven
+systems and estimates the largest Lyapunov exponent.
+
+``system`` is a scene from :mod:`mechpy.scenes` (evaluated in C) or a Python
+callable ``f(t, y)``.  Units are those of the system.
+"""
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from ._validate import as_array, as_int, as_scalar
+from .integrate import solve, solve_many
+
+__all__ = ["FixedPoint", "vector_field", "fixed_points", "limit_cycle", "poincare",
+           "bifurcation", "lyapunov"]
+
+
+def _is_scene(system) -> bool:
+    from .scenes import Scene
+    return isinstance(system, Scene)
+
+
+def _callable(system):
+    if not (_is_scene(system) or callable(system)):
+        raise TypeError(f"system must be a scene or a callable f(t, y), got "
+                        f"{type(system).__name__}")
+    return system.rhs if _is_scene(system) else system
+
+
+def _ensemble(system, y0s, t_span, t_eval, **kw):
+    """Integrate one system from several starts; returns a list of Solutions.
+
+    The one place where many trajectories are run: a loop over :func:`solve`
+    today, to be replaced by the C ensemble integrator."""
+    return [solve(system, t_span, y0, t_eval=t_eval, **kw) for y0 in y0s]
+
+
+# ---- vector field ---------------------------------------------------------------
+def vector_field(system, X, Y, t: float = 0.0):
+    """The field (U, V) = f(t, (X, Y)) of a two-dimensional system on a grid.
+
+    Parameters
+    ----------
+    system : Scene or callable f(t, y)
+        A system with a 2-component state.  A scene is evaluated in C in one
+        call; a callable is first tried vectorised (``y`` of shape (2, ...)),
+        then point by point.
+    X, Y : array_like, same shape
+        Grid coordinates (e.g. from ``np.meshgrid``).
+    t : float
+        Time at which the field is taken (driven systems).
+
+    Returns
+    -------
+    U, V : ndarray, shape of X
+        dx/dt and dy/dt (units of the state per unit time).
+    """
+    f = _callable(system)
+    X = as_array(X, "X").reshape(np.shape(X))
+    Y = as_array(Y, "Y").reshape(np.shape(Y))
+    if X.shape != Y.shape:
+        raise ValueError(f"X and Y must have the same shape, got {X.shape} and {Y.shape}")
+    t = as_scalar(t, "t")
+    if _is_scene(system) and system.dim != 2:
+        raise ValueError(f"vector_field needs a 2-D system; this scene has dim {system.dim}")
+    Z = np.stack([X, Y])
+    try:
+        F = np.asarray(f(t, Z), dtype=np.float64)
+        ok = F.shape == Z.shape
+    except Exception:
+        if _is_scene(system):
+            raise
+        ok = False
+    if not ok:
+        F = np.empty_like(Z)
+        for idx in np.ndindex(X.shape):
+            val = np.asarray(f(t, Z[(slice(None),) + idx]), dtype=np.float64)
+            if val.shape != (2,):
+                raise ValueError(f"the system must return 2 components, got shape {val.shape}")
+            F[(slice(None),) + idx] = val
+    return F[0], F[1]
+
+
+# ---- fixed points -----------------------------------------------------------------
+class FixedPoint(NamedTuple):
+    """A fixed point f(x) = 0 and its linear classification.
+
+    ``kind`` is ``"saddle"``, ``"node"``, ``"focus"``, ``"centre"`` (2-D), or
+    ``"hyperbolic"``/``"non-hyperbolic"`` in higher dimension; ``stable`` is
+    True when no eigenvalue of the Jacobian has a positive real part (a centre
+    counts as stable: neutrally, in the linear approximation);
+    ``eigenvalues`` are the Jacobian's."""
+    x: np.ndarray
+    kind: str
+    stable: bool
+    eigenvalues: np.ndarray
+
+
+def _jacobian(system, t, y):
+    if _is_scene(system):
+        return system.jacobian(t, y)
+    f = system
+    n = y.size
+    J = np.empty((n, n))
+    for j in range(n):
+        h = 1e-7 * max(1.0, abs(y[j]))
+        e = np.zeros(n)
+        e[j] = h
+        J[:, j] = (np.asarray(f(t, y + e)) - np.asarray(f(t, y - e))) / (2 * h)
+    return J
+
+
+def _classify(ev, scale):
+    re, im = ev.real, ev.imag
+    tol = 1e-9 * max(scale, 1e-300)
+    stable = bool(np.all(re <= tol))
+    if ev.size == 2:
+        if np.any(re > tol) and np.any(re < -tol) and np.all(np.abs(im) <= tol):
+            return "saddle", False
+        if np.all(np.abs(im) > tol):
+            return ("centre", True) if np.all(np.abs(re) <= tol) else ("focus", stable)
+        return "node", stable
+    return ("hyperbolic" if np.all(np.abs(re) > tol) else "non-hyperbolic"), stable
+
+
+def fixed_points(system, bounds, *, t: float = 0.0, seeds: int = 15, tol: float = 1e-12):
+    r"""Fixed points of an autonomous system in a box, classified from the Jacobian.
+
+    Newton's method :math:`\mathbf y \leftarrow \mathbf y - J^{-1}\mathbf f`
+    is started from a grid of ``seeds`` points per axis; converged points
+    inside ``bounds`` are kept once each.  In 2-D the eigenvalues of J give a
+    saddle (real, opposite signs), a node (real, same sign), a focus
+    (complex) or a centre (purely imaginary).
+
+    Parameters
+    ----------
+    system : Scene or callable f(t, y)
+    bounds : array_like, shape (dim, 2)
+        ``[(lo, hi), ...]`` per state component.
+    t : float
+        Time at which the field is frozen.
+    seeds : int
+        Starting points per axis.
+    tol : float
+        Convergence tolerance on the step (state units).
+
+    Returns
+    -------
+    list of FixedPoint
+        Sorted by their coordinates.
+    """
+    f = _callable(system)
+    b = as_array(bounds, "bounds", ndim=2)
+    if b.shape[1] != 2 or np.any(b[:, 1] <= b[:, 0]):
+        raise ValueError(f"bounds must have shape (dim, 2) with lo < hi, got {b.shape}")
+    dim = b.shape[0]
+    if _is_scene(system) and system.dim != dim:
+        raise ValueError(f"bounds gives {dim} components; the scene has dim {system.dim}")
+    seeds = as_int(seeds, "seeds", minimum=1)
+    if seeds ** dim > 200_000:
+        raise ValueError("too many seeds for this dimension: lower seeds")
+    t = as_scalar(t, "t")
+    axes = [np.linspace(lo, hi, seeds + 2)[1:-1] for lo, hi in b]
+    starts = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, dim)
+    span = np.max(b[:, 1] - b[:, 0])
+    found = []
+    for y in starts:
+        y = y.copy()
+        for _ in range(60):
+            J = _jacobian(system, t, y)
+            try:
+                step = np.linalg.solve(J, np.asarray(f(t, y), dtype=np.float64))
+            except np.linalg.LinAlgError:
+                break
+            y -= step
+            if not np.all(np.isfinite(y)):
+                break
+            if np.linalg.norm(step) <= tol * max(1.0, np.linalg.norm(y)):
+                break
+        else:
+            continue
+        if not np.all(np.isfinite(y)) or np.any(y < b[:, 0]) or np.any(y > b[:, 1]):
+            continue
+        if np.linalg.norm(f(t, y)) > 1e-8 * max(1.0, np.abs(_jacobian(system, t, y)).max()):
+            continue
+        if any(np.linalg.norm(y - p) < 1e-7 * span for p in found):
+            continue
+        found.append(y)
+    found.sort(key=tuple)
+    out = []
+    for y in found:
+        J = _jacobian(system, t, y)
+        ev = np.linalg.eigvals(J)
+        kind, stable = _classify(ev, np.abs(J).max())
+        out.append(FixedPoint(y, kind, stable, ev))
+    return out
+
+
+# ---- limit cycles ------------------------------------------------------------------
+def limit_cycle(system, y0, *, component: int = 0, tol: float = 1e-9, t_max: float = 1e5,
+                method: str = "dop853", rtol: float = 1e-12):
+    r"""Period and amplitude of the limit cycle reached from ``y0``.
+
+    The trajectory is integrated until the times between successive maxima of
+    ``y[component]`` (zeros of its rate, located on the interpolant) agree to
+    ``tol`` (relative); the amplitude is the value at the maximum.
+
+    Parameters
+    ----------
+    system : Scene or callable f(t, y)
+        An autonomous system with an attracting cycle.
+    y0 : array_like
+        Start in the cycle's basin.
+    component : int
+        Which coordinate's maxima mark the section.
+    tol : float
+        Relative tolerance on the period and the amplitude.
+    t_max : float
+        Give up (``ConvergenceError``) after this time.
+    method, rtol : str, float
+        Passed to :func:`mechpy.solve` (use ``"radau"`` for strongly stiff cycles).
+
+    Returns
+    -------
+    period, amplitude : float
+        Period (time units) and max of ``y[component]`` on the cycle.
+    """
+    from .errors import ConvergenceError
+    f = _callable(system)
+    y = as_array(y0, "y0", ndim=1).copy()
+    k = as_int(component, "component", minimum=0, maximum=y.size - 1)
+    tol = as_scalar(tol, "tol", positive=True)
+    t_max = as_scalar(t_max, "t_max", positive=True)
+
+    def rate(t, z):
+        return np.asarray(f(t, z))[k]
+    rate.direction = -1
+
+    times, amps = [], []
+    t0, chunk = 0.0, 20.0
+    while t0 < t_max:
+        s = solve(system, (t0, t0 + chunk), y, method=method, rtol=rtol,
+                  atol=rtol * 1e-2, events=rate)
+        if s.status < 0:
+            raise ConvergenceError(f"limit_cycle: integration failed ({s.message})")
+        times.extend(s.t_events[0])
+        amps.extend(s.y_events[0][:, k])
+        y, t0 = s.y[:, -1], s.t[-1]
+        if len(times) >= 4:
+            P = np.diff(times[-4:])
+            A = np.array(amps[-3:])
+            if (np.ptp(P) <= tol * P[-1] and np.ptp(A) <= tol * max(abs(A[-1]), 1e-300)):
+                return float(P[-1]), float(A[-1])
+            chunk = max(chunk, 10.0 * P[-1])
+        else:
+            chunk *= 2.0
+    raise ConvergenceError(f"limit_cycle: no cycle converged to {tol} before t = {t_max}")
+
+
+# ---- sections ----------------------------------------------------------------------
+def _section_times(t0, period, n, skip):
+    return t0 + period * (skip + np.arange(n))
+
+
+def poincare(system, y0, period, n, skip: int = 0, *, t0: float = 0.0, rtol: float = 1e-10,
+             atol: float = 1e-12, method: str = "dop853"):
+    r"""Stroboscopic Poincaré section of a driven system.
+
+    The states :math:`\mathbf y(t_0 + kT)` for k = skip, ..., skip + n - 1,
+    read from one integration's interpolant.
+
+    Parameters
+    ----------
+    system : Scene or callable f(t, y)
+    y0 : array_like, shape (dim,)
+        State at ``t0``.
+    period : float
+        The drive period T (time units), e.g. ``2 pi / drive_frequency``.
+    n : int
+        Points to return; ``skip`` first periods are discarded (transient).
+
+    Returns
+    -------
+    ndarray, shape (n, dim)
+        The section points (angles are not wrapped: use ``np.angle(np.exp(1j*theta))``).
+    """
+    _callable(system)
+    y0 = as_array(y0, "y0", ndim=1)
+    period = as_scalar(period, "period", positive=True)
+    n = as_int(n, "n", minimum=1)
+    skip = as_int(skip, "skip", minimum=0)
+    t0 = as_scalar(t0, "t0")
+    te = _section_times(t0, period, n, skip)
+    s = solve(system, (t0, te[-1] + 0.5 * period), y0, method=method, rtol=rtol, atol=atol,
+              t_eval=te)
+    _check(s)
+    return np.ascontiguousarray(s.y.T)
+
+
+def _check(s):
+    if s.status < 0:
+        from .errors import ConvergenceError
+        raise ConvergenceError(f"integration failed: {s.message}")
+
+
+def bifurcation(scene, param: str, values, y0, period, n: int, skip: int, *, t0: float = 0.0,
+                rtol: float = 1e-10, atol: float = 1e-12):
+    r"""Bifurcation diagram: Poincaré points of ``scene`` as ``param`` varies.
+
+    For each value v the scene ``scene.replace(param=v)`` is integrated from
+    ``y0`` and its stroboscopic section is taken as in :func:`poincare`.
+
+    Parameters
+    ----------
+    scene : Scene
+        E.g. ``Pendulum(damping=0.5, drive_amplitude=1.2, drive_frequency=2/3)``.
+    param : str
+        Name of the parameter varied (e.g. ``"drive_amplitude"``).
+    values : array_like, shape (m,)
+    y0 : array_like, shape (dim,)
+    period : float or callable
+        Drive period T; a callable ``period(v)`` when it depends on the value.
+    n, skip : int
+        Section points kept per value, and drive periods discarded first.
+
+    Returns
+    -------
+    ndarray, shape (m, n, dim)
+        Section points per value.
+    """
+    if not _is_scene(scene):
+        raise TypeError("bifurcation needs a scene (its parameters are varied)")
+    if param not in scene.params:
+        raise ValueError(f"{param!r} is not a parameter of {type(scene).__name__}: "
+                         f"{list(scene.params)}")
+    vals = as_array(values, "values", ndim=1)
+    y0 = as_array(y0, "y0", shape=(scene.dim,))
+    n = as_int(n, "n", minimum=1)
+    skip = as_int(skip, "skip", minimum=0)
+    out = np.empty((vals.size, n, scene.dim))
+    if not callable(period):
+        # one drive period for every value: the whole diagram is one C ensemble
+        T = as_scalar(period, "period", positive=True)
+        te = _section_times(t0, T, n, skip)
+        e = solve_many(scene, (t0, te[-1] + 0.5 * T), np.tile(y0, (vals.size, 1)),
+                       params={param: vals}, t_eval=te, rtol=rtol, atol=atol)
+        if not np.all(e.success):
+            bad = int(np.flatnonzero(~e.success)[0])
+            raise RuntimeError(f"integration failed for {param} = {vals[bad]!r} "
+                               f"(status {int(e.status[bad])})")
+        return np.ascontiguousarray(e.y.transpose(0, 2, 1))
+    for i, v in enumerate(vals):
+        T = as_scalar(period(v) if callable(period) else period, "period", positive=True)
+        te = _section_times(t0, T, n, skip)
+        sc = scene.replace(**{param: float(v)})
+        (s,) = _ensemble(sc, [y0], (t0, te[-1] + 0.5 * T), te, rtol=rtol, atol=atol)
+        _check(s)
+        out[i] = s.y.T
+    return out
+
+
+# ---- Lyapunov exponent -------------------------------------------------------------
+def lyapunov(system, y0, t, *, dt: float = 1.0, method: str = "variational", d0: float = 1e-8,
+             transient: float = 0.0, rtol: float = 1e-10, return_history: bool = False):
+    r"""The largest Lyapunov exponent along the trajectory from ``y0``.
+
+    .. math:: \lambda = \lim_{t\to\infty}\frac1t\ln\frac{|\delta\mathbf y(t)|}{|\delta\mathbf y(0)|}
+
+    ``method="variational"`` integrates the tangent equations
+    :math:`\dot{\delta} = J(t, \mathbf y)\,\delta` beside the state;
+    ``method="neighbours"`` follows a neighbour at distance ``d0``.  Either
+    way the separation is renormalised every ``dt`` and the logarithms of the
+    growth factors are summed (Benettin's method).
+
+    Parameters
+    ----------
+    system : Scene or callable f(t, y)
+    y0 : array_like, shape (dim,)
+    t : float
+        Averaging time (after ``transient``).
+    dt : float
+        Renormalisation interval.
+    return_history : bool
+        Also return the times and the running estimate (its convergence).
+
+    Returns
+    -------
+    float
+        The exponent (1/time units); with ``return_history``,
+        ``(lam, times, running)``.
+    """
+    f = _callable(system)
+    y = as_array(y0, "y0", ndim=1).copy()
+    T = as_scalar(t, "t", positive=True)
+    dt = as_scalar(dt, "dt", positive=True)
+    d0 = as_scalar(d0, "d0", positive=True)
+    transient = as_scalar(transient, "transient", nonnegative=True)
+    if method not in ("variational", "neighbours"):
+        raise ValueError("method must be 'variational' or 'neighbours'")
+    t0 = 0.0
+    if transient > 0:
+        s = solve(system, (0.0, transient), y, rtol=rtol, atol=rtol * 1e-2)
+        _check(s)
+        y, t0 = s.y[:, -1], transient
+    nd = y.size
+    rng = np.random.default_rng(12345)
+    d = rng.normal(size=nd)
+    d /= np.linalg.norm(d)
+    m = max(1, int(round(T / dt)))
+    logs = np.empty(m)
+    times = t0 + dt * np.arange(1, m + 1)
+    if method == "variational":
+        def aug(tt, z):
+            yy, dd = z[:nd], z[nd:]
+            return np.concatenate([np.asarray(f(tt, yy)), _jacobian(system, tt, yy) @ dd])
+        z = np.concatenate([y, d])
+        ta = t0
+        for i in range(m):
+            s = solve(aug, (ta, times[i]), z, rtol=rtol, atol=rtol * 1e-2)
+            _check(s)
+            z = s.y[:, -1]
+            g = np.linalg.norm(z[nd:])
+            logs[i] = np.log(g)
+            z[nd:] /= g
+            ta = times[i]
+    else:
+        ref = solve(system, (t0, times[-1]), y, rtol=rtol, atol=rtol * 1e-2, t_eval=times)
+        _check(ref)
+        ys = np.column_stack([y, ref.y])
+        ta = t0
+        for i in range(m):
+            w = ys[:, i] + d0 * d
+            (s,) = _ensemble(system, [w], (ta, times[i]), None, rtol=rtol, atol=rtol * 1e-2)
+            _check(s)
+            sep = s.y[:, -1] - ys[:, i + 1]
+            g = np.linalg.norm(sep) / d0
+            logs[i] = np.log(g)
+            d = sep / np.linalg.norm(sep)
+            ta = times[i]
+    running = np.cumsum(logs) / (times - t0)
+    lam = float(running[-1])
+    return (lam, times, running) if return_history else lam

@@ -1,0 +1,130 @@
+"""Phase space: vector fields, fixed points, limit cycles, sections, Lyapunov exponents."""
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+import mechpy as mp
+
+DRIVEN = dict(g=1.0, length=1.0, damping=0.5, drive_frequency=2 / 3)
+
+
+def test_vector_field_scene_and_callable():
+    X, Y = np.meshgrid(np.linspace(-3, 3, 7), np.linspace(-2, 2, 5))
+    U, V = mp.phase.vector_field(mp.scenes.VanDerPol(1.5), X, Y)
+    np.testing.assert_allclose(U, Y, rtol=0, atol=0)
+    np.testing.assert_allclose(V, 1.5 * (1 - X ** 2) * Y - X, rtol=1e-15, atol=1e-15)
+    # a callable that only takes one point at a time
+    U2, V2 = mp.phase.vector_field(lambda t, y: [y[1], -np.sin(float(y[0]))], X, Y)
+    np.testing.assert_allclose(V2, -np.sin(X), rtol=1e-15)
+
+
+def test_vector_field_bad_grids():
+    X = np.zeros((3, 4))
+    with pytest.raises(ValueError):
+        mp.phase.vector_field(mp.scenes.VanDerPol(), X, np.zeros((4, 3)))
+    with pytest.raises(ValueError):
+        mp.phase.vector_field(mp.scenes.VanDerPol(), X, np.full((3, 4), np.nan))
+    with pytest.raises(ValueError):
+        mp.phase.vector_field(mp.scenes.Kepler(), X, X)
+    with pytest.raises(ValueError):
+        mp.phase.fixed_points(mp.scenes.VanDerPol(), [(-1, 1, 2), (0, 1, 2)])
+    with pytest.raises(ValueError):
+        mp.phase.fixed_points(mp.scenes.VanDerPol(), [(1, -1), (-1, 1)])
+
+
+def test_pendulum_fixed_points():
+    fps = mp.phase.fixed_points(mp.scenes.Pendulum(g=9.81, length=2.0), [(-7, 7), (-3, 3)])
+    x = np.array([p.x[0] for p in fps])
+    np.testing.assert_allclose(x, np.pi * np.arange(-2, 3), atol=1e-12)
+    w0 = np.sqrt(9.81 / 2.0)
+    for p in fps:
+        n = int(round(p.x[0] / np.pi))
+        if n % 2 == 0:
+            assert p.kind == "centre" and p.stable
+            np.testing.assert_allclose(sorted(p.eigenvalues.imag), [-w0, w0], rtol=1e-12)
+        else:
+            assert p.kind == "saddle" and not p.stable
+            np.testing.assert_allclose(sorted(p.eigenvalues.real), [-w0, w0], rtol=1e-12)
+
+
+def test_damped_and_vdp_classification():
+    under = mp.phase.fixed_points(mp.scenes.Pendulum(g=1, length=1, damping=0.5),
+                                  [(-1, 1), (-1, 1)])
+    assert [(p.kind, p.stable) for p in under] == [("focus", True)]
+    over = mp.phase.fixed_points(mp.scenes.Pendulum(g=1, length=1, damping=3.0),
+                                 [(-1, 1), (-1, 1)])
+    assert [(p.kind, p.stable) for p in over] == [("node", True)]
+    vdp = mp.phase.fixed_points(mp.scenes.VanDerPol(1.0), [(-1, 1), (-1, 1)])
+    assert [(p.kind, p.stable) for p in vdp] == [("focus", False)]
+    vdp3 = mp.phase.fixed_points(mp.scenes.VanDerPol(3.0), [(-1, 1), (-1, 1)])
+    assert [(p.kind, p.stable) for p in vdp3] == [("node", False)]
+    # a Python callable (finite-difference Jacobian): Duffing double well
+    duff = mp.phase.fixed_points(lambda t, y: np.array([y[1], y[0] - y[0] ** 3]),
+                                 [(-2, 2), (-1, 1)])
+    assert [p.kind for p in duff] == ["centre", "saddle", "centre"]
+    np.testing.assert_allclose([p.x[0] for p in duff], [-1, 0, 1], atol=1e-10)
+
+
+def test_vdp_limit_cycle_mu1():
+    T, A = mp.phase.limit_cycle(mp.scenes.VanDerPol(1.0), [0.5, 0.0], tol=1e-10)
+    assert abs(T - 6.6632868593231301896996820305) < 1e-8
+    assert abs(A - 2.00861986) < 1e-7
+
+
+def test_vdp_large_mu_period():
+    mu = 40.0
+    T, A = mp.phase.limit_cycle(mp.scenes.VanDerPol(mu), [2.0, 0.0], tol=1e-7, rtol=1e-9)
+    lead = (3 - 2 * np.log(2)) * mu
+    two = lead + 7.014322 * mu ** (-1 / 3)  # 3 * (first zero of Ai) mu^(-1/3)
+    # the leading term's own relative correction is 7.01 mu^(-4/3) / 1.614 = 3.0 %
+    assert abs(T - lead) / lead < 0.035
+    assert abs(T - two) / two < 2e-3
+    assert abs(A - 2.0) < 0.02
+
+
+def _pend(t, y, A):
+    return [y[1], -np.sin(y[0]) - 0.5 * y[1] + A * np.cos(2 / 3 * t)]
+
+
+def test_poincare_against_solve_ivp():
+    A = 1.07
+    sc = mp.scenes.Pendulum(drive_amplitude=A, **DRIVEN)
+    T = 3 * np.pi
+    pts = mp.phase.poincare(sc, [0.1, 0.0], T, 20, skip=5, rtol=1e-12, atol=1e-13)
+    te = T * np.arange(5, 25)
+    ref = solve_ivp(_pend, (0, te[-1]), [0.1, 0.0], args=(A,), method="DOP853", rtol=1e-12,
+                    atol=1e-13, t_eval=te)
+    assert pts.shape == (20, 2)
+    np.testing.assert_allclose(pts, ref.y.T, atol=1e-6)
+
+
+def test_bifurcation_against_solve_ivp():
+    sc = mp.scenes.Pendulum(drive_amplitude=1.0, **DRIVEN)
+    vals = [0.9, 1.07, 1.15]
+    T = 3 * np.pi
+    out = mp.phase.bifurcation(sc, "drive_amplitude", vals, [0.1, 0.0], T, 8, 10, rtol=1e-12,
+                               atol=1e-13)
+    assert out.shape == (3, 8, 2)
+    te = T * np.arange(10, 18)
+    for i, A in enumerate(vals):
+        ref = solve_ivp(_pend, (0, te[-1]), [0.1, 0.0], args=(A,), method="DOP853",
+                        rtol=1e-12, atol=1e-13, t_eval=te)
+        np.testing.assert_allclose(out[i], ref.y.T, atol=1e-5)
+    with pytest.raises(ValueError):
+        mp.phase.bifurcation(sc, "mass", vals, [0.1, 0.0], T, 8, 10)
+
+
+def test_lyapunov_chaos_and_cycle():
+    sc = mp.scenes.Pendulum(drive_amplitude=1.5, **DRIVEN)
+    lam, times, run = mp.phase.lyapunov(sc, [0.2, 0.0], 200.0, transient=50.0,
+                                        method="neighbours", return_history=True)
+    assert lam > 0.05 and run.shape == times.shape
+    lam_v = mp.phase.lyapunov(sc, [0.2, 0.0], 200.0, transient=50.0)
+    assert lam_v > 0.05
+    lam0 = mp.phase.lyapunov(mp.scenes.VanDerPol(1.0), [2.0, 0.0], 300.0, transient=50.0,
+                             method="neighbours")
+    assert abs(lam0) < 5e-3
+    # a stable focus: the exponent is the real part of the eigenvalues, -b/2
+    lamf = mp.phase.lyapunov(mp.scenes.Pendulum(g=1, length=1, damping=0.4), [1e-3, 0.0],
+                             100.0, method="variational")
+    assert abs(lamf + 0.2) < 0.01
