@@ -7,7 +7,7 @@ from . import _core
 from .errors import *  # noqa: F401,F403
 from . import integrate, plot, scenes  # noqa: F401
 from . import inertia, modes, rotation, stress, variational  # noqa: F401
-from . import frames, phase  # noqa: F401
+from . import frames, phase, rigid  # noqa: F401
 from .integrate import (DenseOutput, EnsembleSolution, SecondOrder, Solution,  # noqa: F401
                         methods, solve, solve_many)
 

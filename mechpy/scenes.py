@@ -15,7 +15,8 @@ import numpy as np
 from . import _core
 from ._validate import as_array, as_scalar
 
-__all__ = ["Scene", "Pendulum", "VanDerPol", "Duffing", "Kepler", "RestrictedThreeBody", "Foucault"]
+__all__ = ["Scene", "Pendulum", "VanDerPol", "Duffing", "Kepler", "RestrictedThreeBody", "Foucault",
+           "RigidBody", "HeavyTop"]
 
 
 class Scene:
@@ -262,3 +263,129 @@ class Foucault(Scene):
         (positive: clockwise seen from above)."""
         p = self._params
         return p["omega"] * float(np.sin(np.radians(p["latitude"])))
+
+def _moments(moments) -> np.ndarray:
+    m = as_array(moments, "moments", shape=(3,))
+    if not np.all(m > 0):
+        raise ValueError(f"moments must be positive, got {m}")
+    for i in range(3):
+        if m[i] > (m[(i + 1) % 3] + m[(i + 2) % 3]) * (1 + 1e-14):
+            raise ValueError(f"moments {m} violate the triangle inequality I_i <= I_j + I_k "
+                             "of a real body")
+    return m
+
+
+class RigidBody(Scene):
+    r"""A rigid body about its centre of mass: Euler's equations in the
+    principal body frame,
+
+    .. math:: I_1\dot\omega_1 = (I_2 - I_3)\,\omega_2\omega_3 + \tau_1 \quad\text{(cyclic)},
+
+    and, only when ``orientation=True``, the orientation as a unit quaternion
+    ``q`` (scalar last, body to space) with :math:`\dot q = \tfrac12 q\otimes(\omega, 0)`.
+
+    State ``omega`` (3,) in rad/s, or ``(omega, q)`` (7,).  Parameters:
+    ``moments`` (I1, I2, I3) principal moments (kg m^2), positive and obeying
+    the triangle inequality; ``torque`` a constant body-frame torque (N m) or
+    None.  ``energy`` is the rotational kinetic energy
+    :math:`T = \tfrac12\sum_i I_i\omega_i^2` (J).  The geometric methods
+    ``"rigid:split"`` (order 2) and ``"rigid:split4"`` (order 4) of
+    :func:`mechpy.solve` keep |L| and |q| to round-off.
+    """
+
+    _model = "RigidBody"
+
+    def __init__(self, moments=(1.0, 2.0, 3.0), torque=None, orientation=False):
+        m = _moments(moments)
+        tau = np.zeros(3) if torque is None else as_array(torque, "torque", shape=(3,))
+        if not isinstance(orientation, (bool, np.bool_)):
+            raise TypeError("orientation must be True or False")
+        self._orientation = bool(orientation)
+        self._has_torque = torque is not None
+        self._model = "RigidBodyOriented" if orientation else "RigidBody"
+        super().__init__(I1=m[0], I2=m[1], I3=m[2], tau1=tau[0], tau2=tau[1], tau3=tau[2])
+
+    @property
+    def moments(self) -> np.ndarray:
+        """The principal moments (I1, I2, I3)."""
+        p = self._params
+        return np.array([p["I1"], p["I2"], p["I3"]])
+
+    @property
+    def params(self) -> dict:
+        p = self._params
+        tau = (p["tau1"], p["tau2"], p["tau3"]) if self._has_torque else None
+        return dict(moments=tuple(self.moments), torque=tau, orientation=self._orientation)
+
+    def initial_state(self, omega, quat=None, *, atol: float = 1e-12) -> np.ndarray:
+        """The state for body angular velocity ``omega`` (and, with
+        orientation, a unit quaternion ``quat``, scalar last; identity if None)."""
+        w = as_array(omega, "omega", shape=(3,))
+        if not self._orientation:
+            if quat is not None:
+                raise ValueError("quat is only used with orientation=True")
+            return w.copy()
+        q = np.array([0.0, 0.0, 0.0, 1.0]) if quat is None else as_array(quat, "quat", shape=(4,))
+        if abs(np.linalg.norm(q) - 1.0) > atol:
+            raise ValueError(f"quat must be a unit quaternion, |q| = {np.linalg.norm(q)!r}")
+        return np.concatenate([w, q])
+
+    def angular_momentum(self, y) -> np.ndarray:
+        """Body-frame angular momentum L = I omega for states y of shape (dim, ...)."""
+        y = as_array(y, "y", min_ndim=1)
+        return self.moments.reshape((3,) + (1,) * (y.ndim - 1)) * y[:3]
+
+    def replace(self, **changes) -> "RigidBody":
+        p = self.params
+        p.update(changes)
+        return RigidBody(**p)
+
+    def __repr__(self):
+        p = self.params
+        return (f"RigidBody(moments={p['moments']!r}, torque={p['torque']!r}, "
+                f"orientation={p['orientation']!r})")
+
+    def __eq__(self, other):
+        return type(self) is type(other) and self.params == other.params
+
+    def __hash__(self):
+        p = self.params
+        return hash(("RigidBody", p["moments"], p["torque"], p["orientation"]))
+
+    def __reduce__(self):
+        return (_rebuild, (type(self), self.params))
+
+
+class HeavyTop(Scene):
+    r"""The heavy symmetric top with one fixed point, in Euler angles (ZXZ).
+
+    .. math:: L = \tfrac{I_1}{2}(\dot\theta^2 + \dot\phi^2\sin^2\theta)
+              + \tfrac{I_3}{2}(\dot\psi + \dot\phi\cos\theta)^2 - M g l\cos\theta
+
+    State ``(phi, theta, psi, phi_dot, theta_dot, psi_dot)`` (rad, rad/s);
+    ``I1`` the moment about a transverse axis through the fixed point, ``I3``
+    about the symmetry axis (kg m^2), ``mass`` (kg), ``g`` (m/s^2) and ``l``
+    the distance of the centre of mass from the fixed point (m).  Conserved:
+    ``energy`` :math:`E = \tfrac{I_1}{2}(\dot\theta^2 + \dot\phi^2\sin^2\theta)
+    + \tfrac{I_3}{2}\omega_3^2 + Mgl\cos\theta` (J), ``p_phi`` and ``p_psi``.
+    Singular at theta = 0 or pi (Euler angles).
+    """
+
+    _model = "HeavyTop"
+    _defaults = dict(g=9.81)
+    _positive = ("I1", "I3", "mass")
+    _nonnegative = ("g",)
+
+    def __init__(self, I1, I3, mass, g=9.81, l=1.0):
+        super().__init__(I1=I1, I3=I3, mass=mass, g=g, l=l)
+
+    def p_psi(self, y):
+        """p_psi = I3 (psi_dot + phi_dot cos theta) for states (6, ...)."""
+        y = as_array(y, "y", min_ndim=1)
+        return self._params["I3"] * (y[5] + y[3] * np.cos(y[1]))
+
+    def p_phi(self, y):
+        """p_phi = I1 phi_dot sin^2 theta + p_psi cos theta for states (6, ...)."""
+        y = as_array(y, "y", min_ndim=1)
+        s = np.sin(y[1])
+        return self._params["I1"] * y[3] * s * s + self.p_psi(y) * np.cos(y[1])

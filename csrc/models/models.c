@@ -4,11 +4,11 @@
 #include <string.h>
 
 extern const mp_model mp_model_pendulum, mp_model_vanderpol, mp_model_duffing, mp_model_kepler,
-    mp_model_r3b, mp_model_foucault;
+    mp_model_r3b, mp_model_foucault, mp_model_rigid, mp_model_rigid_q, mp_model_heavy_top;
 
 const mp_model *const mp_models[] = {
     &mp_model_pendulum, &mp_model_vanderpol, &mp_model_duffing, &mp_model_kepler, &mp_model_r3b,
-    &mp_model_foucault, NULL,
+    &mp_model_foucault, &mp_model_rigid, &mp_model_rigid_q, &mp_model_heavy_top, NULL,
 };
 
 const mp_model *mp_model_find(const char *name)

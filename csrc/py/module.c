@@ -16,6 +16,7 @@ PyMODINIT_FUNC PyInit__core(void)
     PyMethodDef *tables[] = {
         mp_py_ode_methods, mp_py_scene_methods, mp_py_inertia_methods,
         mp_py_rotation_methods, mp_py_modes_methods, mp_py_variational_methods,
+        mp_py_rigid_methods,
     };
     import_array();
     /* GSL must never abort the interpreter: every GSL status is checked. */
