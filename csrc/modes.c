@@ -44,21 +44,27 @@ void mp_modes_sign(int n, double *v)
     }
 }
 
+double mp_modes_roundoff(int n)
+{
+    return 16.0 * (double)n * DBL_EPSILON;
+}
+
 /* Shared post-processing: finiteness, stability, zero-mode clamp, signs. */
-static int mp_modes_finish(int n, double *w, double *z, double *w_bad)
+static int mp_modes_finish(int n, double zero_rtol, double *w, double *z, double *w_bad)
 {
     double wmax = 0.0;
     for (int i = 0; i < n; i++) {
         if (!isfinite(w[i])) return MP_ENONFINITE;
         if (fabs(w[i]) > wmax) wmax = fabs(w[i]);
     }
-    double tol = 16.0 * (double)n * DBL_EPSILON * wmax;
+    double tol = mp_modes_roundoff(n) * wmax;
+    double ztol = (zero_rtol < 0.0 ? mp_modes_roundoff(n) : zero_rtol) * wmax;
     for (int i = 0; i < n; i++) {
-        if (w[i] < -tol) {
+        if (w[i] < -(tol > ztol ? tol : ztol)) {
             if (w_bad) *w_bad = w[i];
             return MP_EUNSTABLE;
         }
-        if (fabs(w[i]) <= tol) w[i] = 0.0;
+        if (w[i] < 0.0 || w[i] <= ztol) w[i] = 0.0;
     }
     for (size_t k = 0; k < (size_t)n; k++) {
         double *v = z + k * (size_t)n;
@@ -69,7 +75,7 @@ static int mp_modes_finish(int n, double *w, double *z, double *w_bad)
     return MP_OK;
 }
 
-int mp_modes_dense(int n, double *k, double *m, double *w, double *w_bad)
+int mp_modes_dense(int n, double *k, double *m, double zero_rtol, double *w, double *w_bad)
 {
     if (n < 1 || (size_t)n > (size_t)INT_MAX / 2) return MP_EDOM;
     const int itype = 1;
@@ -92,7 +98,7 @@ int mp_modes_dense(int n, double *k, double *m, double *w, double *w_bad)
     if (info > n) return MP_ENOTSPD;
     if (info > 0) return MP_ENOCONV;
     if (info < 0) return MP_EDOM;
-    return mp_modes_finish(n, w, k, w_bad);
+    return mp_modes_finish(n, zero_rtol, w, k, w_bad);
 }
 
 /* Eigen-decomposition of the symmetric tridiagonal (d, e): d (n) and e (n)
@@ -164,7 +170,7 @@ static int mp_modes_stev(int n, double *d, double *e, double *w, double *z)
 }
 
 int mp_modes_tridiag(int n, const double *kd, const double *ke, const double *md,
-                     double *w, double *z, double *w_bad)
+                     double zero_rtol, double *w, double *z, double *w_bad)
 {
     if (n < 1 || (size_t)n > (size_t)INT_MAX / 2) return MP_EDOM;
     for (int i = 0; i < n; i++)
@@ -184,7 +190,7 @@ int mp_modes_tridiag(int n, const double *kd, const double *ke, const double *md
             double *v = z + k * (size_t)n;
             for (int i = 0; i < n; i++) v[i] *= s[i];
         }
-        status = mp_modes_finish(n, w, z, w_bad);
+        status = mp_modes_finish(n, zero_rtol, w, z, w_bad);
     }
     free(buf);
     return status;

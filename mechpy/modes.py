@@ -91,8 +91,9 @@ class Modes:
 
     @property
     def zero_modes(self) -> np.ndarray:
-        """Boolean mask of the zero modes (``omega == 0``: eigenvalues within
-        ``16 n eps max|lambda|`` of zero, free translations and rotations)."""
+        """Boolean mask of the zero modes, ``omega == 0``: free translations
+        and rotations, eigenvalues within ``zero_tol`` (default
+        ``16 n eps max|omega^2|``) of zero; see :func:`normal_modes`."""
         return self.omega == 0.0
 
     def __repr__(self) -> str:
@@ -173,6 +174,7 @@ class Modes:
         v0 = self._vector(v0, "v0")
         if q0.ndim != 1 or v0.ndim != 1:
             raise ValueError("q0 and v0 must be vectors of length n")
+        scalar_t = np.ndim(t) == 0
         t_arr = as_array(t, "t", allow_empty=True)
         if t_arr.ndim > 1:
             raise ValueError(f"t must be a scalar or a 1-D array, got shape {t_arr.shape}")
@@ -186,12 +188,12 @@ class Modes:
         s = np.sin(w * tt)
         sw = np.where(zero, tt, s / wsafe)          # sin(w t)/w, -> t at w = 0
         q = (eta0 * c + deta0 * sw) @ self.vectors.T
-        if t_arr.ndim == 0:
+        if scalar_t:
             q = q[0]
         if not velocities:
             return q
         v = (deta0 * c - eta0 * w * s) @ self.vectors.T
-        if t_arr.ndim == 0:
+        if scalar_t:
             v = v[0]
         return q, v
 
@@ -220,7 +222,7 @@ def _check_band_symmetry(ke, kl, kd):
         raise ValueError(f"K must be symmetric (max |K - K^T| = {np.max(np.abs(ke - kl)):.3g})")
 
 
-def normal_modes(K, M=None, *, method: str = "auto") -> Modes:
+def normal_modes(K, M=None, *, method: str = "auto", zero_tol: float | None = None) -> Modes:
     """Normal modes of ``M q'' + K q = 0``: solve ``K a = omega^2 M a``.
 
     Parameters
@@ -236,6 +238,12 @@ def normal_modes(K, M=None, *, method: str = "auto") -> Modes:
         ``M^{-1/2} K M^{-1/2}``, O(n^2) for all modes.  ``"auto"`` uses the
         chain path whenever the structure allows it (sparse input that is
         not a chain is converted to dense).
+    zero_tol : float, optional
+        Eigenvalues with ``|omega^2| <= zero_tol * max|omega^2|`` are zero
+        modes and set to exactly 0.  Default: the round-off bound
+        ``16 n eps``, below which a dense solver cannot tell an eigenvalue
+        from zero.  Pass 0 to keep tiny positive eigenvalues (the chain path
+        computes them to high relative accuracy, e.g. with mass ratios 1e12).
 
     Returns
     -------
@@ -253,9 +261,10 @@ def normal_modes(K, M=None, *, method: str = "auto") -> Modes:
     mechpy.NotPositiveDefiniteError
         M is not positive definite (a ``numpy.linalg.LinAlgError``).
     mechpy.UnstableSystemError
-        An eigenvalue ``omega^2 < -16 n eps max|omega^2|``: the equilibrium
-        is unstable (a ``ValueError``; the message gives the eigenvalue).
-        Eigenvalues within that bound of zero are set to 0 (zero modes).
+        An eigenvalue ``omega^2 < -max(16 n eps, zero_tol) max|omega^2|``:
+        the equilibrium is unstable (a ``ValueError``; the message gives the
+        eigenvalue).  Negative eigenvalues within that bound are round-off
+        and set to 0, never a NaN.
 
     Notes
     -----
@@ -271,6 +280,7 @@ def normal_modes(K, M=None, *, method: str = "auto") -> Modes:
     """
     if method not in ("auto", "dense", "chain"):
         raise ValueError(f"method must be 'auto', 'dense' or 'chain', got {method!r}")
+    zr = -1.0 if zero_tol is None else as_scalar(zero_tol, "zero_tol", nonnegative=True)
     try:
         import scipy.sparse as sp
         sparse_in = sp.issparse(K) or (M is not None and sp.issparse(M))
@@ -295,7 +305,7 @@ def normal_modes(K, M=None, *, method: str = "auto") -> Modes:
             kd, md = as_array(kd, "K"), as_array(md, "M")
             ke, kl = as_array(ke, "K", allow_empty=True), as_array(kl, "K", allow_empty=True)
             _check_band_symmetry(ke, kl, kd)
-            return _chain_solve(kd, ke, md)
+            return _chain_solve(kd, ke, md, zr)
         if method == "chain":
             raise ValueError("method='chain' needs a diagonal M and a tridiagonal K")
         K, M = K.toarray(), M.toarray()
@@ -310,17 +320,17 @@ def normal_modes(K, M=None, *, method: str = "auto") -> Modes:
         if bands is not None:
             kd, ke, md = bands
             _check_band_symmetry(ke, np.diagonal(K, -1), kd)
-            return _chain_solve(kd, ke, md)
+            return _chain_solve(kd, ke, md, zr)
         if method == "chain":
             raise ValueError("method='chain' needs a diagonal M and a tridiagonal K")
     K = as_symmetric(K, "K")
     M = as_symmetric(M, "M")
-    w, Z = _core.modes_dense(K, M)
+    w, Z = _core.modes_dense(K, M, zr)
     return Modes(np.sqrt(w), Z.T, M)
 
 
-def _chain_solve(kd, ke, md) -> Modes:
-    w, Z = _core.modes_tridiag(kd, ke, md)
+def _chain_solve(kd, ke, md, zero_rtol) -> Modes:
+    w, Z = _core.modes_tridiag(kd, ke, md, zero_rtol)
     return Modes(np.sqrt(w), Z.T, np.array(md))
 
 

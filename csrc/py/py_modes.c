@@ -44,7 +44,7 @@ static PyObject *mp_py_modes_result(int status, PyArrayObject *w, PyArrayObject 
 }
 
 PyDoc_STRVAR(modes_dense_doc,
-"modes_dense(K, M) -> (w, Z)\n\n"
+"modes_dense(K, M, zero_rtol) -> (w, Z)\n\n"
 "Dense K v = w M v by LAPACK dsygvd: w ascending, Z[k] is mode k\n"
 "(M-normalised, sign rule applied).  K and M must be symmetric.");
 
@@ -53,7 +53,8 @@ static PyObject *modes_dense(PyObject *self, PyObject *args)
     (void)self;
     PyObject *ko, *mo;
     int n = 0, nm = 0;
-    if (!PyArg_ParseTuple(args, "OO:modes_dense", &ko, &mo)) return NULL;
+    double zero_rtol = -1.0;
+    if (!PyArg_ParseTuple(args, "OO|d:modes_dense", &ko, &mo, &zero_rtol)) return NULL;
     PyArrayObject *k = mp_py_modes_square(ko, "K", &n);
     if (!k) return NULL;
     PyArrayObject *m = mp_py_modes_square(mo, "M", &nm);
@@ -85,14 +86,14 @@ static PyObject *modes_dense(PyObject *self, PyObject *args)
     double w_bad = 0.0;
     Py_BEGIN_ALLOW_THREADS
     status = mp_modes_dense(n, (double *)PyArray_DATA(z), (double *)PyArray_DATA(mc),
-                            (double *)PyArray_DATA(w), &w_bad);
+                            zero_rtol, (double *)PyArray_DATA(w), &w_bad);
     Py_END_ALLOW_THREADS
     Py_DECREF(mc);
     return mp_py_modes_result(status, w, z, w_bad, "normal_modes(K, M)");
 }
 
 PyDoc_STRVAR(modes_tridiag_doc,
-"modes_tridiag(kd, ke, md) -> (w, Z)\n\n"
+"modes_tridiag(kd, ke, md, zero_rtol) -> (w, Z)\n\n"
 "Chain K v = w M v with K tridiagonal (diagonal kd, off-diagonal ke) and\n"
 "M = diag(md), by LAPACK dstemr on M^-1/2 K M^-1/2: O(n^2).");
 
@@ -100,7 +101,9 @@ static PyObject *modes_tridiag(PyObject *self, PyObject *args)
 {
     (void)self;
     PyObject *kdo, *keo, *mdo;
-    if (!PyArg_ParseTuple(args, "OOO:modes_tridiag", &kdo, &keo, &mdo)) return NULL;
+    double zero_rtol = -1.0;
+    if (!PyArg_ParseTuple(args, "OOO|d:modes_tridiag", &kdo, &keo, &mdo, &zero_rtol))
+        return NULL;
     PyArrayObject *kd = mp_py_array(kdo, "kd", 1);
     PyArrayObject *ke = mp_py_array(keo, "ke", 1);
     PyArrayObject *md = mp_py_array(mdo, "md", 1);
@@ -129,7 +132,8 @@ static PyObject *modes_tridiag(PyObject *self, PyObject *args)
     Py_BEGIN_ALLOW_THREADS
     status = mp_modes_tridiag((int)n, (const double *)PyArray_DATA(kd),
                               (const double *)PyArray_DATA(ke),
-                              (const double *)PyArray_DATA(md), (double *)PyArray_DATA(w),
+                              (const double *)PyArray_DATA(md), zero_rtol,
+                              (double *)PyArray_DATA(w),
                               (double *)PyArray_DATA(z), &w_bad);
     Py_END_ALLOW_THREADS
     res = mp_py_modes_result(status, w, z, w_bad, "normal_modes(K, M) (chain)");
