@@ -24,6 +24,38 @@ extern void dstevd_(const char *jobz, const int *n, double *d, double *e, double
                     const int *ldz, double *work, const int *lwork, int *iwork,
                     const int *liwork, int *info, size_t jobz_len);
 
+/* A LAPACK workspace, sized from a workspace query (wq, iwq). */
+struct mp_modes_work {
+    double *work;
+    int *iwork;
+    int lwork, liwork;
+};
+
+static int mp_modes_work_alloc(struct mp_modes_work *ws, double wq, int iwq)
+{
+    ws->work = NULL;
+    ws->iwork = NULL;
+    if (!(wq < (double)INT_MAX - 1.0)) return MP_ENOMEM;   /* beyond LAPACK's int sizes */
+    ws->lwork = (int)wq + 1;
+    ws->liwork = iwq > 1 ? iwq : 1;
+    ws->work = malloc((size_t)ws->lwork * sizeof *ws->work);
+    ws->iwork = malloc((size_t)ws->liwork * sizeof *ws->iwork);
+    if (!ws->work || !ws->iwork) {
+        free(ws->work);
+        free(ws->iwork);
+        ws->work = NULL;
+        ws->iwork = NULL;
+        return MP_ENOMEM;
+    }
+    return MP_OK;
+}
+
+static void mp_modes_work_free(struct mp_modes_work *ws)
+{
+    free(ws->work);
+    free(ws->iwork);
+}
+
 /* Relative threshold below which a vector component does not decide the sign. */
 #define MP_MODES_SIGN_RTOL 1e-8
 
@@ -83,18 +115,12 @@ int mp_modes_dense(int n, double *k, double *m, double zero_rtol, double *w, dou
     double wq = 0.0;
     dsygvd_(&itype, "V", "L", &n, k, &n, m, &n, w, &wq, &lwork, &iwq, &liwork, &info, 1, 1);
     if (info != 0) return MP_EDOM;
-    lwork = (int)wq + 1;
-    liwork = iwq > 1 ? iwq : 1;
-    double *work = malloc((size_t)lwork * sizeof *work);
-    int *iwork = malloc((size_t)liwork * sizeof *iwork);
-    if (!work || !iwork) {
-        free(work);
-        free(iwork);
-        return MP_ENOMEM;
-    }
-    dsygvd_(&itype, "V", "L", &n, k, &n, m, &n, w, work, &lwork, iwork, &liwork, &info, 1, 1);
-    free(work);
-    free(iwork);
+    struct mp_modes_work ws;
+    int status = mp_modes_work_alloc(&ws, wq, iwq);
+    if (status != MP_OK) return status;
+    dsygvd_(&itype, "V", "L", &n, k, &n, m, &n, w, ws.work, &ws.lwork, ws.iwork, &ws.liwork,
+            &info, 1, 1);
+    mp_modes_work_free(&ws);
     if (info > n) return MP_ENOTSPD;
     if (info > 0) return MP_ENOCONV;
     if (info < 0) return MP_EDOM;
@@ -124,19 +150,13 @@ static int mp_modes_stev(int n, double *d, double *e, double *w, double *z)
     dstemr_("V", "A", &n, d, e, &vl, &vu, &il, &iu, &m, w, z, &n, &nzc, isuppz, &tryrac,
             &wq, &lwork, &iwq, &liwork, &info, 1, 1);
     int status = MP_OK;
+    struct mp_modes_work ws;
     if (info == 0) {
-        lwork = (int)wq + 1;
-        liwork = iwq > 1 ? iwq : 1;
-        double *work = malloc((size_t)lwork * sizeof *work);
-        int *iwork = malloc((size_t)liwork * sizeof *iwork);
-        if (!work || !iwork) {
-            status = MP_ENOMEM;
-        } else {
+        status = mp_modes_work_alloc(&ws, wq, iwq);
+        if (status == MP_OK)
             dstemr_("V", "A", &n, d, e, &vl, &vu, &il, &iu, &m, w, z, &n, &nzc, isuppz,
-                    &tryrac, work, &lwork, iwork, &liwork, &info, 1, 1);
-        }
-        free(work);
-        free(iwork);
+                    &tryrac, ws.work, &ws.lwork, ws.iwork, &ws.liwork, &info, 1, 1);
+        mp_modes_work_free(&ws);
     }
     free(isuppz);
     if (status == MP_OK && (info != 0 || m != n)) {
@@ -151,18 +171,13 @@ static int mp_modes_stev(int n, double *d, double *e, double *w, double *z)
         if (info != 0) {
             status = MP_ENOCONV;
         } else {
-            lwork = (int)wq + 1;
-            liwork = iwq > 1 ? iwq : 1;
-            double *work = malloc((size_t)lwork * sizeof *work);
-            int *iwork = malloc((size_t)liwork * sizeof *iwork);
-            if (!work || !iwork) {
-                status = MP_ENOMEM;
-            } else {
-                dstevd_("V", &n, w, e, z, &n, work, &lwork, iwork, &liwork, &info, 1);
+            status = mp_modes_work_alloc(&ws, wq, iwq);
+            if (status == MP_OK) {
+                dstevd_("V", &n, w, e, z, &n, ws.work, &ws.lwork, ws.iwork, &ws.liwork, &info,
+                        1);
                 if (info != 0) status = MP_ENOCONV;
             }
-            free(work);
-            free(iwork);
+            mp_modes_work_free(&ws);
         }
     }
     free(d0);

@@ -233,6 +233,9 @@ def test_chain_matrices_by_hand():
     Kd, Md = chain(5, springs=np.arange(1.0, 6.0), ends="periodic")
     np.testing.assert_array_equal(Ks.toarray(), Kd)
     np.testing.assert_array_equal(Ms.toarray(), Md)
+    # sparse but not a chain (the ring's corners): the dense path, same modes
+    np.testing.assert_allclose(normal_modes(Ks, Ms).omega ** 2, sl.eigh(Kd, Md, eigvals_only=True),
+                               rtol=1e-12, atol=1e-14)
 
 
 def test_mass_defect_chain_paths_agree_with_scipy(rng):
@@ -397,6 +400,8 @@ def test_bad_input():
         normal_modes(np.ones((2, 3)), np.eye(2))
     with pytest.raises(TypeError):
         normal_modes("K", np.eye(2))
+    with pytest.raises(ValueError, match="zero_tol"):
+        normal_modes(K, M, zero_tol=-1.0)
     with pytest.raises(ValueError, match="method"):
         normal_modes(K, M, method="qr")
     with pytest.raises(ValueError, match="chain"):
