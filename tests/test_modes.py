@@ -431,3 +431,25 @@ def test_round_off_negative_eigenvalue_is_a_zero_mode_not_nan():
     K = np.array([[k, -0.3], [-0.3, 0.3]])
     modes = normal_modes(K, np.eye(2))
     assert modes.omega[0] == 0.0 and np.all(np.isfinite(modes.omega))
+
+
+# ------------------------------------------------------------- properties
+hypothesis = pytest.importorskip("hypothesis")
+st = hypothesis.strategies
+
+
+@hypothesis.settings(max_examples=40, deadline=None)
+@hypothesis.given(N=st.integers(1, 12), ends=st.sampled_from(["fixed", "free", "periodic"]),
+                  seed=st.integers(0, 2 ** 32 - 1))
+def test_random_chains_paths_and_scipy_agree(N, ends, seed):
+    rng = np.random.default_rng(seed)
+    ns = {"fixed": N + 1, "free": N - 1, "periodic": N}[ends]
+    K, M = chain(N, masses=10 ** rng.uniform(-2, 2, N), springs=10 ** rng.uniform(-2, 2, ns),
+                 ends=ends)
+    ws = sl.eigh(K, M, eigvals_only=True)
+    for method in (("auto", "dense") if ends == "periodic" and N > 2 else ("chain", "dense")):
+        modes = normal_modes(K, M, method=method)
+        assert np.all(np.isfinite(modes.omega)) and np.all(np.diff(modes.omega) >= 0)
+        np.testing.assert_allclose(modes.omega ** 2, np.maximum(ws, 0), atol=1e-12 * ws[-1] + 1e-300)
+        assert m_orthonormality(M, modes.vectors) < 1e-11
+        check_sign_rule(modes.vectors)
