@@ -1,7 +1,8 @@
 """mechpy: classical mechanics with a fast C core.
 
-``import mechpy as mp``: ``mp.solve``, ``mp.methods``, ``mp.scenes``,
-``mp.inertia``, ``mp.stress``, ``mp.rotation``, ``mp.modes``.
+``import mechpy as mp``: ``mp.solve``, ``mp.solve_many``, ``mp.methods``,
+``mp.scenes``, ``mp.inertia``, ``mp.stress``, ``mp.rotation``, ``mp.rigid``,
+``mp.modes``, ``mp.phase``, ``mp.frames``, ``mp.variational``, ``mp.plot``.
 """
 from . import _core
 from .errors import *  # noqa: F401,F403

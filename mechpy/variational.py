@@ -719,12 +719,31 @@ def lagrangian(scene) -> Callable:
     Duffing: :math:`e^{\delta t}(\tfrac12\dot x^2 - \tfrac12\alpha x^2 - \tfrac14\beta x^4
     + \gamma\cos(\omega t)\,x)`.  The factor :math:`e^{bt}` (Caldirola-Kanai)
     makes the damped equation of motion an Euler-Lagrange equation.
+    HeavyTop (J), coordinates q = (phi, theta, psi) of shape (3, ...):
+    :math:`\tfrac{I_1}{2}(\dot\theta^2 + \dot\phi^2\sin^2\theta)
+    + \tfrac{I_3}{2}(\dot\psi + \dot\phi\cos\theta)^2 - Mgl\cos\theta`.
     """
+    from .scenes import HeavyTop
+    if isinstance(scene, HeavyTop):
+        return _heavy_top_lagrangian(scene)
     spec = _scene_integrand(scene)
 
     def L(q, qdot, t=0.0):
         return _derivs(spec, t, q, qdot)[0]
     L.__doc__ = f"Lagrangian of {scene!r}."
+    return L
+
+
+def _heavy_top_lagrangian(top):
+    p = top.params
+    I1, I3, Mgl = p["I1"], p["I3"], p["mass"] * p["g"] * p["l"]
+
+    def L(q, qdot, t=0.0):
+        th = np.asarray(q, dtype=float)[1]
+        phd, thd, psd = np.asarray(qdot, dtype=float)[:3]
+        return (0.5 * I1 * (thd ** 2 + (phd * np.sin(th)) ** 2)
+                + 0.5 * I3 * (psd + phd * np.cos(th)) ** 2 - Mgl * np.cos(th))
+    L.__doc__ = f"Lagrangian of {top!r} (J)."
     return L
 
 
@@ -771,8 +790,8 @@ def generalized_momenta(L: Callable, q, qdot) -> np.ndarray:
     ----------
     L : callable ``L(q, qdot)`` or a scene
         Vectorised: q and qdot of shape (d, ...) (or scalars for one
-        coordinate); a scene has one coordinate, and q of any shape holds
-        samples of it.
+        coordinate); a one-coordinate scene takes q of any shape (samples of
+        it), a HeavyTop q = (phi, theta, psi) of shape (3, ...).
     q, qdot : array_like
         Coordinates and velocities, same shape.
 
@@ -781,8 +800,8 @@ def generalized_momenta(L: Callable, q, qdot) -> np.ndarray:
     ndarray
         Same shape as q (units of L times s per unit of q).
     """
-    from .scenes import Scene
-    if isinstance(L, Scene):     # one coordinate: q of any shape
+    from .scenes import HeavyTop, Scene
+    if isinstance(L, Scene) and not isinstance(L, HeavyTop):  # one coordinate: any shape
         q, qdot = _split(q, qdot)
         return _partials(lagrangian(L), q[None], qdot[None], 1)[0]
     return _partials(_as_lagrangian(L), q, qdot, 1)

@@ -391,3 +391,18 @@ def test_bad_input():
         V.pendulum_tension(mp.scenes.Pendulum(), np.zeros((3, 4)))
     with pytest.raises(ValueError):
         V.constraint_forces(-1.0, [0, 0], [[1, 0]], [0])
+
+
+def test_heavy_top_momenta_cyclic_and_conserved():
+    """phi and psi are cyclic in the heavy top's Lagrangian: p_phi and p_psi
+    (from dL/dqdot) are conserved along a trajectory and equal the closed forms."""
+    top = mp.scenes.HeavyTop(I1=0.5, I3=0.2, mass=1.0, g=9.81, l=0.3)
+    y0 = [0.0, 0.6, 0.0, 1.0, 0.0, 20.0]
+    s = mp.solve(top, (0, 5), y0, rtol=1e-12, atol=1e-12, t_eval=np.linspace(0, 5, 201))
+    q, qdot = s.y[:3], s.y[3:]
+    assert mp.variational.cyclic_coordinates(top, q, qdot) == (0, 2)
+    p = mp.variational.generalized_momenta(top, q, qdot)
+    np.testing.assert_allclose(p[0], top.p_phi(s.y), rtol=1e-9)
+    np.testing.assert_allclose(p[2], top.p_psi(s.y), rtol=1e-9)
+    assert np.ptp(p[0]) < 1e-9 * abs(p[0][0]) and np.ptp(p[2]) < 1e-9 * abs(p[2][0])
+    assert np.ptp(p[1]) > 1e-3  # p_theta is not conserved: the top nutates
