@@ -294,6 +294,22 @@ fail:
     return NULL;
 }
 
+/* The options ode_solve and ode_solve_many share. */
+static void fill_options(mp_ode_options *o, double rtol, PyArrayObject *atol, double first_step,
+                         double max_step, double h, long max_steps, PyArrayObject *tev)
+{
+    memset(o, 0, sizeof *o);
+    o->rtol = rtol;
+    o->atol = PyArray_DATA(atol);
+    o->first_step = first_step;
+    o->max_step = max_step;
+    o->h = h;
+    o->max_steps = max_steps;
+    o->t_eval = tev ? PyArray_DATA(tev) : NULL;
+    o->n_eval = tev ? (size_t)PyArray_SIZE(tev) : 0;
+    o->interrupt = mp_py_check_interrupt;
+}
+
 /* ---- ode_solve ------------------------------------------------------------ */
 
 static PyObject *py_ode_solve(PyObject *self, PyObject *args, PyObject *kw)
@@ -353,17 +369,8 @@ static PyObject *py_ode_solve(PyObject *self, PyObject *args, PyObject *kw)
         holds_python = 1;
     }
     mp_ode_options o;
-    memset(&o, 0, sizeof o);
-    o.rtol = rtol;
-    o.atol = PyArray_DATA(atol);
-    o.first_step = first_step;
-    o.max_step = max_step;
-    o.h = h;
-    o.max_steps = max_steps;
-    o.t_eval = tev ? PyArray_DATA(tev) : NULL;
-    o.n_eval = tev ? (size_t)PyArray_SIZE(tev) : 0;
+    fill_options(&o, rtol, atol, first_step, max_step, h, max_steps, tev);
     o.dense = dense;
-    o.interrupt = mp_py_check_interrupt;
     if (evo != Py_None) {
         Py_ssize_t ne = PyList_Size(evo);
         if (ne < 0) goto out;
@@ -554,16 +561,7 @@ static PyObject *py_ode_solve_many(PyObject *self, PyObject *args, PyObject *kw)
         }
     }
     mp_ode_options o;
-    memset(&o, 0, sizeof o);
-    o.rtol = rtol;
-    o.atol = PyArray_DATA(atol);
-    o.first_step = first_step;
-    o.max_step = max_step;
-    o.h = h;
-    o.max_steps = max_steps;
-    o.t_eval = PyArray_DATA(tev);
-    o.n_eval = nt;
-    o.interrupt = mp_py_check_interrupt;
+    fill_options(&o, rtol, atol, first_step, max_step, h, max_steps, tev);
     npy_intp shape[3] = {(npy_intp)k, (npy_intp)n, (npy_intp)nt};
     if (!(yout = mp_py_empty(3, shape))) goto out;
     size_t last = 0;
