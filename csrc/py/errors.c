@@ -126,6 +126,24 @@ PyArrayObject *mp_py_array(PyObject *obj, const char *name, int ndim)
     return a;
 }
 
+PyArrayObject *mp_py_array_finite(PyObject *obj, const char *name, int ndim, npy_intp last)
+{
+    PyArrayObject *a = mp_py_array(obj, name, ndim);
+    if (!a) return NULL;
+    int nd = PyArray_NDIM(a);
+    if (last >= 0 && (nd == 0 || PyArray_DIM(a, nd - 1) != last)) {
+        PyErr_Format(PyExc_ValueError, "%s must have a last axis of length %zd", name,
+                     (Py_ssize_t)last);
+        Py_DECREF(a);
+        return NULL;
+    }
+    if (mp_py_require_finite(a, name) < 0) {
+        Py_DECREF(a);
+        return NULL;
+    }
+    return a;
+}
+
 int mp_py_require_finite(PyArrayObject *a, const char *name)
 {
     const double *p = (const double *)PyArray_DATA(a);

@@ -35,6 +35,10 @@ PyObject *mp_py_exception_for(int status);
  * input raises TypeError naming `name`; NULL on error. */
 PyArrayObject *mp_py_array(PyObject *obj, const char *name, int ndim);
 
+/* mp_py_array, then: the last axis must have length `last` (-1: any) and every
+ * element must be finite; errors name the argument. */
+PyArrayObject *mp_py_array_finite(PyObject *obj, const char *name, int ndim, npy_intp last);
+
 /* ValueError naming `name` unless every element is finite. */
 int mp_py_require_finite(PyArrayObject *a, const char *name);
 

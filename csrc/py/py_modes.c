@@ -10,16 +10,12 @@
 /* A square float64 matrix argument (new reference) with its order in *n. */
 static PyArrayObject *mp_py_modes_square(PyObject *obj, const char *name, int *n)
 {
-    PyArrayObject *a = mp_py_array(obj, name, 2);
+    PyArrayObject *a = mp_py_array_finite(obj, name, 2, -1);
     if (!a) return NULL;
     npy_intp r = PyArray_DIM(a, 0), c = PyArray_DIM(a, 1);
     if (r != c || r < 1 || r > INT_MAX / 2) {
         PyErr_Format(PyExc_ValueError, "%s must be a non-empty square matrix, got shape (%zd, %zd)",
                      name, (Py_ssize_t)r, (Py_ssize_t)c);
-        Py_DECREF(a);
-        return NULL;
-    }
-    if (mp_py_require_finite(a, name) < 0) {
         Py_DECREF(a);
         return NULL;
     }

@@ -7,22 +7,10 @@
 
 #include "rotation.h"
 
-/* obj as a C-contiguous float64 (n, k) array (new reference) or NULL. */
+/* obj as a C-contiguous, finite float64 (n, k) array (new reference) or NULL. */
 static PyArrayObject *batch(PyObject *obj, const char *name, npy_intp k)
 {
-    PyArrayObject *a = mp_py_array(obj, name, 2);
-    if (!a) return NULL;
-    if (PyArray_DIM(a, 1) != k) {
-        PyErr_Format(PyExc_ValueError, "%s must have shape (n, %zd), got (n, %zd)", name,
-                     (Py_ssize_t)k, (Py_ssize_t)PyArray_DIM(a, 1));
-        Py_DECREF(a);
-        return NULL;
-    }
-    if (mp_py_require_finite(a, name) < 0) {
-        Py_DECREF(a);
-        return NULL;
-    }
-    return a;
+    return mp_py_array_finite(obj, name, 2, k);
 }
 
 static int parse_seq(const char *text, struct mp_rotation_seq *seq)
