@@ -73,21 +73,15 @@ def _plots(rows, problems, out: Path) -> None:
     except ImportError:
         print("matplotlib is not installed: no plots written")
         return
+    from .plot import work_precision
     for p in problems:
-        pr = [r for r in rows if r["problem"] == p and r.get("error") is not None
-              and isinstance(r.get("error"), float) and r["error"] > 0 and not math.isnan(r["error"])]
+        pr = [r for r in rows if r["problem"] == p and isinstance(r.get("error"), float)
+              and r["error"] > 0 and not math.isnan(r["error"])]
         impls = list(dict.fromkeys(r["impl"] for r in pr))
         if not pr or all(sum(r["impl"] == i for r in pr) < 2 for i in impls):
-            continue
+            continue  # a plot needs a curve: one implementation at two tolerances at least
         fig, ax = plt.subplots(figsize=(6.5, 4.5))
-        for i in impls:
-            pts = sorted((r["time"], r["error"]) for r in pr if r["impl"] == i)
-            ax.loglog([a for a, _ in pts], [b for _, b in pts], "o-", label=i, ms=3)
-        ax.set_xlabel("median wall time [s]")
-        ax.set_ylabel("error at final time")
-        ax.set_title(p)
-        ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=7)
+        work_precision(pr, p, ax=ax)
         fig.tight_layout()
         safe = "".join(c if c.isalnum() else "_" for c in p).strip("_").lower()
         fig.savefig(out / f"wp_{safe}.png", dpi=110)

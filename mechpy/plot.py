@@ -5,7 +5,7 @@ import numpy as np
 
 from ._validate import as_array, as_int
 
-__all__ = ["phase_portrait"]
+__all__ = ["phase_portrait", "work_precision", "modes", "trajectory3d", "animate_field"]
 
 
 def _plt():
@@ -77,3 +77,154 @@ def phase_portrait(system, xlim=(-2 * np.pi, 2 * np.pi), ylim=(-4.0, 4.0), *, t=
     ax.set_xlabel(labels[0])
     ax.set_ylabel(labels[1])
     return ax
+
+
+def work_precision(rows, problem=None, *, ax=None):
+    """Work-precision diagram: error against wall time, log-log, one line per
+    implementation (the rows of ``python -m mechpy bench``: dicts with
+    ``problem``, ``impl``, ``time`` (s) and ``error``).
+
+    Rows without a positive finite error are left out; ``problem`` picks one
+    problem when the rows hold several (default: the first).  Returns the Axes.
+    """
+    plt = _plt()
+    rows = list(rows)
+    if not rows:
+        raise ValueError("rows must not be empty")
+    for i, r in enumerate(rows):
+        if not isinstance(r, dict) or not {"problem", "impl", "time", "error"} <= set(r):
+            raise ValueError(f"rows[{i}] must be a dict with problem, impl, time and error")
+    if problem is None:
+        problem = rows[0]["problem"]
+    pr = [r for r in rows if r["problem"] == problem and r["error"] is not None
+          and np.isfinite(r["error"]) and r["error"] > 0 and r["time"] > 0]
+    if not pr:
+        raise ValueError(f"no rows with a positive error for problem {problem!r}")
+    if ax is None:
+        _, ax = plt.subplots(figsize=(6.5, 4.5))
+    for impl in dict.fromkeys(r["impl"] for r in pr):
+        pts = sorted((r["time"], r["error"]) for r in pr if r["impl"] == impl)
+        ax.loglog([a for a, _ in pts], [b for _, b in pts], "o-", label=impl, ms=3)
+    ax.set_xlabel("median wall time [s]")
+    ax.set_ylabel("error at final time")
+    ax.set_title(problem)
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=7)
+    return ax
+
+
+def modes(m, which=None, *, positions=None, ax=None):
+    """Mode shapes of a :class:`mechpy.modes.Modes`: the displacement of each
+    coordinate in the chosen modes (default: up to the six lowest), each
+    labelled with its angular frequency (rad/s).  ``positions`` places the
+    coordinates along the horizontal axis (default 1..n).  Returns the Axes."""
+    plt = _plt()
+    V = np.asarray(m.vectors)
+    n = V.shape[0]
+    idx = range(min(6, V.shape[1])) if which is None else \
+        [as_int(k, "which", minimum=0, maximum=V.shape[1] - 1) for k in np.atleast_1d(which)]
+    x = np.arange(1, n + 1) if positions is None else as_array(positions, "positions", shape=(n,))
+    if ax is None:
+        _, ax = plt.subplots(figsize=(6.5, 4))
+    for k in idx:
+        ax.plot(x, V[:, k], "o-", ms=3, label=f"mode {k + 1}: omega = {m.omega[k]:.4g} rad/s")
+    ax.axhline(0.0, color="0.6", lw=0.6)
+    ax.set_xlabel("coordinate")
+    ax.set_ylabel("mode shape (M-normalised)")
+    ax.legend(fontsize=7)
+    return ax
+
+
+def trajectory3d(path, *, ax=None, **line_kw):
+    """A curve in space: ``path`` of shape (3, m) (e.g. ``sol.y[:3]``), or a
+    :class:`mechpy.Solution` whose first three components are drawn.  Marks the
+    start.  Returns the 3-D Axes."""
+    plt = _plt()
+    y = path.y if hasattr(path, "y") else path
+    y = as_array(y, "path", ndim=2)
+    if y.shape[0] < 3:
+        raise ValueError(f"path must have at least 3 rows (x, y, z), got shape {y.shape}")
+    if ax is None:
+        fig = plt.figure(figsize=(6, 5))
+        ax = fig.add_subplot(projection="3d")
+    ax.plot(y[0], y[1], y[2], **({"lw": 1.0} | line_kw))
+    ax.plot([y[0, 0]], [y[1, 0]], [y[2, 0]], "o", color="k", ms=4)
+    ax.set_xlabel("x")
+    ax.set_ylabel("y")
+    ax.set_zlabel("z")
+    return ax
+
+
+def animate_field(system, xlim=(-2 * np.pi, 2 * np.pi), ylim=(-4.0, 4.0), *, particles=800,
+                  frames=120, dt=0.03, trail=8, respawn=0.01, t=0.0, seed=0, path=None,
+                  interval=40):
+    """Particles advected through a 2-D field and fading, as fieldplay does.
+
+    Each frame moves every particle one RK4 step of ``dt`` through the field
+    (evaluated in C for scenes) and draws its last ``trail`` positions with
+    fading opacity; a fraction ``respawn`` of the particles, and any that leave
+    the window, restart at random places.  Returns a matplotlib
+    ``FuncAnimation``: in a notebook, ``IPython.display.HTML(anim.to_jshtml())``;
+    with ``path`` it is also written to a file (``.gif`` with Pillow, ``.html``
+    as a JavaScript animation).
+    """
+    plt = _plt()
+    from matplotlib import animation
+    from matplotlib.collections import LineCollection
+    particles = as_int(particles, "particles", minimum=1)
+    frames = as_int(frames, "frames", minimum=1)
+    trail = as_int(trail, "trail", minimum=2)
+    dt = float(as_array(dt, "dt", positive=True))
+    xlim = as_array(xlim, "xlim", shape=(2,))
+    ylim = as_array(ylim, "ylim", shape=(2,))
+    rng = np.random.default_rng(seed)
+
+    def spawn(k):
+        return np.stack([rng.uniform(*xlim, k), rng.uniform(*ylim, k)])
+
+    def f(p):
+        U, V = _field(system, p[0], p[1], t)
+        return np.stack([U, V])
+
+    pos = spawn(particles)
+    hist = np.repeat(pos[None], trail, axis=0)  # (trail, 2, particles)
+    fig, ax = plt.subplots(figsize=(6, 4.5))
+    ax.set_xlim(*xlim)
+    ax.set_ylim(*ylim)
+    ax.set_facecolor("black")
+    lc = LineCollection([], linewidths=1.0)
+    ax.add_collection(lc)
+    alphas = np.linspace(0.05, 1.0, trail - 1)
+
+    def step(_):
+        nonlocal pos, hist
+        k1 = f(pos)
+        k2 = f(pos + 0.5 * dt * k1)
+        k3 = f(pos + 0.5 * dt * k2)
+        k4 = f(pos + dt * k3)
+        pos = pos + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        out = ((pos[0] < xlim[0]) | (pos[0] > xlim[1]) | (pos[1] < ylim[0]) | (pos[1] > ylim[1])
+               | (rng.random(particles) < respawn) | ~np.all(np.isfinite(pos), axis=0))
+        hist = np.roll(hist, -1, axis=0)
+        if out.any():
+            pos[:, out] = spawn(int(out.sum()))
+            hist[:, :, out] = pos[None, :, out]
+        hist[-1] = pos
+        segs = np.stack([hist[:-1], hist[1:]], axis=1)        # (trail-1, 2pts, 2, P)
+        segs = segs.transpose(0, 3, 1, 2).reshape(-1, 2, 2)  # ((trail-1)*P, 2pts, xy)
+        colors = np.zeros((segs.shape[0], 4))
+        colors[:, :3] = (0.55, 0.85, 1.0)
+        colors[:, 3] = np.repeat(alphas, particles)
+        lc.set_segments(segs)
+        lc.set_color(colors)
+        return (lc,)
+
+    anim = animation.FuncAnimation(fig, step, frames=frames, interval=interval, blit=True)
+    if path is not None:
+        path = str(path)
+        if path.endswith(".html"):
+            with open(path, "w") as fh:
+                fh.write(anim.to_jshtml())
+        else:
+            anim.save(path, writer=animation.PillowWriter(fps=max(1, 1000 // interval)))
+    return anim
