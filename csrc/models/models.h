@@ -22,9 +22,16 @@ typedef struct mp_model {
     void (*bind)(const double *params, mp_ode_problem *prob);
     /* Energy (or the scene's natural invariant) of one state. */
     double (*energy)(const double *params, const double *y);
+    /* Variable-size scenes (a chain of N masses): the state dimension their
+     * np parameters describe, 0 when np does not fit.  NULL for a scene of
+     * fixed dim and nparams. */
+    size_t (*dim_of)(const double *params, size_t np);
 } mp_model;
 
 extern const mp_model *const mp_models[];
 const mp_model *mp_model_find(const char *name);
+/* The one parameter check: np values for m, in their domain (MP_EDOM
+ * otherwise); *dim receives the state dimension they describe. */
+int mp_model_prepare(const mp_model *m, const double *params, size_t np, size_t *dim);
 
 #endif

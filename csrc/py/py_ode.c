@@ -189,13 +189,14 @@ static int py_system_parse(PyObject *spec, size_t n, py_system *s)
         }
         s->params = mp_py_array(b, "scene parameters", 1);
         if (!s->params) return -1;
-        if ((size_t)PyArray_SIZE(s->params) != m->nparams ||
-            m->check(PyArray_DATA(s->params)) != MP_OK) {
+        size_t dim;
+        if (mp_model_prepare(m, PyArray_DATA(s->params), (size_t)PyArray_SIZE(s->params), &dim)
+            != MP_OK) {
             mp_py_raise(MP_EDOM, "scene parameters");
             return -1;
         }
-        if (m->dim != n) {
-            PyErr_Format(PyExc_ValueError, "y0 must have %zu values for %s, got %zu", m->dim,
+        if (dim != n) {
+            PyErr_Format(PyExc_ValueError, "y0 must have %zu values for %s, got %zu", dim,
                          m->name, n);
             return -1;
         }
@@ -500,16 +501,18 @@ static PyObject *py_ode_solve_many(PyObject *self, PyObject *args, PyObject *kw)
     for (size_t i = 0; i < k; i++) probs[i] = sys.prob;
     if (par && strcmp(spec_kind, "scene") == 0) {
         const mp_model *mod = mp_model_find(PyUnicode_AsUTF8(PyTuple_GET_ITEM(spec, 1)));
-        if (np != mod->nparams) {
+        if (!mod->dim_of && np != mod->nparams) {
             PyErr_Format(PyExc_ValueError, "params must have %zu columns (%s's parameters)",
                          mod->nparams, mod->name);
             goto out;
         }
         for (size_t i = 0; i < k; i++) {
             const double *row = (const double *)PyArray_DATA(par) + i * np;
-            if (mod->check(row) != MP_OK) {
-                char ctx[64];
-                snprintf(ctx, sizeof ctx, "params[%zu]", i);
+            size_t dim;
+            if (mp_model_prepare(mod, row, np, &dim) != MP_OK || dim != n) {
+                char ctx[80];
+                snprintf(ctx, sizeof ctx, "params[%zu] (%s's parameters for a state of %zu)", i,
+                         mod->name, n);
                 mp_py_raise(MP_EDOM, ctx);
                 goto out;
             }

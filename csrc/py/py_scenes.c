@@ -46,12 +46,13 @@ static PyObject *py_scene_eval(PyObject *self, PyObject *args)
     if (!m) return NULL;
     PyArrayObject *p = mp_py_array(po, "params", 1), *y = NULL, *out = NULL;
     if (!p) return NULL;
-    if ((size_t)PyArray_SIZE(p) != m->nparams || m->check(PyArray_DATA(p)) != MP_OK) {
+    size_t dim;
+    if (mp_model_prepare(m, PyArray_DATA(p), (size_t)PyArray_SIZE(p), &dim) != MP_OK) {
         mp_py_raise(MP_EDOM, "scene parameters");
         goto done;
     }
     if (!(y = mp_py_array(yo, "y", 2))) goto done;
-    npy_intp cnt = PyArray_DIM(y, 0), d = (npy_intp)m->dim;
+    npy_intp cnt = PyArray_DIM(y, 0), d = (npy_intp)dim;
     if (PyArray_DIM(y, 1) != d) {
         PyErr_Format(PyExc_ValueError, "y must have %zd components for %s, got %zd", (Py_ssize_t)d,
                      m->name, (Py_ssize_t)PyArray_DIM(y, 1));
