@@ -389,3 +389,266 @@ class HeavyTop(Scene):
         y = as_array(y, "y", min_ndim=1)
         s = np.sin(y[1])
         return self._params["I1"] * y[3] * s * s + self.p_psi(y) * np.cos(y[1])
+
+
+_CHAIN_ENDS = {"fixed": 0, "free": 1, "periodic": 2}
+
+
+def _chain_springs(springs, N: int, ends: str) -> np.ndarray:
+    ns = {"fixed": N + 1, "free": N - 1, "periodic": N}[ends]
+    if np.ndim(springs) == 0 and not isinstance(springs, (str, bytes)) and springs is not None:
+        k = np.full(ns, as_scalar(springs, "springs", nonnegative=True))
+    else:
+        k = as_array(springs, "springs", allow_empty=(ns == 0))
+        if k.shape != (ns,):
+            raise ValueError(f"springs must be a scalar or have {ns} values for a {ends} chain "
+                             f"of {N} masses (N + 1 fixed, N - 1 free, N periodic), got shape "
+                             f"{k.shape}")
+        if not np.all(k >= 0):
+            raise ValueError(f"springs must be non-negative, got min {k.min()!r}")
+    return k
+
+
+class SpringChain(Scene):
+    r"""A one-dimensional chain of masses and springs, integrated in time,
+    optionally with the Fermi-Pasta-Ulam-Tsingou (FPUT) nonlinearity.
+
+    Mass ``i`` is displaced by ``x_i`` from equilibrium; spring ``j`` of
+    constant :math:`k_j`, stretched by :math:`r_j = x_{right} - x_{left}`,
+    stores
+
+    .. math:: V_j(r) = k_j\left(\frac{r^2}{2} + \frac{\alpha r^3}{3}
+              + \frac{\beta r^4}{4}\right),\qquad
+              m_i\ddot x_i = V'_{right(i)}(r) - V'_{left(i)}(r).
+
+    The ends follow :func:`mechpy.modes.chain`: ``"fixed"`` (walls at both
+    ends, N + 1 springs, spring 0 joins the left wall to mass 0),
+    ``"free"`` (N - 1 springs, spring j joins masses j and j+1) and
+    ``"periodic"`` (a ring, N springs, spring N-1 joins mass N-1 to mass 0).
+    With ``alpha = beta = 0`` (the default) the motion is ``M x'' = -K x``
+    with ``K, M = mp.modes.chain(N, ends=ends, masses=masses,
+    springs=springs)``, solved exactly by :meth:`modes`; the FPUT terms cost
+    nothing when off.
+
+    State ``(x (N), v (N))``, ``dim = 2 N``; separable, so the symplectic
+    methods (``"verlet"``, ``"yoshida"``, ``"gauss4"``) apply.
+
+    Parameters
+    ----------
+    masses : array_like (N,)
+        Masses (kg), positive; N >= 1.
+    springs : float or array_like
+        Spring constants (N/m), non-negative: one value for all, or N + 1,
+        N - 1 or N of them (fixed, free, periodic).
+    ends : {"fixed", "free", "periodic"}
+    alpha : float
+        Quadratic FPUT coefficient (1/m): the tension is
+        :math:`k(r + \alpha r^2 + \beta r^3)`.
+    beta : float
+        Cubic FPUT coefficient (1/m^2).
+
+    Notes
+    -----
+    ``energy`` is :math:`\sum_i m_i v_i^2/2 + \sum_j V_j(r_j)` (J), conserved.
+    For free and periodic ends the momentum :math:`\sum_i m_i v_i` (kg m/s)
+    is conserved too.  For :func:`mechpy.solve_many` with per-trajectory
+    parameters, build the rows with :meth:`ensemble_params`.
+
+    Examples
+    --------
+    >>> import numpy as np, mechpy as mp
+    >>> ch = mp.scenes.SpringChain(np.ones(8), 1.0)            # fixed ends
+    >>> md = ch.modes()
+    >>> y0 = ch.initial_state(md.vectors[:, 0])                # the lowest mode
+    >>> sol = mp.solve(ch, (0, 10), y0, method="dop853", rtol=1e-12, atol=1e-12)
+    >>> bool(np.allclose(sol.y[:8, -1], md.evolve(y0[:8], y0[8:], 10.0)))
+    True
+    """
+
+    _model = "SpringChain"
+
+    def __init__(self, masses, springs=1.0, ends: str = "fixed", alpha: float = 0.0,
+                 beta: float = 0.0):
+        if not isinstance(ends, str) or ends not in _CHAIN_ENDS:
+            raise ValueError(f"ends must be one of {tuple(_CHAIN_ENDS)}, got {ends!r}")
+        m = as_array(masses, "masses", allow_empty=True)
+        if m.ndim != 1:
+            raise ValueError(f"masses must be a 1-D array (one mass per site), got shape {m.shape}")
+        if m.size < 1:
+            raise ValueError("a SpringChain needs at least one mass (N >= 1)")
+        if not np.all(m > 0):
+            raise ValueError(f"masses must be positive, got min {m.min()!r}")
+        N = m.size
+        k = _chain_springs(springs, N, ends)
+        self._params = dict(masses=m, springs=k, ends=ends,
+                            alpha=as_scalar(alpha, "alpha"), beta=as_scalar(beta, "beta"))
+        self._dim = 2 * N
+        self._vec = np.concatenate([[N, _CHAIN_ENDS[ends], self._params["alpha"],
+                                     self._params["beta"]], m, k])
+        self._modes = None
+
+    @classmethod
+    def uniform(cls, N: int, mass: float = 1.0, spring: float = 1.0, ends: str = "fixed",
+                alpha: float = 0.0, beta: float = 0.0) -> "SpringChain":
+        """A chain of N equal masses (kg) and equal springs (N/m)."""
+        from ._validate import as_int
+        N = as_int(N, "N", minimum=1)
+        m = as_scalar(mass, "mass", positive=True)
+        return cls(np.full(N, m), spring, ends, alpha, beta)
+
+    # -- parameters ----------------------------------------------------------
+    @property
+    def N(self) -> int:
+        """Number of masses."""
+        return self._dim // 2
+
+    @property
+    def nonlinear(self) -> bool:
+        """Whether the FPUT terms are on (alpha or beta non-zero)."""
+        return self._params["alpha"] != 0.0 or self._params["beta"] != 0.0
+
+    @property
+    def params(self) -> dict:
+        """``masses``, ``springs`` (copies), ``ends``, ``alpha``, ``beta``."""
+        p = dict(self._params)
+        p["masses"] = p["masses"].copy()
+        p["springs"] = p["springs"].copy()
+        return p
+
+    def _vector(self) -> np.ndarray:
+        return self._vec
+
+    def replace(self, **changes) -> "SpringChain":
+        """A copy with some parameters changed (``masses``, ``springs``,
+        ``ends``, ``alpha``, ``beta``)."""
+        p = self.params
+        unknown = set(changes) - set(p)
+        if unknown:
+            raise TypeError(f"SpringChain got unknown parameter(s) {sorted(unknown)}; "
+                            f"parameters are {list(p)}")
+        p.update(changes)
+        return SpringChain(**p)
+
+    def ensemble_params(self, k: int | None = None, **columns) -> np.ndarray:
+        """Rows of parameters for :func:`mechpy.solve_many`, one per trajectory.
+
+        Each keyword (``masses``, ``springs``, ``alpha``, ``beta``) gives
+        either one value for all rows or one per row (a leading axis of
+        length k: ``alpha`` of shape (k,), ``masses`` of shape (k, N), ...);
+        the others are this chain's.  N and ``ends`` are shared by all rows.
+
+        Returns
+        -------
+        ndarray (k, 4 + N + n_springs)
+            Pass as ``params=`` with this chain as the system.
+        """
+        from ._validate import as_int
+        allowed = ("masses", "springs", "alpha", "beta")
+        unknown = set(columns) - set(allowed)
+        if unknown:
+            raise ValueError(f"ensemble_params takes {allowed} (N and ends are shared), "
+                             f"got {sorted(unknown)}")
+        base = self._params
+        N, ns = self.N, base["springs"].size
+        width = {"masses": N, "springs": ns}
+        blocks = {}
+        for name in allowed:
+            v = as_array(columns.get(name, base[name]), name, allow_empty=True)
+            rows = None
+            if name in width:
+                w = width[name]
+                if v.ndim == 0 and name == "springs":
+                    v = np.full((1, w), float(v))
+                elif v.shape == (w,):
+                    v = v[None, :]
+                elif v.ndim == 2 and v.shape[1] == w:
+                    rows = v.shape[0]
+                else:
+                    raise ValueError(f"{name} must have shape ({w},) or (k, {w}), got {v.shape}")
+            elif v.ndim <= 1:
+                rows = v.shape[0] if v.ndim == 1 else None
+                v = v.reshape(-1, 1)
+            else:
+                raise ValueError(f"{name} must be a scalar or of shape (k,), got {v.shape}")
+            if rows is not None:
+                if k is not None and rows != k:
+                    raise ValueError(f"{name} has {rows} rows, expected {k} (one per trajectory)")
+                k = rows
+            blocks[name] = v
+        k = 1 if k is None else as_int(k, "k", minimum=1)
+        out = np.empty((k, 4 + N + ns))
+        out[:, 0] = N
+        out[:, 1] = _CHAIN_ENDS[base["ends"]]
+        out[:, 2:3] = blocks["alpha"]
+        out[:, 3:4] = blocks["beta"]
+        out[:, 4:4 + N] = blocks["masses"]
+        out[:, 4 + N:] = blocks["springs"]
+        if not np.all(out[:, 4:4 + N] > 0):
+            raise ValueError("masses must be positive")
+        if not np.all(out[:, 4 + N:] >= 0):
+            raise ValueError("springs must be non-negative")
+        return out
+
+    # -- states and the linear theory ------------------------------------------
+    def initial_state(self, x, v=None) -> np.ndarray:
+        """The state ``(x, v)`` from displacements x (N,) (m) and velocities
+        v (N,) (m/s, zero if None)."""
+        x = as_array(x, "x", shape=(self.N,))
+        v = np.zeros(self.N) if v is None else as_array(v, "v", shape=(self.N,))
+        return np.concatenate([x, v])
+
+    def matrices(self):
+        """The linearisation ``(K, M)``, as :func:`mechpy.modes.chain` gives it."""
+        from .modes import chain
+        p = self._params
+        return chain(self.N, ends=p["ends"], masses=p["masses"], springs=p["springs"])
+
+    def modes(self):
+        """Normal modes of the linearised chain,
+        ``mp.modes.normal_modes(*self.matrices())`` (exact motion by
+        ``Modes.evolve``; the FPUT terms are left out)."""
+        if self._modes is None:
+            from .modes import normal_modes
+            self._modes = normal_modes(*self.matrices())
+        return self._modes
+
+    def mode_energies(self, y) -> np.ndarray:
+        r"""Harmonic energy in each normal mode,
+        :math:`E_k = (\dot\eta_k^2 + \omega_k^2\eta_k^2)/2`, for states y of
+        shape (2N, ...) -> (N, ...) (J).  Constant for a linear chain; the
+        FPUT terms share energy among them."""
+        y = self._states(y)
+        q = np.moveaxis(y[:self.N], 0, -1)
+        v = np.moveaxis(y[self.N:], 0, -1)
+        return np.moveaxis(self.modes().energy(q, v), -1, 0)
+
+    def momentum(self, y):
+        """Total momentum :math:`\\sum_i m_i v_i` (kg m/s) of states (2N, ...)."""
+        y = self._states(y)
+        m = self._params["masses"].reshape((self.N,) + (1,) * (y.ndim - 1))
+        return np.sum(m * y[self.N:], axis=0)
+
+    def _states(self, y) -> np.ndarray:
+        y = as_array(y, "y", min_ndim=1)
+        if y.shape[0] != self._dim:
+            raise ValueError(f"y must have {self._dim} components along its first axis, "
+                             f"got shape {y.shape}")
+        return y
+
+    # -- identity ------------------------------------------------------------
+    def __repr__(self):
+        p = self._params
+        extra = f", alpha={p['alpha']!r}, beta={p['beta']!r}" if self.nonlinear else ""
+        return f"SpringChain(N={self.N}, ends={p['ends']!r}{extra})"
+
+    def __eq__(self, other):
+        return type(self) is type(other) and np.array_equal(self._vec, other._vec)
+
+    def __hash__(self):
+        return hash(("SpringChain", self._vec.tobytes()))
+
+    def __reduce__(self):
+        return (_rebuild, (type(self), self.params))
+
+
+__all__ += ["SpringChain"]

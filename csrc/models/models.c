@@ -7,10 +7,12 @@
 
 extern const mp_model mp_model_pendulum, mp_model_vanderpol, mp_model_duffing, mp_model_kepler,
     mp_model_r3b, mp_model_foucault, mp_model_rigid, mp_model_rigid_q, mp_model_heavy_top;
+extern const mp_model mp_model_chain;
 
 const mp_model *const mp_models[] = {
     &mp_model_pendulum, &mp_model_vanderpol, &mp_model_duffing, &mp_model_kepler, &mp_model_r3b,
-    &mp_model_foucault, &mp_model_rigid, &mp_model_rigid_q, &mp_model_heavy_top, NULL,
+    &mp_model_foucault, &mp_model_rigid, &mp_model_rigid_q, &mp_model_heavy_top,
+    &mp_model_chain, NULL,
 };
 
 const mp_model *mp_model_find(const char *name)
