@@ -1,4 +1,5 @@
-"""Tour: normal modes of a 1000-mass chain and its exact motion, beside SciPy."""
+"""Tour: normal modes of a 1000-mass chain, its exact and its integrated motion
+(SpringChain) beside SciPy, and the FPUT recurrence."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -62,6 +63,52 @@ def run(out: Path) -> None:
     line(f"chain N={N}: exact q(t), 51 times to t=50", f"max|q| {np.max(np.abs(q_ex)):.6f}",
          ref="odeint rtol 1e-10", err=err, t_mp=t_ev, t_ref=t_ode, ref_name="odeint")
     line("  energy drift of the exact motion", f"{drift:.1e}")
+
+    # the same chain integrated in time (SpringChain, a C scene) beside the exact motion
+    from scipy.integrate import solve_ivp
+
+    from ..integrate import solve
+    from ..scenes import SpringChain
+
+    sc = SpringChain.uniform(N, mass=m, spring=kappa)
+    y0 = sc.initial_state(q0, v0)
+
+    def rhs_ivp(_t, y):
+        r = np.diff(np.concatenate([[0.0], y[:N], [0.0]]))   # spring extensions
+        return np.concatenate([y[N:], kappa / m * np.diff(r)])
+
+    runs = {}
+    t_int = median_time(lambda: runs.__setitem__("mp", solve(
+        sc, (0.0, 50.0), y0, rtol=1e-10, atol=1e-12, t_eval=t)), repeat=3)
+    t_ivp = median_time(lambda: runs.__setitem__("sp", solve_ivp(
+        rhs_ivp, (0.0, 50.0), y0, method="DOP853", rtol=1e-10, atol=1e-12, t_eval=t)),
+        repeat=1, warmup=0)
+    err_mp = float(np.max(np.abs(runs["mp"].y[:N].T - q_ex)))
+    err_sp = float(np.max(np.abs(runs["sp"].y[:N].T - q_ex)))
+    line(f"SpringChain N={N}: dop853 rtol 1e-10 to t=50", f"solve_ivp err {err_sp:.1e}",
+         ref="exact modes", err=err_mp, t_mp=t_int, t_ref=t_ivp, ref_name="solve_ivp DOP853")
+    t_sy = median_time(lambda: runs.__setitem__("sy", solve(
+        sc, (0.0, 50.0), y0, method="yoshida4", h=0.05, t_eval=t)), repeat=3)
+    line("  symplectic yoshida4, h=0.05", "",
+         ref="exact modes", err=float(np.max(np.abs(runs["sy"].y[:N].T - q_ex))), t_mp=t_sy)
+
+    # FPUT: the alpha chain of Fermi, Pasta, Ulam and Tsingou shares mode 1's energy
+    # among the modes and gives it back (the recurrence, ~160 periods of mode 1)
+    nf = 32
+    fput = SpringChain.uniform(nf, alpha=0.25)
+    w1 = fput.modes().omega[0]
+    tf = np.linspace(0.0, 180 * 2 * np.pi / w1, 3601)
+    yf0 = fput.initial_state(np.sin(np.pi * np.arange(1, nf + 1) / (nf + 1)))
+    t_f = median_time(lambda: runs.__setitem__("fput", solve(
+        fput, (0.0, tf[-1]), yf0, method="yoshida4", h=0.1, t_eval=tf)), repeat=1)
+    Ef = fput.mode_energies(runs["fput"].y)
+    frac = Ef[0] / Ef.sum(axis=0)
+    late = tf * w1 / (2 * np.pi) > 100
+    k = int(np.argmax(np.where(late, frac, 0.0)))
+    line("FPUT alpha=1/4, N=32: mode-1 energy share",
+         f"min {frac.min():.2f}, back to {frac[k]:.3f} after {tf[k] * w1 / (2 * np.pi):.0f} "
+         "periods", ref="FPUT 1955: near-return after ~160 periods",
+         t_mp=t_f)
 
     # CO2: 5 zero modes, 4 vibrations
     co2 = linear_triatomic()
