@@ -103,23 +103,25 @@ static inline void chain_accel(const double *p, const double *x, double *acc, in
     }
 }
 
+/* (x, v)' = (v, a(x)); `nonlinear` is a constant in each bound rhs below */
+static inline void chain_rhs(const double *y, double *f, const double *p, int nonlinear)
+{
+    const size_t n = (size_t)p[CN];
+    memcpy(f, y + n, n * sizeof(double));
+    chain_accel(p, y, f + n, nonlinear);
+}
+
 static int chain_rhs_linear(double t, const double *y, double *f, void *d)
 {
-    const double *p = d;
-    const size_t n = (size_t)p[CN];
     (void)t;
-    memcpy(f, y + n, n * sizeof(double));
-    chain_accel(p, y, f + n, 0);
+    chain_rhs(y, f, d, 0);
     return MP_OK;
 }
 
 static int chain_rhs_fput(double t, const double *y, double *f, void *d)
 {
-    const double *p = d;
-    const size_t n = (size_t)p[CN];
     (void)t;
-    memcpy(f, y + n, n * sizeof(double));
-    chain_accel(p, y, f + n, 1);
+    chain_rhs(y, f, d, 1);
     return MP_OK;
 }
 
