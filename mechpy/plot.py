@@ -157,17 +157,120 @@ def trajectory3d(path, *, ax=None, **line_kw):
 
 def animate_field(system, xlim=(-2 * np.pi, 2 * np.pi), ylim=(-4.0, 4.0), *, particles=800,
                   frames=120, dt=0.03, trail=8, respawn=0.01, t=0.0, seed=0, path=None,
-                  interval=40):
-    """Particles advected through a 2-D field and fading, as fieldplay does.
+                  interval=40, param=None, values=None):
+    r"""Particles advected through a 2-D field and fading, as fieldplay does.
 
     Each frame moves every particle one RK4 step of ``dt`` through the field
-    (evaluated in C for scenes) and draws its last ``trail`` positions with
-    fading opacity; a fraction ``respawn`` of the particles, and any that leave
-    the window, restart at random places.  Returns a matplotlib
-    ``FuncAnimation``: in a notebook, ``IPython.display.HTML(anim.to_jshtml())``;
-    with ``path`` it is also written to a file (``.gif`` with Pillow, ``.html``
-    as a JavaScript animation).
+    :math:`\dot{\mathbf y} = \mathbf f(t, \mathbf y)` (evaluated in C for
+    scenes) and draws its last ``trail`` positions with fading opacity; a
+    fraction ``respawn`` of the particles, and any that leave the window,
+    restart at random places.
+
+    Parameters
+    ----------
+    system : Scene or callable f(t, y)
+        A two-dimensional system (state units on both axes).
+    xlim, ylim : (float, float)
+        The window in the state plane.
+    particles, frames, trail : int
+        Particles advected, frames drawn, positions kept per particle's trail.
+    dt : float
+        Time step per frame (time units of the system).
+    respawn : float
+        Fraction of the particles restarted at random at each frame.
+    t : float
+        Time at which the field is frozen (driven systems).
+    seed : int
+        Seed of the random particle positions (the animation is reproducible).
+    path : str or Path, optional
+        Also write the animation there: ``.html`` as a JavaScript animation,
+        otherwise a GIF (Pillow).
+    interval : int
+        Milliseconds between frames.
+    param : str, optional
+        The name of a parameter of the scene ``system`` (e.g. ``"mu"`` for
+        :class:`mechpy.scenes.VanDerPol`) to offer on a slider; needs
+        ipywidgets (``pip install mechpy[plot]``).
+    values : array_like, shape (m,), optional
+        The values the slider offers (required with ``param``).
+
+    Returns
+    -------
+    matplotlib.animation.FuncAnimation or ipywidgets.VBox
+        Without ``param``, the animation: in a notebook show it with
+        ``IPython.display.HTML(anim.to_jshtml())``.  With ``param``, a widget
+        (a slider over ``values`` above an output showing the JavaScript
+        animation of ``system.replace(param=value)``; each value is rendered
+        once, when first chosen).
+
+    Raises
+    ------
+    ImportError
+        ``param`` was given but ipywidgets is not installed.
+    ValueError
+        ``param`` is not a parameter of the scene, ``values`` is missing,
+        empty or not finite, or ``path`` is combined with ``param``.
+    TypeError
+        ``param`` was given for a system that is not a scene.
     """
+    if param is None:
+        if values is not None:
+            raise ValueError("values is given without param: name the scene parameter "
+                             "the slider should vary")
+        return _animate_field(system, xlim, ylim, particles=particles, frames=frames, dt=dt,
+                              trail=trail, respawn=respawn, t=t, seed=seed, path=path,
+                              interval=interval)
+    from .scenes import Scene
+    if not isinstance(param, str):
+        raise TypeError(f"param must be a parameter name (str), got {type(param).__name__}")
+    if not isinstance(system, Scene):
+        raise TypeError("animate_field(param=...) needs a scene (its parameters are varied), "
+                        f"got {type(system).__name__}")
+    if param not in system.params:
+        raise ValueError(f"{param!r} is not a parameter of {type(system).__name__}: "
+                         f"{list(system.params)}")
+    if values is None:
+        raise ValueError(f"animate_field(param={param!r}) needs values: the values the "
+                         "slider offers")
+    vals = as_array(values, "values", ndim=1)
+    if path is not None:
+        raise ValueError("path cannot be combined with param: write one file per value "
+                         "with animate_field(system.replace(...), path=...)")
+    scenes = [system.replace(**{param: float(v)}) for v in vals]  # bad values fail here
+    try:
+        import ipywidgets as widgets
+    except ImportError as exc:
+        raise ImportError("animate_field(param=...) draws a slider and needs ipywidgets: "
+                          "pip install ipywidgets (or mechpy[plot])") from exc
+    plt = _plt()
+    opts = dict(particles=particles, frames=frames, dt=dt, trail=trail, respawn=respawn, t=t,
+                seed=seed, path=None, interval=interval)
+    cache = {}
+
+    def render(i):
+        if i not in cache:
+            anim = _animate_field(scenes[i], xlim, ylim, **opts)
+            cache[i] = anim.to_jshtml()
+            plt.close(anim._fig)
+        return cache[i]
+
+    slider = widgets.SelectionSlider(options=[(f"{v:g}", i) for i, v in enumerate(vals)],
+                                     value=0, description=param, continuous_update=False)
+    out = widgets.Output()
+
+    def show(i):
+        out.outputs = ({"output_type": "display_data", "metadata": {},
+                        "data": {"text/html": render(i),
+                                 "text/plain": f"<{type(system).__name__} field, "
+                                               f"{param} = {vals[i]:g}>"}},)
+
+    slider.observe(lambda change: show(change["new"]), names="value")
+    show(0)
+    return widgets.VBox([slider, out])
+
+
+def _animate_field(system, xlim, ylim, *, particles, frames, dt, trail, respawn, t, seed, path,
+                   interval):
     plt = _plt()
     from matplotlib import animation
     from matplotlib.collections import LineCollection

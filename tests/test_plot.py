@@ -57,3 +57,55 @@ def test_animate_field_advects_particles(tmp_path):
     lc = anim._fig.axes[0].collections[0]
     assert len(lc.get_segments()) == 3 * 50  # (trail - 1) segments per particle
     plt.close("all")
+
+
+def test_animate_field_param_slider_renders_each_value():
+    widgets = pytest.importorskip("ipywidgets")
+    vdp = mp.scenes.VanDerPol()
+    w = mp.plot.animate_field(vdp, (-3, 3), (-3, 3), particles=20, frames=2, trail=3,
+                              param="mu", values=[0.5, 3.0])
+    assert isinstance(w, widgets.VBox)
+    slider, out = w.children
+    assert slider.description == "mu"
+    assert [label for label, _ in slider.options] == ["0.5", "3"]
+    first = out.outputs[0]["data"]
+    assert "<script" in first["text/html"] and "mu = 0.5" in first["text/plain"]
+    slider.value = 1                        # choosing another value re-renders
+    second = out.outputs[0]["data"]
+    assert "mu = 3" in second["text/plain"] and second["text/html"] != first["text/html"]
+    assert plt.get_fignums() == []          # the rendered figures are closed
+
+
+def test_animate_field_param_without_ipywidgets(monkeypatch):
+    import builtins
+    real_import = builtins.__import__
+
+    def no_ipywidgets(name, *args, **kw):
+        if name == "ipywidgets" or name.startswith("ipywidgets."):
+            raise ImportError("No module named 'ipywidgets'")
+        return real_import(name, *args, **kw)
+    monkeypatch.setattr(builtins, "__import__", no_ipywidgets)
+    with pytest.raises(ImportError, match="ipywidgets"):
+        mp.plot.animate_field(mp.scenes.VanDerPol(), param="mu", values=[1.0, 2.0])
+    # without param nothing needs ipywidgets
+    anim = mp.plot.animate_field(mp.scenes.VanDerPol(), particles=5, frames=1, trail=2)
+    assert len(anim._fig.axes[0].collections) == 1
+    plt.close("all")
+
+
+@pytest.mark.parametrize("kw, exc, match", [
+    (dict(param="nu", values=[1.0]), ValueError, r"'nu' is not a parameter of VanDerPol.*mu"),
+    (dict(param="mu"), ValueError, "needs values"),
+    (dict(param="mu", values=[]), ValueError, "values must not be empty"),
+    (dict(param="mu", values=[1.0, np.nan]), ValueError, "values"),
+    (dict(param="mu", values=[-1.0]), ValueError, "mu"),
+    (dict(values=[1.0, 2.0]), ValueError, "without param"),
+    (dict(param=3, values=[1.0]), TypeError, "param"),
+    (dict(param="mu", values=[1.0], path="x.html"), ValueError, "path"),
+])
+def test_animate_field_bad_param(kw, exc, match):
+    with pytest.raises(exc, match=match):
+        mp.plot.animate_field(mp.scenes.VanDerPol(), **kw)
+    with pytest.raises(TypeError, match="scene"):
+        mp.plot.animate_field(lambda t, y: y, param="mu", values=[1.0])
+    assert plt.get_fignums() == []

@@ -8,6 +8,7 @@ from scipy.integrate import solve_ivp
 
 import mechpy as mp
 from mechpy._timing import median_time
+from mechpy.benches.phase import _starts, _vdp
 from mechpy.tours import line
 
 TITLE = "Phase space: Van der Pol limit cycle, pendulum fixed points, chaos"
@@ -16,17 +17,32 @@ ORDER = 30
 
 def run(out: Path) -> None:
     vdp = mp.scenes.VanDerPol(1.0)
-    T, A = mp.phase.limit_cycle(vdp, [0.5, 0.0], tol=1e-10)
     ref = 6.6632868593231301897
-    line("Van der Pol mu=1 period", f"{T:.12f}", ref=f"{ref:.10f}", err=abs(T - ref))
+    T, A = mp.phase.limit_cycle(vdp, [0.5, 0.0], tol=1e-10)
+    Ts, _ = _scipy_cycle()
+    t_mp = median_time(lambda: mp.phase.limit_cycle(vdp, [0.5, 0.0], tol=1e-10), repeat=3)
+    t_sp = median_time(_scipy_cycle, repeat=3)
+    line("Van der Pol mu=1 period", f"{T:.12f}", ref=f"{ref:.10f}", err=abs(T - ref),
+         t_mp=t_mp, t_ref=t_sp)
+    line("  same with solve_ivp DOP853 + events", f"{Ts:.12f}", err=abs(Ts - ref))
     line("Van der Pol mu=1 amplitude", f"{A:.8f}", ref="2.00861986", err=abs(A - 2.00861986))
     fps = mp.phase.fixed_points(mp.scenes.Pendulum(), [(-7, 7), (-3, 3)])
     line("pendulum fixed points", ", ".join(f"{p.x[0]:+.4f} {p.kind}" for p in fps))
     X, Y = np.meshgrid(np.linspace(-3, 3, 200), np.linspace(-3, 3, 200))
     t_mp = median_time(lambda: mp.phase.vector_field(vdp, X, Y))
-    t_np = median_time(lambda: [vdp_py(0.0, np.array([x, y])) for x, y in
+    t_np = median_time(lambda: [_vdp(0.0, np.array([x, y])) for x, y in
                                 zip(X.ravel()[:4000], Y.ravel()[:4000])]) * 10
     line("200x200 Van der Pol field", "C", t_mp=t_mp, t_ref=t_np, ref_name="Python loop")
+    k, sub = 2500, 5
+    y0s, te = _starts(k), np.linspace(0.0, 20.0, 201)
+    t_mp = median_time(lambda: mp.solve_many(vdp, (0, 20), y0s, t_eval=te, rtol=1e-8,
+                                             atol=1e-10), repeat=3)
+    idx = np.linspace(0, k - 1, sub).astype(int)
+    t_sp = median_time(lambda: [solve_ivp(_vdp, (0, 20), y0s[i], method="DOP853", rtol=1e-8,
+                                          atol=1e-10, t_eval=te) for i in idx],
+                       repeat=1, warmup=0) * (k / sub)
+    line(f"{k} Van der Pol trajectories (201 samples)", "solve_many", t_mp=t_mp, t_ref=t_sp,
+         ref_name=f"solve_ivp loop ({sub} timed, scaled)")
     sc = mp.scenes.Pendulum(g=1, length=1, damping=0.5, drive_amplitude=1.5,
                             drive_frequency=2 / 3)
     lam = mp.phase.lyapunov(sc, [0.2, 0.0], 200.0, transient=50.0, method="neighbours")
@@ -46,5 +62,11 @@ def run(out: Path) -> None:
         pass
 
 
-def vdp_py(t, y, mu=1.0):
-    return [y[1], mu * (1 - y[0] ** 2) * y[1] - y[0]]
+def _scipy_cycle(t_end=60.0):
+    """The mu = 1 period and amplitude from solve_ivp: successive maxima of x."""
+    def xdot(t, y):
+        return y[1]
+    xdot.direction = -1
+    s = solve_ivp(_vdp, (0, t_end), [0.5, 0.0], method="DOP853", rtol=1e-12, atol=1e-14,
+                  events=xdot)
+    return float(np.diff(s.t_events[0][-2:])[0]), float(s.y_events[0][-1][0])
