@@ -7,6 +7,7 @@ arrays, ready to hand to the C core.
 """
 from __future__ import annotations
 
+import math
 import numbers
 import operator
 
@@ -45,11 +46,11 @@ def as_array(x, name: str, *, ndim=None, shape=None, min_ndim=None, finite=True,
             raise ValueError(f"{name} must have shape {want}, got {a.shape}")
     if not allow_empty and a.size == 0:
         raise ValueError(f"{name} must not be empty")
-    if finite and not np.all(np.isfinite(a)):
+    if finite and not np.isfinite(a).all():
         raise ValueError(f"{name} must be finite (it contains NaN or inf)")
-    if positive and not np.all(a > 0):
+    if positive and not (a > 0).all():
         raise ValueError(f"{name} must be positive")
-    if nonnegative and not np.all(a >= 0):
+    if nonnegative and not (a >= 0).all():
         raise ValueError(f"{name} must be non-negative")
     return a
 
@@ -57,13 +58,16 @@ def as_array(x, name: str, *, ndim=None, shape=None, min_ndim=None, finite=True,
 def as_scalar(x, name: str, *, positive=False, nonnegative=False, finite=True,
               lo=None, hi=None) -> float:
     """A real number, checked (bools are refused)."""
-    if isinstance(x, (bool, np.bool_)) or not isinstance(x, (numbers.Real, np.ndarray)):
-        raise TypeError(f"{name} must be a real number, got {type(x).__name__}")
-    if isinstance(x, np.ndarray):
-        if x.ndim != 0 or x.dtype.kind not in "iuf":
-            raise TypeError(f"{name} must be a real scalar, got an array of shape {x.shape}")
-    v = float(x)
-    if finite and not np.isfinite(v):
+    if type(x) is float or type(x) is int:  # the common case, without isinstance chains
+        v = float(x)
+    else:
+        if isinstance(x, (bool, np.bool_)) or not isinstance(x, (numbers.Real, np.ndarray)):
+            raise TypeError(f"{name} must be a real number, got {type(x).__name__}")
+        if isinstance(x, np.ndarray):
+            if x.ndim != 0 or x.dtype.kind not in "iuf":
+                raise TypeError(f"{name} must be a real scalar, got an array of shape {x.shape}")
+        v = float(x)
+    if finite and not math.isfinite(v):
         raise ValueError(f"{name} must be finite, got {v}")
     if positive and not v > 0:
         raise ValueError(f"{name} must be positive, got {v}")

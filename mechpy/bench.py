@@ -40,6 +40,86 @@ def _fmt(v, kind):
     return str(v)
 
 
+def _ratios(pairs):
+    """(min, median, count) of t_other / t_mechpy over the pairs."""
+    r = sorted(b / a for a, b in pairs if a > 0 and b > 0)
+    return (r[0], r[len(r) // 2], len(r)) if r else None
+
+
+def targets(rows) -> list[dict]:
+    """The overhead budget of the report, computed from the rows.
+
+    * C scene against ``solve_ivp`` (Python rhs) at equal final error: for each
+      SciPy run, the fastest C-scene run of the same problem whose error is no
+      larger (no interpolation, so the ratio is conservative);
+    * Python rhs through ``mp.solve`` against ``solve_ivp`` with the same
+      method and tolerance;
+    * C callback against numbalsoda with the same numba ``cfunc``, at equal
+      error as for the C scene;
+    * ``solve_many``: against the Python loop, and 2 threads against 1;
+    * fixed-step rk4 against a plain C loop (the time ratio, target <= 1.3).
+    """
+    def ok(r):
+        e = r.get("error")
+        return isinstance(e, float) and e > 0 and not math.isnan(e)
+
+    out = []
+    problems = list(dict.fromkeys(r["problem"] for r in rows))
+
+    def equal_error(mine, theirs, label, goal):
+        for p in problems:
+            ours = [r for r in rows if r["problem"] == p and r.get("path") == mine and ok(r)]
+            refs = [r for r in rows if r["problem"] == p and r.get("path") == theirs and ok(r)]
+            pairs = []
+            for q in refs:
+                fit = [r["time"] for r in ours if r["error"] <= q["error"]]
+                if fit:
+                    pairs.append((min(fit), q["time"]))
+            got = _ratios(pairs)
+            if got:
+                out.append(dict(target=label, problem=p, goal=goal, worst=got[0],
+                                median=got[1], n=got[2]))
+
+    equal_error("c-scene", "scipy", "C scene vs solve_ivp/odeint at equal error", ">= 100x")
+    equal_error("cfunc", "numbalsoda", "C callback vs numbalsoda at equal error", ">= 1x")
+    for p in problems:
+        py = [r for r in rows if r["problem"] == p and r.get("path") == "python"]
+        sc = {(r.get("method"), r.get("rtol")): r for r in rows
+              if r["problem"] == p and r.get("path") == "scipy"}
+        pairs = [(r["time"], sc[(r.get("method"), r.get("rtol"))]["time"]) for r in py
+                 if (r.get("method"), r.get("rtol")) in sc]
+        got = _ratios(pairs)
+        if got:
+            out.append(dict(target="Python rhs vs solve_ivp, same method and rtol", problem=p,
+                            goal=">= 5x", worst=got[0], median=got[1], n=got[2]))
+    by = {r.get("path"): r for r in rows if r.get("path")}
+    if "ensemble-1" in by and "ensemble-loop" in by:
+        best = min(by["ensemble-1"]["time"], by.get("ensemble-2", by["ensemble-1"])["time"])
+        v = by["ensemble-loop"]["time"] / best
+        out.append(dict(target="solve_many vs a Python loop of solve_ivp",
+                        problem=by["ensemble-1"]["problem"], goal=">= 1000x", worst=v,
+                        median=v, n=1))
+    if "ensemble-1" in by and "ensemble-2" in by:
+        v = by["ensemble-1"]["time"] / by["ensemble-2"]["time"]
+        out.append(dict(target="solve_many, 2 threads vs 1", problem=by["ensemble-1"]["problem"],
+                        goal=">= 1.7x", worst=v, median=v, n=1))
+    if "rk4" in by and "plain-c" in by:
+        v = by["rk4"]["time"] / by["plain-c"]["time"]
+        out.append(dict(target="fixed-step rk4: time / plain C loop", problem=by["rk4"]["problem"],
+                        goal="<= 1.3x", worst=v, median=v, n=1))
+    return out
+
+
+def _targets_md(tg) -> list[str]:
+    lines = ["\n## Overhead budget (ratios from this run)\n",
+             "| target | problem | goal | worst | median | pairs |",
+             "| --- | --- | --- | --- | --- | --- |"]
+    for t in tg:
+        lines.append(f"| {t['target']} | {t['problem']} | {t['goal']} | {t['worst']:.3g}x | "
+                     f"{t['median']:.3g}x | {t['n']} |")
+    return lines
+
+
 def write_report(rows, out: Path, header: str) -> None:
     out.mkdir(parents=True, exist_ok=True)
     keys = ["problem", "impl", "rtol", "error", "time", "nfev", "ratio"]
@@ -51,7 +131,10 @@ def write_report(rows, out: Path, header: str) -> None:
             w.writerow(r)
     with open(out / "bench.json", "w") as f:
         json.dump({"header": header, "rows": rows}, f, indent=1, default=float)
-    lines = [f"# mechpy benchmark\n\n{header}\n"]
+    tg = targets(rows)
+    with open(out / "targets.json", "w") as f:
+        json.dump({"header": header, "targets": tg}, f, indent=1)
+    lines = [f"# mechpy benchmark\n\n{header}\n"] + _targets_md(tg)
     problems = list(dict.fromkeys(r["problem"] for r in rows))
     for p in problems:
         pr = [r for r in rows if r["problem"] == p]
@@ -102,5 +185,6 @@ def main(quick: bool = False, out: Path = Path("bench-output")) -> int:
                   flush=True)
         rows += got
     write_report(rows, out, header)
+    print("\n".join(_targets_md(targets(rows))))
     print(f"\nwrote {out.resolve()}/bench.md, bench.csv, bench.json and wp_*.png")
     return 0

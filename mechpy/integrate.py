@@ -241,7 +241,10 @@ def _common(method, t_span, rtol, atol, n, h, first_step, max_step, max_steps):
     rtol = as_scalar(rtol, "rtol")
     if not rtol > 0:
         raise ValueError(f"rtol must be positive, got {rtol}")
-    atol_a = as_array(atol, "atol", nonnegative=True)
+    if type(atol) is float and math.isfinite(atol) and atol >= 0:  # the common case
+        atol_a = np.full(n, atol)
+    else:
+        atol_a = as_array(atol, "atol", nonnegative=True)
     if atol_a.ndim == 0 or atol_a.size == 1:
         atol_a = np.full(n, float(atol_a.reshape(-1)[0]))
     elif atol_a.shape != (n,):
@@ -400,6 +403,8 @@ def _ensemble_params(system, params, k):
     if isinstance(params, dict):
         if not isinstance(system, Scene):
             raise TypeError("params as a dict of names needs a scene")
+        if hasattr(system, "ensemble_params"):  # array-valued parameters (SpringChain)
+            return system.ensemble_params(k, **params)
         base = system.params
         unknown = set(params) - set(base)
         if unknown:

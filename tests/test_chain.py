@@ -392,3 +392,15 @@ def test_bad_input():
         with pytest.raises(mp.DomainError):
             mp._core.scene_eval("SpringChain", np.array(vec, float), "rhs", 0.0,
                                 np.zeros((1, 6)))
+
+
+def test_solve_many_params_dict_matches_single_solves():
+    chain = mp.scenes.SpringChain.uniform(6, 1.0, 1.0, "fixed")
+    alphas = np.array([0.0, 0.5, 1.0])
+    y0 = chain.initial_state(np.sin(np.pi * np.arange(1, 7) / 7))
+    te = np.linspace(0, 5, 6)
+    ens = mp.solve_many(chain, (0, 5), np.tile(y0, (3, 1)), params={"alpha": alphas},
+                        t_eval=te, rtol=1e-11, atol=1e-13)
+    for i, a in enumerate(alphas):
+        one = mp.solve(chain.replace(alpha=a), (0, 5), y0, t_eval=te, rtol=1e-11, atol=1e-13)
+        np.testing.assert_allclose(ens.y[i], one.y, rtol=0, atol=1e-12)

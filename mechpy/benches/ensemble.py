@@ -71,7 +71,8 @@ def run(quick: bool):
         fn = lambda th=th: mp.solve_many(p, (0, 10), y0s, t_eval=te, rtol=1e-8,  # noqa: E731
                                          threads=th)
         rows.append(dict(problem=name, impl=f"mechpy solve_many, {th} thread(s)",
-                         time=median_time(fn, repeat=5), error=float("nan")))
+                         path=f"ensemble-{th}", time=median_time(fn, repeat=5),
+                         error=float("nan")))
     sub = 20 if quick else 100
 
     def f(t, y):
@@ -82,7 +83,8 @@ def run(quick: bool):
             solve_ivp(f, (0, 10), y0s[i * (k // sub)], method="DOP853", rtol=1e-8,
                       t_eval=te)
     t_loop = median_time(loop, repeat=1, warmup=0) * (k / sub)
-    rows.append(dict(problem=name, impl="Python loop of scipy solve_ivp DOP853", time=t_loop,
+    rows.append(dict(problem=name, impl="Python loop of scipy solve_ivp DOP853",
+                     path="ensemble-loop", time=t_loop,
                      error=float("nan"),
                      note=f"{sub} trajectories timed, scaled to {k}"))
 
@@ -93,10 +95,12 @@ def run(quick: bool):
     name = f"rk4, h=1e-4, {nsteps} steps, pendulum (C scene)"
     fn = lambda: mp.solve(p, (0, T), [1.0, 0.0], method="rk4", h=h, t_eval=[T])  # noqa: E731
     ours = fn().y[:, -1]
-    rows.append(dict(problem=name, impl="mechpy solve rk4 (C scene)", time=median_time(fn),
+    rows.append(dict(problem=name, impl="mechpy solve rk4 (C scene)", path="rk4",
+                     time=median_time(fn),
                      error=float("nan")))
     if plain is not None:
-        rows.append(dict(problem=name, impl="plain C loop (cc -O2)", time=plain[0],
+        rows.append(dict(problem=name, impl="plain C loop (cc -O2)", path="plain-c",
+                         time=plain[0],
                          error=float(np.max(np.abs(plain[1] - ours))),
                          note="error = difference from mechpy's result"))
     return rows
