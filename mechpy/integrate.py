@@ -177,7 +177,7 @@ def _check_signature(sig: str):
                         "'void (double, double const *, double *, void *)'")
 
 
-def _system_spec(system, args):
+def _system_spec(system, args, method):
     from .scenes import Scene
     if isinstance(system, SecondOrder):
         c = _c_address(system.accel)
@@ -187,6 +187,10 @@ def _system_spec(system, args):
     if isinstance(system, Scene):
         if args:
             raise TypeError("args are not used with a scene: set its parameters instead")
+        # a scene may carry a C callback bound into its model (RigidBody's torque)
+        spec = getattr(system, "_spec", None)
+        if spec is not None:
+            return spec(method), system.dim
         return ("scene", system._model, system._vector()), system.dim
     c = _c_address(system)
     if c is not None:
@@ -351,7 +355,7 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
     args = _as_args(args)
     if jac is not None and not callable(jac):
         raise TypeError("jac must be callable")
-    spec, dim = _system_spec(system, args)
+    spec, dim = _system_spec(system, args, method)
     if dim is not None and dim != n:
         raise ValueError(f"y0 must have {dim} values for {type(system).__name__}, got {n}")
     evs, term, dirs = _events_spec(events)
@@ -474,7 +478,7 @@ def solve_many(system, t_span: Sequence[float], y0s, *, params=None, t_eval=None
         method, t_span, rtol, atol, n, h, first_step, max_step, max_steps)
     tev = np.array([tf]) if t_eval is None else _t_eval(t_eval, t0, tf)
     args = _as_args(args)
-    spec, dim = _system_spec(system, args)
+    spec, dim = _system_spec(system, args, method)
     if dim is not None and dim != n:
         raise ValueError(f"y0s must have {dim} columns for {type(system).__name__}, got {n}")
     par = _ensemble_params(system, params, k)

@@ -286,24 +286,90 @@ class RigidBody(Scene):
 
     State ``omega`` (3,) in rad/s, or ``(omega, q)`` (7,).  Parameters:
     ``moments`` (I1, I2, I3) principal moments (kg m^2), positive and obeying
-    the triangle inequality; ``torque`` a constant body-frame torque (N m) or
-    None.  ``energy`` is the rotational kinetic energy
+    the triangle inequality; ``torque`` the body-frame torque (N m): None, a
+    constant (3,), or a C function
+    ``void torque(double t, const double *y, double *tau, void *user_data)``
+    of the scene state y (omega, and q with orientation) writing tau (3,),
+    given as a ctypes function pointer, a ``scipy.LowLevelCallable`` or a
+    numba ``cfunc``; it runs in C with the GIL released (:func:`mechpy.solve`,
+    :func:`mechpy.solve_many`).  ``energy`` is the rotational kinetic energy
     :math:`T = \tfrac12\sum_i I_i\omega_i^2` (J).  The geometric methods
     ``"rigid:split"`` (order 2) and ``"rigid:split4"`` (order 4) of
-    :func:`mechpy.solve` keep |L| and |q| to round-off.
+    :func:`mechpy.solve` keep |L| and |q| to round-off; they take a constant
+    torque, not a callback.
     """
 
     _model = "RigidBody"
 
     def __init__(self, moments=(1.0, 2.0, 3.0), torque=None, orientation=False):
+        from .integrate import _c_address
         m = _moments(moments)
-        tau = np.zeros(3) if torque is None else as_array(torque, "torque", shape=(3,))
+        self._torque_fn = self._torque_c = None
+        if torque is None:
+            tau = np.zeros(3)
+        elif (c := _c_address(torque)) is not None:
+            self._torque_fn, self._torque_c, tau = torque, c, np.zeros(3)
+        elif callable(torque):
+            raise TypeError("torque must be a constant body-frame vector (3,) or a C function "
+                            "void torque(double t, const double *y, double *tau, void *user_data)"
+                            " (ctypes, scipy.LowLevelCallable or numba cfunc); for a torque "
+                            "written in Python, give mp.solve a Python right-hand side")
+        else:
+            tau = as_array(torque, "torque", shape=(3,))
         if not isinstance(orientation, (bool, np.bool_)):
             raise TypeError("orientation must be True or False")
         self._orientation = bool(orientation)
         self._has_torque = torque is not None
         self._model = "RigidBodyOriented" if orientation else "RigidBody"
         super().__init__(I1=m[0], I2=m[1], I3=m[2], tau1=tau[0], tau2=tau[1], tau3=tau[2])
+
+    def _spec(self, method: str) -> tuple:
+        """The system spec for _core: the scene, with the torque callback if any."""
+        spec = ("scene", self._model, self._vector())
+        if self._torque_c is None:
+            return spec
+        if method.startswith("rigid:"):
+            raise ValueError(f"method {method!r} needs a torque-free body or a constant torque; "
+                             "with a torque callback use a general method (dop853, rk4, "
+                             "radau, ...)")
+        return spec + (self._torque_c,)
+
+    def _callback_torque(self, t, y):
+        """The callback's torque at (t, y) for states y of shape (dim, m) -> (3, m)."""
+        import ctypes
+        dp = ctypes.POINTER(ctypes.c_double)
+        fn = ctypes.CFUNCTYPE(None, ctypes.c_double, dp, dp, ctypes.c_void_p)(self._torque_c[0])
+        out = np.zeros((y.shape[1], 3))
+        for k in range(y.shape[1]):
+            yk = np.ascontiguousarray(y[:, k])
+            fn(t, yk.ctypes.data_as(dp), out[k].ctypes.data_as(dp), self._torque_c[1])
+        return out.T
+
+    def rhs(self, t, y) -> np.ndarray:
+        f = super().rhs(t, y)
+        if self._torque_c is not None:
+            y = as_array(y, "y", min_ndim=1)
+            tau = self._callback_torque(as_scalar(t, "t"), y.reshape(self._dim, -1))
+            f[:3] += (tau / self.moments[:, None]).reshape((3,) + y.shape[1:])
+        return f
+
+    def jacobian(self, t, y) -> np.ndarray:
+        """df/dy, shape (dim, dim, ...); with a torque callback, the torque's
+        part by central differences (about 1e-10 relative)."""
+        J = super().jacobian(t, y)
+        if self._torque_c is None:
+            return J
+        y = as_array(y, "y", min_ndim=1)
+        flat = y.reshape(self._dim, -1)
+        t = as_scalar(t, "t")
+        dJ = np.empty((3, self._dim, flat.shape[1]))
+        for j in range(self._dim):
+            e = np.zeros((self._dim, 1))
+            e[j] = 1e-6 * np.maximum(1.0, np.abs(flat[j]))
+            d = self._callback_torque(t, flat + e) - self._callback_torque(t, flat - e)
+            dJ[:, j] = d / (2 * e[j]) / self.moments[:, None]
+        J[:3] += dJ.reshape((3, self._dim) + y.shape[1:])
+        return J
 
     @property
     def moments(self) -> np.ndarray:
@@ -314,8 +380,12 @@ class RigidBody(Scene):
     @property
     def params(self) -> dict:
         p = self._params
-        tau = (p["tau1"], p["tau2"], p["tau3"]) if self._has_torque else None
-        return dict(moments=tuple(self.moments), torque=tau, orientation=self._orientation)
+        if self._torque_fn is not None:
+            tau = self._torque_fn
+        else:
+            tau = (p["tau1"], p["tau2"], p["tau3"]) if self._has_torque else None
+        return dict(moments=tuple(float(x) for x in self.moments), torque=tau,
+                    orientation=self._orientation)
 
     def initial_state(self, omega, quat=None, *, atol: float = 1e-12) -> np.ndarray:
         """The state for body angular velocity ``omega`` (and, with
@@ -350,9 +420,12 @@ class RigidBody(Scene):
 
     def __hash__(self):
         p = self.params
-        return hash(("RigidBody", p["moments"], p["torque"], p["orientation"]))
+        tau = p["torque"] if self._torque_fn is None else id(self._torque_fn)
+        return hash(("RigidBody", p["moments"], tau, p["orientation"]))
 
     def __reduce__(self):
+        if self._torque_fn is not None:
+            raise TypeError("a RigidBody with a C torque callback cannot be pickled")
         return (_rebuild, (type(self), self.params))
 
 

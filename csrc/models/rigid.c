@@ -149,6 +149,34 @@ const mp_model mp_model_rigid = {"RigidBody", 3, 6, rigid_names, rigid_check, ri
 const mp_model mp_model_rigid_q = {"RigidBodyOriented", 7, 6, rigid_names, rigid_check,
                                    rigid_bind_q, rigid_energy};
 
+/* a torque callback: the free part, then tau / I (tau zeroed before the call) */
+static int rigid_rhs_cb(double t, const double *y, double *f, void *d)
+{
+    const mp_rigid_torque *tq = d;
+    double tau[3] = {0.0, 0.0, 0.0};
+    tq->fn(t, y, tau, tq->user_data);
+    euler_free(tq->params, y, f);
+    for (int i = 0; i < 3; i++) f[i] += tau[i] / tq->params[i];
+    return MP_OK;
+}
+
+static int rigid_rhs_cb_q(double t, const double *y, double *f, void *d)
+{
+    rigid_rhs_cb(t, y, f, d);
+    quat_rate(y, y + 3, f + 3);
+    return MP_OK;
+}
+
+int mp_rigid_bind_torque(const mp_model *m, const mp_rigid_torque *tq, mp_ode_problem *prob)
+{
+    if (m != &mp_model_rigid && m != &mp_model_rigid_q) return MP_EDOM;
+    m->bind(tq->params, prob);
+    prob->rhs = m == &mp_model_rigid ? rigid_rhs_cb : rigid_rhs_cb_q;
+    prob->jac = NULL;
+    prob->data = (void *)tq;
+    return MP_OK;
+}
+
 int mp_rigid_is_body(const mp_ode_problem *p)
 {
     if (p->rhs == mp_rigid_rhs_free || p->rhs == mp_rigid_rhs_torque) return p->n == 3 ? 1 : 0;

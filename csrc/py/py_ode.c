@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "models/models.h"
+#include "models/rigid.h"
 #include "ode/ensemble.h"
 #include "ode/ode.h"
 
@@ -143,7 +144,8 @@ static int c_rhs2(double t, const double *y, double *dydt, void *data)
 
 /* ---- a system described by the Python layer --------------------------------
  * ("scene", name, params) | ("python", fun, args) | ("cfunc", address, user_data)
- * and the second-order ("python2", accel, args) | ("cfunc2", address, user_data) */
+ * and the second-order ("python2", accel, args) | ("cfunc2", address, user_data);
+ * a RigidBody scene may carry a C torque: ("scene", name, params, (address, user_data)) */
 
 typedef struct {
     mp_ode_problem prob;
@@ -151,6 +153,7 @@ typedef struct {
     PyArrayObject *params;    /* scene parameters (owned) */
     py_fn fn;
     c_fn2 cfn;
+    mp_rigid_torque torque;   /* a scene's C torque callback (fn NULL: none) */
 } py_system;
 
 static int c_address(PyObject *a, PyObject *b, c_fn *out)
@@ -175,9 +178,14 @@ static void py_system_clear(py_system *s) { Py_CLEAR(s->params); }
 static int py_system_parse(PyObject *spec, size_t n, py_system *s)
 {
     const char *kind;
-    PyObject *a, *b;
+    PyObject *a, *b, *cb = NULL;
     memset(s, 0, sizeof *s);
-    if (!PyArg_ParseTuple(spec, "sOO", &kind, &a, &b)) return -1;
+    if (!PyArg_ParseTuple(spec, "sOO|O!", &kind, &a, &b, &PyTuple_Type, &cb)) return -1;
+    if (cb && (strcmp(kind, "scene") != 0 || PyTuple_GET_SIZE(cb) != 2)) {
+        PyErr_SetString(PyExc_ValueError, "a callback in a system spec needs a scene and "
+                                          "(address, user_data)");
+        return -1;
+    }
     s->prob.n = n;
     if (strcmp(kind, "scene") == 0) {
         const char *name = PyUnicode_AsUTF8(a);
@@ -201,6 +209,15 @@ static int py_system_parse(PyObject *spec, size_t n, py_system *s)
             return -1;
         }
         m->bind(PyArray_DATA(s->params), &s->prob);
+        if (cb) {
+            c_fn f;
+            if (c_address(PyTuple_GET_ITEM(cb, 0), PyTuple_GET_ITEM(cb, 1), &f) < 0) return -1;
+            s->torque = (mp_rigid_torque){PyArray_DATA(s->params), f.f, f.user_data};
+            if (mp_rigid_bind_torque(m, &s->torque, &s->prob) != MP_OK) {
+                PyErr_Format(PyExc_ValueError, "scene %s takes no C callback", m->name);
+                return -1;
+            }
+        }
     } else if (strcmp(kind, "python") == 0 || strcmp(kind, "python2") == 0) {
         int second = kind[6] == '2';
         if (!PyCallable_Check(a) || !PyTuple_Check(b)) {
@@ -466,6 +483,7 @@ static PyObject *py_ode_solve_many(PyObject *self, PyObject *args, PyObject *kw)
     mp_ode_problem *probs = NULL;
     py_fn *fns = NULL;
     c_fn *cfns = NULL;
+    mp_rigid_torque *torques = NULL;
     int *status = NULL;
     long *nfev = NULL;
     py_system sys;
@@ -517,6 +535,15 @@ static PyObject *py_ode_solve_many(PyObject *self, PyObject *args, PyObject *kw)
                 goto out;
             }
             mod->bind(row, &probs[i]);
+            if (sys.torque.fn) {
+                if (!torques && !(torques = PyMem_Calloc(k, sizeof *torques))) {
+                    PyErr_NoMemory();
+                    goto out;
+                }
+                torques[i] = sys.torque;
+                torques[i].params = row;
+                mp_rigid_bind_torque(mod, &torques[i], &probs[i]);
+            }
         }
     } else if (par && sys.holds_python) {
         /* a Python system gets its row as leading extra arguments */
@@ -598,6 +625,7 @@ out:
     PyMem_Free(tuples);
     PyMem_Free(fns);
     PyMem_Free(cfns);
+    PyMem_Free(torques);
     PyMem_Free(probs);
     PyMem_Free(status);
     PyMem_Free(nfev);
