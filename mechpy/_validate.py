@@ -23,18 +23,21 @@ def as_array(x, name: str, *, ndim=None, shape=None, min_ndim=None, finite=True,
     ``shape`` may contain ``None`` (any length) and ``-1`` entries are not
     used; ``ndim`` fixes the number of dimensions, ``min_ndim`` bounds it.
     """
-    if isinstance(x, (str, bytes)) or x is None:
-        raise TypeError(f"{name} must be a real numeric array, got {type(x).__name__}")
-    try:
-        a = np.asarray(x)
-    except Exception as exc:  # ragged sequences and the like
-        raise ValueError(f"{name} must be a rectangular numeric array ({exc})") from None
-    if a.dtype == object:
-        raise TypeError(f"{name} must be a real numeric array, got objects "
-                        "(a ragged or non-numeric sequence)")
-    if a.dtype.kind not in "biuf":
-        raise TypeError(f"{name} must be a real numeric array, got dtype {a.dtype}")
-    a = np.asarray(a, dtype=np.float64, order="C")  # keeps 0-d input 0-d
+    if type(x) is np.ndarray and x.dtype == np.float64 and x.flags.c_contiguous:
+        a = x  # already what the C core takes
+    else:
+        if isinstance(x, (str, bytes)) or x is None:
+            raise TypeError(f"{name} must be a real numeric array, got {type(x).__name__}")
+        try:
+            a = np.asarray(x)
+        except Exception as exc:  # ragged sequences and the like
+            raise ValueError(f"{name} must be a rectangular numeric array ({exc})") from None
+        if a.dtype == object:
+            raise TypeError(f"{name} must be a real numeric array, got objects "
+                            "(a ragged or non-numeric sequence)")
+        if a.dtype.kind not in "biuf":
+            raise TypeError(f"{name} must be a real numeric array, got dtype {a.dtype}")
+        a = np.asarray(a, dtype=np.float64, order="C")  # keeps 0-d input 0-d
     if ndim is not None and a.ndim != ndim:
         raise ValueError(f"{name} must have {ndim} dimension(s), got shape {a.shape}")
     if min_ndim is not None and a.ndim < min_ndim:
@@ -46,7 +49,8 @@ def as_array(x, name: str, *, ndim=None, shape=None, min_ndim=None, finite=True,
             raise ValueError(f"{name} must have shape {want}, got {a.shape}")
     if not allow_empty and a.size == 0:
         raise ValueError(f"{name} must not be empty")
-    if finite and not np.isfinite(a).all():
+    if finite and not (all(map(math.isfinite, a.flat)) if a.size <= 16
+                       else np.isfinite(a).all()):
         raise ValueError(f"{name} must be finite (it contains NaN or inf)")
     if positive and not (a > 0).all():
         raise ValueError(f"{name} must be positive")

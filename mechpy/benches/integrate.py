@@ -171,7 +171,7 @@ def run(quick: bool):
             yo = lambda: odeint(f, y0, [0, T], rtol=rtol, atol=atol, tfirst=True,  # noqa: E731
                                 mxstep=10**7)
             err = float(np.max(np.abs(yo()[-1] - ref)))
-            rows.append(dict(problem=pr["name"], impl="scipy odeint", path="scipy",
+            rows.append(dict(problem=pr["name"], impl="scipy odeint", path="odeint",
                              method="lsoda", rtol=rtol, error=err,
                              time=median_time(yo, repeat=5, budget=1.0)))
             if nbs is not None:
