@@ -166,9 +166,8 @@ def _plots(rows, problems, out: Path) -> None:
         impls = list(dict.fromkeys(r["impl"] for r in pr))
         if not pr or all(sum(r["impl"] == i for r in pr) < 2 for i in impls):
             continue  # a plot needs a curve: one implementation at two tolerances at least
-        fig, ax = plt.subplots(figsize=(6.5, 4.5))
+        fig, ax = plt.subplots(figsize=(9.5, 4.5), layout="constrained")
         work_precision(pr, p, ax=ax)
-        fig.tight_layout()
         safe = "".join(c if c.isalnum() else "_" for c in p).strip("_").lower()
         fig.savefig(out / f"wp_{safe}.png", dpi=110)
         plt.close(fig)

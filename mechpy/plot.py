@@ -101,15 +101,22 @@ def work_precision(rows, problem=None, *, ax=None):
     if not pr:
         raise ValueError(f"no rows with a positive error for problem {problem!r}")
     if ax is None:
-        _, ax = plt.subplots(figsize=(6.5, 4.5))
-    for impl in dict.fromkeys(r["impl"] for r in pr):
-        pts = sorted((r["time"], r["error"]) for r in pr if r["impl"] == impl)
-        ax.loglog([a for a, _ in pts], [b for _, b in pts], "o-", label=impl, ms=3)
+        _, ax = plt.subplots(figsize=(9.5, 4.5), layout="constrained")
+    impls = list(dict.fromkeys(r["impl"] for r in pr))
+    colors = plt.get_cmap("tab20" if len(impls) > 10 else "tab10")
+    for i, impl in enumerate(impls):
+        # along the tolerance sweep (by rtol where given), so noise cannot zig-zag the line
+        pts = sorted(((-(r.get("rtol") or 0.0), r["time"], r["error"]) for r in pr
+                      if r["impl"] == impl), key=lambda p: (p[0], -p[2]))
+        style = ("o-" if impl.startswith("mechpy") else
+                 "s--" if impl.startswith("scipy") else "^:")
+        ax.loglog([p[1] for p in pts], [p[2] for p in pts], style, label=impl, ms=3.5,
+                  color=colors(i % colors.N), lw=1.6 if impl.startswith("mechpy") else 1.1)
     ax.set_xlabel("median wall time [s]")
     ax.set_ylabel("error at final time")
     ax.set_title(problem)
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=7)
+    ax.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5))
     return ax
 
 

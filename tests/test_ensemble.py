@@ -105,6 +105,24 @@ def test_inputs_pickle_for_distributed_sweeps():
     assert e.success.all()
 
 
+def _final_angles(scene, amplitudes):
+    y0s = np.column_stack([amplitudes, np.zeros_like(amplitudes)])
+    return mp.solve_many(scene, (0.0, 5.0), y0s, t_eval=[5.0], threads=1).y[:, 0, -1]
+
+
+def test_sweep_spread_over_a_process_pool_matches_one_process():
+    # the README's distributed sweep, with the standard library's pool: the
+    # scene and the chunks travel by pickle and each worker runs its own ensemble
+    import concurrent.futures as cf
+    import multiprocessing as mpc
+    scene = P.replace(damping=0.1)
+    chunks = np.array_split(np.linspace(0.1, 3.0, 40), 4)
+    with cf.ProcessPoolExecutor(2, mp_context=mpc.get_context("fork")) as pool:
+        got = np.concatenate(list(pool.map(_final_angles, [scene] * 4, chunks)))
+    want = _final_angles(scene, np.concatenate(chunks))
+    np.testing.assert_array_equal(got, want)
+
+
 def test_bad_input():
     with pytest.raises(ValueError, match="y0s"):
         mp.solve_many(P, (0, 1), [1.0, 0.0])
