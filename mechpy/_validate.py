@@ -62,7 +62,10 @@ def as_scalar(x, name: str, *, positive=False, nonnegative=False, finite=True,
     if isinstance(x, np.ndarray):
         if x.ndim != 0 or x.dtype.kind not in "iuf":
             raise TypeError(f"{name} must be a real scalar, got an array of shape {x.shape}")
-    v = float(x)
+    try:
+        v = float(x)
+    except OverflowError:  # a Python int beyond float64's range
+        raise ValueError(f"{name} must be finite, got an integer too large for float64") from None
     if finite and not np.isfinite(v):
         raise ValueError(f"{name} must be finite, got {v}")
     if positive and not v > 0:
