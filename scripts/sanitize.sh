@@ -45,4 +45,6 @@ export PYTHONMALLOC=malloc          # every allocation visible to ASan/LSan
 export PYTHONPATH="$PWD/$out${PYTHONPATH:+:$PYTHONPATH}"
 export PYTHONSAFEPATH=1           # no cwd on sys.path: the copy in build/asan is imported
 export MECHPY_SANITIZED=1
-exec "$py" -m pytest -q -p no:cacheprovider "$@"
+# The notebooks run in Jupyter kernels (a third interpreter each, slow under ASan)
+# and call the same C paths as the tests: they run in the normal pass only.
+exec "$py" -m pytest -q -p no:cacheprovider --ignore=tests/test_notebooks.py "$@"
