@@ -645,5 +645,40 @@ def test_fuzz(group, tmp_path):
     print(f"\n{group}: " + ", ".join(f"{k} {v}" for k, v in sorted(counts.items())))
 
 
+# --------------------------------------------------------------------------- #
+# Regressions: the bugs the fuzzing found, each pinned by its failing example
+# --------------------------------------------------------------------------- #
+
+def test_huge_python_int_is_a_value_error():
+    import mechpy as mp  # was OverflowError from float(10**400) in as_scalar
+    with pytest.raises(ValueError, match="mass"):
+        mp.inertia.solid("sphere", 10 ** 400, radius=1.0)
+    with pytest.raises(ValueError, match="mass"):
+        mp.modes.chain(3, mass=10 ** 400)
+
+
+def test_solid_overflow_is_a_value_error():
+    import mechpy as mp  # was OverflowError from M * side**2 in Python floats
+    with pytest.raises(ValueError, match="overflows"):
+        mp.inertia.solid("cube", 1e300, side=1e300)
+    assert mp.inertia.solid("cube", 6.0, side=1.0).inertia[0, 0] == 1.0  # M s^2 / 6
+
+
+def test_dispersion_at_q0_with_tiny_mass_is_zero():
+    import mechpy as mp  # was sqrt(k/m) = inf times sin(0) = NaN
+    w = mp.modes.dispersion(5e-324, 1.0, 1.0, [0.0, 0.5])
+    assert w[0] == 0.0 and np.isfinite(w[1])
+    assert w[1] == pytest.approx(2 * math.sin(0.25) / math.sqrt(5e-324), rel=1e-12)
+
+
+def test_brachistochrone_exact_cycloid_for_a_shallow_drop():
+    import mechpy as mp  # th rounds to 2 pi: a = Y / (1 - cos th) was inf, y_exact NaN
+    r = mp.variational.brachistochrone(1.0, 1.8e-191, n=4, max_iter=1)
+    assert np.all(np.isfinite(r.y_exact)) and np.isfinite(r.time_exact)
+    # x_end = a (th - sin th) with th -> 2 pi: a -> x_end / (2 pi)
+    assert r.radius == pytest.approx(1.0 / (2 * math.pi), rel=1e-12)
+    assert r.time_exact == pytest.approx(2 * math.pi * math.sqrt(r.radius / 9.81), rel=1e-12)
+
+
 if __name__ == "__main__":
     sys.exit(main(sys.argv[1:]))
