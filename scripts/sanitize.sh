@@ -38,7 +38,7 @@ libasan=$(gcc -print-file-name=libasan.so)
 # (C++ extensions such as matplotlib's ft2font throw during import).
 libstdcxx=$(gcc -print-file-name=libstdc++.so)
 export LD_PRELOAD="$libasan${libstdcxx:+ $libstdcxx}"
-export ASAN_OPTIONS="detect_leaks=1:fast_unwind_on_malloc=0:leak_check_at_exit=0:abort_on_error=1:halt_on_error=1:detect_stack_use_after_return=0:allocator_may_return_null=1:${ASAN_OPTIONS:-}"
+export ASAN_OPTIONS="detect_leaks=1:leak_check_at_exit=0:abort_on_error=1:halt_on_error=1:detect_stack_use_after_return=0:allocator_may_return_null=1:${ASAN_OPTIONS:-}"
 export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1:${UBSAN_OPTIONS:-}"
 export LSAN_OPTIONS="suppressions=$PWD/scripts/lsan.supp:print_suppressions=0:${LSAN_OPTIONS:-}"
 export PYTHONMALLOC=malloc          # every allocation visible to ASan/LSan

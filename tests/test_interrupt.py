@@ -74,3 +74,17 @@ def test_sigint_raises_keyboard_interrupt_promptly(name, tmp_path):
     assert float(dt) < 1.0, f"{name}: KeyboardInterrupt {dt} s after SIGINT"
     assert same == "True", f"{name}: a solve after the interrupt differs from before it"
     assert "LEAKS" not in out, r.stderr[-3000:]
+
+
+class _InterruptedFloat:
+    def __float__(self):
+        raise KeyboardInterrupt
+
+
+def test_interrupt_while_converting_the_rhs_result_is_kept():
+    """Regression: a KeyboardInterrupt raised while the binding converts the
+    value a Python right-hand side returned was replaced by TypeError."""
+    with pytest.raises(KeyboardInterrupt):
+        mechpy.solve(lambda t, y: [_InterruptedFloat()], (0, 1), [1.0])
+    with pytest.raises(TypeError, match="fun must return real numbers"):
+        mechpy.solve(lambda t, y: ["x"], (0, 1), [1.0])
