@@ -46,10 +46,14 @@ inc, libdirs, libs = _flags()
 extra = ["-std=c11", "-O2", "-pthread", "-Wall", "-Wextra", "-Wno-missing-field-initializers",
          "-Wno-cast-function-type"]
 if os.environ.get("MECHPY_SANITIZE"):
-    extra += ["-fsanitize=address,undefined", "-fno-omit-frame-pointer", "-O1", "-g"]
+    # undefined behaviour aborts (no recovery), as does a double -> integer cast
+    # out of range (not part of gcc's -fsanitize=undefined)
+    extra += ["-fsanitize=address,undefined,float-cast-overflow",
+              "-fno-sanitize-recover=undefined,float-cast-overflow",
+              "-fno-omit-frame-pointer", "-O1", "-g"]
 link_extra = ["-pthread"]
 if os.environ.get("MECHPY_SANITIZE"):
-    link_extra += ["-fsanitize=address,undefined"]
+    link_extra += ["-fsanitize=address,undefined,float-cast-overflow"]
 
 setup(
     ext_modules=[

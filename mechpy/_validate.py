@@ -62,15 +62,16 @@ def as_array(x, name: str, *, ndim=None, shape=None, min_ndim=None, finite=True,
 def as_scalar(x, name: str, *, positive=False, nonnegative=False, finite=True,
               lo=None, hi=None) -> float:
     """A real number, checked (bools are refused)."""
-    if type(x) is float or type(x) is int:  # the common case, without isinstance chains
-        v = float(x)
-    else:
+    if type(x) is not float:  # the common case skips the type checks
         if isinstance(x, (bool, np.bool_)) or not isinstance(x, (numbers.Real, np.ndarray)):
             raise TypeError(f"{name} must be a real number, got {type(x).__name__}")
         if isinstance(x, np.ndarray):
             if x.ndim != 0 or x.dtype.kind not in "iuf":
                 raise TypeError(f"{name} must be a real scalar, got an array of shape {x.shape}")
+    try:
         v = float(x)
+    except OverflowError:  # a Python int beyond float64's range
+        raise ValueError(f"{name} must be finite, got an integer too large for float64") from None
     if finite and not math.isfinite(v):
         raise ValueError(f"{name} must be finite, got {v}")
     if positive and not v > 0:

@@ -496,7 +496,11 @@ def solid(shape: str, mass, **dims) -> Body:
         raise TypeError(f"solid({shape!r}) needs the dimension(s) {missing}")
     M = as_scalar(mass, "mass", positive=True)
     vals = [as_scalar(dims[n], n, positive=True) for n in names]
-    diag, vol = fn(M, *vals)
+    with np.errstate(over="ignore", under="ignore"):  # float64 arithmetic: overflow is inf
+        diag, vol = fn(np.float64(M), *map(np.float64, vals))
+    if not (np.all(np.isfinite(diag)) and (vol is None or np.isfinite(vol))):
+        raise ValueError(f"solid({shape!r}): the inertia (mass x size^2) overflows float64; "
+                         "use smaller units")
     return Body(M, np.zeros(3), np.diag(np.asarray(diag, dtype=float)), vol)
 
 

@@ -460,7 +460,8 @@ def dispersion(mass, spring, spacing, q) -> np.ndarray:
     k = as_array(spring, "spring", nonnegative=True)
     a = as_array(spacing, "spacing", positive=True)
     q = as_array(q, "q", allow_empty=True)
-    return 2.0 * np.sqrt(k / m) * np.abs(np.sin(0.5 * q * a))
+    # sqrt(k) |sin| / sqrt(m): 0 at q = 0 even when k/m overflows (no inf * 0 = NaN)
+    return 2.0 * (np.sqrt(k) * np.abs(np.sin(0.5 * q * a))) / np.sqrt(m)
 
 
 def dispersion_diatomic(mass1, mass2, spring, spacing, q):

@@ -406,7 +406,9 @@ def brachistochrone(x_end: float, y_end: float, g: float = 9.81, n: int = 200, *
         raise ValueError(f"x_end must be > 0 (got {X}); mirror the problem for x_end < 0, "
                          "and x_end = 0 is a free fall")
     th = _cycloid_theta(X / Y)
-    a = Y / (1 - np.cos(th))
+    # a = Y / (1 - cos th) = X / (th - sin th): the second form stays finite when
+    # th rounds to 2 pi (a very shallow drop, X / Y beyond ~1e16)
+    a = X / float(_t_minus_sin(th)) if X >= Y else Y / (2 * np.sin(0.5 * th) ** 2)
     s = np.linspace(0.0, 1.0, n + 1)
     u0 = np.sqrt(Y) * s
     u, _, info = _solve(("brachistochrone", [X, g]), s, u0, tol=tol, max_iter=max_iter)
@@ -414,8 +416,8 @@ def brachistochrone(x_end: float, y_end: float, g: float = 9.81, n: int = 200, *
     y = u * u
     theta = _cycloid_theta_of_x(x, a, th)
     tc = np.linspace(0, th, 400)
-    return Brachistochrone(x, y, info["J"], a * (1 - np.cos(theta)), a * (tc - np.sin(tc)),
-                           a * (1 - np.cos(tc)), th * np.sqrt(a / g),
+    return Brachistochrone(x, y, info["J"], a * 2 * np.sin(0.5 * theta) ** 2, a * _t_minus_sin(tc),
+                           a * 2 * np.sin(0.5 * tc) ** 2, th * np.sqrt(a / g),
                            np.sqrt(2 * (X * X + Y * Y) / (g * Y)), a, th, info["iterations"])
 
 

@@ -2,7 +2,8 @@
 # Set up mechpy on this machine (once) and run one of its jobs.
 #
 #   bash scripts/dev.sh tour     # set up, then: python -m mechpy tour
-#   bash scripts/dev.sh test     # set up, then: the test suite
+#   bash scripts/dev.sh test     # set up, then: the test suite, then the suite again
+#                                #   against the ASan+UBSan build (scripts/sanitize.sh)
 #   bash scripts/dev.sh bench    # set up (with the bench extras), then: python -m mechpy bench
 #
 # Set-up installs what is missing and nothing twice: Debian's libgsl-dev,
@@ -61,6 +62,11 @@ fi
 case "$job" in
     tour)  exec "$vpy" -m mechpy tour "$@" ;;
     bench) exec "$vpy" -m mechpy bench "$@" ;;
-    test)  exec "$vpy" -m pytest -q "$@" ;;
+    test)  # the suite, then the same suite against the ASan+UBSan build
+           # (scripts/sanitize.sh; MECHPY_SANITIZE_SKIP=1 skips that second pass)
+           "$vpy" -m pytest -q "$@"
+           [ -n "${MECHPY_SANITIZE_SKIP:-}" ] && exit 0
+           say "the test suite again, under AddressSanitizer and UndefinedBehaviorSanitizer"
+           PYTHON="$vpy" exec bash scripts/sanitize.sh "$@" ;;
     *) say "unknown job '$job' (tour, test or bench)"; exit 2 ;;
 esac

@@ -52,8 +52,12 @@ static int py_call(const py_fn *c, double t, const double *y, double *out)
     PyArrayObject *ra = (PyArrayObject *)PyArray_FROM_OTF(res, NPY_DOUBLE, NPY_ARRAY_IN_ARRAY);
     Py_DECREF(res);
     if (!ra) {
-        PyErr_Clear();
-        PyErr_Format(PyExc_TypeError, "%s must return real numbers", c->name);
+        /* a conversion failure becomes a message naming the callback; anything
+         * else (KeyboardInterrupt during the conversion, MemoryError) is kept */
+        if (PyErr_ExceptionMatches(PyExc_TypeError) || PyErr_ExceptionMatches(PyExc_ValueError)) {
+            PyErr_Clear();
+            PyErr_Format(PyExc_TypeError, "%s must return real numbers", c->name);
+        }
         return MP_ECALLBACK;
     }
     if ((size_t)PyArray_SIZE(ra) != c->nout) {
