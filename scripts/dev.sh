@@ -19,6 +19,8 @@ say() { printf 'mechpy setup: %s\n' "$*"; }
 
 # 1. System libraries -------------------------------------------------------
 debs=(libgsl-dev libopenblas-dev pkg-config)
+# the bench compares with numbalsoda, built from source with a Fortran compiler
+[ "$job" = bench ] && debs+=(gfortran)
 missing=()
 if command -v dpkg-query >/dev/null 2>&1; then
     for p in "${debs[@]}"; do
@@ -54,6 +56,9 @@ if [ "$(cat .venv/.mechpy-stamp 2>/dev/null)" != "$stamp" ]; then
     say "installing mechpy[$extras] into .venv"
     "$vpy" -m pip install -q --upgrade pip >/dev/null
     "$vpy" -m pip install -q "setuptools>=64" wheel "numpy>=2.0"
+    # numbalsoda (bench extra) is built from source with its own build tools:
+    # install it with build isolation before mechpy's isolation-free install
+    [ "$job" = bench ] && "$vpy" -m pip install -q numbalsoda
     "$vpy" -m pip install -q --no-build-isolation -e ".[$extras]"
     echo "$stamp" > .venv/.mechpy-stamp
 fi

@@ -27,6 +27,9 @@ import pytest
 import mechpy as mp
 from mechpy import _core
 
+# the calls at gimbal lock are recorded on purpose: their warning is expected
+pytestmark = pytest.mark.filterwarnings("ignore::mechpy.rotation.GimbalLockWarning")
+
 SANITIZED = bool(os.environ.get("MECHPY_SANITIZED"))
 N_MAX = 1000 if SANITIZED else 100_000
 BUDGET = 0.4  # seconds of calls per entry beyond which fewer than N_MAX are made
