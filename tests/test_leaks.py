@@ -20,15 +20,13 @@ import gc
 import os
 import sys
 import time
+import warnings
 
 import numpy as np
 import pytest
 
 import mechpy as mp
 from mechpy import _core
-
-# the calls at gimbal lock are recorded on purpose: their warning is expected
-pytestmark = pytest.mark.filterwarnings("ignore::mechpy.rotation.GimbalLockWarning")
 
 SANITIZED = bool(os.environ.get("MECHPY_SANITIZED"))
 N_MAX = 1000 if SANITIZED else 100_000
@@ -148,7 +146,9 @@ def _record():
     return out, names
 
 
-CALLS, CORE_NAMES = _record()
+with warnings.catch_warnings():  # the calls at gimbal lock warn, on purpose
+    warnings.simplefilter("ignore", mp.rotation.GimbalLockWarning)
+    CALLS, CORE_NAMES = _record()
 
 
 def test_every_entry_point_is_covered():
