@@ -382,3 +382,19 @@ def test_callback_torque_bad_input():
     with pytest.raises(TypeError):
         import pickle
         pickle.dumps(RigidBody(I123, torque=_const_torque))
+
+
+def test_scene_evaluation_at_a_singular_state_raises_instead_of_returning_garbage():
+    # the top's Euler-angle equations are singular at theta = 0; its rhs reports
+    # it, and the evaluation must say so rather than hand back unwritten memory
+    top = mp.scenes.HeavyTop(1.0, 2.0, 1.0)
+    y = np.array([0.0, 0.0, 0.0, 1.0, 1.0, 1.0])
+    with pytest.raises(mp.errors.SingularityError, match="HeavyTop rhs"):
+        top.rhs(0.0, y)
+    with pytest.raises(mp.errors.SingularityError, match="HeavyTop jacobian"):
+        top.jacobian(0.0, y)
+    good = y.copy()
+    good[1] = 0.4
+    assert np.isfinite(top.rhs(0.0, np.stack([good, good], axis=1))).all()
+    with pytest.raises(mp.errors.NonFiniteError, match="Kepler rhs at state 1"):
+        mp.scenes.Kepler().rhs(0.0, np.array([[1.0, 0.0], [0.0, 0.0], [0.0, 1.0], [1.0, 0.0]]))

@@ -2,6 +2,8 @@
  * right-hand side, Jacobian and energy over many states. */
 #include "mp_py.h"
 
+#include <math.h>
+#include <stdio.h>
 #include <string.h>
 
 #include "models/models.h"
@@ -71,14 +73,34 @@ static PyObject *py_scene_eval(PyObject *self, PyObject *args)
     double *oo = PyArray_DATA(out);
     mp_ode_problem prob;
     m->bind(pp, &prob);
+    npy_intp per = kind == 2 ? 1 : kind == 1 ? d * d : d, bad = -1;
+    int rc = MP_OK;
     Py_BEGIN_ALLOW_THREADS
-    for (npy_intp i = 0; i < cnt; i++) {
+    for (npy_intp i = 0; i < cnt && bad < 0; i++) {
         const double *yi = yy + i * d;
-        if (kind == 0) prob.rhs(t, yi, oo + i * d, prob.data);
-        else if (kind == 1) prob.jac(t, yi, oo + i * d * d, prob.data);
-        else oo[i] = m->energy(pp, yi);
+        double *oi = oo + i * per;
+        if (kind == 0) rc = prob.rhs(t, yi, oi, prob.data);
+        else if (kind == 1) rc = prob.jac(t, yi, oi, prob.data);
+        else oi[0] = m->energy(pp, yi);
+        if (rc != MP_OK) {
+            bad = i;
+            break;
+        }
+        for (npy_intp j = 0; j < per; j++)
+            if (!isfinite(oi[j])) {
+                rc = MP_ENONFINITE;
+                bad = i;
+                break;
+            }
     }
     Py_END_ALLOW_THREADS
+    if (bad >= 0) { /* a singular state (Kepler at r = 0, the top at theta = 0) or overflow */
+        char ctx[112];
+        snprintf(ctx, sizeof ctx, "%s %s at state %zd (a singular point or overflow)", m->name,
+                 kind == 1 ? "jacobian" : what, (Py_ssize_t)bad);
+        mp_py_raise(rc, ctx);
+        Py_CLEAR(out);
+    }
 done:
     Py_XDECREF(p);
     Py_XDECREF(y);
