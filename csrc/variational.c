@@ -547,7 +547,8 @@ int mp_variational_solve(const mp_var_problem *pb, double *y, double *lambda, mp
 /* ---- the variational integrator ------------------------------------------------ */
 
 int mp_variational_integrate(const mp_var_integrand *L, double t0, double h, size_t nsteps,
-                             double q0, double p0, double *q, double *p)
+                             double q0, double p0, double *q, double *p,
+                             int (*interrupt)(void *), void *interrupt_ctx)
 {
     if (!L || !L->eval || !(h > 0) || !isfinite(h) || !isfinite(t0) || !isfinite(q0) ||
         !isfinite(p0))
@@ -558,6 +559,10 @@ int mp_variational_integrate(const mp_var_integrand *L, double t0, double h, siz
     double v = 0.0; /* last step's mean velocity: the predictor */
     int have_v = 0;
     for (size_t k = 0; k < nsteps; k++) {
+        if (interrupt && k % 4096 == 4095) {
+            int st = interrupt(interrupt_ctx);
+            if (st != MP_OK) return st;
+        }
         double t = t0 + ((double)k + 0.5) * h, qk = q[k], pk = p[k];
         double q1 = qk + (have_v ? v * h : 0.0);
         int done = 0;

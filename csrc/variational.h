@@ -89,8 +89,10 @@ int mp_variational_solve(const mp_var_problem *pb, double *y, double *lambda, mp
  * form: p_k = -D1 L_d(q_k, q_{k+1}) solved for q_{k+1} by Newton, then
  * p_{k+1} = D2 L_d(q_k, q_{k+1}).  The map (q_k, p_k) -> (q_{k+1}, p_{k+1})
  * is symplectic.  q and p receive nsteps + 1 values each (q[0] = q0,
- * p[0] = p0).  MP_ENOCONV if a step's Newton iteration fails. */
+ * p[0] = p0).  MP_ENOCONV if a step's Newton iteration fails; interrupt
+ * (may be NULL) is asked every 4096 steps, and its status ends the run. */
 int mp_variational_integrate(const mp_var_integrand *L, double t0, double h, size_t nsteps,
-                             double q0, double p0, double *q, double *p);
+                             double q0, double p0, double *q, double *p,
+                             int (*interrupt)(void *), void *interrupt_ctx);
 
 #endif

@@ -31,6 +31,8 @@ LONG = {
     "solve_many_python": lambda: mp.solve_many(lambda t, y: [y[1], -np.sin(y[0])], (0, 1e4),
                                                np.ones((1000, 2))),
     "geometric": lambda: mp.solve(P, (0, 1e9), [2.0, 0.0], method="yoshida6", h=1e-3),
+    "variational_integrate": lambda: mp.variational.variational_integrate(
+        P, (0, 2000.0), 1.0, 0.0, 1e-4),
     "variational_python": lambda: mp.variational.stationary_path(
         lambda q, qd, t=0.0: 0.5 * qd ** 2 + np.cos(q), 0.0, 1.0, 5.0, n=200000),
 }
@@ -57,7 +59,7 @@ if os.environ.get("MECHPY_SANITIZED"):  # the interrupted solve freed its memory
 '''
 
 NAMES = ["c_scene", "c_scene_radau", "c_scene_gsl", "python_rhs", "solve_many",
-         "solve_many_python", "geometric", "variational_python"]
+         "solve_many_python", "geometric", "variational_integrate", "variational_python"]
 
 
 @pytest.mark.parametrize("name", NAMES)

@@ -194,7 +194,8 @@ static PyObject *py_variational_integrate(PyObject *self, PyObject *args)
     int st;
     double *qq = PyArray_DATA(q), *pp = PyArray_DATA(p);
     Py_BEGIN_ALLOW_THREADS
-    st = mp_variational_integrate(&L.F, t0, h, (size_t)nsteps, q0, p0, qq, pp);
+    st = mp_variational_integrate(&L.F, t0, h, (size_t)nsteps, q0, p0, qq, pp,
+                                  mp_py_check_interrupt, NULL);
     Py_END_ALLOW_THREADS
     if (st != MP_OK) {
         Py_DECREF(q);
