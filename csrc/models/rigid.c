@@ -201,13 +201,30 @@ static int top_check(const double *p)
     return MP_OK;
 }
 
+/* The quantities the top's rhs and Jacobian share: sin and cos of theta,
+ * r = I3/I1, A = m g l / I1, the rates and the spin w3 = psi' + phi' cos(theta). */
+typedef struct {
+    double s, c, r, A, pd, td, w3;
+} top_terms;
+
+static int top_terms_of(const double *p, const double *y, top_terms *k)
+{
+    k->s = sin(y[1]);
+    k->c = cos(y[1]);
+    k->r = p[1] / p[0];
+    k->A = p[2] * p[3] * p[4] / p[0];
+    k->pd = y[3];
+    k->td = y[4];
+    k->w3 = y[5] + k->pd * k->c;
+    return k->s == 0.0 ? MP_ESINGULAR : MP_OK; /* Euler angles fail at theta = 0, pi */
+}
+
 static int top_rhs(double t, const double *y, double *f, void *d)
 {
-    const double *p = d;
     (void)t;
-    double s = sin(y[1]), c = cos(y[1]), r = p[1] / p[0], A = p[2] * p[3] * p[4] / p[0];
-    double pd = y[3], td = y[4], w3 = y[5] + pd * c;
-    if (s == 0.0) return MP_ESINGULAR;
+    top_terms k;
+    if (top_terms_of(d, y, &k) != MP_OK) return MP_ESINGULAR;
+    double s = k.s, c = k.c, r = k.r, A = k.A, pd = k.pd, td = k.td, w3 = k.w3;
     f[0] = pd;
     f[1] = td;
     f[2] = y[5];
@@ -219,11 +236,10 @@ static int top_rhs(double t, const double *y, double *f, void *d)
 
 static int top_jac(double t, const double *y, double *J, void *d)
 {
-    const double *p = d;
     (void)t;
-    double s = sin(y[1]), c = cos(y[1]), r = p[1] / p[0], A = p[2] * p[3] * p[4] / p[0];
-    double pd = y[3], td = y[4], w3 = y[5] + pd * c;
-    if (s == 0.0) return MP_ESINGULAR;
+    top_terms k;
+    if (top_terms_of(d, y, &k) != MP_OK) return MP_ESINGULAR;
+    double s = k.s, c = k.c, r = k.r, A = k.A, pd = k.pd, td = k.td, w3 = k.w3;
     for (int i = 0; i < 36; i++) J[i] = 0.0;
     J[0 * 6 + 3] = 1.0;
     J[1 * 6 + 4] = 1.0;

@@ -436,7 +436,8 @@ int mp_ode_solve(const mp_ode_method *m, const mp_ode_problem *p, double t0, dou
                 continue;
             }
             double fac11 = pow(err, cur->expo);
-            double fac = fac11 / pow(facold, cur->beta);
+            /* Lund stabilisation only for methods with beta > 0 (dopri5) */
+            double fac = cur->beta > 0.0 ? fac11 / pow(facold, cur->beta) : fac11;
             fac = fmax(1.0 / cur->fac_max, fmin(1.0 / cur->fac_min, fac / cur->safety));
             hnew = h / fac;
             facold = fmax(err, 1e-4);
