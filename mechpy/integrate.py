@@ -407,21 +407,7 @@ def _ensemble_params(system, params, k):
     if isinstance(params, dict):
         if not isinstance(system, Scene):
             raise TypeError("params as a dict of names needs a scene")
-        if hasattr(system, "ensemble_params"):  # array-valued parameters (SpringChain)
-            return system.ensemble_params(k, **params)
-        base = system.params
-        unknown = set(params) - set(base)
-        if unknown:
-            raise ValueError(f"unknown parameter(s) {sorted(unknown)}; the scene has "
-                             f"{list(base)}")
-        cols = []
-        for name, v in base.items():
-            col = as_array(params.get(name, v), f"params[{name!r}]", min_ndim=0)
-            cols.append(np.broadcast_to(col, (k,)) if col.ndim == 0 else col)
-        for name, c in zip(base, cols):
-            if c.shape != (k,):
-                raise ValueError(f"params[{name!r}] must have shape ({k},), got {c.shape}")
-        return np.ascontiguousarray(np.stack(cols, axis=1))
+        return system.ensemble_params(k, **params)
     p = as_array(params, "params", ndim=2)
     if p.shape[0] != k:
         raise ValueError(f"params must have {k} rows (one per trajectory), got {p.shape}")

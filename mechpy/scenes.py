@@ -67,6 +67,27 @@ class Scene:
     def _vector(self) -> np.ndarray:
         return np.array(list(self._params.values()), dtype=np.float64)
 
+    def ensemble_params(self, k: int, **columns) -> np.ndarray:
+        """Rows of parameters for :func:`mechpy.solve_many`, one per trajectory.
+
+        Each keyword names a parameter and gives one value per row (shape
+        (k,)) or one for all; the others keep this scene's values.  This is
+        what ``solve_many(scene, ..., params={name: values})`` uses.
+        """
+        base = self.params
+        unknown = set(columns) - set(base)
+        if unknown:
+            raise ValueError(f"unknown parameter(s) {sorted(unknown)}; the scene has "
+                             f"{list(base)}")
+        cols = []
+        for name, v in base.items():
+            col = as_array(columns.get(name, v), f"params[{name!r}]", min_ndim=0)
+            cols.append(np.broadcast_to(col, (k,)) if col.ndim == 0 else col)
+        for name, c in zip(base, cols):
+            if c.shape != (k,):
+                raise ValueError(f"params[{name!r}] must have shape ({k},), got {c.shape}")
+        return np.ascontiguousarray(np.stack(cols, axis=1))
+
     def _eval(self, what, t, y):
         y = as_array(y, "y", min_ndim=1)
         if y.shape[0] != self._dim:
