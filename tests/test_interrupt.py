@@ -37,6 +37,9 @@ LONG = {
         lambda q, qd, t=0.0: 0.5 * qd ** 2 + np.cos(q), 0.0, 1.0, 5.0, n=200000),
 }
 name = sys.argv[1]
+# a parent started in the background by a non-interactive shell passes SIGINT on
+# ignored, and Python then installs no handler: restore Python's own
+signal.signal(signal.SIGINT, signal.default_int_handler)
 check = lambda: mp.solve(P, (0, 5), [2.0, 0.0], rtol=1e-10).y
 before = check()
 sent = {}
