@@ -243,9 +243,9 @@ def test_variational_integrator_energy_bounded_and_symplectic():
     # symplectic: the (q, p) map over 200 steps has unit Jacobian determinant
     def flow(q0, p0):
         from mechpy import _core
-        q, pp = _core.variational_integrate(("pendulum", [G, 1.0, 0, 0, 0]), 0.0, h, 200, q0,
-                                            p0)
-        return np.array([q[-1], pp[-1]])
+        q, pp = _core.variational_integrate(("pendulum", [G, 1.0, 0, 0, 0]), 0.0, h, 200,
+                                            [q0], [p0], [0.0], 1e-12)
+        return np.array([q[-1, 0], pp[-1, 0]])
     z = np.array([1.0, 0.5])
     d = 1e-6
     Jm = np.column_stack([(flow(*(z + d * e)) - flow(*(z - d * e))) / (2 * d)
