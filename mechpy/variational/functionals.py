@@ -39,40 +39,39 @@ def _fd_spec(f: Callable, d: int) -> tuple:
     derivatives, second order for the mixed ones (exact for an F quadratic in
     its arguments).  All perturbed points go to ``f`` in one call."""
     nz = 2 * d
-    pairs = [(j, k) for j in range(nz) for k in range(j + 1, nz)]
-    P = 1 + 4 * nz + 4 * len(pairs)
+    pairs = np.array([(j, k) for j in range(nz) for k in range(j + 1, nz)],
+                     dtype=np.intp).reshape(-1, 2)
+    # the stencil: row 0 the point, then +-1, +-2 steps in each variable, then
+    # the four (+-1, +-1) corners of each pair
+    S = np.zeros((1 + 4 * nz + 4 * len(pairs), nz))
+    for j in range(nz):
+        S[1 + 4 * j: 5 + 4 * j, j] = (1, -1, 2, -2)
+    for i, (j, k) in enumerate(pairs):
+        rows = slice(1 + 4 * nz + 4 * i, 5 + 4 * nz + 4 * i)
+        S[rows, j] = (1, 1, -1, -1)
+        S[rows, k] = (1, -1, 1, -1)
+    P = S.shape[0]
+    single = 1 + 4 * np.arange(nz)            # rows of +1 in each variable
+    corner = 1 + 4 * nz + 4 * np.arange(len(pairs))
+    jj, kk = pairs[:, 0], pairs[:, 1]
 
     def cb(x, y, p):
         m = x.shape[0]
         z = np.concatenate([y, p], axis=1)                    # (m, 2d)
         dz = 1e-3 * (1.0 + np.abs(z))
-        Z = np.broadcast_to(z, (P, m, nz)).copy()
-        row = 1
-        for j in range(nz):
-            for s in (1, -1, 2, -2):
-                Z[row, :, j] += s * dz[:, j]
-                row += 1
-        for j, k in pairs:
-            for sj, sk in ((1, 1), (1, -1), (-1, 1), (-1, -1)):
-                Z[row, :, j] += sj * dz[:, j]
-                Z[row, :, k] += sk * dz[:, k]
-                row += 1
-        Zf = Z.reshape(P * m, nz)
+        Zf = (z[None] + S[:, None, :] * dz[None]).reshape(P * m, nz)
         vals = np.asarray(f(np.tile(x, P), Zf[:, :d], Zf[:, d:]), dtype=np.float64)
         V = np.broadcast_to(vals, (P * m,)).reshape(P, m)
-        f0 = V[0]
-        grad = np.empty((m, nz))
-        hess = np.empty((m, nz, nz))
-        for j in range(nz):
-            a, b, c, e = V[1 + 4 * j: 5 + 4 * j]
-            h = dz[:, j]
-            grad[:, j] = (8 * (a - b) - (c - e)) / (12 * h)
-            hess[:, j, j] = (16 * (a + b) - (c + e) - 30 * f0) / (12 * h * h)
-        base = 1 + 4 * nz
-        for i, (j, k) in enumerate(pairs):
-            pp, pm, mp_, mm = V[base + 4 * i: base + 4 * i + 4]
-            hess[:, j, k] = hess[:, k, j] = (pp - pm - mp_ + mm) / (4 * dz[:, j] * dz[:, k])
-        return np.concatenate([f0[:, None], grad, hess[:, :d, :d].reshape(m, -1),
+        f0, h = V[0], dz.T                                    # (m,), (nz, m)
+        a, b, c, e = V[single], V[single + 1], V[single + 2], V[single + 3]
+        hess = np.empty((nz, nz, m))
+        grad = (8 * (a - b) - (c - e)) / (12 * h)
+        hess[np.arange(nz), np.arange(nz)] = (16 * (a + b) - (c + e) - 30 * f0) / (12 * h * h)
+        mixed = (V[corner] - V[corner + 1] - V[corner + 2] + V[corner + 3]) / (4 * h[jj] * h[kk])
+        hess[jj, kk] = mixed
+        hess[kk, jj] = mixed
+        hess = np.moveaxis(hess, 2, 0)
+        return np.concatenate([f0[:, None], grad.T, hess[:, :d, :d].reshape(m, -1),
                                hess[:, :d, d:].reshape(m, -1),
                                hess[:, d:, d:].reshape(m, -1)], axis=1)
     return ("python", cb, d)
