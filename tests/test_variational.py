@@ -689,7 +689,7 @@ def test_double_pendulum_integrator_order_and_bounded_energy(clib):
     # 1.5e-5 J in the first tenth, 1.5e-4 J in the last)
     r = V.variational_integrate(dp, (0, 1000), q0, v0, 0.01)
     E = _dp_energy(r.q, r.qdot)
-    assert np.max(np.abs(r.energy - E)) < 1e-13 * np.max(np.abs(E))   # h = v.p - L is E
+    assert np.max(np.abs(r.energy - E)) < 5e-15 * np.max(np.abs(E))   # h = v.p - L is E: 1e-14 J
     dE = np.abs(E - E[0])
     k = len(E) // 10
     assert dE.max() < 4e-4 * abs(E[0])             # 4.0e-5 relative measured
