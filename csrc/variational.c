@@ -23,6 +23,13 @@ extern void dpbtrs_(const char *uplo, const int *n, const int *kd, const int *nr
                     const double *ab, const int *ldab, double *b, const int *ldb, int *info,
                     size_t uplo_len);
 
+/* max(a, b) for an accumulator a that is never NaN (a NaN b is skipped, as by
+ * fmax, which is a library call at -O2 and too slow in the inner loops). */
+static inline double var_max(double a, double b)
+{
+    return b > a ? b : a;
+}
+
 /* ---- built-in integrands --------------------------------------------------- */
 
 static const struct {
@@ -193,8 +200,8 @@ static int var_gauss(size_t k, double *A, double *b, double *pivmin, double *piv
         for (size_t r = c + 1; r < k; r++)
             if (fabs(A[r * k + c]) > fabs(A[piv * k + c])) piv = r;
         double a = fabs(A[piv * k + c]);
-        lo = fmin(lo, a);
-        hi = fmax(hi, a);
+        lo = a < lo ? a : lo;
+        hi = a > hi ? a : hi;
         if (!(a > 0) || !isfinite(a)) {
             if (pivmin) *pivmin = 0.0;
             if (pivmax) *pivmax = hi;
@@ -229,10 +236,11 @@ static int var_gauss(size_t k, double *A, double *b, double *pivmin, double *piv
     return MP_OK;
 }
 
+/* max |a_i| over k values (0 for k = 0). */
 static double var_maxabs(size_t k, const double *a)
 {
-    double m = 0.0;
-    for (size_t i = 0; i < k; i++) m = fmax(m, fabs(a[i]));
+    double m = 0.0; /* NaN entries are skipped, as by fmax (a call at -O2: too slow here) */
+    for (size_t i = 0; i < k; i++) m = fabs(a[i]) > m ? fabs(a[i]) : m;
     return m;
 }
 
@@ -243,8 +251,9 @@ static int var_vv_singular(size_t d, const double *o, double h, double sing_tol,
 {
     size_t dd = d * d;
     const double *Lqq = o + 1 + 2 * d, *Lqv = Lqq + dd, *Lvv = Lqv + dd;
-    double scale = fmax(var_maxabs(dd, Lvv),
-                        fmax(h * var_maxabs(dd, Lqv), h * h * var_maxabs(dd, Lqq)));
+    double scale = var_max(var_maxabs(dd, Lvv),
+                           var_max(h * var_maxabs(dd, Lqv), h * h * var_maxabs(dd, Lqq)));
+    if (d == 1) return !(fabs(Lvv[0]) > sing_tol * scale); /* the one pivot */
     memcpy(work, Lvv, dd * sizeof(double));
     double lo, hi;
     if (var_gauss(d, work, NULL, &lo, &hi) != MP_OK) return 1;
@@ -274,6 +283,7 @@ typedef struct {
     double *ytry, *ltry, *dy, *dl; /* (n + 1) d, nc, N, nc */
 } var_ws;
 
+/* Free a workspace (safe on a zeroed or partly allocated one). */
 static void var_ws_free(var_ws *w)
 {
     free(w->h);
@@ -384,7 +394,7 @@ static int var_assemble(const mp_var_problem *pb, var_ws *w, const double *y,
         }
         const double *Fy = w->loc + 1, *Fp = Fy + d, *A = Fp + d, *Bm = A + dd, *C = Bm + dd;
         for (size_t a = 0; a < d; a++) {
-            gscale = fmax(gscale, fabs(0.5 * h * Fy[a]) + fabs(Fp[a]));
+            gscale = var_max(gscale, fabs(0.5 * h * Fy[a]) + fabs(Fp[a]));
             if (left) w->g[ul + a] += 0.5 * h * Fy[a] - Fp[a];
             if (right) w->g[ur + a] += 0.5 * h * Fy[a] + Fp[a];
         }
@@ -440,7 +450,7 @@ static int var_step(const mp_var_problem *pb, var_ws *w, int minimise)
     double *r = w->rhs;
     if (minimise) {
         double shift = 0.0, scale = 0.0;
-        for (size_t j = 0; j < N; j++) scale = fmax(scale, fabs(w->H[j * ldh]));
+        for (size_t j = 0; j < N; j++) scale = var_max(scale, fabs(w->H[j * ldh]));
         for (int tries = 0;; tries++) {
             memcpy(w->AB, w->H, N * ldh * sizeof(double));
             for (size_t j = 0; j < N; j++) w->AB[j * ldh] += shift;
@@ -539,19 +549,19 @@ int mp_variational_solve(const mp_var_problem *pb, double *y, double *lambda, mp
         if (st != MP_OK) break;
         double ymax = 0.0, dmax = 0.0, lmax = 0.0, dlmax = 0.0, slope = 0.0;
         for (size_t j = 0; j < N; j++) {
-            ymax = fmax(ymax, fabs(y[d + j]));
-            dmax = fmax(dmax, fabs(w.dy[j]));
+            ymax = var_max(ymax, fabs(y[d + j]));
+            dmax = var_max(dmax, fabs(w.dy[j]));
             slope += w.g[j] * w.dy[j];
         }
         for (size_t k = 0; k < nc; k++) {
-            lmax = fmax(lmax, fabs(lambda[k]));
-            dlmax = fmax(dlmax, fabs(w.dl[k]));
+            lmax = var_max(lmax, fabs(lambda[k]));
+            dlmax = var_max(dlmax, fabs(w.dl[k]));
         }
         double gmax = 0.0, cmax = 0.0, vmax = 0.0;
-        for (size_t j = 0; j < N; j++) gmax = fmax(gmax, fabs(w.g[j]));
+        for (size_t j = 0; j < N; j++) gmax = var_max(gmax, fabs(w.g[j]));
         for (size_t k = 0; k < nc; k++) {
-            cmax = fmax(cmax, fabs(w.Gv[k] - pb->value[k]));
-            vmax = fmax(vmax, fabs(pb->value[k]));
+            cmax = var_max(cmax, fabs(w.Gv[k] - pb->value[k]));
+            vmax = var_max(vmax, fabs(pb->value[k]));
         }
         /* a residual at round-off level also ends the iteration (a nearly
            singular Hessian can keep the step from shrinking) */
@@ -610,8 +620,8 @@ int mp_variational_solve(const mp_var_problem *pb, double *y, double *lambda, mp
         info->iterations = it;
         info->J = w.J;
         double rmax = 0.0, cmax = 0.0;
-        for (size_t j = 0; j < N; j++) rmax = fmax(rmax, fabs(w.g[j]));
-        for (size_t k = 0; k < nc; k++) cmax = fmax(cmax, fabs(w.Gv[k] - pb->value[k]));
+        for (size_t j = 0; j < N; j++) rmax = var_max(rmax, fabs(w.g[j]));
+        for (size_t k = 0; k < nc; k++) cmax = var_max(cmax, fabs(w.Gv[k] - pb->value[k]));
         info->residual = rmax;
         info->constraint_error = cmax;
     }
@@ -693,7 +703,7 @@ int mp_variational_velocities(const mp_var_integrand *L, size_t m, const double 
             }
             double *vi = v + i * d;
             for (size_t a = 0; a < d; a++) vi[a] -= r[a];
-            worst = fmax(worst, var_maxabs(d, r) / (1.0 + var_maxabs(d, vi)));
+            worst = var_max(worst, var_maxabs(d, r) / (1.0 + var_maxabs(d, vi)));
         }
         if (st != MP_ENOCONV) break;
         if (worst <= 1e-11) {
