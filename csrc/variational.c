@@ -1,27 +1,14 @@
 /* Calculus of variations with d unknown functions: the discrete
  * Euler-Lagrange equations solved by Newton's method with a block-tridiagonal
- * (banded, LAPACK) Hessian; the variational integrator and the discrete
+ * (banded LU or Cholesky) Hessian; the variational integrator and the discrete
  * Legendre transform of the same discrete action.  See variational.h. */
 #include "variational.h"
 
-#include <limits.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "mp_status.h"
-
-/* LAPACK (Fortran calling convention, gfortran's hidden string lengths). */
-extern void dgbtrf_(const int *m, const int *n, const int *kl, const int *ku, double *ab,
-                    const int *ldab, int *ipiv, int *info);
-extern void dgbtrs_(const char *trans, const int *n, const int *kl, const int *ku,
-                    const int *nrhs, const double *ab, const int *ldab, const int *ipiv,
-                    double *b, const int *ldb, int *info, size_t trans_len);
-extern void dpbtrf_(const char *uplo, const int *n, const int *kd, double *ab, const int *ldab,
-                    int *info, size_t uplo_len);
-extern void dpbtrs_(const char *uplo, const int *n, const int *kd, const int *nrhs,
-                    const double *ab, const int *ldab, double *b, const int *ldb, int *info,
-                    size_t uplo_len);
 
 /* max(a, b) for an accumulator a that is never NaN (a NaN b is skipped, as by
  * fmax, which is a library call at -O2 and too slow in the inner loops). */
@@ -260,25 +247,132 @@ static int var_vv_singular(size_t d, const double *o, double h, double sing_tol,
     return !(lo > sing_tol * scale);
 }
 
+/* ---- band solvers (half-bandwidth kd, column-major band storage) --------------------- */
+
+/* LU with partial pivoting of the N x N band matrix with kl = ku = kd, stored
+ * as LAPACK's dgbtrf takes it: A[i][j] at ab[2kd + i - j + j ldab] with
+ * ldab >= 3kd + 1 and the top kd rows of the storage zero (room for the
+ * fill-in).  The factor overwrites ab, the row interchanges go to ipiv (the
+ * algorithm of LAPACK's dgbtf2, written out: no library call per column for
+ * the narrow bands here).  MP_ESINGULAR at a zero pivot. */
+static int var_band_lu(size_t N, size_t kd, double *ab, size_t ldab, size_t *ipiv)
+{
+    size_t kv = 2 * kd, ju = 0;
+    for (size_t j = 0; j < N; j++) {
+        size_t km = kd < N - 1 - j ? kd : N - 1 - j;
+        double *col = ab + kv + j * ldab; /* col[r] = A[j + r][j] */
+        size_t jp = 0;
+        for (size_t r = 1; r <= km; r++)
+            if (fabs(col[r]) > fabs(col[jp])) jp = r;
+        ipiv[j] = j + jp;
+        if (!(col[jp] != 0.0) || !isfinite(col[jp])) return MP_ESINGULAR;
+        size_t last = j + kd + jp < N - 1 ? j + kd + jp : N - 1;
+        ju = ju > last ? ju : last;
+        if (jp != 0)
+            for (size_t c = j; c <= ju; c++) {
+                double *x = ab + kv + j - c + c * ldab, *y = x + jp, t = *x;
+                *x = *y;
+                *y = t;
+            }
+        double inv = 1.0 / col[0];
+        for (size_t r = 1; r <= km; r++) col[r] *= inv;
+        for (size_t c = j + 1; c <= ju; c++) {
+            double *u = ab + kv + j - c + c * ldab, t = *u; /* u[r] = A[j + r][c] */
+            if (t != 0.0)
+                for (size_t r = 1; r <= km; r++) u[r] -= col[r] * t;
+        }
+    }
+    return MP_OK;
+}
+
+/* Solve A x = b in place with the factor of var_band_lu (nrhs columns of b,
+ * column-major, N rows each). */
+static void var_band_lu_solve(size_t N, size_t kd, const double *ab, size_t ldab,
+                              const size_t *ipiv, double *b, size_t nrhs)
+{
+    size_t kv = 2 * kd;
+    for (size_t c = 0; c < nrhs; c++) {
+        double *x = b + c * N;
+        for (size_t j = 0; j + 1 < N; j++) {
+            size_t lm = kd < N - 1 - j ? kd : N - 1 - j, l = ipiv[j];
+            if (l != j) {
+                double t = x[l];
+                x[l] = x[j];
+                x[j] = t;
+            }
+            const double *col = ab + kv + j * ldab;
+            for (size_t r = 1; r <= lm; r++) x[j + r] -= col[r] * x[j];
+        }
+        for (size_t j = N; j-- > 0;) {
+            const double *col = ab + kv + j * ldab; /* col[-k] = U[j - k][j] */
+            x[j] /= col[0];
+            size_t top = j > kv ? j - kv : 0;
+            for (size_t i = top; i < j; i++) x[i] -= col[(ptrdiff_t)i - (ptrdiff_t)j] * x[j];
+        }
+    }
+}
+
+/* Cholesky L L^T of the symmetric positive definite band matrix with its lower
+ * band in ab: A[i][j] at ab[i - j + j ldh] for 0 <= i - j <= kd; overwritten
+ * by L.  MP_ENOTSPD at a non-positive pivot. */
+static int var_band_cholesky(size_t N, size_t kd, double *ab, size_t ldh)
+{
+    for (size_t j = 0; j < N; j++) {
+        size_t k0 = j > kd ? j - kd : 0;
+        double s = ab[j * ldh];
+        for (size_t k = k0; k < j; k++) {
+            double l = ab[(j - k) + k * ldh];
+            s -= l * l;
+        }
+        if (!(s > 0) || !isfinite(s)) return MP_ENOTSPD;
+        double ljj = sqrt(s);
+        ab[j * ldh] = ljj;
+        size_t imax = j + kd < N - 1 ? j + kd : N - 1;
+        for (size_t i = j + 1; i <= imax; i++) {
+            double t = ab[(i - j) + j * ldh];
+            for (size_t k = i > kd ? i - kd : 0; k < j; k++)
+                t -= ab[(i - k) + k * ldh] * ab[(j - k) + k * ldh];
+            ab[(i - j) + j * ldh] = t / ljj;
+        }
+    }
+    return MP_OK;
+}
+
+/* Solve L L^T x = b in place with the factor of var_band_cholesky. */
+static void var_band_cholesky_solve(size_t N, size_t kd, const double *ab, size_t ldh, double *x)
+{
+    for (size_t i = 0; i < N; i++) {
+        double s = x[i];
+        for (size_t k = i > kd ? i - kd : 0; k < i; k++) s -= ab[(i - k) + k * ldh] * x[k];
+        x[i] = s / ab[i * ldh];
+    }
+    for (size_t i = N; i-- > 0;) {
+        double s = x[i];
+        size_t kmax = i + kd < N - 1 ? i + kd : N - 1;
+        for (size_t k = i + 1; k <= kmax; k++) s -= ab[(k - i) + i * ldh] * x[k];
+        x[i] = s / ab[i * ldh];
+    }
+}
+
 /* ---- the Newton solver -------------------------------------------------------- */
 
 typedef struct {
     size_t n, d, N, K, nc, kd; /* intervals, coordinates, unknowns, values, constraints,
                                   half-bandwidth 2d - 1 */
-    int ldh, ldab;             /* kd + 1 (symmetric lower band), 3 kd + 1 (LU band) */
+    size_t ldh, ldab;          /* kd + 1 (symmetric lower band), 3 kd + 1 (LU band) */
     double *h, *xm, *ym, *pm;  /* n, n, n d, n d */
     double *ev;                /* n K (F) */
     double *evg;               /* n K nc (constraints) */
     double *loc;               /* K: F + sum lambda_k G_k on one interval */
     double *g;                 /* N: gradient of Phi = J + sum lambda G */
     double *B;                 /* N nc: gradients of G_k (column-major) */
-    double *H;                 /* ldh N: Hessian of Phi, lower band (LAPACK 'L') */
+    double *H;                 /* ldh N: Hessian of Phi, lower band storage */
     double *AB;                /* ldab N: its factor */
     double *Gv;                /* nc: G_k values */
     double J;
     double gscale;             /* max over nodes of the summands' size in g (round-off scale) */
     double *rhs;               /* N (nc + 1) */
-    int *ipiv;                 /* N */
+    size_t *ipiv;              /* N */
     double *S, *sb;            /* nc nc, nc */
     double *ytry, *ltry, *dy, *dl; /* (n + 1) d, nc, N, nc */
 } var_ws;
@@ -297,7 +391,7 @@ static size_t var_mul(size_t a, size_t b)
 }
 
 /* Allocate the workspace of n intervals, d coordinates and nc constraints.
- * MP_ENOMEM on failure or when the sizes overflow LAPACK's int. */
+ * MP_ENOMEM on failure or when the sizes overflow size_t. */
 static int var_ws_alloc(var_ws *w, size_t n, size_t d, size_t nc)
 {
     memset(w, 0, sizeof *w);
@@ -308,17 +402,16 @@ static int var_ws_alloc(var_ws *w, size_t n, size_t d, size_t nc)
     w->nc = nc;
     w->kd = 2 * d - 1;
     size_t N = w->N, K = w->K, kd = w->kd;
-    if (d > 4096 || n > (size_t)INT_MAX || var_mul(N, 3 * kd + 1) == 0 ||
-        var_mul(N, 3 * kd + 1) > (size_t)INT_MAX || var_mul(N, nc + 1) > (size_t)INT_MAX ||
-        var_mul(var_mul(n, K), nc + 1) == 0)
+    if (d > 4096 || var_mul(N, 3 * kd + 1) == 0 || var_mul(N, nc + 1) == 0 ||
+        var_mul(var_mul(n, K), nc + 1) == 0 || var_mul(N, 4 * kd + 2 * nc + 8) == 0)
         return MP_ENOMEM;
-    w->ldh = (int)(kd + 1);
-    w->ldab = (int)(3 * kd + 1);
+    w->ldh = kd + 1;
+    w->ldab = 3 * kd + 1;
     size_t tot = 2 * n + 2 * n * d + n * K * (nc + 1) + K + N + N * nc + N * (kd + 1) +
                  N * (3 * kd + 1) + nc + N * (nc + 1) + nc * nc + nc + (n + 1) * d + nc + N +
                  nc;
     w->h = calloc(tot, sizeof(double));
-    w->ipiv = calloc(N, sizeof(int));
+    w->ipiv = calloc(N, sizeof(size_t));
     if (!w->h || !w->ipiv) {
         var_ws_free(w);
         return MP_ENOMEM;
@@ -348,7 +441,7 @@ static int var_ws_alloc(var_ws *w, size_t n, size_t d, size_t nc)
 /* H[r][c] += v for unknowns r >= c (the lower band). */
 static void var_hadd(var_ws *w, size_t r, size_t c, double v)
 {
-    w->H[(r - c) + c * (size_t)w->ldh] += v;
+    w->H[(r - c) + c * w->ldh] += v;
 }
 
 /* Evaluate J, G, the gradient of Phi and (if hess) its block-tridiagonal
@@ -371,7 +464,7 @@ static int var_assemble(const mp_var_problem *pb, var_ws *w, const double *y,
     }
     memset(w->g, 0, N * sizeof(double));
     memset(w->B, 0, N * nc * sizeof(double));
-    if (hess) memset(w->H, 0, N * (size_t)w->ldh * sizeof(double));
+    if (hess) memset(w->H, 0, N * w->ldh * sizeof(double));
     double J = 0.0, gscale = 0.0;
     for (size_t k = 0; k < nc; k++) w->Gv[k] = 0.0;
     for (size_t i = 0; i < n; i++) {
@@ -421,7 +514,7 @@ static int var_assemble(const mp_var_problem *pb, var_ws *w, const double *y,
     for (size_t k = 0; k < nc; k++)
         if (!isfinite(w->Gv[k])) return MP_ENONFINITE;
     if (hess)
-        for (size_t j = 0; j < N * (size_t)w->ldh; j++)
+        for (size_t j = 0; j < N * w->ldh; j++)
             if (!isfinite(w->H[j])) return MP_ENONFINITE;
     return MP_OK;
 }
@@ -445,8 +538,7 @@ static double var_merit(const mp_var_problem *pb, const var_ws *w)
  * constraints through its Schur complement. */
 static int var_step(const mp_var_problem *pb, var_ws *w, int minimise)
 {
-    size_t N = w->N, nc = w->nc, kd = w->kd, ldh = (size_t)w->ldh, ldab = (size_t)w->ldab;
-    int iN = (int)N, ikd = (int)kd, info = 0, one = 1;
+    size_t N = w->N, nc = w->nc, kd = w->kd, ldh = w->ldh, ldab = w->ldab;
     double *r = w->rhs;
     if (minimise) {
         double shift = 0.0, scale = 0.0;
@@ -454,15 +546,12 @@ static int var_step(const mp_var_problem *pb, var_ws *w, int minimise)
         for (int tries = 0;; tries++) {
             memcpy(w->AB, w->H, N * ldh * sizeof(double));
             for (size_t j = 0; j < N; j++) w->AB[j * ldh] += shift;
-            dpbtrf_("L", &iN, &ikd, w->AB, &w->ldh, &info, 1);
-            if (info == 0) break;
-            if (info < 0) return MP_EDOM;
+            if (var_band_cholesky(N, kd, w->AB, ldh) == MP_OK) break;
             if (tries > 60) return MP_ESINGULAR;
             shift = shift == 0.0 ? 1e-8 * (scale > 0 ? scale : 1.0) : 4.0 * shift;
         }
         memcpy(r, w->g, N * sizeof(double));
-        dpbtrs_("L", &iN, &ikd, &one, w->AB, &w->ldh, r, &iN, &info, 1);
-        if (info != 0) return MP_EDOM;
+        var_band_cholesky_solve(N, kd, w->AB, ldh, r);
     } else {
         memset(w->AB, 0, N * ldab * sizeof(double));
         for (size_t c = 0; c < N; c++) {
@@ -473,14 +562,10 @@ static int var_step(const mp_var_problem *pb, var_ws *w, int minimise)
                 w->AB[(2 * kd + c - rr) + rr * ldab] = v;
             }
         }
-        dgbtrf_(&iN, &iN, &ikd, &ikd, w->AB, &w->ldab, w->ipiv, &info);
-        if (info > 0) return MP_ESINGULAR;
-        if (info < 0) return MP_EDOM;
+        if (var_band_lu(N, kd, w->AB, ldab, w->ipiv) != MP_OK) return MP_ESINGULAR;
         memcpy(r, w->g, N * sizeof(double));
         memcpy(r + N, w->B, N * nc * sizeof(double));
-        int nrhs = (int)(nc + 1);
-        dgbtrs_("N", &iN, &ikd, &ikd, &nrhs, w->AB, &w->ldab, w->ipiv, r, &iN, &info, 1);
-        if (info != 0) return MP_EDOM;
+        var_band_lu_solve(N, kd, w->AB, ldab, w->ipiv, r, nc + 1);
     }
     /* r = H^-1 g (w), r + N k = H^-1 B_k (Z) */
     if (nc > 0) {

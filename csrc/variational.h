@@ -10,8 +10,8 @@
  * with h_i = x_{i+1} - x_i and xm_i the interval midpoint (the midpoint
  * rule, second order).  The Hessian of J_h in the interior values is
  * block-tridiagonal with d x d blocks, a band matrix of half-bandwidth
- * 2d - 1, so one Newton iteration costs O(n d^3) (LAPACK's banded LU or
- * Cholesky).
+ * 2d - 1, so one Newton iteration costs O(n d^3) (banded LU with partial
+ * pivoting, or banded Cholesky when minimising).
  *
  * Array layout: point-major.  A path y is (n + 1) x d row-major; an
  * evaluation of F at m points is m x K row-major with K = 1 + 2d + 3d^2. */

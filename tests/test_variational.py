@@ -466,6 +466,29 @@ def test_coupled_oscillators_path_closed_form_and_order():
     assert np.max(np.abs(r2.q[0] - exact0)) < 1e-5
 
 
+@pytest.mark.parametrize("d, bound", [(3, 3e-4), (6, 1.2e-4)])   # 3.2e-5, 1.2e-5 measured
+def test_oscillator_chains_of_more_coordinates(d, bound):
+    """A random positive definite K: the band of half-width 2d - 1 in Newton's
+    matrix, against the normal-mode closed form."""
+    rng = np.random.default_rng(d)
+    A = rng.standard_normal((d, d))
+    K = A @ A.T / d + np.eye(d)
+
+    def L(q, v):
+        return 0.5 * np.sum(v * v, axis=0) - 0.5 * np.einsum("im,ij,jm->m", q, K, q)
+    qa, qb, T = rng.uniform(-1, 1, d), rng.uniform(-1, 1, d), 1.0
+    w2, U = np.linalg.eigh(K)
+    w = np.sqrt(w2)[:, None]
+    errs = []
+    for n in (50, 100, 200):
+        r = V.stationary_path(L, qa, qb, T, n)
+        ea, eb = (U.T @ qa)[:, None], (U.T @ qb)[:, None]
+        exact = U @ ((ea * np.sin(w * (T - r.t)) + eb * np.sin(w * r.t)) / np.sin(w * T))
+        errs.append(np.max(np.abs(r.q - exact)))
+    assert errs[-1] < bound, errs
+    assert np.all(np.abs(_order(errs) - 2) < 0.05), errs
+
+
 def test_coupled_oscillators_integrator_order():
     v0 = np.array([0.0, 0.5])
     errs = []
