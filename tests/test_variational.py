@@ -799,3 +799,26 @@ def test_one_coordinate_as_a_vector_and_bad_shapes():
         V.stationary_path(_coupled, QA2, QB2, 1.0, 20, guess=np.zeros(21))
     with pytest.raises(ValueError):
         V.variational_integrate(_coupled, (0, 1), QA2, [[0.0, 1.0]], 0.1)
+    with pytest.raises(ValueError, match="one value per sample"):   # L not summed over q
+        V.stationary_path(lambda q, v: 0.5 * v ** 2, QA2, QB2, 1.0, 20)
+
+
+def test_time_dependent_python_lagrangian_matches_the_scene():
+    """A callable taking a third argument receives the times: the damped, driven
+    Duffing oscillator's Caldirola-Kanai Lagrangian in Python gives the C
+    built-in's path and orbit."""
+    al, be, de, ga, om = 1.0, 0.5, 0.3, 0.4, 1.2
+    duff = mp.scenes.Duffing(alpha=al, beta=be, delta=de, gamma=ga, omega=om)
+
+    def L(q, v, t):
+        return np.exp(de * t) * (0.5 * v * v - 0.5 * al * q * q - 0.25 * be * q ** 4
+                                 + ga * np.cos(om * t) * q)
+    a = V.stationary_path(L, 0.2, -0.4, 2.0, 200, t0=0.5)
+    b = V.stationary_path(duff, 0.2, -0.4, 2.0, 200, t0=0.5)
+    assert np.max(np.abs(a.q - b.q)) < 5e-14          # 5.6e-15 measured
+    a = V.variational_integrate(L, (0, 5), 0.2, 0.1, 0.01)
+    b = V.variational_integrate(duff, (0, 5), 0.2, 0.1, 0.01)
+    assert np.max(np.abs(a.q - b.q)) < 5e-13          # 6.7e-14 measured
+    # and the orbit is the scene's equation of motion (mp.solve), to O(h^2)
+    s = mp.solve(duff, (0, 5), [0.2, 0.1], rtol=1e-12, atol=1e-12, t_eval=b.t)
+    assert np.max(np.abs(b.q - s.y[0])) < 1e-4         # 1.1e-5 measured

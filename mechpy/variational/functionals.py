@@ -103,6 +103,9 @@ def _lagrangian_fn(L: Callable, d: int, scalar: bool) -> Callable:
         out = np.asarray(out, dtype=np.float64)
         if out.size == t.shape[0] and out.shape != t.shape:
             out = out.reshape(t.shape)        # e.g. (1, M) from a one-coordinate L
+        if out.ndim and out.shape != t.shape:
+            raise ValueError("the Lagrangian must return one value per sample: for q of "
+                             f"shape {q.shape} a result of shape {t.shape}, got {out.shape}")
         return out
     return f
 
