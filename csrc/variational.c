@@ -19,6 +19,7 @@ static inline double var_max(double a, double b)
 
 /* ---- built-in integrands --------------------------------------------------- */
 
+/* The built-ins: name, kind, number of parameters, dimension d. */
 static const struct {
     const char *name;
     int kind;
