@@ -690,6 +690,10 @@ def test_compiled_double_pendulum_matches_python_and_shooting(clib):
     f = fd[1](np.zeros(7), q.T.copy(), v.T.copy())
     assert np.max(np.abs(c[:, :5] - f[:, :5])) < 5e-10     # L and gradient: 4.2e-11 measured
     assert np.max(np.abs(c - f)) < 1e-4                    # mixed second order: 1e-5
+    # the Lagrangian helpers take the compiled scene too
+    assert np.max(np.abs(V.lagrangian(dp)(q, v) - _dp_lagrangian(q, v))) < 1e-13
+    p_exact = np.stack([2 * v[0] + v[1] * np.cos(q[0] - q[1]), v[1] + v[0] * np.cos(q[0] - q[1])])
+    assert np.max(np.abs(V.generalized_momenta(dp, q, v) - p_exact)) < 2e-11   # 1.7e-12
     qa, qb, T = np.array([0.4, -0.3]), np.array([-0.2, 0.5]), 0.8
     r = V.stationary_path(dp, qa, qb, T, 400)
     ref = _dp_shoot(qa, qb, T, r.t, (qb - qa) / T)
