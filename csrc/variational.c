@@ -160,15 +160,23 @@ void mp_variational_builtin_bind(mp_var_builtin *b, mp_var_integrand *out)
         if (mp_var_table[i].kind == b->kind) out->d = mp_var_table[i].d;
 }
 
-/* Evaluate L at m points; an out-of-domain status becomes MP_ENONFINITE, as
- * does any non-finite value among the m * K outputs. */
+/* Points per call of an integrand: bounds what a Python integrand builds at once
+ * (its finite-difference stencil multiplies the points). */
+#define MP_VAR_CHUNK 4096
+
+/* Evaluate L at m points, MP_VAR_CHUNK at a time; an out-of-domain status
+ * becomes MP_ENONFINITE, as does any non-finite value among the m * K outputs. */
 static int var_eval(const mp_var_integrand *L, size_t m, const double *x, const double *y,
                     const double *p, double *out)
 {
-    int st = L->eval(m, x, y, p, out, L->ctx);
-    if (st == MP_EDOM) return MP_ENONFINITE;
-    if (st != MP_OK) return st;
-    size_t tot = m * mp_var_nvalues(L->d);
+    size_t d = L->d, K = mp_var_nvalues(d);
+    for (size_t i = 0; i < m; i += MP_VAR_CHUNK) {
+        size_t c = m - i < MP_VAR_CHUNK ? m - i : MP_VAR_CHUNK;
+        int st = L->eval(c, x + i, y + i * d, p + i * d, out + i * K, L->ctx);
+        if (st == MP_EDOM) return MP_ENONFINITE;
+        if (st != MP_OK) return st;
+    }
+    size_t tot = m * K;
     for (size_t i = 0; i < tot; i++)
         if (!isfinite(out[i])) return MP_ENONFINITE;
     return MP_OK;
@@ -752,46 +760,28 @@ int mp_variational_momenta(const mp_var_integrand *L, size_t n, const double *x,
     return st;
 }
 
-/* Solve dL/dv(x_i, y_i, v_i) = p_i for the m velocities v (Newton). */
-int mp_variational_velocities(const mp_var_integrand *L, size_t m, const double *x,
-                              const double *y, const double *p, double *v, double *energy,
-                              double sing_tol)
+/* Newton for the velocities of m <= MP_VAR_CHUNK points (see
+ * mp_variational_velocities); ev: m K, A and work: d d, r: d. */
+static int var_velocities_chunk(const mp_var_integrand *L, size_t m, const double *x,
+                                const double *y, const double *p, double *v, double *energy,
+                                double h, double sing_tol, double *ev, double *A, double *work,
+                                double *r)
 {
     size_t d = L->d, K = mp_var_nvalues(d), dd = d * d;
-    if (d < 1 || !L->eval) return MP_EDOM;
-    if (m == 0) return MP_OK;
-    /* the time scale of the singularity test: the mean spacing of x */
-    double h = m > 1 ? fabs(x[m - 1] - x[0]) / (double)(m - 1) : 1.0;
-    if (!(h > 0) || !isfinite(h)) h = 1.0;
-    if (var_mul(m, K) == 0) return MP_ENOMEM;
-    double *ev = malloc((m * K + 2 * dd + d) * sizeof(double));
-    if (!ev) return MP_ENOMEM;
-    double *A = ev + m * K, *work = A + dd, *r = work + dd;
-    int st = MP_ENOCONV;
     for (int it = 0; it < 50; it++) {
-        int s2 = var_eval(L, m, x, y, v, ev);
-        if (s2 != MP_OK) {
-            st = s2;
-            break;
-        }
+        int st = var_eval(L, m, x, y, v, ev);
+        if (st != MP_OK) return st;
         double worst = 0.0;
-        for (size_t i = 0; i < m && st == MP_ENOCONV; i++) {
+        for (size_t i = 0; i < m; i++) {
             const double *o = ev + i * K;
-            if (var_vv_singular(d, o, h, sing_tol, work)) {
-                st = MP_ESINGULAR;
-                break;
-            }
+            if (var_vv_singular(d, o, h, sing_tol, work)) return MP_ESINGULAR;
             memcpy(A, o + 1 + 2 * d + 2 * dd, dd * sizeof(double));
             for (size_t a = 0; a < d; a++) r[a] = o[1 + d + a] - p[i * d + a];
-            if (var_gauss(d, A, r, NULL, NULL) != MP_OK) {
-                st = MP_ESINGULAR;
-                break;
-            }
+            if (var_gauss(d, A, r, NULL, NULL) != MP_OK) return MP_ESINGULAR;
             double *vi = v + i * d;
             for (size_t a = 0; a < d; a++) vi[a] -= r[a];
             worst = var_max(worst, var_maxabs(d, r) / (1.0 + var_maxabs(d, vi)));
         }
-        if (st != MP_ENOCONV) break;
         if (worst <= 1e-11) {
             st = var_eval(L, m, x, y, v, ev);
             if (st == MP_OK && energy)
@@ -801,8 +791,31 @@ int mp_variational_velocities(const mp_var_integrand *L, size_t m, const double 
                     for (size_t a = 0; a < d; a++) e += v[i * d + a] * o[1 + d + a];
                     energy[i] = e;
                 }
-            break;
+            return st;
         }
+    }
+    return MP_ENOCONV;
+}
+
+/* Solve dL/dv(x_i, y_i, v_i) = p_i for the m velocities v (Newton, by chunks). */
+int mp_variational_velocities(const mp_var_integrand *L, size_t m, const double *x,
+                              const double *y, const double *p, double *v, double *energy,
+                              double sing_tol)
+{
+    size_t d = L->d, K = mp_var_nvalues(d), dd = d * d, c = MP_VAR_CHUNK;
+    if (d < 1 || d > 4096 || !L->eval) return MP_EDOM;
+    if (m == 0) return MP_OK;
+    /* the time scale of the singularity test: the mean spacing of x */
+    double h = m > 1 ? fabs(x[m - 1] - x[0]) / (double)(m - 1) : 1.0;
+    if (!(h > 0) || !isfinite(h)) h = 1.0;
+    double *ev = malloc((c * K + 2 * dd + d) * sizeof(double));
+    if (!ev) return MP_ENOMEM;
+    double *A = ev + c * K, *work = A + dd, *r = work + dd;
+    int st = MP_OK;
+    for (size_t i = 0; i < m && st == MP_OK; i += c) {
+        size_t k = m - i < c ? m - i : c;
+        st = var_velocities_chunk(L, k, x + i, y + i * d, p + i * d, v + i * d,
+                                  energy ? energy + i : NULL, h, sing_tol, ev, A, work, r);
     }
     free(ev);
     return st;
