@@ -254,11 +254,11 @@ def variational_integrate(system, t_span, q0, qdot0, h: float, *,
                          f"{max_steps}; raise h or max_steps (each step stores "
                          f"{8 * (3 * d + 2)} bytes)")
     n = int(steps)
-    t = t0 + h * np.arange(n + 1)
-    ev = _core.variational_eval(spec, t[:1], q0a[None], v0a[None])
+    ev = _core.variational_eval(spec, np.array([t0]), q0a[None], v0a[None])
     p0 = ev[0, 1 + d:1 + 2 * d]
     q, p = _core.variational_integrate(spec, t0, h, n, q0a[None], p0[None], v0a[None],
                                        sing_tol)
+    t = t0 + h * np.arange(n + 1)      # after the interruptible run
     vguess = np.empty_like(q)
     vguess[0] = v0a
     vguess[1:] = np.diff(q, axis=0) / h
