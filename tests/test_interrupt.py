@@ -32,7 +32,7 @@ LONG = {
                                                np.ones((1000, 2))),
     "geometric": lambda: mp.solve(P, (0, 1e9), [2.0, 0.0], method="yoshida6", h=1e-3),
     "variational_integrate": lambda: mp.variational.variational_integrate(
-        P, (0, 2000.0), 1.0, 0.0, 1e-4),
+        P, (0, 2000.0), 1.0, 0.0, 1e-4, max_steps=2 * 10**7),
     "variational_python": lambda: mp.variational.stationary_path(
         lambda q, qd, t=0.0: 0.5 * qd ** 2 + np.cos(q), 0.0, 1.0, 5.0, n=200000),
 }

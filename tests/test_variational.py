@@ -243,9 +243,9 @@ def test_variational_integrator_energy_bounded_and_symplectic():
     # symplectic: the (q, p) map over 200 steps has unit Jacobian determinant
     def flow(q0, p0):
         from mechpy import _core
-        q, pp = _core.variational_integrate(("pendulum", [G, 1.0, 0, 0, 0]), 0.0, h, 200, q0,
-                                            p0)
-        return np.array([q[-1], pp[-1]])
+        q, pp = _core.variational_integrate(("pendulum", [G, 1.0, 0, 0, 0]), 0.0, h, 200,
+                                            [[q0]], [[p0]], [[0.0]], 1e-12)
+        return np.array([q[-1, 0], pp[-1, 0]])
     z = np.array([1.0, 0.5])
     d = 1e-6
     Jm = np.column_stack([(flow(*(z + d * e)) - flow(*(z - d * e))) / (2 * d)
@@ -406,3 +406,423 @@ def test_heavy_top_momenta_cyclic_and_conserved():
     np.testing.assert_allclose(p[2], top.p_psi(s.y), rtol=1e-9)
     assert np.ptp(p[0]) < 1e-9 * abs(p[0][0]) and np.ptp(p[2]) < 1e-9 * abs(p[2][0])
     assert np.ptp(p[1]) > 1e-3  # p_theta is not conserved: the top nutates
+
+
+# ---- d coordinates ------------------------------------------------------------------------------
+
+# Two coupled oscillators, L = |v|^2 / 2 - q^T K q / 2: in the normal coordinates
+# eta = U^T q (K = U diag(w^2) U^T) each mode is a harmonic oscillator, so the
+# path between fixed ends is eta_j(t) = (eta_a sin(w (T - t)) + eta_b sin(w t)) / sin(w T).
+KC = np.array([[2.0, -0.5], [-0.5, 1.5]])
+
+
+def _coupled(q, v):
+    return 0.5 * (v[0] ** 2 + v[1] ** 2) - 0.5 * (KC[0, 0] * q[0] ** 2 + 2 * KC[0, 1] * q[0] * q[1]
+                                                 + KC[1, 1] * q[1] ** 2)
+
+
+def _coupled_path(qa, qb, T, t):
+    w2, U = np.linalg.eigh(KC)
+    w = np.sqrt(w2)[:, None]
+    ea, eb = (U.T @ qa)[:, None], (U.T @ qb)[:, None]
+    s = np.sin(w * T)
+    eta = (ea * np.sin(w * (T - t)) + eb * np.sin(w * t)) / s
+    deta = (-ea * w * np.cos(w * (T - t)) + eb * w * np.cos(w * t)) / s
+    return U @ eta, U @ deta
+
+
+def _coupled_orbit(q0, v0, t):
+    w2, U = np.linalg.eigh(KC)
+    w = np.sqrt(w2)[:, None]
+    e0, ev0 = (U.T @ q0)[:, None], (U.T @ v0)[:, None]
+    return U @ (e0 * np.cos(w * t) + ev0 / w * np.sin(w * t))
+
+
+QA2, QB2, T2 = np.array([0.3, -0.2]), np.array([0.1, 0.4]), 1.5
+
+
+def test_coupled_oscillators_path_closed_form_and_order():
+    errs, verrs = [], []
+    for n in (50, 100, 200, 400):
+        r = V.stationary_path(_coupled, QA2, QB2, T2, n)
+        assert r.q.shape == r.p.shape == r.qdot.shape == (2, n + 1)
+        q_ex, v_ex = _coupled_path(QA2, QB2, T2, r.t)
+        errs.append(np.max(np.abs(r.q - q_ex)))
+        verrs.append(np.max(np.abs(r.qdot - v_ex)))
+        assert r.iterations <= 3           # a quadratic action: one Newton step (2 measured)
+    assert errs[-1] < 1e-5, errs           # 1.8e-6 at n = 400
+    assert verrs[-1] < 4e-5, verrs         # 3.9e-6 at n = 400
+    assert np.all(np.abs(_order(errs) - 2) < 0.05), errs
+    assert np.all(np.abs(_order(verrs) - 2) < 0.05), verrs
+    # for a quadratic L the momenta are the velocities of the midpoint
+    # Legendre transform: p = qdot exactly
+    assert np.max(np.abs(r.p - r.qdot)) < 1e-12
+    # uncoupled (K diagonal): each coordinate is the 1-D path of its own oscillator
+    r2 = V.stationary_path(lambda q, v: 0.5 * (v[0] ** 2 + v[1] ** 2)
+                           - 0.5 * (q[0] ** 2 + 4 * q[1] ** 2), QA2, QB2, T2, 200)
+    r1 = V.stationary_path(lambda q, v: 0.5 * v * v - 2 * q * q, QA2[1], QB2[1], T2, 200)
+    assert np.max(np.abs(r2.q[1] - r1.q)) < 1e-12
+    exact0 = (QA2[0] * np.sin(T2 - r2.t) + QB2[0] * np.sin(r2.t)) / np.sin(T2)
+    assert np.max(np.abs(r2.q[0] - exact0)) < 1e-5
+
+
+@pytest.mark.parametrize("d, bound", [(3, 3e-4), (6, 1.2e-4)])   # 3.2e-5, 1.2e-5 measured
+def test_oscillator_chains_of_more_coordinates(d, bound):
+    """A random positive definite K: the band of half-width 2d - 1 in Newton's
+    matrix, against the normal-mode closed form."""
+    rng = np.random.default_rng(d)
+    A = rng.standard_normal((d, d))
+    K = A @ A.T / d + np.eye(d)
+
+    def L(q, v):
+        return 0.5 * np.sum(v * v, axis=0) - 0.5 * np.einsum("im,ij,jm->m", q, K, q)
+    qa, qb, T = rng.uniform(-1, 1, d), rng.uniform(-1, 1, d), 1.0
+    w2, U = np.linalg.eigh(K)
+    w = np.sqrt(w2)[:, None]
+    errs = []
+    for n in (50, 100, 200):
+        r = V.stationary_path(L, qa, qb, T, n)
+        ea, eb = (U.T @ qa)[:, None], (U.T @ qb)[:, None]
+        exact = U @ ((ea * np.sin(w * (T - r.t)) + eb * np.sin(w * r.t)) / np.sin(w * T))
+        errs.append(np.max(np.abs(r.q - exact)))
+    assert errs[-1] < bound, errs
+    assert np.all(np.abs(_order(errs) - 2) < 0.05), errs
+
+
+def test_coupled_oscillators_integrator_order():
+    v0 = np.array([0.0, 0.5])
+    errs = []
+    for h in (0.02, 0.01, 0.005):
+        r = V.variational_integrate(_coupled, (0, 3), QA2, v0, h)
+        assert r.q.shape == (2, len(r.t))
+        errs.append(np.max(np.abs(r.q - _coupled_orbit(QA2, v0, r.t))))
+        # the energy function of a quadratic L is kept to round-off by the
+        # midpoint rule (6e-13 measured)
+        assert np.ptp(r.energy) < 5e-12
+    assert errs[-1] < 1e-4, errs           # 7.1e-6 at h = 0.005
+    assert np.all(np.abs(_order(errs) - 2) < 0.05), errs
+
+
+# The double pendulum (unit masses and lengths), q = (theta1, theta2) from the vertical
+DP = dict(m1=1.0, m2=1.0, l1=1.0, l2=1.0)
+
+
+def _dp_lagrangian(q, v):
+    m1, m2, l1, l2 = DP.values()
+    return (0.5 * (m1 + m2) * l1 ** 2 * v[0] ** 2 + 0.5 * m2 * l2 ** 2 * v[1] ** 2
+            + m2 * l1 * l2 * v[0] * v[1] * np.cos(q[0] - q[1])
+            + (m1 + m2) * G * l1 * np.cos(q[0]) + m2 * G * l2 * np.cos(q[1]))
+
+
+def _dp_rhs(t, y):
+    """Newton's equations of the double pendulum, M(q) qdd = f (solved here)."""
+    m1, m2, l1, l2 = DP.values()
+    q1, q2, v1, v2 = y
+    c, s = np.cos(q1 - q2), np.sin(q1 - q2)
+    M = np.array([[(m1 + m2) * l1 ** 2, m2 * l1 * l2 * c], [m2 * l1 * l2 * c, m2 * l2 ** 2]])
+    f = np.array([-m2 * l1 * l2 * s * v2 ** 2 - (m1 + m2) * G * l1 * np.sin(q1),
+                  m2 * l1 * l2 * s * v1 ** 2 - m2 * G * l2 * np.sin(q2)])
+    return np.concatenate([[v1, v2], np.linalg.solve(M, f)])
+
+
+def _dp_energy(q, v):
+    m1, m2, l1, l2 = DP.values()
+    return (0.5 * (m1 + m2) * l1 ** 2 * v[0] ** 2 + 0.5 * m2 * l2 ** 2 * v[1] ** 2
+            + m2 * l1 * l2 * v[0] * v[1] * np.cos(q[0] - q[1])
+            - (m1 + m2) * G * l1 * np.cos(q[0]) - m2 * G * l2 * np.cos(q[1]))
+
+
+def _dp_shoot(qa, qb, T, t_eval, v_guess):
+    """The boundary-value problem by shooting: solve_ivp (DOP853) + fsolve on qdot(0)."""
+    def end(v):
+        return solve_ivp(_dp_rhs, (0, T), np.concatenate([qa, v]), method="DOP853",
+                         rtol=1e-12, atol=1e-12).y[:2, -1] - qb
+    v = fsolve(end, v_guess, xtol=1e-13)
+    assert np.max(np.abs(end(v))) < 1e-10
+    return solve_ivp(_dp_rhs, (0, T), np.concatenate([qa, v]), method="DOP853", rtol=1e-12,
+                     atol=1e-12, t_eval=t_eval).y
+
+
+def test_double_pendulum_path_against_solve_ivp_shooting():
+    qa, qb, T = np.array([0.4, -0.3]), np.array([-0.2, 0.5]), 0.8
+    errs, verrs = [], []
+    for n in (100, 200, 400):
+        r = V.stationary_path(_dp_lagrangian, qa, qb, T, n)
+        ref = _dp_shoot(qa, qb, T, r.t, (qb - qa) / T)
+        errs.append(np.max(np.abs(r.q - ref[:2])))
+        verrs.append(np.max(np.abs(r.qdot - ref[2:])))
+    assert errs[-1] < 2e-5, errs           # 2.1e-6 rad at n = 400
+    assert verrs[-1] < 2e-4, verrs         # 1.9e-5 rad/s at n = 400
+    assert np.all(np.abs(_order(errs) - 2) < 0.1), errs
+    assert np.all(np.abs(_order(verrs) - 2) < 0.1), verrs
+
+
+# ---- the compiled-Lagrangian interface (mp_gen_lagrangian), with a hand-written library ---------
+
+C_LAGRANGIANS = r"""
+#include <math.h>
+#include <stddef.h>
+#include <string.h>
+
+/* K = 1 + 2d + 3d^2 = 17 values per point (d = 2)
+   two coupled oscillators, params k11, k12, k22, bound: L = |qd|^2/2 - q^T K q/2;
+   MP_EDOM (1) when |q_a| > bound */
+int mp_gen_lagrangian(size_t m, const double *t, const double *q, const double *qd,
+                      double *out, void *params)
+{
+    const double *k = params;
+    (void)t;
+    for (size_t i = 0; i < m; i++) {
+        const double *x = q + 2 * i, *v = qd + 2 * i;
+        double *o = out + 17 * i;
+        if (fabs(x[0]) > k[3] || fabs(x[1]) > k[3]) return 1;
+        memset(o, 0, 17 * sizeof(double));
+        o[0] = 0.5 * (v[0] * v[0] + v[1] * v[1])
+               - 0.5 * (k[0] * x[0] * x[0] + 2 * k[1] * x[0] * x[1] + k[2] * x[1] * x[1]);
+        o[1] = -(k[0] * x[0] + k[1] * x[1]);
+        o[2] = -(k[1] * x[0] + k[2] * x[1]);
+        o[3] = v[0];
+        o[4] = v[1];
+        o[5] = -k[0]; o[6] = -k[1]; o[7] = -k[1]; o[8] = -k[2];   /* d2L/dq dq */
+        o[13] = 1.0; o[16] = 1.0;                                /* d2L/dqd dqd */
+    }
+    return 0;
+}
+
+/* the double pendulum, params m1, m2, l1, l2, g */
+int double_pendulum(size_t m, const double *t, const double *q, const double *qd,
+                    double *out, void *params)
+{
+    const double *k = params;
+    double a = (k[0] + k[1]) * k[2] * k[2], b = k[1] * k[3] * k[3], c0 = k[1] * k[2] * k[3];
+    double g1 = (k[0] + k[1]) * k[4] * k[2], g2 = k[1] * k[4] * k[3];
+    (void)t;
+    for (size_t i = 0; i < m; i++) {
+        const double *x = q + 2 * i, *v = qd + 2 * i;
+        double *o = out + 17 * i, C = cos(x[0] - x[1]), S = sin(x[0] - x[1]);
+        o[0] = 0.5 * a * v[0] * v[0] + 0.5 * b * v[1] * v[1] + c0 * v[0] * v[1] * C
+               + g1 * cos(x[0]) + g2 * cos(x[1]);
+        o[1] = -c0 * v[0] * v[1] * S - g1 * sin(x[0]);
+        o[2] = c0 * v[0] * v[1] * S - g2 * sin(x[1]);
+        o[3] = a * v[0] + c0 * v[1] * C;
+        o[4] = b * v[1] + c0 * v[0] * C;
+        o[5] = -c0 * v[0] * v[1] * C - g1 * cos(x[0]);
+        o[6] = o[7] = c0 * v[0] * v[1] * C;
+        o[8] = -c0 * v[0] * v[1] * C - g2 * cos(x[1]);
+        o[9] = -c0 * v[1] * S; o[10] = -c0 * v[0] * S;          /* d2L/dq1 dqd_b */
+        o[11] = c0 * v[1] * S; o[12] = c0 * v[0] * S;           /* d2L/dq2 dqd_b */
+        o[13] = a; o[14] = o[15] = c0 * C; o[16] = b;
+    }
+    return 0;
+}
+"""
+
+
+class _CompiledScene:
+    """What a scene compiled by mp.lagrangian offers the variational tools."""
+
+    def __init__(self, lib, name, params, d):
+        import ctypes
+        self._lib = lib                       # keeps the library loaded
+        address = ctypes.cast(getattr(lib, name), ctypes.c_void_p).value
+        self._lagrangian_c = (address, np.asarray(params, dtype=np.float64))
+        self.dim = 2 * d
+
+
+@pytest.fixture(scope="module")
+def clib(tmp_path_factory):
+    import ctypes
+    import shutil
+    import subprocess
+    cc = shutil.which("cc") or shutil.which("gcc")
+    if cc is None:
+        pytest.skip("no C compiler")
+    d = tmp_path_factory.mktemp("clagrangian")
+    (d / "lag.c").write_text(C_LAGRANGIANS)
+    subprocess.run([cc, "-shared", "-fPIC", "-O2", "-Wall", "-Werror", "-o", str(d / "lag.so"),
+                    str(d / "lag.c"), "-lm"], check=True)
+    return ctypes.CDLL(str(d / "lag.so"))
+
+
+def _dp_scene(clib):
+    m1, m2, l1, l2 = DP.values()
+    return _CompiledScene(clib, "double_pendulum", [m1, m2, l1, l2, G], 2)
+
+
+def test_compiled_lagrangian_oscillators_path_and_orbit(clib):
+    scene = _CompiledScene(clib, "mp_gen_lagrangian", [KC[0, 0], KC[0, 1], KC[1, 1], 10.0], 2)
+    errs = []
+    for n in (100, 200, 400):
+        r = V.stationary_path(scene, QA2, QB2, T2, n)
+        q_ex, v_ex = _coupled_path(QA2, QB2, T2, r.t)
+        errs.append(np.max(np.abs(r.q - q_ex)))
+    assert np.all(np.abs(_order(errs) - 2) < 0.05), errs
+    # the same discrete equations as the Python path (its finite differences
+    # are exact for a quadratic L up to round-off)
+    py = V.stationary_path(_coupled, QA2, QB2, T2, 400)
+    assert np.max(np.abs(r.q - py.q)) < 1e-13           # 1.2e-15 measured
+    assert np.max(np.abs(r.qdot - py.qdot)) < 5e-13     # 4.4e-14 measured
+    v0 = np.array([0.0, 0.5])
+    o = V.variational_integrate(scene, (0, 3), QA2, v0, 0.005)
+    assert np.max(np.abs(o.q - _coupled_orbit(QA2, v0, o.t))) < 1e-5   # 7.1e-6 measured
+    assert np.ptp(o.energy) < 3e-13                                     # 3.4e-14 measured
+    assert abs(o.energy[0] - _coupled(QA2, v0) - KC @ QA2 @ QA2) < 1e-14
+    py = V.variational_integrate(_coupled, (0, 3), QA2, v0, 0.005)
+    assert np.max(np.abs(o.q - py.q)) < 3e-12                           # 2.5e-13 measured
+    # the C function reports a point outside its domain (|q| > bound): the
+    # straight-line guess is outside, so the problem is refused
+    out = _CompiledScene(clib, "mp_gen_lagrangian", [KC[0, 0], KC[0, 1], KC[1, 1], 0.35], 2)
+    with pytest.raises(mp.errors.DomainError):
+        V.stationary_path(out, QA2, np.array([0.1, 0.5]), T2, 50)
+    with pytest.raises(ValueError, match="coordinate"):
+        V.stationary_path(scene, 0.3, 0.1, T2, 50)
+
+
+def test_compiled_double_pendulum_matches_python_and_shooting(clib):
+    dp = _dp_scene(clib)
+    rng = np.random.default_rng(5)
+    q, v = rng.uniform(-2, 2, (2, 7)), rng.uniform(-3, 3, (2, 7))
+    # the hand-written derivatives against finite differences of the Python L
+    from mechpy.variational.functionals import _fd_spec, _lagrangian_fn
+    fd = _fd_spec(_lagrangian_fn(_dp_lagrangian, 2, False), 2)
+    spec = ("c", mp._core._variational_capsule(dp._lagrangian_c[0]), dp._lagrangian_c[1], 2)
+    c = mp._core.variational_eval(spec, np.zeros(7), q.T.copy(), v.T.copy())
+    f = fd[1](np.zeros(7), q.T.copy(), v.T.copy())
+    assert np.max(np.abs(c[:, :5] - f[:, :5])) < 5e-10     # L and gradient: 4.2e-11 measured
+    assert np.max(np.abs(c - f)) < 1e-4                    # mixed second order: 1e-5
+    # the Lagrangian helpers take the compiled scene too
+    assert np.max(np.abs(V.lagrangian(dp)(q, v) - _dp_lagrangian(q, v))) < 1e-13
+    p_exact = np.stack([2 * v[0] + v[1] * np.cos(q[0] - q[1]), v[1] + v[0] * np.cos(q[0] - q[1])])
+    assert np.max(np.abs(V.generalized_momenta(dp, q, v) - p_exact)) < 2e-11   # 1.7e-12
+    qa, qb, T = np.array([0.4, -0.3]), np.array([-0.2, 0.5]), 0.8
+    r = V.stationary_path(dp, qa, qb, T, 400)
+    ref = _dp_shoot(qa, qb, T, r.t, (qb - qa) / T)
+    assert np.max(np.abs(r.q - ref[:2])) < 2e-5            # 2.1e-6 measured
+    py = V.stationary_path(_dp_lagrangian, qa, qb, T, 400)
+    assert np.max(np.abs(r.q - py.q)) < 1e-12              # 6e-14 measured
+
+
+def test_double_pendulum_integrator_order_and_bounded_energy(clib):
+    dp = _dp_scene(clib)
+    q0, v0 = np.array([1.0, 0.5]), np.array([0.0, 0.0])
+    ref = solve_ivp(_dp_rhs, (0, 2), np.concatenate([q0, v0]), method="DOP853", rtol=1e-13,
+                    atol=1e-13).y[:, -1]
+    errs = [np.max(np.abs(V.variational_integrate(dp, (0, 2), q0, v0, h).q[:, -1] - ref[:2]))
+            for h in (0.004, 0.002, 0.001)]
+    assert errs[-1] < 5e-5, errs                       # 6.3e-6 rad at h = 1e-3
+    assert np.all(np.abs(_order(errs) - 2) < 0.1), errs
+    # a long run (10^5 steps, 10 J above the lowest energy, chaotic): the energy
+    # error oscillates at O(h^2) and does not grow (RK4 at the same step drifts:
+    # 1.5e-5 J in the first tenth, 1.5e-4 J in the last)
+    r = V.variational_integrate(dp, (0, 1000), q0, v0, 0.01)
+    E = _dp_energy(r.q, r.qdot)
+    assert np.max(np.abs(r.energy - E)) < 5e-15 * np.max(np.abs(E))   # h = v.p - L is E: 1e-14 J
+    dE = np.abs(E - E[0])
+    k = len(E) // 10
+    assert dE.max() < 4e-4 * abs(E[0])             # 4.0e-5 relative measured
+    assert dE[-k:].max() < 1.5 * dE[:k].max()      # 7.742e-4 J vs 7.737e-4 J
+
+
+def test_heavy_top_integrator_conserves_cyclic_momenta():
+    """phi and psi are cyclic: the variational integrator keeps p_phi and p_psi
+    exactly (discrete Noether), up to round-off, and follows mp.solve."""
+    top = mp.scenes.HeavyTop(I1=0.5, I3=0.2, mass=1.0, g=9.81, l=0.3)
+    y0 = np.array([0.0, 0.6, 0.0, 1.0, 0.0, 20.0])
+    r = V.variational_integrate(top, (0, 20), y0[:3], y0[3:], 1e-3)
+    assert r.q.shape == (3, 20001)
+    y = np.concatenate([r.q, r.qdot])
+    assert np.ptp(r.p[0]) < 2e-9 * abs(r.p[0, 0])      # 1.4e-10 relative measured
+    assert np.ptp(r.p[2]) < 2e-9 * abs(r.p[2, 0])      # 1.5e-10
+    np.testing.assert_allclose(r.p[0], top.p_phi(y), rtol=1e-14)   # 4e-16 measured
+    np.testing.assert_allclose(r.p[2], top.p_psi(y), rtol=1e-14)
+    assert np.ptp(r.energy) < 3e-9 * abs(r.energy[0])  # O(h^2): 3.2e-10 relative measured
+    s = mp.solve(top, (0, 20), y0, rtol=1e-12, atol=1e-12, t_eval=r.t[::1000])
+    assert np.max(np.abs(r.q[:, ::1000] - s.y[:3])) < 2e-4   # 2.1e-5 rad measured
+    # the built-in's derivatives against finite differences of the closed form
+    from mechpy.variational.functionals import _fd_spec, _lagrangian_fn
+    fd = _fd_spec(_lagrangian_fn(V.lagrangian(top), 3, False), 3)
+    Q, Vq = y[:3, ::4000].T.copy(), y[3:, ::4000].T.copy()
+    c = mp._core.variational_eval(("heavytop", [0.5, 0.2, 9.81 * 0.3]), r.t[::4000], Q, Vq)
+    f = fd[1](r.t[::4000], Q, Vq)
+    assert np.max(np.abs(c[:, :7] - f[:, :7])) < 2e-12 * np.max(np.abs(c[:, :7]))  # 1.3e-13
+    assert np.max(np.abs(c - f)) < 2e-7 * np.max(np.abs(c))    # mixed, 2nd order: 1.6e-8
+
+
+# ---- regressions ----------------------------------------------------------------------------
+
+def test_step_budget_refused_before_allocating():
+    import time
+    t = time.perf_counter()
+    with pytest.raises(ValueError, match="max_steps"):    # was a 15 GiB allocation
+        V.variational_integrate(mp.scenes.Pendulum(), (0, 10), 1.0, 0.0, 1e-9)
+    with pytest.raises(ValueError, match="max_steps"):
+        V.variational_integrate(mp.scenes.Pendulum(), (0, 10), 1.0, 0.0, 0.01, max_steps=999)
+    assert time.perf_counter() - t < 1.0
+    r = V.variational_integrate(mp.scenes.Pendulum(), (0, 10), 1.0, 0.0, 0.01, max_steps=1000)
+    assert len(r.t) == 1001
+
+
+@pytest.mark.parametrize("L, q0, v0", [
+    (lambda q, v: q * v - 0.5 * q * q, 0.1, 0.2),                        # linear in qdot
+    (lambda q, v: 0.5 * (v[0] + v[1]) ** 2 - 0.5 * (q[0] ** 2 + q[1] ** 2),
+     [0.1, 0.0], [0.2, 0.0]),                                           # rank-one mass matrix
+])
+def test_lagrangian_singular_in_qdot_raises(L, q0, v0):
+    # the velocities and energies were NaN
+    with pytest.raises(mp.errors.SingularityError, match="singular"):
+        V.variational_integrate(L, (0, 1), q0, v0, 0.1)
+    with pytest.raises(mp.errors.SingularityError):
+        V.stationary_path(L, q0, v0, 1.0, 20)
+
+
+def test_lagrangian_of_a_non_scene_is_a_type_error():
+    with pytest.raises(TypeError, match="scene"):          # was AttributeError
+        V.lagrangian(3.0)
+    with pytest.raises(TypeError, match="Lagrangian"):
+        V.lagrangian(mp.scenes.VanDerPol())
+
+
+def test_brachistochrone_tiny_x_end_is_refused():
+    with pytest.raises(ValueError, match="too small"):     # was inf / NaN
+        V.brachistochrone(5e-324, 1.0)
+    r = V.brachistochrone(1e-150, 1.0, n=20)               # still representable
+    assert np.isfinite(r.radius) and np.all(np.isfinite(r.y_exact))
+    assert r.time_exact == pytest.approx(np.sqrt(2 / G), rel=1e-12)   # free fall
+
+
+def test_one_coordinate_as_a_vector_and_bad_shapes():
+    def L(q, v):
+        return 0.5 * v[0] ** 2 - 0.5 * q[0] ** 2
+    r = V.stationary_path(L, [0.3], [0.7], 2.0, 100)
+    s = V.stationary_path(lambda q, v: 0.5 * v * v - 0.5 * q * q, 0.3, 0.7, 2.0, 100)
+    assert r.q.shape == (1, 101) and s.q.shape == (101,)
+    assert np.max(np.abs(r.q[0] - s.q)) < 1e-12
+    with pytest.raises(ValueError, match="coordinate"):
+        V.stationary_path(mp.scenes.HeavyTop(1.0, 1.0, 1.0), [0, 1, 0], [0, 1], 1.0, 20)
+    with pytest.raises(ValueError, match="shape"):
+        V.stationary_path(_coupled, QA2, QB2, 1.0, 20, guess=np.zeros(21))
+    with pytest.raises(ValueError):
+        V.variational_integrate(_coupled, (0, 1), QA2, [[0.0, 1.0]], 0.1)
+    with pytest.raises(ValueError, match="one value per sample"):   # L not summed over q
+        V.stationary_path(lambda q, v: 0.5 * v ** 2, QA2, QB2, 1.0, 20)
+
+
+def test_time_dependent_python_lagrangian_matches_the_scene():
+    """A callable taking a third argument receives the times: the damped, driven
+    Duffing oscillator's Caldirola-Kanai Lagrangian in Python gives the C
+    built-in's path and orbit."""
+    al, be, de, ga, om = 1.0, 0.5, 0.3, 0.4, 1.2
+    duff = mp.scenes.Duffing(alpha=al, beta=be, delta=de, gamma=ga, omega=om)
+
+    def L(q, v, t):
+        return np.exp(de * t) * (0.5 * v * v - 0.5 * al * q * q - 0.25 * be * q ** 4
+                                 + ga * np.cos(om * t) * q)
+    a = V.stationary_path(L, 0.2, -0.4, 2.0, 200, t0=0.5)
+    b = V.stationary_path(duff, 0.2, -0.4, 2.0, 200, t0=0.5)
+    assert np.max(np.abs(a.q - b.q)) < 5e-14          # 5.6e-15 measured
+    a = V.variational_integrate(L, (0, 5), 0.2, 0.1, 0.01)
+    b = V.variational_integrate(duff, (0, 5), 0.2, 0.1, 0.01)
+    assert np.max(np.abs(a.q - b.q)) < 5e-13          # 6.7e-14 measured
+    # and the orbit is the scene's equation of motion (mp.solve), to O(h^2)
+    s = mp.solve(duff, (0, 5), [0.2, 0.1], rtol=1e-12, atol=1e-12, t_eval=b.t)
+    assert np.max(np.abs(b.q - s.y[0])) < 1e-4         # 1.1e-5 measured

@@ -1,47 +1,67 @@
-/* Binding for the variational solvers of the C core: integrand specs
- * (a built-in by name, or a Python callable returning the six derivative
- * arrays), the Newton solver and the variational integrator. */
+/* Binding for the variational solvers of the C core.  An integrand spec is
+ *   (name, params)              a built-in (its dimension d from the table),
+ *   ("python", f, d)            a Python callable f(x (m,), y (m, d), p (m, d))
+ *                               returning the (m, K) values, K = 1 + 2d + 3d^2,
+ *   ("c", capsule, params, d)   a compiled mp_gen_lagrangian (the capsule from
+ *                               _variational_capsule), called with params' data.
+ * Entry points: the Newton solver, the variational integrator, the discrete
+ * momenta, the Legendre transform back to velocities, one evaluation. */
 #include "mp_py.h"
 
+#include <stdint.h>
 #include <string.h>
 
 #include "variational.h"
 
 #define MP_VAR_MAXCON 16
+#define MP_VAR_MAXDIM 64
+#define MP_VAR_CAPSULE "mechpy.variational.lagrangian"
+
+typedef struct {
+    mp_var_eval_fn fn;
+} py_var_cfun;
 
 typedef struct {
     mp_var_builtin b;
-    PyObject *fn; /* borrowed: a Python callable f(x, y, p) -> (6, m), or NULL */
+    PyObject *fn;            /* borrowed: the Python callable, or NULL */
+    PyArrayObject *params;   /* owned: the compiled function's parameters, or NULL */
     mp_var_integrand F;
 } py_var_spec;
+
+/* Release what py_var_parse took (safe on a zeroed spec). */
+static void py_var_release(py_var_spec *s)
+{
+    Py_CLEAR(s->params);
+}
 
 /* The Python integrand adapter: called from C with the GIL released. */
 static int py_var_eval(size_t m, const double *x, const double *y, const double *p, double *out,
                        void *ctx)
 {
     py_var_spec *s = ctx;
+    size_t d = s->F.d, K = mp_var_nvalues(d);
     int st = MP_ECALLBACK;
     PyGILState_STATE gs = PyGILState_Ensure();
-    npy_intp dim = (npy_intp)m;
-    PyArrayObject *ax = mp_py_empty(1, &dim), *ay = mp_py_empty(1, &dim), *ap = mp_py_empty(1, &dim);
+    npy_intp d1 = (npy_intp)m, d2[2] = {(npy_intp)m, (npy_intp)d};
+    PyArrayObject *ax = mp_py_empty(1, &d1), *ay = mp_py_empty(2, d2), *ap = mp_py_empty(2, d2);
     PyObject *r = NULL;
     PyArrayObject *ra = NULL;
     if (!ax || !ay || !ap) goto done;
     memcpy(PyArray_DATA(ax), x, m * sizeof(double));
-    memcpy(PyArray_DATA(ay), y, m * sizeof(double));
-    memcpy(PyArray_DATA(ap), p, m * sizeof(double));
+    memcpy(PyArray_DATA(ay), y, m * d * sizeof(double));
+    memcpy(PyArray_DATA(ap), p, m * d * sizeof(double));
     r = PyObject_CallFunctionObjArgs(s->fn, (PyObject *)ax, (PyObject *)ay, (PyObject *)ap, NULL);
     if (!r) goto done;
     ra = mp_py_array(r, "integrand derivatives", 2);
     if (!ra) goto done;
-    if (PyArray_DIM(ra, 0) != 6 || PyArray_DIM(ra, 1) != dim) {
+    if (PyArray_DIM(ra, 0) != d1 || PyArray_DIM(ra, 1) != (npy_intp)K) {
         PyErr_Format(PyExc_ValueError,
-                     "the integrand must return an array of shape (6, %zd), got (%zd, %zd)",
-                     (Py_ssize_t)dim, (Py_ssize_t)PyArray_DIM(ra, 0),
+                     "the integrand must return an array of shape (%zd, %zd), got (%zd, %zd)",
+                     (Py_ssize_t)d1, (Py_ssize_t)K, (Py_ssize_t)PyArray_DIM(ra, 0),
                      (Py_ssize_t)PyArray_DIM(ra, 1));
         goto done;
     }
-    memcpy(out, PyArray_DATA(ra), 6 * m * sizeof(double));
+    memcpy(out, PyArray_DATA(ra), m * K * sizeof(double));
     st = MP_OK;
 done:
     Py_XDECREF(ax);
@@ -53,29 +73,71 @@ done:
     return st;
 }
 
-/* spec: a callable, or a tuple (name, params) naming a built-in. */
+/* A dimension d from a Python int: 1 <= d <= MP_VAR_MAXDIM. */
+static int py_var_dim(PyObject *o, size_t *d, const char *what)
+{
+    Py_ssize_t v = PyLong_Check(o) ? PyLong_AsSsize_t(o) : -1;
+    if (v == -1 && PyErr_Occurred()) PyErr_Clear();
+    if (v < 1 || v > MP_VAR_MAXDIM) {
+        PyErr_Format(PyExc_ValueError, "%s: the dimension must be an int in 1..%d", what,
+                     MP_VAR_MAXDIM);
+        return -1;
+    }
+    *d = (size_t)v;
+    return 0;
+}
+
+/* Parse a spec (see the file comment) into s; -1 with an exception set. */
 static int py_var_parse(PyObject *obj, py_var_spec *s, const char *what)
 {
     memset(s, 0, sizeof *s);
-    if (PyCallable_Check(obj)) {
-        s->fn = obj;
+    Py_ssize_t len = PyTuple_Check(obj) ? PyTuple_GET_SIZE(obj) : -1;
+    PyObject *tag = len >= 2 ? PyTuple_GET_ITEM(obj, 0) : NULL;
+    if (!tag || !PyUnicode_Check(tag)) {
+        PyErr_Format(PyExc_TypeError,
+                     "%s must be a tuple (name, params), (\"python\", f, d) or "
+                     "(\"c\", capsule, params, d)", what);
+        return -1;
+    }
+    const char *name = PyUnicode_AsUTF8(tag);
+    if (!name) return -1;
+    if (strcmp(name, "python") == 0) {
+        if (len != 3 || !PyCallable_Check(PyTuple_GET_ITEM(obj, 1))) {
+            PyErr_Format(PyExc_TypeError, "%s: (\"python\", f, d) needs a callable f", what);
+            return -1;
+        }
+        if (py_var_dim(PyTuple_GET_ITEM(obj, 2), &s->F.d, what) < 0) return -1;
+        s->fn = PyTuple_GET_ITEM(obj, 1);
         s->F.eval = py_var_eval;
         s->F.ctx = s;
         return 0;
     }
-    const char *name;
-    PyObject *po;
-    if (!PyTuple_Check(obj) || !PyArg_ParseTuple(obj, "sO", &name, &po)) {
-        PyErr_Clear();
-        PyErr_Format(PyExc_TypeError, "%s must be a callable or a tuple (name, params)", what);
+    if (strcmp(name, "c") == 0) {
+        PyObject *cap = len == 4 ? PyTuple_GET_ITEM(obj, 1) : NULL;
+        if (!cap || !PyCapsule_IsValid(cap, MP_VAR_CAPSULE)) {
+            PyErr_Format(PyExc_TypeError, "%s: (\"c\", capsule, params, d) needs a capsule "
+                         "from _variational_capsule", what);
+            return -1;
+        }
+        if (py_var_dim(PyTuple_GET_ITEM(obj, 3), &s->F.d, what) < 0) return -1;
+        py_var_cfun *cf = PyCapsule_GetPointer(cap, MP_VAR_CAPSULE);
+        if (!cf) return -1;
+        s->params = mp_py_array(PyTuple_GET_ITEM(obj, 2), "params", 1);
+        if (!s->params) return -1;
+        s->F.eval = cf->fn;
+        s->F.ctx = PyArray_DATA(s->params);
+        return 0;
+    }
+    if (len != 2) {
+        PyErr_Format(PyExc_TypeError, "%s: a built-in is a pair (name, params)", what);
         return -1;
     }
-    size_t np;
-    if (mp_variational_builtin_find(name, &s->b.kind, &np) != MP_OK) {
+    size_t np, d;
+    if (mp_variational_builtin_find(name, &s->b.kind, &np, &d) != MP_OK) {
         PyErr_Format(PyExc_ValueError, "%s: unknown built-in integrand %s", what, name);
         return -1;
     }
-    PyArrayObject *p = mp_py_array(po, "params", 1);
+    PyArrayObject *p = mp_py_array(PyTuple_GET_ITEM(obj, 1), "params", 1);
     if (!p) return -1;
     if ((size_t)PyArray_SIZE(p) != np) {
         PyErr_Format(PyExc_ValueError, "%s: %s takes %zd parameters, got %zd", what, name,
@@ -93,8 +155,70 @@ static int py_var_parse(PyObject *obj, py_var_spec *s, const char *what)
     return 0;
 }
 
+/* Points of d coordinates: an array (m, d), or (m,) when d = 1; finite.  *m
+ * receives the count (checked against want when want >= 0). */
+static PyArrayObject *py_var_points(PyObject *o, const char *name, size_t d, npy_intp want,
+                                    npy_intp *m)
+{
+    PyArrayObject *a = mp_py_array(o, name, -1);
+    if (!a) return NULL;
+    int nd = PyArray_NDIM(a);
+    int ok = (nd == 2 && PyArray_DIM(a, 1) == (npy_intp)d) || (nd == 1 && d == 1);
+    if (ok) *m = PyArray_DIM(a, 0);
+    if (!ok || (want >= 0 && *m != want)) {
+        PyErr_Format(PyExc_ValueError, "%s must have shape (%zd, %zd)%s", name,
+                     (Py_ssize_t)(want >= 0 ? want : (ok ? *m : 0)), (Py_ssize_t)d,
+                     d == 1 ? " or (m,)" : "");
+        Py_DECREF(a);
+        return NULL;
+    }
+    if (mp_py_require_finite(a, name) < 0) {
+        Py_DECREF(a);
+        return NULL;
+    }
+    return a;
+}
+
+/* A copy of a (C order) as a new array; steals nothing. */
+static PyArrayObject *py_var_copy(PyArrayObject *a)
+{
+    return (PyArrayObject *)PyArray_NewCopy(a, NPY_CORDER);
+}
+
+/* Free the capsule's record (the capsule's destructor). */
+static void py_var_capsule_free(PyObject *cap)
+{
+    PyMem_Free(PyCapsule_GetPointer(cap, MP_VAR_CAPSULE));
+}
+
+/* _variational_capsule(address) -> a capsule of the compiled function at address. */
+static PyObject *py_variational_capsule(PyObject *self, PyObject *arg)
+{
+    (void)self;
+    if (!PyLong_Check(arg)) {
+        PyErr_SetString(PyExc_TypeError, "address must be an int");
+        return NULL;
+    }
+    void *addr = PyLong_AsVoidPtr(arg);
+    if (!addr) {
+        if (!PyErr_Occurred())
+            PyErr_SetString(PyExc_ValueError, "address must be a non-null function address");
+        return NULL;
+    }
+    py_var_cfun *cf = PyMem_Malloc(sizeof *cf);
+    if (!cf) return PyErr_NoMemory();
+    cf->fn = (mp_var_eval_fn)(uintptr_t)addr;
+    PyObject *cap = PyCapsule_New(cf, MP_VAR_CAPSULE, py_var_capsule_free);
+    if (!cap) {
+        PyMem_Free(cf);
+        return NULL;
+    }
+    return cap;
+}
+
 /* variational_solve(F, x, y0, constraints, values, lambda0, stationary, tol, max_iter)
- * -> (y, lambda, {"iterations", "J", "residual", "constraint_error"}) */
+ * -> (y, lambda, {"iterations", "J", "residual", "constraint_error"}); y0 of
+ * shape (n + 1, d) or (n + 1,) for d = 1, y of the same shape. */
 static PyObject *py_variational_solve(PyObject *self, PyObject *args)
 {
     (void)self;
@@ -106,36 +230,36 @@ static PyObject *py_variational_solve(PyObject *self, PyObject *args)
                           &max_iter))
         return NULL;
     py_var_spec F, G[MP_VAR_MAXCON];
+    memset(G, 0, sizeof G);
     mp_var_integrand GI[MP_VAR_MAXCON];
-    PyArrayObject *x = NULL, *y = NULL, *v = NULL, *lam = NULL;
+    PyArrayObject *x = NULL, *y = NULL, *v = NULL, *lam = NULL, *y0 = NULL, *l0 = NULL;
     PyObject *seq = NULL, *res = NULL;
+    Py_ssize_t nc = 0;
     if (py_var_parse(fo, &F, "F") < 0) return NULL;
     seq = PySequence_Fast(co, "constraints must be a sequence");
-    if (!seq) return NULL;
-    Py_ssize_t nc = PySequence_Fast_GET_SIZE(seq);
+    if (!seq) goto done;
+    nc = PySequence_Fast_GET_SIZE(seq);
     if (nc > MP_VAR_MAXCON) {
         PyErr_Format(PyExc_ValueError, "at most %d constraints", MP_VAR_MAXCON);
+        nc = 0;
         goto done;
     }
     for (Py_ssize_t k = 0; k < nc; k++) {
         if (py_var_parse(PySequence_Fast_GET_ITEM(seq, k), &G[k], "constraint") < 0) goto done;
+        if (G[k].F.d != F.F.d) {
+            PyErr_SetString(PyExc_ValueError, "a constraint must have the functional's "
+                            "dimension");
+            goto done;
+        }
         GI[k] = G[k].F;
     }
-    if (!(x = mp_py_array(xo, "x", 1)) || !(v = mp_py_array(vo, "values", 1)) ||
-        !(lam = mp_py_array(lo, "lambda0", 1)))
+    npy_intp npts = 0;
+    if (!(x = mp_py_array_finite(xo, "x", 1, -1)) || !(v = mp_py_array(vo, "values", 1)) ||
+        !(l0 = mp_py_array(lo, "lambda0", 1)) ||
+        !(y0 = py_var_points(yo, "y0", F.F.d, PyArray_SIZE(x), &npts)))
         goto done;
-    PyArrayObject *y0 = mp_py_array(yo, "y0", 1);
-    if (!y0) goto done;
-    y = (PyArrayObject *)PyArray_NewCopy(y0, NPY_CORDER);
-    Py_DECREF(y0);
-    if (!y) goto done;
-    PyArrayObject *l2 = (PyArrayObject *)PyArray_NewCopy(lam, NPY_CORDER);
-    Py_DECREF(lam);
-    lam = l2;
-    if (!lam) goto done;
-    npy_intp npts = PyArray_SIZE(x);
-    if (npts < 3 || PyArray_SIZE(y) != npts || PyArray_SIZE(v) != nc || PyArray_SIZE(lam) != nc ||
-        max_iter < 1) {
+    if (!(y = py_var_copy(y0)) || !(lam = py_var_copy(l0))) goto done;
+    if (npts < 3 || PyArray_SIZE(v) != nc || PyArray_SIZE(lam) != nc || max_iter < 1) {
         PyErr_SetString(PyExc_ValueError,
                         "variational_solve: need len(x) == len(y0) >= 3, one value and one "
                         "multiplier per constraint, max_iter >= 1");
@@ -143,7 +267,8 @@ static PyObject *py_variational_solve(PyObject *self, PyObject *args)
     }
     mp_var_problem pb = {.n = (size_t)npts - 1, .x = PyArray_DATA(x), .F = F.F,
                          .ncon = (size_t)nc, .G = GI, .value = PyArray_DATA(v),
-                         .stationary = stationary, .tol = tol, .max_iter = (size_t)max_iter};
+                         .stationary = stationary, .tol = tol, .max_iter = (size_t)max_iter,
+                         .interrupt = mp_py_check_interrupt};
     mp_var_info info = {0};
     int st;
     double *yy = PyArray_DATA(y), *ll = PyArray_DATA(lam);
@@ -162,47 +287,186 @@ static PyObject *py_variational_solve(PyObject *self, PyObject *args)
                         (Py_ssize_t)info.iterations, "J", info.J, "residual", info.residual,
                         "constraint_error", info.constraint_error);
 done:
+    py_var_release(&F);
+    for (Py_ssize_t k = 0; k < nc; k++) py_var_release(&G[k]);
     Py_XDECREF(seq);
     Py_XDECREF(x);
     Py_XDECREF(y);
+    Py_XDECREF(y0);
     Py_XDECREF(v);
     Py_XDECREF(lam);
+    Py_XDECREF(l0);
     return res;
 }
 
-/* variational_integrate(L, t0, h, nsteps, q0, p0) -> (q, p), each nsteps + 1 */
+/* variational_integrate(L, t0, h, nsteps, q0, p0, v0, sing_tol) -> (q, p), each of
+ * shape (nsteps + 1, d). */
 static PyObject *py_variational_integrate(PyObject *self, PyObject *args)
 {
     (void)self;
-    PyObject *fo;
-    double t0, h, q0, p0;
+    PyObject *fo, *qo, *po, *vo;
+    double t0, h, sing_tol;
     Py_ssize_t nsteps;
-    if (!PyArg_ParseTuple(args, "Oddndd", &fo, &t0, &h, &nsteps, &q0, &p0)) return NULL;
+    if (!PyArg_ParseTuple(args, "OddnOOOd", &fo, &t0, &h, &nsteps, &qo, &po, &vo, &sing_tol))
+        return NULL;
     py_var_spec L;
     if (py_var_parse(fo, &L, "L") < 0) return NULL;
-    if (nsteps < 0) {
-        PyErr_SetString(PyExc_ValueError, "nsteps must be >= 0");
-        return NULL;
+    PyArrayObject *q0 = NULL, *p0 = NULL, *v0 = NULL, *q = NULL, *p = NULL;
+    PyObject *res = NULL;
+    npy_intp one;
+    size_t d = L.F.d;
+    if (!(q0 = py_var_points(qo, "q0", d, 1, &one)) || !(p0 = py_var_points(po, "p0", d, 1, &one))
+        || !(v0 = py_var_points(vo, "v0", d, 1, &one)))
+        goto done;
+    if (nsteps < 0 || (size_t)nsteps >= (size_t)PY_SSIZE_T_MAX / (8 * d) - 1) {
+        PyErr_SetString(PyExc_ValueError, "nsteps must be >= 0 and fit in memory");
+        goto done;
     }
-    npy_intp dim = nsteps + 1;
-    PyArrayObject *q = mp_py_empty(1, &dim), *p = mp_py_empty(1, &dim);
-    if (!q || !p) {
-        Py_XDECREF(q);
-        Py_XDECREF(p);
-        return NULL;
-    }
+    npy_intp dims[2] = {nsteps + 1, (npy_intp)d};
+    if (!(q = mp_py_empty(2, dims)) || !(p = mp_py_empty(2, dims))) goto done;
     int st;
     double *qq = PyArray_DATA(q), *pp = PyArray_DATA(p);
+    const double *a = PyArray_DATA(q0), *b = PyArray_DATA(p0), *c = PyArray_DATA(v0);
     Py_BEGIN_ALLOW_THREADS
-    st = mp_variational_integrate(&L.F, t0, h, (size_t)nsteps, q0, p0, qq, pp,
+    st = mp_variational_integrate(&L.F, t0, h, (size_t)nsteps, a, b, c, sing_tol, qq, pp,
                                   mp_py_check_interrupt, NULL);
     Py_END_ALLOW_THREADS
     if (st != MP_OK) {
-        Py_DECREF(q);
-        Py_DECREF(p);
-        return mp_py_raise(st, "variational_integrate");
+        mp_py_raise_detail(st, "variational_integrate",
+                           st == MP_ESINGULAR ? "d2L/dqdot2 is singular: the Lagrangian does "
+                                                "not determine the velocities" : "");
+        goto done;
     }
-    return Py_BuildValue("(NN)", (PyObject *)q, (PyObject *)p);
+    res = Py_BuildValue("(OO)", (PyObject *)q, (PyObject *)p);
+done:
+    py_var_release(&L);
+    Py_XDECREF(q0);
+    Py_XDECREF(p0);
+    Py_XDECREF(v0);
+    Py_XDECREF(q);
+    Py_XDECREF(p);
+    return res;
+}
+
+/* variational_momenta(L, x, y) -> p, the discrete momenta along the path (x, y). */
+static PyObject *py_variational_momenta(PyObject *self, PyObject *args)
+{
+    (void)self;
+    PyObject *fo, *xo, *yo;
+    if (!PyArg_ParseTuple(args, "OOO", &fo, &xo, &yo)) return NULL;
+    py_var_spec L;
+    if (py_var_parse(fo, &L, "L") < 0) return NULL;
+    PyArrayObject *x = NULL, *y = NULL, *p = NULL;
+    PyObject *res = NULL;
+    npy_intp m;
+    if (!(x = mp_py_array_finite(xo, "x", 1, -1)) ||
+        !(y = py_var_points(yo, "y", L.F.d, PyArray_SIZE(x), &m)))
+        goto done;
+    if (m < 2) {
+        PyErr_SetString(PyExc_ValueError, "variational_momenta: need at least 2 points");
+        goto done;
+    }
+    if (!(p = (PyArrayObject *)PyArray_NewLikeArray(y, NPY_CORDER, NULL, 0))) goto done;
+    int st;
+    const double *xx = PyArray_DATA(x), *yy = PyArray_DATA(y);
+    double *pp = PyArray_DATA(p);
+    Py_BEGIN_ALLOW_THREADS
+    st = mp_variational_momenta(&L.F, (size_t)m - 1, xx, yy, pp);
+    Py_END_ALLOW_THREADS
+    if (st != MP_OK) {
+        mp_py_raise(st, "variational_momenta");
+        goto done;
+    }
+    res = (PyObject *)p;
+    p = NULL;
+done:
+    py_var_release(&L);
+    Py_XDECREF(x);
+    Py_XDECREF(y);
+    Py_XDECREF(p);
+    return res;
+}
+
+/* variational_velocities(L, x, y, p, v0, sing_tol) -> (v, energy): dL/dv = p solved for v. */
+static PyObject *py_variational_velocities(PyObject *self, PyObject *args)
+{
+    (void)self;
+    PyObject *fo, *xo, *yo, *po, *vo;
+    double sing_tol;
+    if (!PyArg_ParseTuple(args, "OOOOOd", &fo, &xo, &yo, &po, &vo, &sing_tol)) return NULL;
+    py_var_spec L;
+    if (py_var_parse(fo, &L, "L") < 0) return NULL;
+    PyArrayObject *x = NULL, *y = NULL, *p = NULL, *v0 = NULL, *v = NULL, *E = NULL;
+    PyObject *res = NULL;
+    npy_intp m, m2;
+    size_t d = L.F.d;
+    if (!(x = mp_py_array_finite(xo, "x", 1, -1)) ||
+        !(y = py_var_points(yo, "y", d, PyArray_SIZE(x), &m)) ||
+        !(p = py_var_points(po, "p", d, m, &m2)) || !(v0 = py_var_points(vo, "v0", d, m, &m2)))
+        goto done;
+    if (!(v = py_var_copy(v0)) || !(E = mp_py_empty(1, &m))) goto done;
+    int st;
+    const double *xx = PyArray_DATA(x), *yy = PyArray_DATA(y), *pp = PyArray_DATA(p);
+    double *vv = PyArray_DATA(v), *ee = PyArray_DATA(E);
+    Py_BEGIN_ALLOW_THREADS
+    st = mp_variational_velocities(&L.F, (size_t)m, xx, yy, pp, vv, ee, sing_tol);
+    Py_END_ALLOW_THREADS
+    if (st != MP_OK) {
+        mp_py_raise_detail(st, "variational_velocities",
+                           st == MP_ESINGULAR ? "d2L/dqdot2 is singular: the velocities do "
+                                                "not follow from the momenta"
+                                              : "");
+        goto done;
+    }
+    res = Py_BuildValue("(OO)", (PyObject *)v, (PyObject *)E);
+done:
+    py_var_release(&L);
+    Py_XDECREF(x);
+    Py_XDECREF(y);
+    Py_XDECREF(p);
+    Py_XDECREF(v0);
+    Py_XDECREF(v);
+    Py_XDECREF(E);
+    return res;
+}
+
+/* variational_eval(L, x, y, p) -> (m, K): the values and derivatives at m points. */
+static PyObject *py_variational_eval(PyObject *self, PyObject *args)
+{
+    (void)self;
+    PyObject *fo, *xo, *yo, *po;
+    if (!PyArg_ParseTuple(args, "OOOO", &fo, &xo, &yo, &po)) return NULL;
+    py_var_spec L;
+    if (py_var_parse(fo, &L, "L") < 0) return NULL;
+    PyArrayObject *x = NULL, *y = NULL, *p = NULL, *out = NULL;
+    PyObject *res = NULL;
+    npy_intp m, m2;
+    size_t d = L.F.d;
+    if (!(x = mp_py_array_finite(xo, "x", 1, -1)) ||
+        !(y = py_var_points(yo, "y", d, PyArray_SIZE(x), &m)) ||
+        !(p = py_var_points(po, "p", d, m, &m2)))
+        goto done;
+    npy_intp dims[2] = {m, (npy_intp)mp_var_nvalues(d)};
+    if (!(out = mp_py_empty(2, dims))) goto done;
+    int st;
+    const double *xx = PyArray_DATA(x), *yy = PyArray_DATA(y), *pp = PyArray_DATA(p);
+    double *oo = PyArray_DATA(out);
+    Py_BEGIN_ALLOW_THREADS
+    st = m ? L.F.eval((size_t)m, xx, yy, pp, oo, L.F.ctx) : MP_OK;
+    Py_END_ALLOW_THREADS
+    if (st != MP_OK) {
+        mp_py_raise(st, "variational_eval");
+        goto done;
+    }
+    res = (PyObject *)out;
+    out = NULL;
+done:
+    py_var_release(&L);
+    Py_XDECREF(x);
+    Py_XDECREF(y);
+    Py_XDECREF(p);
+    Py_XDECREF(out);
+    return res;
 }
 
 PyMethodDef mp_py_variational_methods[] = {
@@ -210,5 +474,14 @@ PyMethodDef mp_py_variational_methods[] = {
      "Newton solver of the discrete Euler-Lagrange equations (internal)."},
     {"variational_integrate", py_variational_integrate, METH_VARARGS,
      "Variational integrator of the midpoint discrete Lagrangian (internal)."},
+    {"variational_momenta", py_variational_momenta, METH_VARARGS,
+     "Discrete momenta along a path (internal)."},
+    {"variational_velocities", py_variational_velocities, METH_VARARGS,
+     "Velocities from momenta, the Legendre transform back (internal)."},
+    {"variational_eval", py_variational_eval, METH_VARARGS,
+     "A Lagrangian and its derivatives at points (internal)."},
+    {"_variational_capsule", py_variational_capsule, METH_O,
+     "Wrap the address of a compiled mp_gen_lagrangian (internal; the address must be "
+     "that of such a function)."},
     {NULL, NULL, 0, NULL},
 };

@@ -1,4 +1,5 @@
-"""Tour: the brachistochrone, the catenary and the least-action path, beside closed forms."""
+"""Tour: the brachistochrone, the catenary and least-action paths (one and more coordinates),
+beside closed forms."""
 from pathlib import Path
 
 import numpy as np
@@ -56,6 +57,33 @@ def run(out: Path) -> None:
     line("energy error, h = 0.05: first / last 100 s",
          f"variational {dv[:k].max():.1e} / {dv[-k:].max():.1e} J/kg",
          ref=f"rk4 {dr[:k].max():.1e} / {dr[-k:].max():.1e} J/kg (drifts)")
+    # two coordinates: the double pendulum's least-action path (its Lagrangian
+    # as a Python callable, derivatives by finite differences) and solve_bvp
+    from mechpy.benches.variational import _dp_lagrangian, _dp_rhs
+    qa2, qb2, T2 = np.array([0.4, -0.3]), np.array([-0.2, 0.5]), 0.8
+
+    def bc2(ya, yb):
+        return np.r_[ya[:2] - qa2, yb[:2] - qb2]
+
+    def f2(t, y):
+        return np.array(_dp_rhs(t, y))
+    tt2 = np.linspace(0, T2, 11)
+    guess2 = np.vstack([qa2[:, None] + np.outer(qb2 - qa2, tt2 / T2),
+                        np.repeat(((qb2 - qa2) / T2)[:, None], 11, axis=1)])
+    dp = V.stationary_path(_dp_lagrangian, qa2, qb2, T2, n=400)
+    bvp2 = solve_bvp(f2, bc2, tt2, guess2, tol=1e-12, max_nodes=200000)
+    line("double pendulum action path, d = 2, n = 400",
+         f"err {np.max(np.abs(dp.q - bvp2.sol(dp.t)[:2])):.1e} rad",
+         t_mp=median_time(lambda: V.stationary_path(_dp_lagrangian, qa2, qb2, T2, n=400),
+                          repeat=3),
+         t_ref=median_time(lambda: solve_bvp(f2, bc2, tt2, guess2, tol=1e-6), repeat=3),
+         ref_name="solve_bvp (tol 1e-6)")
+    top = mp.scenes.HeavyTop(I1=0.5, I3=0.2, mass=1.0, l=0.3)
+    vt = V.variational_integrate(top, (0, 20), [0.0, 0.6, 0.0], [1.0, 0.0, 20.0], 1e-3)
+    kept = max(np.ptp(vt.p[0]) / abs(vt.p[0, 0]), np.ptp(vt.p[2]) / abs(vt.p[2, 0]))
+    line("heavy top, d = 3, variational, 2e4 steps", f"p_phi, p_psi kept to {kept:.0e}",
+         ref=f"energy to {np.ptp(vt.energy) / abs(vt.energy[0]):.0e} (relative)")
+
     s = mp.solve(p, (0, 3), [2.5, 0.0], t_eval=np.linspace(0, 3, 301))
     Tn = V.pendulum_tension(p, s.y)
     line("string tension by a Lagrange multiplier", f"min {Tn.min():.3f} max {Tn.max():.3f} N/kg",

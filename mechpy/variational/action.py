@@ -1,0 +1,269 @@
+r"""Least action with any number of coordinates: the stationary path between
+two configurations and the variational integrator of the same discrete action.
+
+The discrete action of the midpoint rule,
+
+.. math:: S_h = \sum_{k=0}^{n-1} L_d(q_k, q_{k+1}), \qquad
+          L_d(q_k, q_{k+1}) = h\,L\Big(t_k + \tfrac h2, \frac{q_k + q_{k+1}}2,
+          \frac{q_{k+1} - q_k}h\Big),
+
+is made stationary in C (``csrc/variational.c``): between fixed ends by
+Newton's method on all interior nodes at once (a block-tridiagonal Hessian of
+d x d blocks, banded LU, O(n d^3) per iteration), or step by step from
+initial data (the variational integrator, a d x d Newton per step).
+"""
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from .. import _core
+from .._validate import as_array, as_int, as_scalar
+from .functionals import (_MAX_ITER, _SING_TOL_EXACT, _SING_TOL_FD, _TOL, _fd_spec,
+                          _lagrangian_fn, _n_nodes, _pair)
+from .lagrangians import _scene_spec, _spec_dim
+
+__all__ = ["stationary_path", "StationaryPath", "variational_integrate",
+           "VariationalTrajectory", "MAX_STEPS"]
+
+#: Default step budget of :func:`variational_integrate` (about 80 MB per
+#: array of one coordinate).
+MAX_STEPS = 10_000_000
+
+
+def _system(system, q_like: np.ndarray):
+    """(spec, d, scene energy or None, singularity tolerance) of a scene or a
+    Python Lagrangian; a callable's d comes from the coordinates q_like."""
+    from ..scenes import Duffing, HeavyTop, Pendulum, Scene
+    if isinstance(system, Scene) or getattr(system, "_lagrangian_c", None) is not None:
+        spec = _scene_spec(system)
+        energy = system.energy if isinstance(system, (Pendulum, Duffing, HeavyTop)) else None
+        return spec, _spec_dim(spec), energy, _SING_TOL_EXACT
+    if callable(system):
+        scalar = q_like.ndim == 0
+        d = 1 if scalar else q_like.shape[0]
+        return (_fd_spec(_lagrangian_fn(system, d, scalar), d), d, None, _SING_TOL_FD)
+    raise TypeError("system must be a scene (Pendulum, Duffing, HeavyTop, a scene from "
+                    "mp.lagrangian) or a callable L(q, qdot[, t]), got "
+                    f"{type(system).__name__}")
+
+
+def _coords(v, name: str) -> np.ndarray:
+    a = as_array(v, name)
+    if a.ndim > 1:
+        raise ValueError(f"{name} must be a number or a vector of coordinates (d,), got "
+                         f"shape {a.shape}")
+    return a
+
+
+def _check_dim(a: np.ndarray, name: str, d: int) -> np.ndarray:
+    """a (scalar or (d,)) as a (d,) vector; a scalar only for d = 1."""
+    if a.size != d or (a.ndim == 0 and d != 1):
+        raise ValueError(f"{name} must have {d} coordinate(s) for this system, got shape "
+                         f"{a.shape}")
+    return a.reshape(d)
+
+
+def _shape_out(a: np.ndarray, scalar: bool) -> np.ndarray:
+    """Points (m, d) as the public layout: (m,) for a scalar coordinate, else (d, m)."""
+    return np.ascontiguousarray(a[:, 0] if scalar else a.T)
+
+
+class StationaryPath(NamedTuple):
+    """Result of :func:`stationary_path`.
+
+    Attributes
+    ----------
+    t : ndarray, shape (n + 1,)
+        Times (s).
+    q : ndarray, shape (n + 1,) or (d, n + 1)
+        The path of stationary discrete action (one row per coordinate;
+        1-D for scalar end points).
+    p : ndarray, same shape as q
+        Discrete generalized momenta: :math:`p_0 = -D_1L_d(q_0, q_1)`,
+        :math:`p_k = D_2L_d(q_{k-1}, q_k)`.
+    qdot : ndarray, same shape as q
+        Velocities from :math:`\\partial L/\\partial\\dot q = p`.
+    action : float
+        The discrete action :math:`S_h = \\sum_k h L_d` (units of L times s).
+    iterations : int
+    """
+    t: np.ndarray
+    q: np.ndarray
+    p: np.ndarray
+    qdot: np.ndarray
+    action: float
+    iterations: int
+
+
+def stationary_path(scene_or_lagrangian, q_a, q_b, T: float, n: int = 200, *,
+                    t0: float = 0.0, guess=None, tol: float = _TOL,
+                    max_iter: int = _MAX_ITER) -> StationaryPath:
+    r"""The path of stationary discrete action from q(t0) = q_a to q(t0 + T) = q_b.
+
+    .. math:: S_h = \sum_{k=0}^{n-1} h\,L\Big(t_k + \tfrac h2, \frac{q_k + q_{k+1}}2,
+              \frac{q_{k+1} - q_k}h\Big), \qquad \frac{\partial S_h}{\partial q_k} = 0,
+
+    solved by Newton's method on the residual (the action need not be a
+    minimum: past a conjugate point it is a saddle).  With d coordinates the
+    Hessian is block-tridiagonal (d x d blocks; banded LU, O(n d^3) per
+    iteration).  Second order in h.
+
+    Parameters
+    ----------
+    scene_or_lagrangian : scene or callable ``L(q, qdot[, t])``
+        A scene whose Lagrangian runs in C: Pendulum (per unit mass,
+        :math:`e^{bt}(\tfrac12\ell^2\dot\theta^2 + g\ell\cos\theta + \ell^2A\cos(\Omega t)\theta)`,
+        whose Euler-Lagrange equation is the scene's equation of motion),
+        Duffing, HeavyTop (q = (phi, theta, psi)) or a compiled scene from
+        ``mp.lagrangian`` (any d); or a vectorised Python callable, its
+        derivatives by finite differences: q and qdot of shape (d, m) for end
+        points of shape (d,), of shape (m,) for scalar end points (e.g. the
+        harmonic oscillator ``lambda q, v: 0.5 * v**2 - 0.5 * q**2``); a third
+        argument, if it takes one, receives the times (m,).
+    q_a, q_b : float or array (d,)
+        End configurations.
+    T : float
+        Duration (s), > 0.
+    n : int
+        Number of time steps (>= 4).
+    t0 : float
+        Start time (s).
+    guess : array (n + 1,) or (d, n + 1), optional
+        Initial path (its ends are replaced by q_a, q_b); the straight line
+        by default.
+    tol, max_iter : float, int
+        Relative step tolerance and Newton budget.
+
+    Returns
+    -------
+    StationaryPath
+        Arrays of shape (n + 1,) for scalar ends, (d, n + 1) otherwise.
+
+    Raises
+    ------
+    ConvergenceError
+        Newton's method did not converge within max_iter.
+    SingularityError
+        :math:`\partial^2L/\partial\dot q^2` is singular along the path (the
+        velocities do not follow from the momenta).
+    """
+    qa, qb = _coords(q_a, "q_a"), _coords(q_b, "q_b")
+    spec, d, _, sing_tol = _system(scene_or_lagrangian, qa)
+    scalar = qa.ndim == 0 and qb.ndim == 0
+    qa, qb = _check_dim(qa, "q_a", d), _check_dim(qb, "q_b", d)
+    T = as_scalar(T, "T", positive=True)
+    t0 = as_scalar(t0, "t0")
+    n = _n_nodes(n)
+    t = t0 + np.linspace(0.0, T, n + 1)
+    if guess is None:
+        q0 = qa + (qb - qa) * ((t - t0) / T)[:, None]
+    else:
+        g = as_array(guess, "guess", shape=(n + 1,) if scalar else (d, n + 1))
+        q0 = g.reshape(n + 1, 1).copy() if scalar else np.ascontiguousarray(g.T)
+        q0[0], q0[-1] = qa, qb
+    tol = as_scalar(tol, "tol", positive=True)
+    max_iter = as_int(max_iter, "max_iter", minimum=1)
+    q, _, info = _core.variational_solve(spec, t, q0, [], np.zeros(0), np.zeros(0), True,
+                                         tol, max_iter)
+    p = _core.variational_momenta(spec, t, q)
+    vm = np.diff(q, axis=0) / np.diff(t)[:, None]
+    v, _ = _core.variational_velocities(spec, t, q, p, np.concatenate([vm[:1], vm]),
+                                        sing_tol)
+    return StationaryPath(t, _shape_out(q, scalar), _shape_out(p, scalar),
+                          _shape_out(v, scalar), info["J"], info["iterations"])
+
+
+class VariationalTrajectory(NamedTuple):
+    """Result of :func:`variational_integrate`.
+
+    Attributes
+    ----------
+    t : ndarray, shape (n + 1,)
+        Times (s).
+    q, p, qdot : ndarray, shape (n + 1,) or (d, n + 1)
+        Positions, momenta and velocities (from p), one row per coordinate
+        (1-D for a scalar q0).
+    energy : ndarray, shape (n + 1,)
+        For Pendulum, Duffing and HeavyTop the scene's own ``energy``;
+        otherwise the energy function
+        :math:`h = \\dot q\\cdot\\partial L/\\partial\\dot q - L`.
+    """
+    t: np.ndarray
+    q: np.ndarray
+    p: np.ndarray
+    qdot: np.ndarray
+    energy: np.ndarray
+
+
+def variational_integrate(system, t_span, q0, qdot0, h: float, *,
+                          max_steps: int = MAX_STEPS) -> VariationalTrajectory:
+    r"""Integrate with the variational integrator of the midpoint discrete Lagrangian.
+
+    .. math:: L_d(q_0, q_1) = h\,L\big(\tfrac{q_0 + q_1}2, \tfrac{q_1 - q_0}h\big),\quad
+              p_k = -D_1L_d(q_k, q_{k+1}),\quad p_{k+1} = D_2L_d(q_k, q_{k+1})
+
+    (the same discrete action as :func:`stationary_path`; a d x d Newton
+    iteration per step).  The map :math:`(q_k, p_k) \mapsto (q_{k+1}, p_{k+1})`
+    is symplectic and second order; for a conservative system the energy
+    error stays bounded (O(h^2)) over exponentially long times instead of
+    drifting, and the momentum of a cyclic coordinate is conserved exactly.
+
+    Parameters
+    ----------
+    system : scene or callable ``L(q, qdot[, t])``
+        As for :func:`stationary_path`.
+    t_span : (t0, t1)
+        Time interval (s).
+    q0, qdot0 : float or array (d,)
+        Initial position and velocity.
+    h : float
+        Step (s); the last step ends at or after t1 (n = ceil((t1 - t0)/h)).
+    max_steps : int
+        Step budget (default :data:`MAX_STEPS` = 10**7): more steps are
+        refused before any memory is allocated.
+
+    Returns
+    -------
+    VariationalTrajectory
+        Arrays of shape (n + 1,) for a scalar q0, (d, n + 1) otherwise.
+
+    Raises
+    ------
+    ValueError
+        The run would need more than max_steps steps.
+    SingularityError
+        :math:`\partial^2L/\partial\dot q^2` is singular (the Lagrangian does
+        not determine the motion, e.g. it is linear in the velocities).
+    ConvergenceError
+        A step's Newton iteration failed (the step is too large).
+    """
+    q0a, v0a = _coords(q0, "q0"), _coords(qdot0, "qdot0")
+    spec, d, energy, sing_tol = _system(system, q0a)
+    scalar = q0a.ndim == 0 and v0a.ndim == 0
+    q0a, v0a = _check_dim(q0a, "q0", d), _check_dim(v0a, "qdot0", d)
+    t0, t1 = (as_scalar(v, "t_span") for v in _pair(t_span, "t_span"))
+    if not t1 > t0:
+        raise ValueError("t_span must be increasing")
+    h = as_scalar(h, "h", positive=True)
+    max_steps = as_int(max_steps, "max_steps", minimum=1)
+    steps = np.ceil((t1 - t0) / h - 1e-9)
+    if not steps <= max_steps:
+        raise ValueError(f"t_span and h need {steps:.3g} steps, more than max_steps = "
+                         f"{max_steps}; raise h or max_steps (each step stores "
+                         f"{8 * (3 * d + 2)} bytes)")
+    n = int(steps)
+    ev = _core.variational_eval(spec, np.array([t0]), q0a[None], v0a[None])
+    p0 = ev[0, 1 + d:1 + 2 * d]
+    q, p = _core.variational_integrate(spec, t0, h, n, q0a[None], p0[None], v0a[None],
+                                       sing_tol)
+    t = t0 + h * np.arange(n + 1)      # after the interruptible run
+    vguess = np.empty_like(q)
+    vguess[0] = v0a
+    vguess[1:] = np.diff(q, axis=0) / h
+    v, E = _core.variational_velocities(spec, t, q, p, vguess, sing_tol)
+    if energy is not None:
+        E = energy(np.concatenate([q.T, v.T]))
+    return VariationalTrajectory(t, _shape_out(q, scalar), _shape_out(p, scalar),
+                                 _shape_out(v, scalar), np.asarray(E, dtype=np.float64))

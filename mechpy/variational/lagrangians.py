@@ -1,0 +1,321 @@
+r"""Lagrangians of the scenes, generalized momenta, cyclic coordinates, and two
+small systems with constraints (a central force, a bead on a spinning hoop).
+
+A system's Lagrangian reaches the C core as an integrand spec (see
+``csrc/py/py_variational.c``): a built-in for the scenes (Pendulum, Duffing,
+HeavyTop), the compiled ``mp_gen_lagrangian`` of a scene built by
+``mp.lagrangian`` (its ``_lagrangian_c`` attribute), or finite differences of
+a Python callable.
+"""
+from __future__ import annotations
+
+from typing import Callable
+
+import numpy as np
+
+from .. import _core
+from .._validate import as_array, as_scalar
+from .constraints import constraint_forces
+
+__all__ = ["lagrangian", "generalized_momenta", "cyclic_coordinates", "CentralForce",
+           "RotatingHoop"]
+
+
+def _compiled_spec(system):
+    """The spec ``("c", capsule, params, d)`` of a compiled scene, or None."""
+    lc = getattr(system, "_lagrangian_c", None)
+    if lc is None:
+        return None
+    try:
+        address, params = lc
+    except (TypeError, ValueError):
+        raise TypeError(f"{type(system).__name__}._lagrangian_c must be a pair (address, "
+                        "params)") from None
+    if not isinstance(address, (int, np.integer)) or isinstance(address, bool) or address <= 0:
+        raise TypeError(f"{type(system).__name__}._lagrangian_c[0] must be the function's "
+                        f"address (a positive int), got {address!r}")
+    params = np.ascontiguousarray(as_array(params, "_lagrangian_c params", ndim=1,
+                                           allow_empty=True), dtype=np.float64)
+    dim = getattr(system, "dim", None)
+    if not isinstance(dim, (int, np.integer)) or dim < 2 or dim % 2:
+        raise TypeError(f"{type(system).__name__}.dim must be an even int >= 2 (the state "
+                        f"is (q, qdot)), got {dim!r}")
+    return ("c", _core._variational_capsule(int(address)), params, int(dim) // 2)
+
+
+def _scene_spec(scene):
+    """The C spec of a scene's Lagrangian L(t, q, qdot) (built-in or compiled)."""
+    from ..scenes import Duffing, HeavyTop, Pendulum
+    spec = _compiled_spec(scene)
+    if spec is not None:
+        return spec
+    p = scene.params
+    if isinstance(scene, Pendulum):
+        return ("pendulum", [p["g"], p["length"], p["damping"], p["drive_amplitude"],
+                             p["drive_frequency"]])
+    if isinstance(scene, Duffing):
+        return ("duffing", [p["alpha"], p["beta"], p["delta"], p["gamma"], p["omega"]])
+    if isinstance(scene, HeavyTop):
+        return ("heavytop", [p["I1"], p["I3"], p["mass"] * p["g"] * p["l"]])
+    raise TypeError(f"{type(scene).__name__} has no Lagrangian of the form L(t, q, qdot) "
+                    "here; use Pendulum, Duffing, HeavyTop, a scene from mp.lagrangian or a "
+                    "callable L(q, qdot[, t])")
+
+
+def _spec_dim(spec) -> int:
+    if spec[0] in ("python",):
+        return spec[2]
+    if spec[0] == "c":
+        return spec[3]
+    return 3 if spec[0] == "heavytop" else 1
+
+
+def lagrangian(scene) -> Callable:
+    r"""The Lagrangian ``L(q, qdot, t=0)`` of a scene, as a vectorised callable.
+
+    Pendulum (per unit mass, J/kg):
+    :math:`e^{bt}(\tfrac12\ell^2\dot\theta^2 + g\ell\cos\theta + \ell^2A\cos(\Omega t)\,\theta)`;
+    Duffing: :math:`e^{\delta t}(\tfrac12\dot x^2 - \tfrac12\alpha x^2 - \tfrac14\beta x^4
+    + \gamma\cos(\omega t)\,x)`.  The factor :math:`e^{bt}` (Caldirola-Kanai)
+    makes the damped equation of motion an Euler-Lagrange equation.
+    HeavyTop (J), coordinates q = (phi, theta, psi) of shape (3, ...):
+    :math:`\tfrac{I_1}{2}(\dot\theta^2 + \dot\phi^2\sin^2\theta)
+    + \tfrac{I_3}{2}(\dot\psi + \dot\phi\cos\theta)^2 - Mgl\cos\theta`.
+    A compiled scene of d coordinates (``mp.lagrangian``): q of shape (d, ...).
+
+    Parameters
+    ----------
+    scene : Pendulum, Duffing, HeavyTop or a compiled scene
+
+    Returns
+    -------
+    callable
+        ``L(q, qdot, t=0.0)``; one-coordinate scenes take q of any shape.
+
+    Raises
+    ------
+    TypeError
+        ``scene`` is not a scene with a Lagrangian.
+    """
+    from ..scenes import HeavyTop, Scene
+    if not isinstance(scene, Scene) and getattr(scene, "_lagrangian_c", None) is None:
+        raise TypeError("scene must be a mechpy scene with a Lagrangian (Pendulum, Duffing, "
+                        f"HeavyTop or a compiled mp.lagrangian scene), got {type(scene).__name__}")
+    if isinstance(scene, HeavyTop):
+        return _heavy_top_lagrangian(scene)
+    spec = _scene_spec(scene)
+    d = _spec_dim(spec)
+
+    def L(q, qdot, t=0.0):
+        q = np.asarray(q, dtype=np.float64)
+        qdot = np.asarray(qdot, dtype=np.float64)
+        if d == 1:
+            q, qdot, tt = np.broadcast_arrays(q, qdot, np.asarray(t, dtype=np.float64))
+            shape = q.shape
+            Q, V = q.reshape(-1, 1), qdot.reshape(-1, 1)
+        else:
+            if q.shape[:1] != (d,) or qdot.shape != q.shape:
+                raise ValueError(f"q and qdot must have shape ({d}, ...), got {q.shape} and "
+                                 f"{qdot.shape}")
+            shape = q.shape[1:]
+            tt = np.broadcast_to(np.asarray(t, dtype=np.float64), shape)
+            Q, V = q.reshape(d, -1).T, qdot.reshape(d, -1).T
+        out = _core.variational_eval(spec, np.ascontiguousarray(tt, dtype=np.float64).ravel(),
+                                     np.ascontiguousarray(Q), np.ascontiguousarray(V))
+        return out[:, 0].reshape(shape)
+    L.__doc__ = f"Lagrangian of {scene!r}."
+    return L
+
+
+def _heavy_top_lagrangian(top):
+    p = top.params
+    I1, I3, Mgl = p["I1"], p["I3"], p["mass"] * p["g"] * p["l"]
+
+    def L(q, qdot, t=0.0):
+        th = np.asarray(q, dtype=float)[1]
+        phd, thd, psd = np.asarray(qdot, dtype=float)[:3]
+        return (0.5 * I1 * (thd ** 2 + (phd * np.sin(th)) ** 2)
+                + 0.5 * I3 * (psd + phd * np.cos(th)) ** 2 - Mgl * np.cos(th))
+    L.__doc__ = f"Lagrangian of {top!r} (J)."
+    return L
+
+
+def _split(q, qdot):
+    q = as_array(q, "q")
+    qdot = as_array(qdot, "qdot")
+    if q.shape != qdot.shape:
+        raise ValueError(f"q and qdot must have the same shape, got {q.shape} and {qdot.shape}")
+    return q, qdot
+
+
+def _partials(L, q, qdot, which):
+    """dL/dq_i (which = 0) or dL/dqdot_i (which = 1) by 4th-order central
+    differences; q of shape (d, ...) or (...) for one coordinate."""
+    q, qdot = _split(q, qdot)
+    one = q.ndim == 0
+    if one:
+        q, qdot = q[None], qdot[None]
+    base = [q, qdot]
+    out = np.empty_like(q)
+    for i in range(q.shape[0]):
+        z = base[which]
+        hh = 1e-3 * (1 + np.abs(z[i]))
+        vals = []
+        for k in (1, -1, 2, -2):
+            zz = z.copy()
+            zz[i] = z[i] + k * hh
+            args = [q, qdot]
+            args[which] = zz
+            if one:
+                args = [a[0] for a in args]
+            val = np.asarray(L(*args), dtype=float)
+            if not one and q.shape[0] == 1 and val.shape == q.shape:
+                val = val[0]     # a one-coordinate L that keeps the leading axis
+            vals.append(val)
+        out[i] = (8 * (vals[0] - vals[1]) - (vals[2] - vals[3])) / (12 * hh)
+    return out[0] if one else out
+
+
+def generalized_momenta(L: Callable, q, qdot) -> np.ndarray:
+    r"""Generalized momenta :math:`p_i = \partial L/\partial\dot q_i`.
+
+    Parameters
+    ----------
+    L : callable ``L(q, qdot)`` or a scene
+        Vectorised: q and qdot of shape (d, ...) (or scalars for one
+        coordinate); a one-coordinate scene takes q of any shape (samples of
+        it), a HeavyTop q = (phi, theta, psi) of shape (3, ...).
+    q, qdot : array_like
+        Coordinates and velocities, same shape.
+
+    Returns
+    -------
+    ndarray
+        Same shape as q (units of L times s per unit of q).
+    """
+    from ..scenes import Duffing, Pendulum
+    if isinstance(L, (Pendulum, Duffing)):  # one coordinate: any shape
+        q, qdot = _split(q, qdot)
+        return _partials(lagrangian(L), q[None], qdot[None], 1)[0]
+    return _partials(_as_lagrangian(L), q, qdot, 1)
+
+
+def cyclic_coordinates(L: Callable, q, qdot, *, atol: float = 1e-8) -> tuple:
+    r"""Indices i of the coordinates that L does not depend on,
+    :math:`\partial L/\partial q_i = 0` (so that :math:`p_i` is conserved),
+    tested at the sample states (q, qdot) of shape (d, ...)."""
+    q, qdot = _split(q, qdot)
+    if q.ndim == 0:
+        q, qdot = q[None], qdot[None]
+    dLdq = _partials(_as_lagrangian(L), q, qdot, 0)
+    scale = np.max(np.abs(_partials(_as_lagrangian(L), q, qdot, 1))) + 1.0
+    flat = np.abs(dLdq.reshape(q.shape[0], -1))
+    return tuple(int(i) for i in range(q.shape[0]) if np.all(flat[i] <= atol * scale))
+
+
+def _as_lagrangian(L):
+    from ..scenes import Scene
+    if isinstance(L, Scene) or getattr(L, "_lagrangian_c", None) is not None:
+        return lagrangian(L)
+    if not callable(L):
+        raise TypeError("L must be a callable L(q, qdot) or a scene")
+    return L
+
+
+class CentralForce:
+    r"""A particle in the plane under an attractive inverse-square force.
+
+    .. math:: L(r, \varphi, \dot r, \dot\varphi) = \tfrac12 m(\dot r^2 + r^2\dot\varphi^2)
+              + \frac{k}{r}
+
+    Coordinates q = (r, phi): phi is cyclic, so
+    :math:`p_\varphi = m r^2\dot\varphi` (the angular momentum) is conserved.
+    Units: m (kg), k (J m).
+    """
+
+    def __init__(self, m: float = 1.0, k: float = 1.0):
+        self.m = as_scalar(m, "m", positive=True)
+        self.k = as_scalar(k, "k", positive=True)
+
+    def __call__(self, q, qdot):
+        r, _ = q
+        rd, phid = qdot
+        return 0.5 * self.m * (rd * rd + r * r * phid * phid) + self.k / r
+
+    def rhs(self, t, y):
+        """d/dt of the state (r, phi, r_dot, phi_dot), for :func:`mechpy.solve`."""
+        r, _, rd, phid = y
+        return [rd, phid, r * phid * phid - self.k / (self.m * r * r), -2 * rd * phid / r]
+
+    def momenta(self, y):
+        """(p_r, p_phi) = (m r_dot, m r^2 phi_dot) for states (4, ...)."""
+        y = np.asarray(y, dtype=float)
+        return np.stack([self.m * y[2], self.m * y[0] ** 2 * y[3]])
+
+
+class RotatingHoop:
+    r"""A bead on a hoop of radius R spun at a constant rate omega about its
+    vertical diameter; theta is measured from the bottom.
+
+    .. math:: L = \tfrac12 mR^2(\dot\theta^2 + \omega^2\sin^2\theta) + mgR\cos\theta
+
+    The hoop's rotation is imposed (phi = omega t is not a coordinate): the
+    energy is not conserved, but L has no explicit time, so the energy function
+    :math:`h = \tfrac12 mR^2(\dot\theta^2 - \omega^2\sin^2\theta) - mgR\cos\theta`
+    (the Jacobi integral) is.  Units: SI.
+    """
+
+    def __init__(self, R: float = 1.0, omega: float = 5.0, g: float = 9.81, m: float = 1.0):
+        self.R = as_scalar(R, "R", positive=True)
+        self.omega = as_scalar(omega, "omega")
+        self.g = as_scalar(g, "g", positive=True)
+        self.m = as_scalar(m, "m", positive=True)
+
+    def __call__(self, q, qdot):
+        m, R, w, g = self.m, self.R, self.omega, self.g
+        return 0.5 * m * R * R * (qdot ** 2 + (w * np.sin(q)) ** 2) + m * g * R * np.cos(q)
+
+    def rhs(self, t, y):
+        """d/dt (theta, theta_dot), for :func:`mechpy.solve`."""
+        th, thd = y
+        return [thd, np.sin(th) * (self.omega ** 2 * np.cos(th) - self.g / self.R)]
+
+    def jacobi_integral(self, y):
+        """h(theta, theta_dot) (J) for states (2, ...)."""
+        th, thd = np.asarray(y, dtype=float)
+        m, R, w = self.m, self.R, self.omega
+        return 0.5 * m * R * R * (thd ** 2 - (w * np.sin(th)) ** 2) - m * self.g * R * np.cos(th)
+
+    def normal_force(self, t, y) -> np.ndarray:
+        r"""The hoop's force on the bead from Lagrange multipliers, shape (3, ...).
+
+        The bead is a free particle in Cartesian coordinates with two
+        constraints, :math:`|\mathbf r|^2 = R^2` and
+        :math:`-\sin(\omega t)x + \cos(\omega t)y = 0` (the hoop's plane);
+        :func:`constraint_forces` gives the multipliers.  Returned are the
+        components (radial outward, azimuthal along the rotation, vertical
+        plane tangent) in N: the radial one is
+        :math:`-mR(\dot\theta^2 + \omega^2\sin^2\theta) - mg\cos\theta`, the
+        azimuthal one :math:`2mR\omega\dot\theta\cos\theta` (the Coriolis
+        push), the tangential one 0.
+        """
+        t = np.asarray(t, dtype=float)
+        th, thd = np.asarray(y, dtype=float)
+        R, w, m, g = self.R, self.omega, self.m, self.g
+        c, s = np.cos(w * t), np.sin(w * t)
+        st, ct = np.sin(th), np.cos(th)
+        pos = R * np.stack([st * c, st * s, -ct])
+        vel = R * thd * np.stack([ct * c, ct * s, st]) + R * w * st * np.stack([-s, c, 0 * c])
+        J = np.stack([np.moveaxis(pos, 0, -1),
+                      np.moveaxis(np.stack([-s, c, 0 * c]), 0, -1)], axis=-2)   # (..., 2, 3)
+        bias = np.stack([np.sum(vel * vel, axis=0),
+                         -2 * w * (c * vel[0] + s * vel[1])], axis=-1)
+        F = np.moveaxis(np.stack([0 * c + 0 * th, 0 * th, -m * g + 0 * th]), 0, -1)
+        _, N = constraint_forces(m, F, J, bias)
+        N = np.moveaxis(N, -1, 0)
+        rhat = pos / R
+        phat = np.stack([-s, c, 0 * c]) + 0 * pos
+        that = np.stack([ct * c, ct * s, st])
+        return np.stack([np.sum(N * rhat, 0), np.sum(N * phat, 0), np.sum(N * that, 0)])
+
+
