@@ -216,7 +216,13 @@ def lagrangian_ir(L, q, params=None, constraints=(), forces=None, baumgarte=None
     Pt = [sp.diff(p[i], T) for i in range(n)]
     rest = [sum(Pq[i][j] * U[j] for j in range(n)) + Pt[i] - Fx[i] for i in range(n)]
     F = [dLdq[i] - rest[i] for i in range(n)]
-    Lqv = [[sp.diff(dLdq[i], v) for v in V] for i in range(n)]
+    # d2L/dq_i dq_c (symmetric: the upper triangle is taken) and
+    # d2L/dq_i dq'_c = dp_c/dq_i (already in Pq)
+    Lqq = [[None] * n for _ in range(n)]
+    for i in range(n):
+        for c in range(i, n):
+            Lqq[i][c] = Lqq[c][i] = sp.diff(dLdq[i], Q[c])
+    Lqv = [Lqq[i] + [Pq[c][i] for c in range(n)] for i in range(n)]
     NA = n + k
     A = sp.zeros(NA, NA)
     A[:n, :n] = M
