@@ -329,6 +329,11 @@ def test_initial_state_must_satisfy_the_constraint():
     good = cart_state(0.5, 0.2)
     with pytest.raises(ValueError, match=r"y0 \(row 1 of y0s\) violates constraint 0"):
         mp.solve_many(s, (0, 1), [good, [1.0, -0.5, 0.0, 0.0]])
+    # the check uses each trajectory's parameters: here the length l
+    with pytest.raises(ValueError, match=r"row 1 of y0s"):
+        mp.solve_many(s, (0, 1), [good, good], params={"l": [1.0, 2.0]})
+    ens = mp.solve_many(s, (0, 1), [good, 2 * good], params={"l": [1.0, 2.0]}, rtol=1e-10)
+    assert ens.success.all()
     ens = mp.solve_many(s, (0, 1), [good, cart_state(-0.3, 1.0)], rtol=1e-10)
     one = mp.solve(s, (0, 1), cart_state(-0.3, 1.0), rtol=1e-10)
     assert np.array_equal(ens.y[1, :, -1], one.y[:, -1])
