@@ -105,7 +105,7 @@ def _meta(ir, source, constraints=(), numpy_blocks=False):
 
 def _make(kind, ir_fn, key_parts, params, backend, constraints=()):
     from .. import _core
-    from . import build, codegen
+    from . import build
     from .scene import CompiledScene
     if backend not in ("c", "numpy"):
         raise ValueError(f"backend must be 'c' or 'numpy', got {backend!r}")
@@ -114,6 +114,7 @@ def _make(kind, ir_fn, key_parts, params, backend, constraints=()):
         meta = build.load_meta(key)
         if meta is not None and meta.get("param_names") == list(params):
             return CompiledScene(meta, params, "c")
+    from . import codegen    # SymPy's C printer: loaded only to derive
     ir = ir_fn()
     source = codegen.c_source(ir, _core.STATUS)
     meta = _meta(ir, source, constraints, numpy_blocks=backend == "numpy")
