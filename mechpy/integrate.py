@@ -358,6 +358,9 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
     spec, dim = _system_spec(system, args, method)
     if dim is not None and dim != n:
         raise ValueError(f"y0 must have {dim} values for {type(system).__name__}, got {n}")
+    check = getattr(system, "_check_initial", None)   # e.g. constraints a scene imposes
+    if check is not None:
+        check(t0, y0a)
     evs, term, dirs = _events_spec(events)
 
     r = _core.ode_solve(method, spec, t0, tf, y0a, rtol, atol_a, tev, bool(dense_output), evs,
@@ -468,6 +471,9 @@ def solve_many(system, t_span: Sequence[float], y0s, *, params=None, t_eval=None
     if dim is not None and dim != n:
         raise ValueError(f"y0s must have {dim} columns for {type(system).__name__}, got {n}")
     par = _ensemble_params(system, params, k)
+    check = getattr(system, "_check_initial", None)   # e.g. constraints a scene imposes
+    if check is not None and k:
+        check(t0, Y0) if par is None else check(t0, Y0, params=par)
     if threads is None:
         nthreads = os.cpu_count() or 1
     else:
