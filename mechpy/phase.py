@@ -43,19 +43,26 @@ def _ensemble(system, y0s, t_span, t_eval, **kw):
 
 
 # ---- vector field ---------------------------------------------------------------
-def vector_field(system, X, Y, t: float = 0.0):
+def vector_field(system, X, Y, t: float = 0.0, *, vectorized: bool = False):
     """The field (U, V) = f(t, (X, Y)) of a two-dimensional system on a grid.
 
     Parameters
     ----------
     system : Scene or callable f(t, y)
         A system with a 2-component state.  A scene is evaluated in C in one
-        call; a callable is first tried vectorised (``y`` of shape (2, ...)),
-        then point by point.
+        call.  A callable is called once per grid point with ``y`` of shape
+        (2,), unless ``vectorized`` is True.
     X, Y : array_like, same shape
         Grid coordinates (e.g. from ``np.meshgrid``).
     t : float
         Time at which the field is taken (driven systems).
+    vectorized : bool
+        As in :func:`scipy.integrate.solve_ivp`: the callable accepts ``y``
+        of shape (2, ...) (the grid stacked on a leading axis) and returns
+        the field in the same shape, acting on each point independently.
+        Whether a callable does so cannot be told from its output (``A @ y``
+        returns the right shape and mixes grid points), so it is never
+        guessed.  Ignored for scenes.
 
     Returns
     -------
@@ -68,23 +75,23 @@ def vector_field(system, X, Y, t: float = 0.0):
     if X.shape != Y.shape:
         raise ValueError(f"X and Y must have the same shape, got {X.shape} and {Y.shape}")
     t = as_scalar(t, "t")
+    if not isinstance(vectorized, (bool, np.bool_)):
+        raise TypeError(f"vectorized must be True or False, got {vectorized!r}")
     if _is_scene(system) and system.dim != 2:
         raise ValueError(f"vector_field needs a 2-D system; this scene has dim {system.dim}")
     Z = np.stack([X, Y])
-    try:
+    if _is_scene(system) or vectorized:
         F = np.asarray(f(t, Z), dtype=np.float64)
-        ok = F.shape == Z.shape
-    except Exception:
-        if _is_scene(system):
-            raise
-        ok = False
-    if not ok:
-        F = np.empty_like(Z)
-        for idx in np.ndindex(X.shape):
-            val = np.asarray(f(t, Z[(slice(None),) + idx]), dtype=np.float64)
-            if val.shape != (2,):
-                raise ValueError(f"the system must return 2 components, got shape {val.shape}")
-            F[(slice(None),) + idx] = val
+        if F.shape != Z.shape:
+            raise ValueError(f"a vectorized system must return shape {Z.shape} for y of "
+                             f"shape {Z.shape}, got {F.shape}")
+        return F[0], F[1]
+    F = np.empty_like(Z)
+    for idx in np.ndindex(X.shape):
+        val = np.asarray(f(t, Z[(slice(None),) + idx]), dtype=np.float64)
+        if val.shape != (2,):
+            raise ValueError(f"the system must return 2 components, got shape {val.shape}")
+        F[(slice(None),) + idx] = val
     return F[0], F[1]
 
 

@@ -18,6 +18,24 @@ def test_vector_field_scene_and_callable():
     np.testing.assert_allclose(V2, -np.sin(X), rtol=1e-15)
 
 
+def test_vector_field_linear_callable_on_non_square_grid():
+    # A @ y returns the right shape for y of shape (2, ny, nx) and mixes grid points
+    # when taken as vectorised; the field of a linear system is exactly A (x, y).
+    A = np.array([[0.0, 1.0], [-2.0, -0.3]])
+    X, Y = np.meshgrid(np.linspace(-3, 3, 7), [-1.0, 2.0])     # a (2, 7) grid
+    U, V = mp.phase.vector_field(lambda t, y: A @ y, X, Y)
+    np.testing.assert_array_equal(U, Y)
+    np.testing.assert_allclose(V, -2.0 * X - 0.3 * Y, rtol=1e-15, atol=1e-15)
+    # vectorized=True is the caller's promise: a field that acts point-wise
+    Uv, Vv = mp.phase.vector_field(lambda t, y: np.stack([y[1], -2 * y[0] - 0.3 * y[1]]),
+                                   X, Y, vectorized=True)
+    np.testing.assert_allclose(Vv, V, rtol=1e-15, atol=1e-15)
+    with pytest.raises(ValueError, match="vectorized"):
+        mp.phase.vector_field(lambda t, y: y[0], X, Y, vectorized=True)
+    with pytest.raises(TypeError, match="vectorized"):
+        mp.phase.vector_field(lambda t, y: A @ y, X, Y, vectorized="yes")
+
+
 def test_vector_field_bad_grids():
     X = np.zeros((3, 4))
     with pytest.raises(ValueError):
