@@ -128,6 +128,17 @@ def shift(I, mass, a, to: str = "point") -> np.ndarray:
     -------
     ndarray, shape (..., 3, 3)
         The shifted tensor [M L^2].
+
+    Raises
+    ------
+    ValueError
+        With ``to="com"``, when the result is not the inertia tensor of any
+        mass distribution (a negative principal moment, or I1 + I2 < I3,
+        beyond the round-off of the shift): a body of mass M whose centre of
+        mass lies at ``-a`` from the point cannot have the tensor ``I`` about
+        that point (its moments about the point are at least those of M
+        concentrated at its centre of mass).  Typical causes: ``I`` is about
+        the centre of mass already, or ``a`` or ``mass`` is too large.
     """
     if to not in ("point", "com"):
         raise ValueError(f'to must be "point" or "com", got {to!r}')
@@ -143,7 +154,28 @@ def shift(I, mass, a, to: str = "point") -> np.ndarray:
     Mb = np.ascontiguousarray(np.broadcast_to(M, batch).reshape(-1))
     ab = np.ascontiguousarray(np.broadcast_to(a, batch + (3,)).reshape(-1, 3))
     out = _core.inertia_shift(Ib, Mb, ab, 1 if to == "point" else -1)
+    if to == "com" and out.size:
+        _check_com_tensor(out, Ib, Mb, ab)
     return out.reshape(batch + (3, 3))
+
+
+def _check_com_tensor(out, I, M, a):
+    """Raise unless each tensor shifted to the centre of mass is one of a mass
+    distribution: principal moments >= 0 and I1 + I2 >= I3, to the round-off of
+    the shift (16 eps times the larger of |I| and M |a|^2)."""
+    w, _ = _eigh(out)
+    scale = np.maximum(np.max(np.abs(I), axis=(-2, -1)), M * np.einsum("...k,...k->...", a, a))
+    tol = 16.0 * np.finfo(float).eps * scale
+    bad = (w[:, 0] < -tol) | (w[:, 0] + w[:, 1] < w[:, 2] - tol)
+    if np.any(bad):
+        k = int(np.flatnonzero(bad)[0])
+        raise ValueError(
+            f"shift(to='com'): no mass distribution has the tensor I about the point a and its "
+            f"centre of mass at distance |a| = {float(np.linalg.norm(a[k])):.6g} with mass "
+            f"{float(M[k]):.6g}: the result would have principal moments "
+            f"{np.array2string(w[k], precision=6)} (negative, or I1 + I2 < I3)"
+            + (f" (item {k} of the batch)" if out.shape[0] > 1 else "")
+            + "; check that I is about the point a and a is measured from the centre of mass")
 
 
 # --------------------------------------------------------------------------- principal axes

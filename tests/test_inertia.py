@@ -325,7 +325,8 @@ def test_density_grid_bad_input():
 def test_shift_large_offsets_exact_rounding(rng):
     for _ in range(20):
         A = rng.normal(size=(3, 3))
-        I = A @ A.T
+        S = A @ A.T                            # second moments of some distribution
+        I = np.trace(S) * np.eye(3) - S        # its inertia tensor
         M = rng.uniform(0.5, 2.0)
         a = rng.normal(size=3) * 1e6
         out = mi.shift(I, M, a)
@@ -351,6 +352,37 @@ def test_shift_batched_and_steiner_matches_point_masses(rng):
         mi.shift(Icom[0], 1.0, p[0], to="corner")
     with pytest.raises(ValueError, match="mass"):
         mi.shift(Icom[0], -1.0, p[0])
+
+
+def test_shift_to_com_refuses_an_impossible_tensor(rng):
+    # a unit point mass at distance 1 has I = diag(0, 1, 1) about the origin; claiming its
+    # centre of mass lies 2 away would give moments 1 - 4 < 0
+    I = mi.point_masses([1.0], [[1.0, 0.0, 0.0]])
+    with pytest.raises(ValueError, match="principal moments") as exc:
+        mi.shift(I, 1.0, [2.0, 0.0, 0.0], to="com")
+    assert "a" in str(exc.value) and "mass" in str(exc.value)
+    # the true offset gives exactly zero (a point mass about itself)
+    np.testing.assert_array_equal(mi.shift(I, 1.0, [1.0, 0.0, 0.0], to="com"), 0.0)
+    # I about the centre of mass already, shifted once more: moments 2/5 - 1 < 0
+    ball = mi.solid("sphere", 1.0, radius=1.0)
+    with pytest.raises(ValueError, match="centre of mass"):
+        mi.shift(ball.inertia, 1.0, [0.0, 0.0, 1.0], to="com")
+    # PSD but I1 + I2 < I3 (no mass distribution): also refused
+    with pytest.raises(ValueError, match="I1 \\+ I2 < I3"):
+        mi.shift(np.diag([1.0, 1.0, 5.0]) + 0.0, 1.0, [0.0, 0.0, 1e-3], to="com")
+    # a batch names its bad item; the good ones alone pass
+    m = rng.uniform(0.5, 2.0, 5)
+    x = rng.normal(size=(5, 4, 3))
+    pts = rng.normal(size=(5, 3))
+    com = np.einsum("bn,bnk->bk", m[:, None] * np.ones(4), x) / (4 * m[:, None])
+    Ip = mi.point_masses(m[:, None] * np.ones(4), x, pts)
+    back = mi.shift(Ip, 4 * m, pts - com, to="com")
+    np.testing.assert_allclose(back, mi.point_masses(m[:, None] * np.ones(4), x, com),
+                               rtol=1e-12, atol=1e-12)
+    a = pts - com
+    a[3] *= 10.0
+    with pytest.raises(ValueError, match="item 3"):
+        mi.shift(Ip, 4 * m, a, to="com")
 
 
 # ----------------------------------------------------------------------- principal axes
