@@ -25,7 +25,7 @@ from typing import NamedTuple
 import numpy as np
 
 from . import _core
-from ._validate import as_array, as_scalar, as_symmetric, as_vector3
+from ._validate import as_array, as_finite_result, as_scalar, as_symmetric, as_vector3
 
 __all__ = [
     "Body", "point_masses", "solid", "SHAPES", "mesh", "density_grid", "shift",
@@ -71,6 +71,11 @@ def point_masses(masses, positions, origin=(0.0, 0.0, 0.0)) -> np.ndarray:
     I : ndarray, shape (..., 3, 3)
         Inertia tensor [M L^2].
 
+    Raises
+    ------
+    mechpy.NonFiniteError
+        When the tensor overflows float64 (a ``ValueError``).
+
     Examples
     --------
     Masses along the x axis give ``I_yy = I_zz > 0`` and every other entry 0:
@@ -98,7 +103,10 @@ def point_masses(masses, positions, origin=(0.0, 0.0, 0.0)) -> np.ndarray:
     mb = np.ascontiguousarray(np.broadcast_to(m, batch + (n,)).reshape(-1, n))
     xb = np.ascontiguousarray(np.broadcast_to(x, batch + (n, 3)).reshape(-1, n, 3))
     ob = np.ascontiguousarray(np.broadcast_to(o, batch + (3,)).reshape(-1, 3))
-    return _core.inertia_point_masses(mb, xb, ob).reshape(batch + (3, 3))
+    out = _core.inertia_point_masses(mb, xb, ob).reshape(batch + (3, 3))
+    return as_finite_result(out, "point_masses: the inertia tensor",
+                            "the sums of mass x distance^2 exceed float64; use other units "
+                            "(or an origin nearer the masses)")
 
 
 # --------------------------------------------------------------------------- Steiner
@@ -547,13 +555,15 @@ def mesh(vertices, faces, density=None, mass=None) -> Body:
     polyhedron, so a mesh of a smooth body converges to it as O(h^2) in the
     edge length h.
 
-    The mesh is checked first, in C and in O(n) time: every face index exists,
+    The mesh is checked first, in C and in O(n log n) time (Ctrl-C is answered):
+    every face index exists,
     no face repeats a vertex or has zero area, every edge is shared by exactly
     two faces that traverse it in opposite directions (closed, manifold,
     consistently oriented), and the signed volume is positive (faces
     counter-clockwise seen from outside).  A defect raises
     :class:`mechpy.MeshError` that says which ("open", "non-manifold",
-    "inconsistently oriented", "inside out", "degenerate") and where.
+    "inconsistently oriented", "inside out", "degenerate", "out of range" for a
+    volume or inertia beyond float64) and where.
 
     Parameters
     ----------

@@ -320,6 +320,63 @@ def test_density_grid_bad_input():
         mi.density_grid(np.ones((2, 2, 2)), (1.0, 1.0))
 
 
+def _bipyramid(n):
+    """Two cones of height 1 on a regular n-gon of circumradius 1: 2n faces, each apex of
+    degree n (the case an edge lookup linear in the degree makes quadratic)."""
+    ph = 2 * np.pi * np.arange(n) / n
+    V = np.concatenate([np.stack([np.cos(ph), np.sin(ph), np.zeros(n)], -1),
+                        [[0, 0, 1.0], [0, 0, -1.0]]])
+    j = np.arange(n)
+    top = np.stack([j, (j + 1) % n, np.full(n, n)], -1)
+    bot = np.stack([(j + 1) % n, j, np.full(n, n + 1)], -1)
+    return V, np.concatenate([top, bot]).astype(np.int64)
+
+
+def test_mesh_high_degree_vertices_bipyramid():
+    # 400k faces, two vertices of degree 200k: took minutes when each edge lookup scanned
+    # the apex's whole list (80k faces: 7 s); now about 0.1 s
+    n = 200_000
+    V, F = _bipyramid(n)
+    b = mi.mesh(V, F)
+    area = 0.5 * n * np.sin(2 * np.pi / n)            # the n-gon
+    assert b.volume == pytest.approx(2 * area / 3, rel=1e-14)      # measured 6e-16
+    np.testing.assert_allclose(b.com, 0.0, atol=1e-16)
+    # the apex's defects are still found: drop one face -> open, at the apex's edges
+    with pytest.raises(mp.MeshError, match="open"):
+        mi.mesh(V, F[1:])
+    G = F.copy()
+    G[n + 5] = G[n + 5][::-1]
+    with pytest.raises(mp.MeshError, match="oriented|open"):
+        mi.mesh(V, G)
+    H = np.concatenate([F, F[:1]])
+    with pytest.raises(mp.MeshError, match="non-manifold"):
+        mi.mesh(V, H)
+
+
+def test_mesh_ctrl_c_is_prompt():
+    from sigint import interrupt_delay
+    setup = ("n = 1_000_000\nph = 2 * np.pi * np.arange(n) / n\n"
+              "V = np.concatenate([np.stack([np.cos(ph), np.sin(ph), np.zeros(n)], -1),"
+              " [[0, 0, 1.0], [0, 0, -1.0]]])\nj = np.arange(n)\n"
+              "F = np.concatenate([np.stack([j, (j + 1) % n, np.full(n, n)], -1),"
+              " np.stack([(j + 1) % n, j, np.full(n, n + 1)], -1)]).astype(np.int64)\n")
+    dt = interrupt_delay(setup, "[mp.inertia.mesh(V, F) for _ in range(20)]", delay=0.3)
+    assert dt < 1.0, f"KeyboardInterrupt {dt} s after SIGINT"   # measured ~0.01 s
+
+
+def test_mesh_out_of_range_is_not_zero_area():
+    V, F = mi.uv_sphere(1.0, 4, 6)
+    # coordinates 1e200: squared edges overflow; said so, not "zero area"
+    with pytest.raises(mp.MeshError, match="overflow"):
+        mi.mesh(V * 1e200, F)
+    with pytest.raises(mp.MeshError, match="underflow"):
+        mi.mesh(V * 1e-200, F)
+    # up to 1e60 the inertia (size^5) fits: exact scaling of the unit result
+    b1, b = mi.mesh(V, F), mi.mesh(V * 2.0 ** 190, F)
+    assert b.volume == b1.volume * 2.0 ** 570
+    np.testing.assert_array_equal(b.inertia, b1.inertia * 2.0 ** 950)
+
+
 # ----------------------------------------------------------------------- Steiner
 
 def test_shift_large_offsets_exact_rounding(rng):
