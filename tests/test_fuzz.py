@@ -693,5 +693,55 @@ def test_brachistochrone_exact_cycloid_for_a_shallow_drop():
     assert r.time_exact == pytest.approx(2 * math.pi * math.sqrt(r.radius / 9.81), rel=1e-12)
 
 
+def test_python_int_beyond_int64_names_the_argument():
+    import mechpy as mp  # was OverflowError "Python int too large to convert to C long"
+    P = mp.scenes.Pendulum()
+    with pytest.raises(ValueError, match="skip"):
+        mp.phase.poincare(P, [0.1, 0.0], 1.0, 3, skip=10 ** 25)
+    with pytest.raises(ValueError, match="skip"):
+        mp.phase.bifurcation(P, "damping", [0.1], [0.1, 0.0], 1.0, 3, 2 ** 64)
+    with pytest.raises(ValueError, match="N"):
+        mp.modes.chain(2 ** 63)
+    with pytest.raises(ValueError, match="n_lon"):
+        mp.inertia.uv_sphere(1.0, 4, 2 ** 70)
+
+
+def test_overflow_is_an_error_not_inf_or_nan():
+    import mechpy as mp
+    from mechpy.errors import NonFiniteError
+    # was [0, nan, 0, ...]: 1e300 * (1e200)^2
+    with pytest.raises(NonFiniteError, match="point_masses.*overflow"):
+        mp.inertia.point_masses([1e300], [[1e200, 0.0, 0.0]])
+    with pytest.raises(NonFiniteError, match="overflow"):
+        mp.inertia.point_masses([1.0], [[0.0, 1e200, 0.0]])
+    # was K with inf on the diagonal (1e308 + 1e308)
+    with pytest.raises(ValueError, match="spring"):
+        mp.modes.chain(3, spring=1e308)
+    with pytest.raises(ValueError, match="springs"):
+        mp.modes.chain(2, springs=[1.0, 1.7e308, 1.7e308])
+    assert np.isfinite(mp.modes.chain(3, spring=8e307)[0]).all()   # 1.6e308 still fits
+    # was OverflowError (1/m1)**2 in Python floats, or inf frequencies
+    with pytest.raises(NonFiniteError, match="dispersion_diatomic"):
+        mp.modes.dispersion_diatomic(5e-324, 1.0, 1e300, 1.0, [0.5])   # sqrt(k/m) ~ 4e311
+    # masses that only overflowed the intermediate 1/m^2 now give the closed form; with
+    # r = m1/m2 = 1e-200 the O(r) terms vanish: optical sqrt(2k/m1), acoustic sqrt(2k/m2)|sin|
+    ac, op = mp.modes.dispersion_diatomic(1e-200, 1.0, 1.0, 1.0, [0.5, np.pi])
+    np.testing.assert_allclose(op, np.sqrt(2e200), rtol=1e-15)
+    np.testing.assert_allclose(ac, np.sqrt(2.0) * np.abs(np.sin([0.25, np.pi / 2])),
+                               rtol=1e-15)
+    ac, op = mp.modes.dispersion_diatomic(1e-300, 1.0, 1e300, 1.0, [np.pi])  # was OverflowError
+    np.testing.assert_allclose([ac[0], op[0]], [np.sqrt(2) * 1e150, np.sqrt(2) * 1e300],
+                               rtol=1e-15)
+    # was NaN: cos(omega t) at omega t = inf
+    m = mp.modes.normal_modes(*mp.modes.chain(3))
+    with pytest.raises(NonFiniteError, match="t"):
+        m.evolve([1.0, 0.0, 0.0], [0.0, 1.0, 0.0], 1e308)
+    q = m.evolve([1.0, 0.0, 0.0], [0.0, 0.0, 0.0], 1e300)      # omega t finite: exact
+    assert np.isfinite(q).all()
+    free = mp.modes.normal_modes(*mp.modes.chain(2, ends="free"))
+    with pytest.raises(NonFiniteError):                       # zero mode drifting past 1e308
+        free.evolve([0.0, 0.0], [1e10, 1e10], 1e300)
+
+
 if __name__ == "__main__":
     sys.exit(main(sys.argv[1:]))
