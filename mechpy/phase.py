@@ -11,15 +11,22 @@ callable ``f(t, y)``.  Units are those of the system.
 """
 from __future__ import annotations
 
+import warnings
 from typing import NamedTuple
 
 import numpy as np
 
 from ._validate import as_array, as_int, as_scalar
+from .errors import ConvergenceError
 from .integrate import solve, solve_many
 
 __all__ = ["FixedPoint", "vector_field", "fixed_points", "limit_cycle", "poincare",
-           "bifurcation", "lyapunov"]
+           "bifurcation", "lyapunov", "LyapunovFloorWarning"]
+
+
+class LyapunovFloorWarning(UserWarning):
+    """The neighbour method's separation fell to the integration error: the
+    exponent it reports is a floor set by the tolerances, not a measurement."""
 
 
 def _is_scene(system) -> bool:
@@ -239,7 +246,6 @@ def limit_cycle(system, y0, *, component: int = 0, tol: float = 1e-9, t_max: flo
     period, amplitude : float
         Period (time units) and max of ``y[component]`` on the cycle.
     """
-    from .errors import ConvergenceError
     f = _callable(system)
     y = as_array(y0, "y0", ndim=1).copy()
     k = as_int(component, "component", minimum=0, maximum=y.size - 1)
@@ -313,7 +319,6 @@ def poincare(system, y0, period, n, skip: int = 0, *, t0: float = 0.0, rtol: flo
 
 def _check(s):
     if s.status < 0:
-        from .errors import ConvergenceError
         raise ConvergenceError(f"integration failed: {s.message}")
 
 
@@ -381,9 +386,16 @@ def lyapunov(system, y0, t, *, dt: float = 1.0, method: str = "variational", d0:
     .. math:: \lambda = \lim_{t\to\infty}\frac1t\ln\frac{|\delta\mathbf y(t)|}{|\delta\mathbf y(0)|}
 
     ``method="variational"`` integrates the tangent equations
-    :math:`\dot{\delta} = J(t, \mathbf y)\,\delta` beside the state;
-    ``method="neighbours"`` follows a neighbour at distance ``d0``.  Either
-    way the separation is renormalised every ``dt`` and the logarithms of the
+    :math:`\dot{\delta} = J(t, \mathbf y)\,\delta` beside the state, as a
+    unit direction u and its log-norm,
+    :math:`\dot u = Ju - (u\cdot Ju)\,u,\ \dot\rho = u\cdot Ju`, so that
+    any exponent, however negative, is resolved to the integration tolerance
+    (a decaying tangent vector never reaches ``atol``).
+    ``method="neighbours"`` follows a neighbour at distance ``d0``; when that
+    separation shrinks to the trajectories' own integration error (about
+    ``rtol |y|``) the exponent is not resolved, and a
+    :class:`LyapunovFloorWarning` says so with the floor's value.  Either way
+    the separation is renormalised every ``dt`` and the logarithms of the
     growth factors are summed (Benettin's method).
 
     Parameters
@@ -424,33 +436,65 @@ def lyapunov(system, y0, t, *, dt: float = 1.0, method: str = "variational", d0:
     logs = np.empty(m)
     times = t0 + dt * np.arange(1, m + 1)
     if method == "variational":
+        # The tangent vector is carried as a direction u and a log-norm rho,
+        #   u' = J u - (u.J u / u.u) u,   rho' = u.J u / u.u,
+        # so |u| stays 1 (exactly, before round-off) and rho integrates the growth
+        # rate itself: no separation shrinks to the integrator's atol, whatever the
+        # exponent (a plain tangent vector decaying as exp(-50 dt) hits that floor).
         def aug(tt, z):
-            yy, dd = z[:nd], z[nd:]
-            return np.concatenate([np.asarray(f(tt, yy)), _jacobian(system, tt, yy) @ dd])
-        z = np.concatenate([y, d])
+            yy, uu = z[:nd], z[nd:2 * nd]
+            Ju = _jacobian(system, tt, yy) @ uu
+            r = float(uu @ Ju) / float(uu @ uu)
+            return np.concatenate([np.asarray(f(tt, yy), dtype=np.float64).reshape(nd),
+                                   Ju - r * uu, [r]])
+        z = np.concatenate([y, d, [0.0]])
         ta = t0
         for i in range(m):
             s = solve(aug, (ta, times[i]), z, rtol=rtol, atol=rtol * 1e-2)
             _check(s)
-            z = s.y[:, -1]
-            g = np.linalg.norm(z[nd:])
-            logs[i] = np.log(g)
-            z[nd:] /= g
+            z = s.y[:, -1].copy()
+            g = np.linalg.norm(z[nd:2 * nd])
+            logs[i] = z[-1] + np.log(g)
+            z[nd:2 * nd] /= g
+            z[-1] = 0.0
             ta = times[i]
     else:
         ref = solve(system, (t0, times[-1]), y, rtol=rtol, atol=rtol * 1e-2, t_eval=times)
         _check(ref)
         ys = np.column_stack([y, ref.y])
         ta = t0
+        floor = None
         for i in range(m):
             w = ys[:, i] + d0 * d
             (s,) = _ensemble(system, [w], (ta, times[i]), None, rtol=rtol, atol=rtol * 1e-2)
             _check(s)
             sep = s.y[:, -1] - ys[:, i + 1]
-            g = np.linalg.norm(sep) / d0
+            nsep = np.linalg.norm(sep)
+            # what the difference of two trajectories resolves: the absolute
+            # tolerance atol = rtol / 100 (errors relative to |y| largely cancel in
+            # the difference of two nearby runs) and the spacing of float64 at |y|;
+            # a separation within 100x of that is noise, and the exponent read from
+            # it a floor, log(100 noise / d0) / dt, not a measurement
+            noise = rtol * 1e-2 + np.finfo(float).eps * np.linalg.norm(ys[:, i + 1])
+            if nsep <= 100.0 * noise and floor is None:
+                floor = (i, nsep)
+            if nsep == 0.0:
+                raise ConvergenceError(
+                    "lyapunov: the neighbour merged with the reference trajectory (separation "
+                    "0 in float64); use method='variational'")
+            g = nsep / d0
             logs[i] = np.log(g)
-            d = sep / np.linalg.norm(sep)
+            d = sep / nsep
             ta = times[i]
+        if floor is not None:
+            warnings.warn(LyapunovFloorWarning(
+                f"lyapunov: the neighbour's separation fell to {floor[1]:.3g} at t = "
+                f"{times[floor[0]]:.6g}, within 100x of what the integration resolves "
+                f"(atol = rtol / 100 = {rtol * 1e-2:.1e}): the exponent is not resolved, "
+                f"the value returned is set by the tolerances (a floor near "
+                f"log(100 atol / d0) / dt = {np.log(100.0 * rtol * 1e-2 / d0) / dt:.3g}); use "
+                "method='variational' (no floor) or a shorter dt"),
+                stacklevel=2)
     running = np.cumsum(logs) / (times - t0)
     lam = float(running[-1])
     return (lam, times, running) if return_history else lam

@@ -132,6 +132,20 @@ def test_bifurcation_against_solve_ivp():
         mp.phase.bifurcation(sc, "mass", vals, [0.1, 0.0], T, 8, 10)
 
 
+def test_lyapunov_strongly_negative_exponent_is_resolved():
+    # y' = A y with A = -50 I + 3 (rotation generator): |delta(t)| = exp(-50 t) |delta(0)|
+    # exactly, so the largest exponent is -50.  A tangent vector renormalised every dt = 1
+    # fell to exp(-50) ~ 2e-22, below atol, and the old estimate was -30.7.
+    A = np.array([[-50.0, 3.0], [-3.0, -50.0]])
+    lam = mp.phase.lyapunov(lambda t, y: A @ y, [1.0, 0.0], 10.0)
+    assert abs(lam + 50.0) < 1e-9                      # measured 5e-11
+    B = np.array([[0.7, 3.0], [-3.0, 0.7]])            # and a growing one: +0.7
+    assert abs(mp.phase.lyapunov(lambda t, y: B @ y, [1.0, 0.0], 10.0) - 0.7) < 3e-8  # 3e-9
+    # the neighbour method cannot resolve it: it says so instead of returning -7.8 silently
+    with pytest.warns(mp.phase.LyapunovFloorWarning, match="variational"):
+        mp.phase.lyapunov(lambda t, y: A @ y, [1.0, 0.0], 10.0, method="neighbours")
+
+
 def test_lyapunov_chaos_and_cycle():
     sc = mp.scenes.Pendulum(drive_amplitude=1.5, **DRIVEN)
     lam, times, run = mp.phase.lyapunov(sc, [0.2, 0.0], 200.0, transient=50.0,
