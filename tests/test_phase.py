@@ -65,6 +65,22 @@ def test_pendulum_fixed_points():
             np.testing.assert_allclose(sorted(p.eigenvalues.real), [-w0, w0], rtol=1e-12)
 
 
+def test_fixed_points_budget():
+    # 400 seeds per axis (160000 starts) took about 220 s one start at a time; a scene's
+    # starts now run batched, and a Python callable has a stated budget
+    P = mp.scenes.Pendulum(g=9.81, length=2.0)
+    fps = mp.phase.fixed_points(P, [(-7, 7), (-3, 3)], seeds=400)
+    np.testing.assert_allclose([p.x[0] for p in fps], np.pi * np.arange(-2, 3), atol=1e-12)
+    assert [p.kind for p in fps] == ["centre", "saddle", "centre", "saddle", "centre"]
+    f = lambda t, y: np.array([y[1], -np.sin(y[0])])  # noqa: E731
+    with pytest.raises(ValueError, match="max_starts = 10000"):
+        mp.phase.fixed_points(f, [(-7, 7), (-3, 3)], seeds=101)
+    with pytest.raises(ValueError, match="max_starts = 50"):
+        mp.phase.fixed_points(P, [(-7, 7), (-3, 3)], seeds=8, max_starts=50)
+    got = mp.phase.fixed_points(f, [(-7, 7), (-3, 3)], seeds=7, max_starts=49)
+    np.testing.assert_allclose([p.x[0] for p in got], np.pi * np.arange(-2, 3), atol=1e-12)
+
+
 def test_damped_and_vdp_classification():
     under = mp.phase.fixed_points(mp.scenes.Pendulum(g=1, length=1, damping=0.5),
                                   [(-1, 1), (-1, 1)])
