@@ -20,7 +20,8 @@ from ._validate import as_array, as_int, as_scalar
 from .errors import ConvergenceError
 from .integrate import solve, solve_many
 
-__all__ = ["FixedPoint", "vector_field", "fixed_points", "FIXED_POINT_STARTS", "limit_cycle", "poincare",
+__all__ = ["FixedPoint", "vector_field", "fixed_points", "FIXED_POINT_STARTS",
+           "MAX_SECTION_POINTS", "SECTION_MAX_STEPS", "limit_cycle", "poincare",
            "bifurcation", "lyapunov", "LyapunovFloorWarning"]
 
 
@@ -286,7 +287,8 @@ def _newton_batch(scene, t, starts, tol):
 
 # ---- limit cycles ------------------------------------------------------------------
 def limit_cycle(system, y0, *, component: int = 0, tol: float = 1e-9, t_max: float = 1e5,
-                method: str = "dop853", rtol: float = 1e-12):
+                method: str = "dop853", rtol: float = 1e-12, max_periods: int = 2000,
+                stall: int = 100):
     r"""Period and amplitude of the limit cycle reached from ``y0``.
 
     The trajectory is integrated until the times between successive maxima of
@@ -302,9 +304,18 @@ def limit_cycle(system, y0, *, component: int = 0, tol: float = 1e-9, t_max: flo
     component : int
         Which coordinate's maxima mark the section.
     tol : float
-        Relative tolerance on the period and the amplitude.
+        Relative tolerance on the period and the amplitude.  What can be
+        reached is limited by ``rtol`` (the spread of successive periods
+        settles a little below ``rtol``; e.g. 2e-15 for the Van der Pol cycle at
+        ``rtol=1e-12``).
     t_max : float
-        Give up (``ConvergenceError``) after this time.
+        Give up after this time.
+    max_periods : int
+        Budget: give up after this many cycles (about 15 ms each for a scene).
+    stall : int
+        Give up early when the spread of the periods and amplitudes has not
+        halved over this many cycles (``tol`` below the integration's
+        resolution: without this the search ran to ``t_max``, 116 s).
     method, rtol : str, float
         Passed to :func:`mechpy.solve` (use ``"radau"`` for strongly stiff cycles).
 
@@ -312,35 +323,55 @@ def limit_cycle(system, y0, *, component: int = 0, tol: float = 1e-9, t_max: flo
     -------
     period, amplitude : float
         Period (time units) and max of ``y[component]`` on the cycle.
+
+    Raises
+    ------
+    mechpy.ConvergenceError
+        When a budget (``t_max``, ``max_periods``, ``stall``) runs out; the
+        message gives the spread reached.  Ctrl-C raises ``KeyboardInterrupt``.
     """
     f = _callable(system)
     y = as_array(y0, "y0", ndim=1).copy()
     k = as_int(component, "component", minimum=0, maximum=y.size - 1)
     tol = as_scalar(tol, "tol", positive=True)
     t_max = as_scalar(t_max, "t_max", positive=True)
+    max_periods = as_int(max_periods, "max_periods", minimum=4)
+    stall = as_int(stall, "stall", minimum=1)
 
     def rate(t, z):
         return np.asarray(f(t, z))[k]
     rate.direction = -1
 
     times, amps = [], []
+    spreads = []          # relative spread of the last three periods / amplitudes, per cycle
     t0, chunk = 0.0, 20.0
     while t0 < t_max:
-        s = solve(system, (t0, t0 + chunk), y, method=method, rtol=rtol,
+        s = solve(system, (t0, min(t0 + chunk, t_max)), y, method=method, rtol=rtol,
                   atol=rtol * 1e-2, events=rate)
         if s.status < 0:
             raise ConvergenceError(f"limit_cycle: integration failed ({s.message})")
         times.extend(s.t_events[0])
         amps.extend(s.y_events[0][:, k])
         y, t0 = s.y[:, -1], s.t[-1]
-        if len(times) >= 4:
-            P = np.diff(times[-4:])
-            A = np.array(amps[-3:])
-            if (np.ptp(P) <= tol * P[-1] and np.ptp(A) <= tol * max(abs(A[-1]), 1e-300)):
+        for j in range(max(4, len(times) - len(s.t_events[0])), len(times) + 1):
+            P = np.diff(times[j - 4:j])
+            A = np.array(amps[j - 3:j])
+            spreads.append(max(np.ptp(P) / P[-1], np.ptp(A) / max(abs(A[-1]), 1e-300)))
+            if spreads[-1] <= tol:
                 return float(P[-1]), float(A[-1])
-            chunk = max(chunk, 10.0 * P[-1])
+            if j > max_periods:
+                raise ConvergenceError(
+                    f"limit_cycle: no cycle converged to tol = {tol:g} within max_periods = "
+                    f"{max_periods} cycles (relative spread {spreads[-1]:.2g})")
+        if len(times) >= 4:
+            chunk = max(chunk, 10.0 * (times[-1] - times[-2]))
         else:
             chunk *= 2.0
+        if len(spreads) > stall and min(spreads[-stall:]) > 0.5 * min(spreads[:-stall]):
+            raise ConvergenceError(
+                f"limit_cycle: the relative spread of periods and amplitudes stalled at "
+                f"{min(spreads):.2g} over the last {stall} cycles, above tol = {tol:g}: "
+                f"tol is below what rtol = {rtol:g} resolves; raise tol or lower rtol")
     raise ConvergenceError(f"limit_cycle: no cycle converged to {tol} before t = {t_max}")
 
 
@@ -349,8 +380,16 @@ def _section_times(t0, period, n, skip):
     return t0 + period * (skip + np.arange(n))
 
 
+#: Budget of poincare and bifurcation: at most this many section points per run
+#: (n * dim floats are returned).
+MAX_SECTION_POINTS = 10_000_000
+#: Default step budget of one poincare / bifurcation integration (about 0.5 s
+#: for a C scene).
+SECTION_MAX_STEPS = 1_000_000
+
+
 def poincare(system, y0, period, n, skip: int = 0, *, t0: float = 0.0, rtol: float = 1e-10,
-             atol: float = 1e-12, method: str = "dop853"):
+             atol: float = 1e-12, method: str = "dop853", max_steps: int = SECTION_MAX_STEPS):
     r"""Stroboscopic Poincaré section of a driven system.
 
     The states :math:`\mathbf y(t_0 + kT)` for k = skip, ..., skip + n - 1,
@@ -364,7 +403,13 @@ def poincare(system, y0, period, n, skip: int = 0, *, t0: float = 0.0, rtol: flo
     period : float
         The drive period T (time units), e.g. ``2 pi / drive_frequency``.
     n : int
-        Points to return; ``skip`` first periods are discarded (transient).
+        Points to return (at most :data:`MAX_SECTION_POINTS`); ``skip`` first
+        periods are discarded (transient).
+    max_steps : int
+        Step budget of the integration over (skip + n) periods (default
+        10^6, about 0.5 s for a scene); an absurd span exhausts it and raises
+        :class:`mechpy.StepBudgetError` instead of running for hours.  Ctrl-C
+        raises ``KeyboardInterrupt``.
 
     Returns
     -------
@@ -374,23 +419,38 @@ def poincare(system, y0, period, n, skip: int = 0, *, t0: float = 0.0, rtol: flo
     _callable(system)
     y0 = as_array(y0, "y0", ndim=1)
     period = as_scalar(period, "period", positive=True)
-    n = as_int(n, "n", minimum=1)
+    n = as_int(n, "n", minimum=1, maximum=MAX_SECTION_POINTS)
     skip = as_int(skip, "skip", minimum=0)
     t0 = as_scalar(t0, "t0")
     te = _section_times(t0, period, n, skip)
-    s = solve(system, (t0, te[-1] + 0.5 * period), y0, method=method, rtol=rtol, atol=atol,
-              t_eval=te)
-    _check(s)
+    t_end = _section_end(te, period)
+    s = solve(system, (t0, t_end), y0, method=method, rtol=rtol, atol=atol, t_eval=te,
+              max_steps=max_steps)
+    _check(s, f"over {skip + n} drive periods (t up to {t_end:.6g})")
     return np.ascontiguousarray(s.y.T)
 
 
-def _check(s):
+def _section_end(te, period):
+    """The end of a section run, half a period after its last point; a span that
+    float64 cannot step through is refused."""
+    t_end = te[-1] + 0.5 * period
+    if not np.isfinite(t_end) or np.any(np.diff(te) <= 0.0):
+        raise ValueError(f"the section times t0 + period * (skip + k) are not distinct in "
+                         f"float64 (up to {te[-1]:.3g}): lower skip or n, or shift t0")
+    return float(t_end)
+
+
+def _check(s, what=""):
     if s.status < 0:
+        if "max_steps" in s.message:
+            from .errors import StepBudgetError
+            raise StepBudgetError(f"the integration {what} needs more steps than its budget: "
+                                  f"{s.message} Raise max_steps or take fewer periods.")
         raise ConvergenceError(f"integration failed: {s.message}")
 
 
 def bifurcation(scene, param: str, values, y0, period, n: int, skip: int, *, t0: float = 0.0,
-                rtol: float = 1e-10, atol: float = 1e-12):
+                rtol: float = 1e-10, atol: float = 1e-12, max_steps: int = SECTION_MAX_STEPS):
     r"""Bifurcation diagram: Poincaré points of ``scene`` as ``param`` varies.
 
     For each value v the scene ``scene.replace(param=v)`` is integrated from
@@ -407,7 +467,12 @@ def bifurcation(scene, param: str, values, y0, period, n: int, skip: int, *, t0:
     period : float or callable
         Drive period T; a callable ``period(v)`` when it depends on the value.
     n, skip : int
-        Section points kept per value, and drive periods discarded first.
+        Section points kept per value, and drive periods discarded first
+        (``len(values) * n`` at most :data:`MAX_SECTION_POINTS`).
+    max_steps : int
+        Step budget of each value's integration (default 10^6); exhausting it
+        raises :class:`mechpy.StepBudgetError` naming the value.  Ctrl-C
+        raises ``KeyboardInterrupt``.
 
     Returns
     -------
@@ -421,26 +486,39 @@ def bifurcation(scene, param: str, values, y0, period, n: int, skip: int, *, t0:
                          f"{list(scene.params)}")
     vals = as_array(values, "values", ndim=1)
     y0 = as_array(y0, "y0", shape=(scene.dim,))
-    n = as_int(n, "n", minimum=1)
+    n = as_int(n, "n", minimum=1, maximum=MAX_SECTION_POINTS)
     skip = as_int(skip, "skip", minimum=0)
+    if vals.size * n > MAX_SECTION_POINTS:
+        raise ValueError(f"bifurcation: {vals.size} values x n = {n} section points exceed "
+                         f"the budget MAX_SECTION_POINTS = {MAX_SECTION_POINTS}")
     out = np.empty((vals.size, n, scene.dim))
     if not callable(period):
         # one drive period for every value: the whole diagram is one C ensemble
         T = as_scalar(period, "period", positive=True)
         te = _section_times(t0, T, n, skip)
-        e = solve_many(scene, (t0, te[-1] + 0.5 * T), np.tile(y0, (vals.size, 1)),
-                       params={param: vals}, t_eval=te, rtol=rtol, atol=atol)
+        t_end = _section_end(te, T)
+        e = solve_many(scene, (t0, t_end), np.tile(y0, (vals.size, 1)),
+                       params={param: vals}, t_eval=te, rtol=rtol, atol=atol,
+                       max_steps=max_steps)
         if not np.all(e.success):
             bad = int(np.flatnonzero(~e.success)[0])
-            raise RuntimeError(f"integration failed for {param} = {vals[bad]!r} "
-                               f"(status {int(e.status[bad])})")
+            from .errors import NonFiniteError, StepBudgetError
+            if int(e.status[bad]) == -2:
+                raise NonFiniteError(f"bifurcation: the integration for {param} = "
+                                     f"{float(vals[bad])!r} produced NaN or inf")
+            raise StepBudgetError(
+                f"bifurcation: the integration for {param} = {float(vals[bad])!r} over "
+                f"{skip + n} drive periods (t up to {t_end:.6g}) ran out of its step budget max_steps = "
+                f"{max_steps} (or its step fell below round-off); raise max_steps or take "
+                "fewer periods")
         return np.ascontiguousarray(e.y.transpose(0, 2, 1))
     for i, v in enumerate(vals):
         T = as_scalar(period(v) if callable(period) else period, "period", positive=True)
         te = _section_times(t0, T, n, skip)
         sc = scene.replace(**{param: float(v)})
-        (s,) = _ensemble(sc, [y0], (t0, te[-1] + 0.5 * T), te, rtol=rtol, atol=atol)
-        _check(s)
+        (s,) = _ensemble(sc, [y0], (t0, _section_end(te, T)), te, rtol=rtol, atol=atol,
+                         max_steps=max_steps)
+        _check(s, f"for {param} = {float(v)!r}")
         out[i] = s.y.T
     return out
 

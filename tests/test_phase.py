@@ -176,3 +176,55 @@ def test_lyapunov_chaos_and_cycle():
     lamf = mp.phase.lyapunov(mp.scenes.Pendulum(g=1, length=1, damping=0.4), [1e-3, 0.0],
                              100.0, method="variational")
     assert abs(lamf + 0.2) < 0.01
+
+
+# ---- budgets and Ctrl-C ---------------------------------------------------------------
+def test_limit_cycle_unreachable_tol_has_a_budget():
+    vdp = mp.scenes.VanDerPol(1.0)
+    # the spread of successive periods settles near 2e-15 at rtol 1e-12: tol = 1e-16 ran
+    # to t_max (116 s); it now stops when the spread has not halved in `stall` cycles
+    with pytest.raises(mp.ConvergenceError, match="stalled.*rtol"):
+        mp.phase.limit_cycle(vdp, [2.0, 0.0], tol=1e-16)
+    with pytest.raises(mp.ConvergenceError, match="max_periods = 6"):
+        mp.phase.limit_cycle(vdp, [0.01, 0.0], tol=1e-12, max_periods=6)   # needs 7 to 10
+    T, A = mp.phase.limit_cycle(vdp, [2.0, 0.0], tol=1e-12)
+    assert abs(T - 6.6632868593231) < 1e-12                      # measured 6e-14
+
+
+def test_sections_have_a_step_budget_and_a_size_budget():
+    sc = mp.scenes.Pendulum(drive_amplitude=1.2, **DRIVEN)
+    T = 3 * np.pi
+    with pytest.raises(mp.StepBudgetError, match="max_steps"):
+        mp.phase.poincare(sc, [0.1, 0.0], T, 3, skip=10 ** 12)
+    with pytest.raises(mp.StepBudgetError, match="drive_amplitude = 1.1"):
+        mp.phase.bifurcation(sc, "drive_amplitude", [1.1, 1.2], [0.1, 0.0], T, 3, 10 ** 12)
+    with pytest.raises(mp.StepBudgetError, match="drive_amplitude = 1.1"):
+        mp.phase.bifurcation(sc, "drive_amplitude", [1.1], [0.1, 0.0], lambda v: T, 3, 10 ** 12)
+    with pytest.raises(ValueError, match="n must be <= 10000000"):
+        mp.phase.poincare(sc, [0.1, 0.0], T, 10 ** 8)
+    with pytest.raises(ValueError, match="MAX_SECTION_POINTS"):
+        mp.phase.bifurcation(sc, "drive_amplitude", np.ones(100), [0.1, 0.0], T, 10 ** 6, 0)
+    with pytest.raises(ValueError, match="not distinct"):
+        mp.phase.poincare(sc, [0.1, 0.0], T, 5, skip=10 ** 17)
+    # within budget the section is the integration's
+    pts = mp.phase.poincare(sc, [0.1, 0.0], T, 4, skip=2, max_steps=10 ** 5)
+    ref = mp.solve(sc, (0, 6.5 * T), [0.1, 0.0], rtol=1e-12, atol=1e-14,
+                   t_eval=T * np.arange(2, 6))
+    np.testing.assert_allclose(pts, ref.y.T, atol=1e-8)          # measured 2e-10
+
+
+@pytest.mark.parametrize("setup, call", [
+    ("P = mp.scenes.Pendulum(drive_amplitude=1.2, damping=0.5, drive_frequency=2 / 3)",
+     "mp.phase.poincare(P, [0.1, 0.0], 3 * np.pi, 3, skip=10 ** 12, max_steps=10 ** 10)"),
+    ("P = mp.scenes.Pendulum(drive_amplitude=1.2, damping=0.5, drive_frequency=2 / 3)",
+     "mp.phase.bifurcation(P, 'drive_amplitude', [1.1, 1.2], [0.1, 0.0], 3 * np.pi, 3, "
+     "10 ** 12, max_steps=10 ** 10)"),
+    ("V = mp.scenes.VanDerPol(1.0)",
+     "mp.phase.limit_cycle(V, [2.0, 0.0], tol=1e-17, stall=10 ** 6, max_periods=10 ** 6)"),
+    ("f = lambda t, y: np.array([y[1], -np.sin(y[0])])",
+     "mp.phase.fixed_points(f, [(-7, 7), (-3, 3)], seeds=400, max_starts=10 ** 6)"),
+])
+def test_ctrl_c_is_prompt(setup, call):
+    from sigint import interrupt_delay
+    dt = interrupt_delay(setup, call, delay=0.5)
+    assert dt < 1.0, f"KeyboardInterrupt {dt} s after SIGINT"   # measured < 0.05 s
