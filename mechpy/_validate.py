@@ -101,8 +101,10 @@ def as_int(x, name: str, *, minimum=None, maximum=None) -> int:
     except TypeError:
         raise TypeError(f"{name} must be an integer, got {type(x).__name__}") from None
     if not -_INT64_MAX - 1 <= v <= _INT64_MAX:
-        raise ValueError(f"{name} = {v:.3g} is too large: it must fit in a 64-bit integer "
-                         f"(|{name}| < 2**63)")
+        digits = len(str(abs(v)))
+        raise ValueError(f"{name} is too large ({'a negative ' if v < 0 else 'a '}{digits}-digit "
+                         f"integer): "
+                         f"it must fit in a 64-bit integer (|{name}| < 2**63)")
     if minimum is not None and v < minimum:
         raise ValueError(f"{name} must be >= {minimum}, got {v}")
     if maximum is not None and v > maximum:
