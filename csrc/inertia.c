@@ -231,6 +231,7 @@ static int mp_mesh_count(const size_t *off, const int64_t *to, int64_t a, int64_
     return lo - first > 2 ? 3 : (int)(lo - first);
 }
 
+/* qsort order of int64 values: ascending. */
 static int mp_mesh_cmp_i64(const void *x, const void *y)
 {
     int64_t a = *(const int64_t *)x, b = *(const int64_t *)y;
@@ -292,6 +293,7 @@ done:
     return rc;
 }
 
+/* Contract in inertia.h: validate, then Eberly's integrals in scaled coordinates. */
 int mp_inertia_mesh(size_t nv, const double *X, size_t nf, const int64_t *F,
                     double *volume, double com[3], double inertia[9],
                     struct mp_mesh_report *rep, int (*interrupt)(void *), void *ctx)
