@@ -22,8 +22,8 @@ import numpy as np
 
 from ._validate import as_array, as_scalar, as_vector3
 
-__all__ = ["OMEGA_EARTH", "FLIGHT_MAX_STEPS", "fictitious", "to_rotating", "from_rotating", "foucault_period",
-           "earth_omega", "eastward_deflection", "drop", "projectile_drift", "projectile"]
+__all__ = ["OMEGA_EARTH", "FLIGHT_MAX_STEPS", "fictitious", "to_rotating", "from_rotating",
+           "foucault_period", "earth_omega", "eastward_deflection", "drop", "projectile_drift", "projectile"]
 
 #: The Earth's sidereal rotation rate [rad/s].
 OMEGA_EARTH = 7.2921159e-5

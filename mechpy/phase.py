@@ -508,9 +508,9 @@ def bifurcation(scene, param: str, values, y0, period, n: int, skip: int, *, t0:
                                      f"{float(vals[bad])!r} produced NaN or inf")
             raise StepBudgetError(
                 f"bifurcation: the integration for {param} = {float(vals[bad])!r} over "
-                f"{skip + n} drive periods (t up to {t_end:.6g}) ran out of its step budget max_steps = "
-                f"{max_steps} (or its step fell below round-off); raise max_steps or take "
-                "fewer periods")
+                f"{skip + n} drive periods (t up to {t_end:.6g}) ran out of its step budget "
+                f"max_steps = {max_steps} (or its step fell below round-off); raise max_steps "
+                "or take fewer periods")
         return np.ascontiguousarray(e.y.transpose(0, 2, 1))
     for i, v in enumerate(vals):
         T = as_scalar(period(v) if callable(period) else period, "period", positive=True)

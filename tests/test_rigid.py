@@ -220,7 +220,8 @@ def _theta_extremes(top, y0, T):
 TOP = (0.5, 0.2, 1.0, 9.81, 0.1)
 
 
-@pytest.mark.parametrize("th0, w3", [(0.5, 40.0), (1.2, 8.0), (2.6, 400.0), (2.99826200791656, 40.0)])
+@pytest.mark.parametrize("th0, w3", [(0.5, 40.0), (1.2, 8.0), (2.6, 400.0),
+                                     (2.99826200791656, 40.0)])
 def test_nutation_bounds_at_steady_precession(th0, w3):
     # on the steady-precession condition theta stays at theta0 (a double root of f(u))
     ph, ps = _steady_precession(*TOP, th0, w3)
@@ -228,7 +229,8 @@ def test_nutation_bounds_at_steady_precession(th0, w3):
     assert abs(lo - th0) <= 4e-16 and abs(hi - th0) <= 4e-16      # measured 0 .. 1.1e-16
 
 
-@pytest.mark.parametrize("th0, w3", [(0.5, 40.0), (2.99826200791656, 40.0), (1.3142822200446478, 40.0)])
+@pytest.mark.parametrize("th0, w3", [(0.5, 40.0), (2.99826200791656, 40.0),
+                                     (1.3142822200446478, 40.0)])
 @pytest.mark.parametrize("thd, dphi", [(1e-4, 0.0), (1e-6, 0.0), (0.0, 1e-6), (0.0, -1e-4),
                                        (1e-9, 1e-9), (1e-3, 1e-5)])
 def test_nutation_bounds_near_steady_precession_match_integration(th0, w3, thd, dphi):
