@@ -444,7 +444,8 @@ def _check(s, what=""):
     if s.status < 0:
         if "max_steps" in s.message:
             from .errors import StepBudgetError
-            raise StepBudgetError(f"the integration {what} needs more steps than its budget: "
+            raise StepBudgetError(f"the integration{' ' + what if what else ''} needs more "
+                                  "steps than its budget: "
                                   f"{s.message} Raise max_steps or take fewer periods.")
         raise ConvergenceError(f"integration failed: {s.message}")
 
