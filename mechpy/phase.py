@@ -446,7 +446,7 @@ def _check(s, what=""):
             from .errors import StepBudgetError
             raise StepBudgetError(f"the integration{' ' + what if what else ''} needs more "
                                   "steps than its budget: "
-                                  f"{s.message} Raise max_steps or take fewer periods.")
+                                  f"{s.message} Raise max_steps or shorten the span.")
         raise ConvergenceError(f"integration failed: {s.message}")
 
 
