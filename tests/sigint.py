@@ -12,6 +12,7 @@ import mechpy
 CHILD = r'''
 import os, signal, sys, threading, time
 import numpy as np
+import scipy.sparse  # imported lazily by mechpy.modes: not inside the timed call
 import mechpy as mp
 setup, call, delay = sys.argv[1], sys.argv[2], float(sys.argv[3])
 signal.signal(signal.SIGINT, signal.default_int_handler)
