@@ -204,35 +204,78 @@ static int mp_mesh_fail(struct mp_mesh_report *rep, int defect, int64_t face, in
     return MP_EMESH;
 }
 
-/* Number of times `b` occurs in the outgoing list of `a`. */
+/* Buckets up to this size are scanned; larger ones are sorted and searched. */
+#define MP_MESH_SMALL_BUCKET 16
+
+/* Number of times `b` occurs in the outgoing list of `a` (3 meaning "more
+ * than two"): a linear scan of a small bucket, two binary searches of a
+ * large (sorted) one, so O(min(deg a, log deg a + 16)). */
 static int mp_mesh_count(const size_t *off, const int64_t *to, int64_t a, int64_t b)
 {
-    int c = 0;
-    for (size_t k = off[a]; k < off[a + 1]; k++) c += (to[k] == b);
-    return c;
+    size_t lo = off[a], hi = off[a + 1];
+    if (hi - lo <= MP_MESH_SMALL_BUCKET) {
+        int c = 0;
+        for (size_t k = lo; k < hi; k++) c += (to[k] == b);
+        return c > 2 ? 3 : c;
+    }
+    while (lo < hi) {                       /* first entry >= b */
+        size_t mid = lo + (hi - lo) / 2;
+        if (to[mid] < b) lo = mid + 1; else hi = mid;
+    }
+    size_t first = lo;
+    hi = off[a + 1];
+    while (lo < hi) {                       /* first entry > b */
+        size_t mid = lo + (hi - lo) / 2;
+        if (to[mid] <= b) lo = mid + 1; else hi = mid;
+    }
+    return lo - first > 2 ? 3 : (int)(lo - first);
 }
 
+/* qsort order of int64 values: ascending. */
+static int mp_mesh_cmp_i64(const void *x, const void *y)
+{
+    int64_t a = *(const int64_t *)x, b = *(const int64_t *)y;
+    return (a > b) - (a < b);
+}
+
+/* Faces between two interrupt checks in the long loops. */
+#define MP_MESH_CHECK_EVERY 65536
+
 /* Every edge shared by exactly two faces that traverse it in opposite
- * directions.  Directed edges a->b are bucketed by a (CSR); the reverse is
- * looked up in b's bucket.  O(nf) time, 3 nf + nv + 1 words of memory. */
+ * directions.  Directed edges a->b are bucketed by a (CSR), each bucket is
+ * sorted, and an edge and its reverse are counted by binary search:
+ * O(nf log d) time for the largest vertex degree d (a pole shared by half
+ * the faces costs log nf per lookup, not nf), 3 nf + 2 nv + 1 words of
+ * memory.  `interrupt` (may be NULL) is polled every MP_MESH_CHECK_EVERY
+ * faces; its non-zero status is returned. */
 static int mp_mesh_check_edges(size_t nv, size_t nf, const int64_t *F,
-                               struct mp_mesh_report *rep)
+                               struct mp_mesh_report *rep, int (*interrupt)(void *),
+                               void *ctx)
 {
     size_t *off = calloc(nv + 1, sizeof *off);
     int64_t *to = malloc(3 * nf * sizeof *to);
+    size_t *fill = malloc(nv * sizeof *fill);
     int rc = MP_OK;
-    if (!off || !to) { rc = MP_ENOMEM; goto done; }
+    if (!off || !to || !fill) { rc = MP_ENOMEM; goto done; }
     for (size_t f = 0; f < 3 * nf; f++) off[F[f] + 1]++;
     for (size_t i = 0; i < nv; i++) off[i + 1] += off[i];
-    {
-        size_t *fill = malloc(nv * sizeof *fill);
-        if (!fill) { rc = MP_ENOMEM; goto done; }
-        memcpy(fill, off, nv * sizeof *fill);
-        for (size_t f = 0; f < nf; f++)
-            for (int e = 0; e < 3; e++) to[fill[F[3 * f + e]]++] = F[3 * f + (e + 1) % 3];
-        free(fill);
+    memcpy(fill, off, nv * sizeof *fill);
+    for (size_t f = 0; f < nf; f++)
+        for (int e = 0; e < 3; e++) to[fill[F[3 * f + e]]++] = F[3 * f + (e + 1) % 3];
+    for (size_t i = 0, done_edges = 0; i < nv; i++) {
+        size_t d = off[i + 1] - off[i];
+        if (d <= MP_MESH_SMALL_BUCKET) continue;
+        qsort(to + off[i], d, sizeof *to, mp_mesh_cmp_i64);
+        done_edges += d;
+        if (interrupt && done_edges >= MP_MESH_CHECK_EVERY) {
+            done_edges = 0;
+            if ((rc = interrupt(ctx)) != MP_OK) goto done;
+        }
     }
     for (size_t f = 0; f < nf && rc == MP_OK; f++) {
+        if (interrupt && f % MP_MESH_CHECK_EVERY == MP_MESH_CHECK_EVERY - 1 &&
+            (rc = interrupt(ctx)) != MP_OK)
+            break;
         for (int e = 0; e < 3; e++) {
             int64_t a = F[3 * f + e], b = F[3 * f + (e + 1) % 3];
             int fw = mp_mesh_count(off, to, a, b), bw = mp_mesh_count(off, to, b, a);
@@ -246,12 +289,14 @@ static int mp_mesh_check_edges(size_t nv, size_t nf, const int64_t *F,
 done:
     free(off);
     free(to);
+    free(fill);
     return rc;
 }
 
+/* Contract in inertia.h: validate, then Eberly's integrals in scaled coordinates. */
 int mp_inertia_mesh(size_t nv, const double *X, size_t nf, const int64_t *F,
                     double *volume, double com[3], double inertia[9],
-                    struct mp_mesh_report *rep)
+                    struct mp_mesh_report *rep, int (*interrupt)(void *), void *ctx)
 {
     memset(rep, 0, sizeof *rep);
     rep->face = rep->v0 = rep->v1 = -1;
@@ -273,22 +318,41 @@ int mp_inertia_mesh(size_t nv, const double *X, size_t nf, const int64_t *F,
         if (t[0] == t[1] || t[1] == t[2] || t[2] == t[0])
             return mp_mesh_fail(rep, MP_MESH_REPEATED, (int64_t)f, -1, -1);
     }
-    int rc = mp_mesh_check_edges(nv, nf, F, rep);
+    int rc = mp_mesh_check_edges(nv, nf, F, rep, interrupt, ctx);
     if (rc != MP_OK) return rc;
 
-    /* Eberly's integrals about the bounding-box centre, summed in blocks */
-    double ref[3] = {0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]), 0.5 * (lo[2] + hi[2])};
+    /* Eberly's integrals about the bounding-box centre, in coordinates scaled
+     * by a power of two near the extent (exact), so that nothing over- or
+     * underflows before the results are scaled back; summed in blocks. */
+    double ref[3] = {0.5 * lo[0] + 0.5 * hi[0], 0.5 * lo[1] + 0.5 * hi[1],
+                     0.5 * lo[2] + 0.5 * hi[2]};
+    double ext = fmax(0.5 * hi[0] - 0.5 * lo[0],
+                      fmax(0.5 * hi[1] - 0.5 * lo[1], 0.5 * hi[2] - 0.5 * lo[2]));
+    int ex = 0;
+    if (ext > 0) frexp(ext, &ex);
+    rep->extent = 2.0 * ext;
+    /* differences of coordinates must exist in float64 */
+    for (int k = 0; k < 3; k++)
+        if (!isfinite(hi[k] - lo[k])) return mp_mesh_fail(rep, MP_MESH_RANGE, -1, -1, -1);
+    /* 2^-ex as two normal factors (2^-ex alone may be subnormal or overflow);
+     * (x * sa) * sb is exact */
+    const double sa = ldexp(1.0, -(ex / 2)), sb = ldexp(1.0, -(ex - ex / 2));
     double tot[10] = {0}, blk[10];
     const size_t B = 2048;
     for (size_t f0 = 0; f0 < nf; f0 += B) {
+        if (interrupt && f0 % MP_MESH_CHECK_EVERY == 0 && f0 && (rc = interrupt(ctx)) != MP_OK)
+            return rc;
         memset(blk, 0, sizeof blk);
         size_t fend = f0 + B < nf ? f0 + B : nf;
         for (size_t f = f0; f < fend; f++) {
             const double *p0 = X + 3 * F[3 * f], *p1 = X + 3 * F[3 * f + 1],
                          *p2 = X + 3 * F[3 * f + 2];
-            double x0 = p0[0] - ref[0], y0 = p0[1] - ref[1], z0 = p0[2] - ref[2];
-            double x1 = p1[0] - ref[0], y1 = p1[1] - ref[1], z1 = p1[2] - ref[2];
-            double x2 = p2[0] - ref[0], y2 = p2[1] - ref[1], z2 = p2[2] - ref[2];
+            double x0 = (p0[0] - ref[0]) * sa * sb, y0 = (p0[1] - ref[1]) * sa * sb,
+                   z0 = (p0[2] - ref[2]) * sa * sb;
+            double x1 = (p1[0] - ref[0]) * sa * sb, y1 = (p1[1] - ref[1]) * sa * sb,
+                   z1 = (p1[2] - ref[2]) * sa * sb;
+            double x2 = (p2[0] - ref[0]) * sa * sb, y2 = (p2[1] - ref[1]) * sa * sb,
+                   z2 = (p2[2] - ref[2]) * sa * sb;
             double a1 = x1 - x0, b1 = y1 - y0, c1 = z1 - z0;
             double a2 = x2 - x0, b2 = y2 - y0, c2 = z2 - z0;
             double d0 = b1 * c2 - b2 * c1, d1 = a2 * c1 - a1 * c2, d2 = a1 * b2 - a2 * b1;
@@ -327,21 +391,30 @@ int mp_inertia_mesh(size_t nv, const double *X, size_t nf, const int64_t *F,
                                     1.0 / 60,  1.0 / 60,  1.0 / 120, 1.0 / 120, 1.0 / 120};
     for (int k = 0; k < 10; k++) tot[k] *= mult[k];
     double V = tot[0];
-    double ext = fmax(hi[0] - lo[0], fmax(hi[1] - lo[1], hi[2] - lo[2]));
-    rep->volume = V;
-    if (!(fabs(V) > 1e-12 * ext * ext * ext))
-        return mp_mesh_fail(rep, MP_MESH_FLAT, -1, -1, -1);
+    rep->volume = ldexp(V, 3 * ex);
+    /* the scaled mesh fits in [-1, 1]^3: its volume is O(1) unless flat */
+    if (!(fabs(V) > 8e-12)) return mp_mesh_fail(rep, MP_MESH_FLAT, -1, -1, -1);
     if (V < 0) return mp_mesh_fail(rep, MP_MESH_INSIDE_OUT, -1, -1, -1);
     double c[3] = {tot[1] / V, tot[2] / V, tot[3] / V};
-    /* second moments about the centre of mass */
+    /* second moments about the centre of mass (scaled units) */
     double sxx = tot[4] - V * c[0] * c[0], syy = tot[5] - V * c[1] * c[1],
            szz = tot[6] - V * c[2] * c[2];
     double sxy = tot[7] - V * c[0] * c[1], syz = tot[8] - V * c[1] * c[2],
            szx = tot[9] - V * c[2] * c[0];
-    *volume = V;
-    for (int k = 0; k < 3; k++) com[k] = ref[k] + c[k];
     const double sm[6] = {sxx, syy, szz, sxy, syz, szx};
-    mp_inertia_from_moments(sm, inertia);
+    double J[9];
+    mp_inertia_from_moments(sm, J);
+    /* back to the input's units: lengths x 2^ex, volume x 2^3ex, inertia x 2^5ex */
+    double Vout = ldexp(V, 3 * ex);
+    int range_ok = isfinite(Vout) && Vout >= DBL_MIN;
+    for (int k = 0; k < 9; k++) {
+        double v = ldexp(J[k], 5 * ex);
+        if (!isfinite(v) || (J[k] != 0.0 && fabs(v) < DBL_MIN)) range_ok = 0;
+        inertia[k] = v;
+    }
+    if (!range_ok) return mp_mesh_fail(rep, MP_MESH_RANGE, -1, -1, -1);
+    *volume = Vout;
+    for (int k = 0; k < 3; k++) com[k] = ref[k] + ldexp(c[k], ex);
     return MP_OK;
 }
 

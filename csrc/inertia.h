@@ -44,7 +44,8 @@ enum mp_mesh_defect {
     MP_MESH_NONMANIFOLD,  /* an edge belongs to more than two faces */
     MP_MESH_ORIENTATION,  /* two faces traverse an edge in the same direction */
     MP_MESH_INSIDE_OUT,   /* the enclosed signed volume is negative */
-    MP_MESH_FLAT          /* the enclosed volume is zero */
+    MP_MESH_FLAT,         /* the enclosed volume is zero */
+    MP_MESH_RANGE         /* the volume or inertia over- or underflows float64 */
 };
 
 /* Where a defect was found: a face index and/or an edge (two vertices). */
@@ -52,7 +53,8 @@ struct mp_mesh_report {
     int defect;
     int64_t face;
     int64_t v0, v1;
-    double volume;
+    double volume;        /* signed volume (inside out, flat) */
+    double extent;        /* largest bounding-box side (MP_MESH_RANGE) */
 };
 
 /* Volume, centre of mass and inertia about the centre of mass (unit
@@ -62,10 +64,15 @@ struct mp_mesh_report {
  * validated first (indices, repeated vertices, zero-area faces, every edge
  * shared by exactly two faces traversing it in opposite directions,
  * positive volume); a defect returns MP_EMESH and fills `report`
- * (MP_EDOM for a non-finite vertex).  O(nf) time and memory. */
+ * (MP_EDOM for a non-finite vertex).  A mesh whose volume or inertia is
+ * beyond float64's normal range (extent above about 1e61 or below 1e-61)
+ * is MP_EMESH with defect MP_MESH_RANGE, never a silent inf or 0.
+ * O(nf log d) time (d the largest vertex degree) and O(nf) memory;
+ * `interrupt` (NULL: none) is polled every 65536 faces in the long loops and
+ * a non-zero status from it is returned at once (MP_EINTR for Ctrl-C). */
 int mp_inertia_mesh(size_t nv, const double *vertices, size_t nf, const int64_t *faces,
                     double *volume, double com[3], double inertia[9],
-                    struct mp_mesh_report *report);
+                    struct mp_mesh_report *report, int (*interrupt)(void *), void *ctx);
 
 /* Mass, centre of mass and inertia about the centre of mass of a density
  * sampled on a regular grid: rho (nx*ny*nz, C order) at origin + (i h0,

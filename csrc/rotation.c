@@ -2,6 +2,7 @@
  * Conventions: see rotation.h. */
 #include "rotation.h"
 
+#include <float.h>
 #include <math.h>
 
 #include "mp_status.h"
@@ -266,11 +267,17 @@ static int euler_of_quat(const double *q, const int axes_in[3], int extrinsic, d
     } else {
         a = q[3] - q[j]; b = q[i] + q[k] * sign; c = q[j] + q[3]; d = q[k] * sign - q[i];
     }
-    /* theta = 2 atan2(|(c, d)|, |(a, b)|): accurate near 0 and pi, unlike acos */
+    /* theta = 2 atan2(|(c, d)|, |(a, b)|): accurate near 0 and pi, unlike acos;
+     * hypot so that nothing underflows before theta does */
     double t[3];
-    t[1] = 2.0 * atan2(sqrt(c * c + d * d), sqrt(a * a + b * b));
-    int safe1 = t[1] > lock_tol;
-    int safe2 = MP_PI - t[1] > lock_tol;
+    double ncd = hypot(c, d), nab = hypot(a, b);
+    t[1] = 2.0 * atan2(ncd, nab);
+    /* tan(theta/2) = ncd/nab and tan((pi - theta)/2) = nab/ncd: lock only where the
+     * smaller norm is no longer a normal number relative to the larger (the first and
+     * third angles are then indeterminate) or within lock_tol of it */
+    double big = fmax(ncd, nab), tl = lock_tol < MP_PI ? tan(0.5 * lock_tol) : INFINITY;
+    int safe1 = ncd > tl * nab && ncd >= DBL_MIN * big;
+    int safe2 = nab > tl * ncd && nab >= DBL_MIN * big;
     double half_sum = atan2(b, a);
     double half_diff = atan2(-d, c);
     int lock = !(safe1 && safe2);
@@ -322,10 +329,64 @@ int mp_rotation_euler_from_quat(size_t n, const double *q, const struct mp_rotat
     return MP_OK;
 }
 
+/* Intrinsic-form angles t of the active matrix A = R_i(t0) R_j(t1) R_k(t2)
+ * (row-major; ax = (i, j, k)) read from atan2 of pairs of entries, each pair
+ * proportional to sin and cos of its angle with the same factor, so that the
+ * first and third angles are exact (to round-off) as long as that factor
+ * (`small`, sin t1 for proper sequences, cos t1 for Tait-Bryan ones) is a
+ * normal number.  At lock (small < DBL_MIN or <= sin(lock_tol)) the user's
+ * third angle is set to 0: t2 for an intrinsic sequence (zero_first = 0), t0
+ * for an extrinsic one (zero_first = 1), and the other one is read from
+ * what is left of A.  Returns 1 at lock. */
+static int euler_of_matrix(const double *A, const int ax[3], int zero_first, double lock_tol,
+                           double t[3])
+{
+#define E(r, c) A[3 * (r) + (c)]
+    int i = ax[0], j = ax[1], k = ax[2], l = 3 - i - j;
+    double sgn = j == (i + 1) % 3 ? 1.0 : -1.0;   /* +1 when (i, j, l) is cyclic */
+    double small;
+    if (i == k) {   /* proper Euler: R_i R_j R_i */
+        small = hypot(E(i, j), E(i, l));
+        t[1] = atan2(small, E(i, i));
+        t[2] = atan2(E(i, j), sgn * E(i, l));
+        t[0] = atan2(E(j, i), -sgn * E(l, i));
+    } else {        /* Tait-Bryan: k = l */
+        small = hypot(E(i, i), E(i, j));
+        t[1] = atan2(sgn * E(i, k), small);
+        t[2] = atan2(-sgn * E(i, j), E(i, i));
+        t[0] = atan2(-sgn * E(j, k), E(k, k));
+    }
+    double sl = lock_tol < 0.5 * MP_PI ? sin(lock_tol) : 1.0;
+    if (small >= DBL_MIN && small > sl) return 0;
+    /* lock: Rj = R_j(t1); intrinsic: R_i(t0) = A Rj^T; extrinsic: R_k(t2) = Rj^T A */
+    double Rj[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1}, N[9];
+    rot_rows(j, cos(t[1]), sin(t[1]), Rj);
+    for (int r = 0; r < 3; r++)
+        for (int c = 0; c < 3; c++) {
+            double acc = 0.0;
+            for (int m = 0; m < 3; m++)
+                acc += zero_first ? Rj[3 * m + r] * E(m, c) : E(r, m) * Rj[3 * c + m];
+            N[3 * r + c] = acc;
+        }
+    int axis = zero_first ? k : i, a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
+    double free_angle = atan2(N[3 * a2 + a1], N[3 * a1 + a1]);
+    if (zero_first) {
+        t[0] = 0.0;
+        t[2] = free_angle;
+    } else {
+        t[0] = free_angle;
+        t[2] = 0.0;
+    }
+    return 1;
+#undef E
+}
+
 int mp_rotation_euler_angles(size_t n, const double *R, const struct mp_rotation_seq *seq,
                              int passive, double orth_tol, double lock_tol, double *angles,
                              size_t *nlock, size_t *bad)
 {
+    int axes[3], perm[3];
+    intrinsic_form(seq, axes, perm);
     size_t locks = 0;
     for (size_t i = 0; i < n; i++) {
         const double *M = R + 9 * i;
@@ -333,9 +394,15 @@ int mp_rotation_euler_angles(size_t n, const double *R, const struct mp_rotation
             if (bad) *bad = i;
             return MP_EDOM;
         }
-        double q[4];
-        quat_of(M, passive, q);
-        locks += (size_t)euler_of_quat(q, seq->axes, seq->extrinsic, lock_tol, angles + 3 * i);
+        double A[9], t[3];
+        for (int r = 0; r < 3; r++)
+            for (int c = 0; c < 3; c++) A[3 * r + c] = passive ? M[3 * c + r] : M[3 * r + c];
+        locks += (size_t)euler_of_matrix(A, axes, seq->extrinsic, lock_tol, t);
+        double *out = angles + 3 * i;
+        for (int k = 0; k < 3; k++) out[perm[k]] = t[k];
+        /* -0.0 from a sign flip reads oddly; the value is the same */
+        for (int k = 0; k < 3; k++)
+            if (out[k] == 0.0) out[k] = 0.0;
     }
     if (nlock) *nlock = locks;
     return MP_OK;

@@ -35,9 +35,11 @@ int mp_rotation_euler_matrix(size_t n, const double *angles, const struct mp_rot
 /* Euler angles (n x 3) from matrices (n x 9).  Each matrix must satisfy
  * max|R R^T - I| <= orth_tol and det R > 0, else MP_EDOM with *bad set to
  * its index.  The middle angle is in [0, pi] (proper Euler) or
- * [-pi/2, pi/2] (Tait-Bryan), the others in [-pi, pi].  Within lock_tol
- * (radians) of gimbal lock the third angle is set to 0 and *nlock counts
- * such items. */
+ * [-pi/2, pi/2] (Tait-Bryan), the others in [-pi, pi].  The angles are
+ * atan2 of pairs of entries (exact to round-off while the sine of the middle
+ * angle's distance from lock is a normal number).  At gimbal lock (that sine
+ * below DBL_MIN, or the distance within lock_tol radians) the third angle is
+ * set to 0, the first read from the rest, and *nlock counts such items. */
 int mp_rotation_euler_angles(size_t n, const double *R, const struct mp_rotation_seq *seq,
                              int passive, double orth_tol, double lock_tol, double *angles,
                              size_t *nlock, size_t *bad);

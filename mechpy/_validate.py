@@ -13,7 +13,10 @@ import operator
 
 import numpy as np
 
-__all__ = ["as_array", "as_scalar", "as_int", "as_vector3", "as_symmetric", "as_square"]
+__all__ = ["as_array", "as_scalar", "as_int", "as_vector3", "as_symmetric", "as_square",
+           "as_finite_result"]
+
+_INT64_MAX = 2 ** 63 - 1
 
 
 def as_array(x, name: str, *, ndim=None, shape=None, min_ndim=None, finite=True,
@@ -86,13 +89,22 @@ def as_scalar(x, name: str, *, positive=False, nonnegative=False, finite=True,
 
 
 def as_int(x, name: str, *, minimum=None, maximum=None) -> int:
-    """An integer (numpy integers accepted, floats and bools refused)."""
+    """An integer (numpy integers accepted, floats and bools refused).
+
+    Python integers beyond int64 (what the C core and NumPy index with) are a
+    ``ValueError`` naming the argument, never an ``OverflowError`` from deeper
+    down."""
     if isinstance(x, (bool, np.bool_)):
         raise TypeError(f"{name} must be an integer, got bool")
     try:
         v = operator.index(x)
     except TypeError:
         raise TypeError(f"{name} must be an integer, got {type(x).__name__}") from None
+    if not -_INT64_MAX - 1 <= v <= _INT64_MAX:
+        digits = len(str(abs(v)))
+        raise ValueError(f"{name} is too large ({'a negative ' if v < 0 else 'a '}{digits}-digit "
+                         f"integer): "
+                         f"it must fit in a 64-bit integer (|{name}| < 2**63)")
     if minimum is not None and v < minimum:
         raise ValueError(f"{name} must be >= {minimum}, got {v}")
     if maximum is not None and v > maximum:
@@ -129,3 +141,15 @@ def as_symmetric(x, name: str, *, rtol=1e-10, atol=0.0, batch=False, **kw) -> np
         raise ValueError(f"{name} must be symmetric (max |A - A^T| = "
                          f"{float(np.max(np.abs(a - at))):.3g})")
     return np.ascontiguousarray(0.5 * (a + at))
+
+
+def as_finite_result(x, what: str, cause: str) -> np.ndarray:
+    """Return *x* (a computed result) if every element is finite; otherwise raise
+    :class:`mechpy.NonFiniteError` saying that ``what`` overflowed (or became
+    NaN) and ``cause`` (which inputs are too large or too small)."""
+    a = np.asarray(x)
+    if a.dtype.kind in "fc" and not np.isfinite(a).all():
+        from .errors import NonFiniteError
+        kind = "NaN" if np.isnan(a).any() else "inf"
+        raise NonFiniteError(f"{what} overflowed float64 (the result contains {kind}): {cause}")
+    return x

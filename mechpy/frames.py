@@ -22,8 +22,8 @@ import numpy as np
 
 from ._validate import as_array, as_scalar, as_vector3
 
-__all__ = ["OMEGA_EARTH", "fictitious", "to_rotating", "from_rotating", "foucault_period",
-           "earth_omega", "eastward_deflection", "drop", "projectile_drift", "projectile"]
+__all__ = ["OMEGA_EARTH", "FLIGHT_MAX_STEPS", "fictitious", "to_rotating", "from_rotating",
+           "foucault_period", "earth_omega", "eastward_deflection", "drop", "projectile_drift", "projectile"]
 
 #: The Earth's sidereal rotation rate [rad/s].
 OMEGA_EARTH = 7.2921159e-5
@@ -180,14 +180,24 @@ def eastward_deflection(height, latitude, g=9.81, omega=OMEGA_EARTH):
     return float(d) if d.ndim == 0 else d
 
 
-def _coriolis_flight(r0, v0, latitude, g, omega, rtol):
-    """Integrate r'' = g - 2 omega x v in the local frame until z = 0."""
-    from .integrate import solve
-    w = earth_omega(latitude, omega)
-    gv = np.array([0.0, 0.0, -g])
+#: Step budget of :func:`drop` and :func:`projectile` (a flight of a few
+#: hundred metres takes a few dozen steps; the budget ends absurd flights,
+#: e.g. a drop from 1e300 m, in about a second).
+FLIGHT_MAX_STEPS = 20_000
 
-    def f(t, y):
-        return np.concatenate([y[3:], gv - 2.0 * np.cross(w, y[3:])])
+
+def _coriolis_flight(r0, v0, latitude, g, omega, rtol, max_steps):
+    """Integrate r'' = g - 2 omega x v in the local frame until z = 0."""
+    from ._validate import as_int
+    from .errors import StepBudgetError
+    from .integrate import solve
+    max_steps = as_int(max_steps, "max_steps", minimum=1)
+    wx, wy, wz = (2.0 * float(c) for c in earth_omega(latitude, omega))
+
+    def f(t, y):   # (v, g - 2 omega x v) in plain floats: a few microseconds a call
+        vx, vy, vz = float(y[3]), float(y[4]), float(y[5])
+        return [vx, vy, vz, -(wy * vz - wz * vy), -(wz * vx - wx * vz),
+                -g - (wx * vy - wy * vx)]
 
     def ground(t, y):
         return y[2]
@@ -195,20 +205,36 @@ def _coriolis_flight(r0, v0, latitude, g, omega, rtol):
     ground.direction = -1
     # a generous time bound: the vacuum flight time, doubled
     vz = v0[2]
-    T = 2.0 * (vz + np.sqrt(vz * vz + 2.0 * g * max(r0[2], 0.0))) / g + 1.0
-    s = solve(f, (0.0, T), np.concatenate([r0, v0]), rtol=rtol, atol=1e-12, events=ground)
+    with np.errstate(over="ignore", invalid="ignore"):
+        T = 2.0 * (vz + np.sqrt(vz * vz + 2.0 * g * max(r0[2], 0.0))) / g + 1.0
+    if not np.isfinite(T):
+        raise ValueError(f"the flight time overflows float64 (launch speed {float(vz):.3g} m/s, "
+                         f"height {float(r0[2]):.3g} m, g = {g:.3g} m/s^2): use other units")
+    s = solve(f, (0.0, T), np.concatenate([r0, v0]), rtol=rtol, atol=1e-12, events=ground,
+              max_steps=max_steps)
+    if s.status < 0 and "max_steps" in s.message:
+        raise StepBudgetError(
+            f"the flight (vacuum flight time about {T:.3g} s) needs more than max_steps = "
+            f"{max_steps} steps: {s.message} The flat-Earth model (constant g, no curvature) "
+            "holds for flights of at most a few km; raise max_steps to go on")
     if not s.t_events[0].size:
         raise RuntimeError("the body did not reach the ground")
     return s.y_events[0][0, :3], float(s.t_events[0][0])
 
 
-def drop(height, latitude, g=9.81, omega=OMEGA_EARTH, *, rtol=1e-11):
+def drop(height, latitude, g=9.81, omega=OMEGA_EARTH, *, rtol=1e-11,
+         max_steps=FLIGHT_MAX_STEPS):
     """Numerically drop a body from rest at ``height`` (m) in the rotating frame
     (Coriolis term in full, no drag) and return its landing point (east, north,
-    0) in m and the fall time in s.  Compare :func:`eastward_deflection`."""
+    0) in m and the fall time in s.  Compare :func:`eastward_deflection`.
+
+    ``max_steps`` (default :data:`FLIGHT_MAX_STEPS`) bounds the integration:
+    a flight that needs more raises :class:`mechpy.StepBudgetError` (an absurd
+    height ran for hours); Ctrl-C raises ``KeyboardInterrupt``."""
     h = as_scalar(height, "height", positive=True)
     g = as_scalar(g, "g", positive=True)
-    return _coriolis_flight(np.array([0.0, 0.0, h]), np.zeros(3), latitude, g, omega, rtol)
+    return _coriolis_flight(np.array([0.0, 0.0, h]), np.zeros(3), latitude, g, omega, rtol,
+                            max_steps)
 
 
 def projectile_drift(v0, t, latitude, g=9.81, omega=OMEGA_EARTH) -> np.ndarray:
@@ -229,14 +255,16 @@ def projectile_drift(v0, t, latitude, g=9.81, omega=OMEGA_EARTH) -> np.ndarray:
     return -np.cross(w, v0) * t ** 2 - np.cross(w, gv) * t ** 3 / 3.0
 
 
-def projectile(v0, latitude, g=9.81, omega=OMEGA_EARTH, *, rtol=1e-11):
+def projectile(v0, latitude, g=9.81, omega=OMEGA_EARTH, *, rtol=1e-11,
+               max_steps=FLIGHT_MAX_STEPS):
     """Numerically fly a projectile launched from the ground with velocity
     ``v0`` (east, north, up; m/s, up-component > 0) in the rotating frame and
     return its landing point (m) and flight time (s).  Its offset from the
     vacuum range ``v0_h * 2 v0_z / g`` is the Coriolis drift of
-    :func:`projectile_drift`."""
+    :func:`projectile_drift`.  ``max_steps`` bounds the integration as in
+    :func:`drop`."""
     v0 = as_vector3(v0, "v0")
     if v0.shape != (3,) or not v0[2] > 0:
         raise ValueError("v0 must be one 3-vector with a positive upward component")
     g = as_scalar(g, "g", positive=True)
-    return _coriolis_flight(np.zeros(3), v0, latitude, g, omega, rtol)
+    return _coriolis_flight(np.zeros(3), v0, latitude, g, omega, rtol, max_steps)

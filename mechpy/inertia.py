@@ -25,7 +25,7 @@ from typing import NamedTuple
 import numpy as np
 
 from . import _core
-from ._validate import as_array, as_scalar, as_symmetric, as_vector3
+from ._validate import as_array, as_finite_result, as_scalar, as_symmetric, as_vector3
 
 __all__ = [
     "Body", "point_masses", "solid", "SHAPES", "mesh", "density_grid", "shift",
@@ -71,6 +71,11 @@ def point_masses(masses, positions, origin=(0.0, 0.0, 0.0)) -> np.ndarray:
     I : ndarray, shape (..., 3, 3)
         Inertia tensor [M L^2].
 
+    Raises
+    ------
+    mechpy.NonFiniteError
+        When the tensor overflows float64 (a ``ValueError``).
+
     Examples
     --------
     Masses along the x axis give ``I_yy = I_zz > 0`` and every other entry 0:
@@ -98,7 +103,10 @@ def point_masses(masses, positions, origin=(0.0, 0.0, 0.0)) -> np.ndarray:
     mb = np.ascontiguousarray(np.broadcast_to(m, batch + (n,)).reshape(-1, n))
     xb = np.ascontiguousarray(np.broadcast_to(x, batch + (n, 3)).reshape(-1, n, 3))
     ob = np.ascontiguousarray(np.broadcast_to(o, batch + (3,)).reshape(-1, 3))
-    return _core.inertia_point_masses(mb, xb, ob).reshape(batch + (3, 3))
+    out = _core.inertia_point_masses(mb, xb, ob).reshape(batch + (3, 3))
+    return as_finite_result(out, "point_masses: the inertia tensor",
+                            "the sums of mass x distance^2 exceed float64; use other units "
+                            "(or an origin nearer the masses)")
 
 
 # --------------------------------------------------------------------------- Steiner
@@ -128,6 +136,17 @@ def shift(I, mass, a, to: str = "point") -> np.ndarray:
     -------
     ndarray, shape (..., 3, 3)
         The shifted tensor [M L^2].
+
+    Raises
+    ------
+    ValueError
+        With ``to="com"``, when the result is not the inertia tensor of any
+        mass distribution (a negative principal moment, or I1 + I2 < I3,
+        beyond the round-off of the shift): a body of mass M whose centre of
+        mass lies at ``-a`` from the point cannot have the tensor ``I`` about
+        that point (its moments about the point are at least those of M
+        concentrated at its centre of mass).  Typical causes: ``I`` is about
+        the centre of mass already, or ``a`` or ``mass`` is too large.
     """
     if to not in ("point", "com"):
         raise ValueError(f'to must be "point" or "com", got {to!r}')
@@ -143,7 +162,28 @@ def shift(I, mass, a, to: str = "point") -> np.ndarray:
     Mb = np.ascontiguousarray(np.broadcast_to(M, batch).reshape(-1))
     ab = np.ascontiguousarray(np.broadcast_to(a, batch + (3,)).reshape(-1, 3))
     out = _core.inertia_shift(Ib, Mb, ab, 1 if to == "point" else -1)
+    if to == "com" and out.size:
+        _check_com_tensor(out, Ib, Mb, ab)
     return out.reshape(batch + (3, 3))
+
+
+def _check_com_tensor(out, I, M, a):
+    """Raise unless each tensor shifted to the centre of mass is one of a mass
+    distribution: principal moments >= 0 and I1 + I2 >= I3, to the round-off of
+    the shift (16 eps times the larger of |I| and M |a|^2)."""
+    w, _ = _eigh(out)
+    scale = np.maximum(np.max(np.abs(I), axis=(-2, -1)), M * np.einsum("...k,...k->...", a, a))
+    tol = 16.0 * np.finfo(float).eps * scale
+    bad = (w[:, 0] < -tol) | (w[:, 0] + w[:, 1] < w[:, 2] - tol)
+    if np.any(bad):
+        k = int(np.flatnonzero(bad)[0])
+        raise ValueError(
+            f"shift(to='com'): no mass distribution has the tensor I about the point a and its "
+            f"centre of mass at distance |a| = {float(np.linalg.norm(a[k])):.6g} with mass "
+            f"{float(M[k]):.6g}: the result would have principal moments "
+            f"{np.array2string(w[k], precision=6)} (negative, or I1 + I2 < I3)"
+            + (f" (item {k} of the batch)" if out.shape[0] > 1 else "")
+            + "; check that I is about the point a and a is measured from the centre of mass")
 
 
 # --------------------------------------------------------------------------- principal axes
@@ -515,13 +555,15 @@ def mesh(vertices, faces, density=None, mass=None) -> Body:
     polyhedron, so a mesh of a smooth body converges to it as O(h^2) in the
     edge length h.
 
-    The mesh is checked first, in C and in O(n) time: every face index exists,
+    The mesh is checked first, in C and in O(n log n) time (Ctrl-C is answered):
+    every face index exists,
     no face repeats a vertex or has zero area, every edge is shared by exactly
     two faces that traverse it in opposite directions (closed, manifold,
     consistently oriented), and the signed volume is positive (faces
     counter-clockwise seen from outside).  A defect raises
     :class:`mechpy.MeshError` that says which ("open", "non-manifold",
-    "inconsistently oriented", "inside out", "degenerate") and where.
+    "inconsistently oriented", "inside out", "degenerate", "out of range" for a
+    volume or inertia beyond float64) and where.
 
     Parameters
     ----------

@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import _core
-from ._validate import as_array, as_int, as_scalar, as_symmetric
+from ._validate import as_array, as_finite_result, as_int, as_scalar, as_symmetric
 
 __all__ = ["Modes", "normal_modes", "chain", "dispersion", "dispersion_diatomic",
            "linear_triatomic", "TriatomicModes"]
@@ -184,15 +184,22 @@ class Modes:
         w = self.omega
         zero = w == 0.0
         wsafe = np.where(zero, 1.0, w)
-        c = np.cos(w * tt)
-        s = np.sin(w * tt)
-        sw = np.where(zero, tt, s / wsafe)          # sin(w t)/w, -> t at w = 0
-        q = (eta0 * c + deta0 * sw) @ self.vectors.T
-        if scalar_t:
-            q = q[0]
-        if not velocities:
-            return q
-        v = (deta0 * c - eta0 * w * s) @ self.vectors.T
+        cause = ("omega * t or a zero mode's drift eta'(0) t is beyond float64 (t up to "
+                 f"{float(np.max(np.abs(tt))) if tt.size else 0.0:.3g}); use smaller times or "
+                 "shift the time origin")
+        with np.errstate(over="ignore", invalid="ignore"):
+            phase = as_finite_result(w * tt, "Modes.evolve: the phase omega t", cause)
+            c = np.cos(phase)
+            s = np.sin(phase)
+            sw = np.where(zero, tt, s / wsafe)          # sin(w t)/w, -> t at w = 0
+            q = (eta0 * c + deta0 * sw) @ self.vectors.T
+            q = as_finite_result(q, "Modes.evolve: q(t)", cause)
+            if scalar_t:
+                q = q[0]
+            if not velocities:
+                return q
+            v = (deta0 * c - eta0 * w * s) @ self.vectors.T
+            v = as_finite_result(v, "Modes.evolve: q'(t)", "omega eta(0) is beyond float64")
         if scalar_t:
             v = v[0]
         return q, v
@@ -269,7 +276,10 @@ def normal_modes(K, M=None, *, method: str = "auto", zero_tol: float | None = No
     Notes
     -----
     The eigenvectors satisfy ``V^T M V = I`` and ``K V = M V diag(omega^2)``.
-    The computation runs in C with the GIL released.
+    The computation runs in C with the GIL released.  LAPACK cannot be stopped
+    part-way, so it runs in a worker thread: Ctrl-C raises ``KeyboardInterrupt``
+    within about 50 ms, and the abandoned solve finishes in the background (its
+    CPU time, up to the full solve's) and frees its memory.
 
     Examples
     --------
@@ -400,6 +410,7 @@ def chain(N: int, mass: float = 1.0, spring: float = 1.0, ends: str = "fixed",
     diag = np.zeros(N)
     off = np.zeros(max(N - 1, 0))
     corner = 0.0
+    _err = np.seterr(over="ignore", invalid="ignore")
     if ends == "fixed":
         diag += k[:-1] + k[1:]
         off -= k[1:-1]
@@ -416,6 +427,12 @@ def chain(N: int, mass: float = 1.0, spring: float = 1.0, ends: str = "fixed",
             if N == 2:  # both springs join mass 0 and mass 1
                 off -= k[-1]
                 corner = 0.0
+    np.seterr(**_err)
+    with np.errstate(over="ignore", invalid="ignore"):
+        as_finite_result(diag, "chain: the diagonal of K (sum of the two springs at a mass)",
+                         "spring constants near the float64 limit 1.8e308; "
+                         f"{'springs' if springs is not None else 'spring'} must be smaller "
+                         "(or use other units)")
     if sparse:
         import scipy.sparse as sp
         Kd = sp.diags([off, diag, off], [-1, 0, 1], shape=(N, N), format="lil")
@@ -494,10 +511,23 @@ def dispersion_diatomic(mass1, mass2, spring, spacing, q):
     k = as_scalar(spring, "spring", nonnegative=True)
     a = as_scalar(spacing, "spacing", positive=True)
     q = as_array(q, "q", allow_empty=True)
-    inv = 1.0 / m1 + 1.0 / m2
-    root = np.sqrt(np.maximum(inv ** 2 - 4.0 * np.sin(0.5 * q * a) ** 2 / (m1 * m2), 0.0))
-    acoustic = np.sqrt(np.maximum(k * (inv - root), 0.0))
-    optical = np.sqrt(k * (inv + root))
+    # scaled by the smaller mass, so that 1/m and 1/(m1 m2) do not overflow first:
+    # with r = m_small / m_large <= 1, omega^2 = (k / m_small) (1 + r -+ sqrt((1 + r)^2 - 4 r s^2))
+    ms, r = min(m1, m2), min(m1, m2) / max(m1, m2)
+    s2 = np.sin(0.5 * q * a) ** 2
+    root = np.sqrt(np.maximum((1.0 + r) ** 2 - 4.0 * r * s2, 0.0))
+    # the acoustic branch without cancellation: (1 + r) - root = 4 r s^2 / ((1 + r) + root)
+    lo = 4.0 * r * s2 / ((1.0 + r) + root)
+    hi = (1.0 + r) + root
+    cause = (f"spring / mass = {k:.3g} / {ms:.3g} gives frequencies beyond float64; "
+             "use other units")
+    with np.errstate(over="ignore", invalid="ignore"):
+        scale = as_finite_result(np.sqrt(np.float64(k)) / np.sqrt(np.float64(ms)),
+                                 "dispersion_diatomic: sqrt(spring / mass)", cause)
+        acoustic = as_finite_result(scale * np.sqrt(lo), "dispersion_diatomic: acoustic branch",
+                                    cause)
+        optical = as_finite_result(scale * np.sqrt(hi), "dispersion_diatomic: optical branch",
+                                   cause)
     return acoustic, optical
 
 

@@ -11,15 +11,23 @@ callable ``f(t, y)``.  Units are those of the system.
 """
 from __future__ import annotations
 
+import warnings
 from typing import NamedTuple
 
 import numpy as np
 
 from ._validate import as_array, as_int, as_scalar
+from .errors import ConvergenceError
 from .integrate import solve, solve_many
 
-__all__ = ["FixedPoint", "vector_field", "fixed_points", "limit_cycle", "poincare",
-           "bifurcation", "lyapunov"]
+__all__ = ["FixedPoint", "vector_field", "fixed_points", "FIXED_POINT_STARTS",
+           "MAX_SECTION_POINTS", "SECTION_MAX_STEPS", "limit_cycle", "poincare",
+           "bifurcation", "lyapunov", "LyapunovFloorWarning"]
+
+
+class LyapunovFloorWarning(UserWarning):
+    """The neighbour method's separation fell to the integration error: the
+    exponent it reports is a floor set by the tolerances, not a measurement."""
 
 
 def _is_scene(system) -> bool:
@@ -43,19 +51,26 @@ def _ensemble(system, y0s, t_span, t_eval, **kw):
 
 
 # ---- vector field ---------------------------------------------------------------
-def vector_field(system, X, Y, t: float = 0.0):
+def vector_field(system, X, Y, t: float = 0.0, *, vectorized: bool = False):
     """The field (U, V) = f(t, (X, Y)) of a two-dimensional system on a grid.
 
     Parameters
     ----------
     system : Scene or callable f(t, y)
         A system with a 2-component state.  A scene is evaluated in C in one
-        call; a callable is first tried vectorised (``y`` of shape (2, ...)),
-        then point by point.
+        call.  A callable is called once per grid point with ``y`` of shape
+        (2,), unless ``vectorized`` is True.
     X, Y : array_like, same shape
         Grid coordinates (e.g. from ``np.meshgrid``).
     t : float
         Time at which the field is taken (driven systems).
+    vectorized : bool
+        As in :func:`scipy.integrate.solve_ivp`: the callable accepts ``y``
+        of shape (2, ...) (the grid stacked on a leading axis) and returns
+        the field in the same shape, acting on each point independently.
+        Whether a callable does so cannot be told from its output (``A @ y``
+        returns the right shape and mixes grid points), so it is never
+        guessed.  Ignored for scenes.
 
     Returns
     -------
@@ -68,23 +83,23 @@ def vector_field(system, X, Y, t: float = 0.0):
     if X.shape != Y.shape:
         raise ValueError(f"X and Y must have the same shape, got {X.shape} and {Y.shape}")
     t = as_scalar(t, "t")
+    if not isinstance(vectorized, (bool, np.bool_)):
+        raise TypeError(f"vectorized must be True or False, got {vectorized!r}")
     if _is_scene(system) and system.dim != 2:
         raise ValueError(f"vector_field needs a 2-D system; this scene has dim {system.dim}")
     Z = np.stack([X, Y])
-    try:
+    if _is_scene(system) or vectorized:
         F = np.asarray(f(t, Z), dtype=np.float64)
-        ok = F.shape == Z.shape
-    except Exception:
-        if _is_scene(system):
-            raise
-        ok = False
-    if not ok:
-        F = np.empty_like(Z)
-        for idx in np.ndindex(X.shape):
-            val = np.asarray(f(t, Z[(slice(None),) + idx]), dtype=np.float64)
-            if val.shape != (2,):
-                raise ValueError(f"the system must return 2 components, got shape {val.shape}")
-            F[(slice(None),) + idx] = val
+        if F.shape != Z.shape:
+            raise ValueError(f"a vectorized system must return shape {Z.shape} for y of "
+                             f"shape {Z.shape}, got {F.shape}")
+        return F[0], F[1]
+    F = np.empty_like(Z)
+    for idx in np.ndindex(X.shape):
+        val = np.asarray(f(t, Z[(slice(None),) + idx]), dtype=np.float64)
+        if val.shape != (2,):
+            raise ValueError(f"the system must return 2 components, got shape {val.shape}")
+        F[(slice(None),) + idx] = val
     return F[0], F[1]
 
 
@@ -130,14 +145,22 @@ def _classify(ev, scale):
     return ("hyperbolic" if np.all(np.abs(re) > tol) else "non-hyperbolic"), stable
 
 
-def fixed_points(system, bounds, *, t: float = 0.0, seeds: int = 15, tol: float = 1e-12):
+#: Budget of fixed_points: starting points for a scene (Newton runs batched in C)
+#: and for a Python callable (one point at a time, about 1 ms each).
+FIXED_POINT_STARTS = {"scene": 1_000_000, "callable": 10_000}
+
+
+def fixed_points(system, bounds, *, t: float = 0.0, seeds: int = 15, tol: float = 1e-12,
+                 max_starts: int | None = None):
     r"""Fixed points of an autonomous system in a box, classified from the Jacobian.
 
     Newton's method :math:`\mathbf y \leftarrow \mathbf y - J^{-1}\mathbf f`
     is started from a grid of ``seeds`` points per axis; converged points
     inside ``bounds`` are kept once each.  In 2-D the eigenvalues of J give a
     saddle (real, opposite signs), a node (real, same sign), a focus
-    (complex) or a centre (purely imaginary).
+    (complex) or a centre (purely imaginary).  For a scene every start runs
+    at once (the field and Jacobian of the whole batch in one C call each);
+    a Python callable is iterated one start at a time.
 
     Parameters
     ----------
@@ -147,9 +170,14 @@ def fixed_points(system, bounds, *, t: float = 0.0, seeds: int = 15, tol: float 
     t : float
         Time at which the field is frozen.
     seeds : int
-        Starting points per axis.
+        Starting points per axis (``seeds ** dim`` in all).
     tol : float
         Convergence tolerance on the step (state units).
+    max_starts : int, optional
+        Budget on ``seeds ** dim``; default :data:`FIXED_POINT_STARTS`:
+        10^6 for a scene (about 1 s per 10^5 starts), 10^4 for a Python
+        callable (about 1 ms per start).  A larger grid is a ``ValueError``
+        before any work; Ctrl-C stops the search between Newton steps.
 
     Returns
     -------
@@ -161,17 +189,53 @@ def fixed_points(system, bounds, *, t: float = 0.0, seeds: int = 15, tol: float 
     if b.shape[1] != 2 or np.any(b[:, 1] <= b[:, 0]):
         raise ValueError(f"bounds must have shape (dim, 2) with lo < hi, got {b.shape}")
     dim = b.shape[0]
-    if _is_scene(system) and system.dim != dim:
+    scene = _is_scene(system)
+    if scene and system.dim != dim:
         raise ValueError(f"bounds gives {dim} components; the scene has dim {system.dim}")
     seeds = as_int(seeds, "seeds", minimum=1)
-    if seeds ** dim > 200_000:
-        raise ValueError("too many seeds for this dimension: lower seeds")
+    kind = "scene" if scene else "callable"
+    budget = (FIXED_POINT_STARTS[kind] if max_starts is None
+              else as_int(max_starts, "max_starts", minimum=1))
+    if seeds ** dim > budget:
+        raise ValueError(
+            f"fixed_points: seeds ** dim = {seeds}^{dim} = {seeds ** dim:.3g} starting points "
+            f"exceed the budget max_starts = {budget} for a {kind}; lower seeds or raise "
+            "max_starts")
     t = as_scalar(t, "t")
+    tol = as_scalar(tol, "tol", positive=True)
     axes = [np.linspace(lo, hi, seeds + 2)[1:-1] for lo, hi in b]
     starts = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, dim)
     span = np.max(b[:, 1] - b[:, 0])
+    cand = _newton_batch(system, t, starts, tol) if scene else _newton_each(f, system, t,
+                                                                              starts, tol)
+    inside = np.all(np.isfinite(cand), axis=1) & np.all((cand >= b[:, 0]) & (cand <= b[:, 1]),
+                                                       axis=1)
+    cand = cand[inside]
     found = []
-    for y in starts:
+    # near-duplicates first collapse on a grid of 1e-7 span, then one by one
+    if cand.shape[0]:
+        _, first = np.unique(np.round(cand / (1e-7 * span)), axis=0, return_index=True)
+        cand = cand[np.sort(first)]
+    for y in cand:
+        if np.linalg.norm(f(t, y)) > 1e-8 * max(1.0, np.abs(_jacobian(system, t, y)).max()):
+            continue
+        if any(np.linalg.norm(y - p) < 1e-7 * span for p in found):
+            continue
+        found.append(np.array(y))
+    found.sort(key=tuple)
+    out = []
+    for y in found:
+        J = _jacobian(system, t, y)
+        ev = np.linalg.eigvals(J)
+        kind_, stable = _classify(ev, np.abs(J).max())
+        out.append(FixedPoint(y, kind_, stable, ev))
+    return out
+
+
+def _newton_each(f, system, t, starts, tol):
+    """Newton from each start in turn; a start that fails gives a row of NaN."""
+    out = np.full(starts.shape, np.nan)
+    for i, y in enumerate(starts):
         y = y.copy()
         for _ in range(60):
             J = _jacobian(system, t, y)
@@ -183,29 +247,48 @@ def fixed_points(system, bounds, *, t: float = 0.0, seeds: int = 15, tol: float 
             if not np.all(np.isfinite(y)):
                 break
             if np.linalg.norm(step) <= tol * max(1.0, np.linalg.norm(y)):
+                out[i] = y
                 break
-        else:
-            continue
-        if not np.all(np.isfinite(y)) or np.any(y < b[:, 0]) or np.any(y > b[:, 1]):
-            continue
-        if np.linalg.norm(f(t, y)) > 1e-8 * max(1.0, np.abs(_jacobian(system, t, y)).max()):
-            continue
-        if any(np.linalg.norm(y - p) < 1e-7 * span for p in found):
-            continue
-        found.append(y)
-    found.sort(key=tuple)
-    out = []
-    for y in found:
-        J = _jacobian(system, t, y)
-        ev = np.linalg.eigvals(J)
-        kind, stable = _classify(ev, np.abs(J).max())
-        out.append(FixedPoint(y, kind, stable, ev))
+    return out
+
+
+def _newton_batch(scene, t, starts, tol):
+    """Newton from every start at once (a scene's rhs and Jacobian take (dim, N)
+    states); rows that do not converge in 60 steps, meet a singular Jacobian or
+    leave the finite numbers are NaN."""
+    y = starts.T.copy()                                # (dim, N)
+    n = y.shape[1]
+    active = np.ones(n, dtype=bool)
+    done = np.zeros(n, dtype=bool)
+    with np.errstate(all="ignore"):
+        for _ in range(60):
+            idx = np.flatnonzero(active)
+            if idx.size == 0:
+                break
+            ya = y[:, idx]
+            F = np.asarray(scene.rhs(t, ya), dtype=np.float64).T          # (k, dim)
+            J = np.moveaxis(np.asarray(scene.jacobian(t, ya), dtype=np.float64), -1, 0)
+            ok = np.all(np.isfinite(J), axis=(1, 2)) & np.all(np.isfinite(F), axis=1)
+            # an exactly singular J (a zero pivot) would stop the batched solve
+            ok &= np.linalg.det(np.where(ok[:, None, None], J, np.eye(J.shape[-1]))) != 0.0
+            Js = np.where(ok[:, None, None], J, np.eye(J.shape[-1]))
+            step = np.linalg.solve(Js, np.where(ok[:, None], F, 0.0)[..., None])[..., 0]
+            ynew = ya - step.T
+            ok &= np.all(np.isfinite(ynew), axis=0)
+            y[:, idx] = np.where(ok, ynew, y[:, idx])
+            conv = ok & (np.linalg.norm(step, axis=1)
+                         <= tol * np.maximum(1.0, np.linalg.norm(ynew, axis=0)))
+            done[idx[conv]] = True
+            active[idx[conv | ~ok]] = False
+    out = np.full(starts.shape, np.nan)
+    out[done] = y[:, done].T
     return out
 
 
 # ---- limit cycles ------------------------------------------------------------------
 def limit_cycle(system, y0, *, component: int = 0, tol: float = 1e-9, t_max: float = 1e5,
-                method: str = "dop853", rtol: float = 1e-12):
+                method: str = "dop853", rtol: float = 1e-12, max_periods: int = 2000,
+                stall: int = 100):
     r"""Period and amplitude of the limit cycle reached from ``y0``.
 
     The trajectory is integrated until the times between successive maxima of
@@ -221,9 +304,18 @@ def limit_cycle(system, y0, *, component: int = 0, tol: float = 1e-9, t_max: flo
     component : int
         Which coordinate's maxima mark the section.
     tol : float
-        Relative tolerance on the period and the amplitude.
+        Relative tolerance on the period and the amplitude.  What can be
+        reached is limited by ``rtol`` (the spread of successive periods
+        settles a little below ``rtol``; e.g. 2e-15 for the Van der Pol cycle at
+        ``rtol=1e-12``).
     t_max : float
-        Give up (``ConvergenceError``) after this time.
+        Give up after this time.
+    max_periods : int
+        Budget: give up after this many cycles (about 15 ms each for a scene).
+    stall : int
+        Give up early when the spread of the periods and amplitudes has not
+        halved over this many cycles (``tol`` below the integration's
+        resolution: without this the search ran to ``t_max``, 116 s).
     method, rtol : str, float
         Passed to :func:`mechpy.solve` (use ``"radau"`` for strongly stiff cycles).
 
@@ -231,36 +323,55 @@ def limit_cycle(system, y0, *, component: int = 0, tol: float = 1e-9, t_max: flo
     -------
     period, amplitude : float
         Period (time units) and max of ``y[component]`` on the cycle.
+
+    Raises
+    ------
+    mechpy.ConvergenceError
+        When a budget (``t_max``, ``max_periods``, ``stall``) runs out; the
+        message gives the spread reached.  Ctrl-C raises ``KeyboardInterrupt``.
     """
-    from .errors import ConvergenceError
     f = _callable(system)
     y = as_array(y0, "y0", ndim=1).copy()
     k = as_int(component, "component", minimum=0, maximum=y.size - 1)
     tol = as_scalar(tol, "tol", positive=True)
     t_max = as_scalar(t_max, "t_max", positive=True)
+    max_periods = as_int(max_periods, "max_periods", minimum=4)
+    stall = as_int(stall, "stall", minimum=1)
 
     def rate(t, z):
         return np.asarray(f(t, z))[k]
     rate.direction = -1
 
     times, amps = [], []
+    spreads = []          # relative spread of the last three periods / amplitudes, per cycle
     t0, chunk = 0.0, 20.0
     while t0 < t_max:
-        s = solve(system, (t0, t0 + chunk), y, method=method, rtol=rtol,
+        s = solve(system, (t0, min(t0 + chunk, t_max)), y, method=method, rtol=rtol,
                   atol=rtol * 1e-2, events=rate)
         if s.status < 0:
             raise ConvergenceError(f"limit_cycle: integration failed ({s.message})")
         times.extend(s.t_events[0])
         amps.extend(s.y_events[0][:, k])
         y, t0 = s.y[:, -1], s.t[-1]
-        if len(times) >= 4:
-            P = np.diff(times[-4:])
-            A = np.array(amps[-3:])
-            if (np.ptp(P) <= tol * P[-1] and np.ptp(A) <= tol * max(abs(A[-1]), 1e-300)):
+        for j in range(max(4, len(times) - len(s.t_events[0])), len(times) + 1):
+            P = np.diff(times[j - 4:j])
+            A = np.array(amps[j - 3:j])
+            spreads.append(max(np.ptp(P) / P[-1], np.ptp(A) / max(abs(A[-1]), 1e-300)))
+            if spreads[-1] <= tol:
                 return float(P[-1]), float(A[-1])
-            chunk = max(chunk, 10.0 * P[-1])
+            if j > max_periods:
+                raise ConvergenceError(
+                    f"limit_cycle: no cycle converged to tol = {tol:g} within max_periods = "
+                    f"{max_periods} cycles (relative spread {spreads[-1]:.2g})")
+        if len(times) >= 4:
+            chunk = max(chunk, 10.0 * (times[-1] - times[-2]))
         else:
             chunk *= 2.0
+        if len(spreads) > stall and min(spreads[-stall:]) > 0.5 * min(spreads[:-stall]):
+            raise ConvergenceError(
+                f"limit_cycle: the relative spread of periods and amplitudes stalled at "
+                f"{min(spreads):.2g} over the last {stall} cycles, above tol = {tol:g}: "
+                f"tol is below what rtol = {rtol:g} resolves; raise tol or lower rtol")
     raise ConvergenceError(f"limit_cycle: no cycle converged to {tol} before t = {t_max}")
 
 
@@ -269,8 +380,16 @@ def _section_times(t0, period, n, skip):
     return t0 + period * (skip + np.arange(n))
 
 
+#: Budget of poincare and bifurcation: at most this many section points per run
+#: (n * dim floats are returned).
+MAX_SECTION_POINTS = 10_000_000
+#: Default step budget of one poincare / bifurcation integration (about 0.5 s
+#: for a C scene).
+SECTION_MAX_STEPS = 1_000_000
+
+
 def poincare(system, y0, period, n, skip: int = 0, *, t0: float = 0.0, rtol: float = 1e-10,
-             atol: float = 1e-12, method: str = "dop853"):
+             atol: float = 1e-12, method: str = "dop853", max_steps: int = SECTION_MAX_STEPS):
     r"""Stroboscopic Poincaré section of a driven system.
 
     The states :math:`\mathbf y(t_0 + kT)` for k = skip, ..., skip + n - 1,
@@ -284,7 +403,13 @@ def poincare(system, y0, period, n, skip: int = 0, *, t0: float = 0.0, rtol: flo
     period : float
         The drive period T (time units), e.g. ``2 pi / drive_frequency``.
     n : int
-        Points to return; ``skip`` first periods are discarded (transient).
+        Points to return (at most :data:`MAX_SECTION_POINTS`); ``skip`` first
+        periods are discarded (transient).
+    max_steps : int
+        Step budget of the integration over (skip + n) periods (default
+        10^6, about 0.5 s for a scene); an absurd span exhausts it and raises
+        :class:`mechpy.StepBudgetError` instead of running for hours.  Ctrl-C
+        raises ``KeyboardInterrupt``.
 
     Returns
     -------
@@ -294,24 +419,39 @@ def poincare(system, y0, period, n, skip: int = 0, *, t0: float = 0.0, rtol: flo
     _callable(system)
     y0 = as_array(y0, "y0", ndim=1)
     period = as_scalar(period, "period", positive=True)
-    n = as_int(n, "n", minimum=1)
+    n = as_int(n, "n", minimum=1, maximum=MAX_SECTION_POINTS)
     skip = as_int(skip, "skip", minimum=0)
     t0 = as_scalar(t0, "t0")
     te = _section_times(t0, period, n, skip)
-    s = solve(system, (t0, te[-1] + 0.5 * period), y0, method=method, rtol=rtol, atol=atol,
-              t_eval=te)
-    _check(s)
+    t_end = _section_end(te, period)
+    s = solve(system, (t0, t_end), y0, method=method, rtol=rtol, atol=atol, t_eval=te,
+              max_steps=max_steps)
+    _check(s, f"over {skip + n} drive periods (t up to {t_end:.6g})")
     return np.ascontiguousarray(s.y.T)
 
 
-def _check(s):
+def _section_end(te, period):
+    """The end of a section run, half a period after its last point; a span that
+    float64 cannot step through is refused."""
+    t_end = te[-1] + 0.5 * period
+    if not np.isfinite(t_end) or np.any(np.diff(te) <= 0.0):
+        raise ValueError(f"the section times t0 + period * (skip + k) are not distinct in "
+                         f"float64 (up to {te[-1]:.3g}): lower skip or n, or shift t0")
+    return float(t_end)
+
+
+def _check(s, what=""):
     if s.status < 0:
-        from .errors import ConvergenceError
+        if "max_steps" in s.message:
+            from .errors import StepBudgetError
+            raise StepBudgetError(f"the integration{' ' + what if what else ''} needs more "
+                                  "steps than its budget: "
+                                  f"{s.message} Raise max_steps or shorten the span.")
         raise ConvergenceError(f"integration failed: {s.message}")
 
 
 def bifurcation(scene, param: str, values, y0, period, n: int, skip: int, *, t0: float = 0.0,
-                rtol: float = 1e-10, atol: float = 1e-12):
+                rtol: float = 1e-10, atol: float = 1e-12, max_steps: int = SECTION_MAX_STEPS):
     r"""Bifurcation diagram: Poincaré points of ``scene`` as ``param`` varies.
 
     For each value v the scene ``scene.replace(param=v)`` is integrated from
@@ -328,7 +468,12 @@ def bifurcation(scene, param: str, values, y0, period, n: int, skip: int, *, t0:
     period : float or callable
         Drive period T; a callable ``period(v)`` when it depends on the value.
     n, skip : int
-        Section points kept per value, and drive periods discarded first.
+        Section points kept per value, and drive periods discarded first
+        (``len(values) * n`` at most :data:`MAX_SECTION_POINTS`).
+    max_steps : int
+        Step budget of each value's integration (default 10^6); exhausting it
+        raises :class:`mechpy.StepBudgetError` naming the value.  Ctrl-C
+        raises ``KeyboardInterrupt``.
 
     Returns
     -------
@@ -342,26 +487,39 @@ def bifurcation(scene, param: str, values, y0, period, n: int, skip: int, *, t0:
                          f"{list(scene.params)}")
     vals = as_array(values, "values", ndim=1)
     y0 = as_array(y0, "y0", shape=(scene.dim,))
-    n = as_int(n, "n", minimum=1)
+    n = as_int(n, "n", minimum=1, maximum=MAX_SECTION_POINTS)
     skip = as_int(skip, "skip", minimum=0)
+    if vals.size * n > MAX_SECTION_POINTS:
+        raise ValueError(f"bifurcation: {vals.size} values x n = {n} section points exceed "
+                         f"the budget MAX_SECTION_POINTS = {MAX_SECTION_POINTS}")
     out = np.empty((vals.size, n, scene.dim))
     if not callable(period):
         # one drive period for every value: the whole diagram is one C ensemble
         T = as_scalar(period, "period", positive=True)
         te = _section_times(t0, T, n, skip)
-        e = solve_many(scene, (t0, te[-1] + 0.5 * T), np.tile(y0, (vals.size, 1)),
-                       params={param: vals}, t_eval=te, rtol=rtol, atol=atol)
+        t_end = _section_end(te, T)
+        e = solve_many(scene, (t0, t_end), np.tile(y0, (vals.size, 1)),
+                       params={param: vals}, t_eval=te, rtol=rtol, atol=atol,
+                       max_steps=max_steps)
         if not np.all(e.success):
             bad = int(np.flatnonzero(~e.success)[0])
-            raise RuntimeError(f"integration failed for {param} = {vals[bad]!r} "
-                               f"(status {int(e.status[bad])})")
+            from .errors import NonFiniteError, StepBudgetError
+            if int(e.status[bad]) == -2:
+                raise NonFiniteError(f"bifurcation: the integration for {param} = "
+                                     f"{float(vals[bad])!r} produced NaN or inf")
+            raise StepBudgetError(
+                f"bifurcation: the integration for {param} = {float(vals[bad])!r} over "
+                f"{skip + n} drive periods (t up to {t_end:.6g}) ran out of its step budget "
+                f"max_steps = {max_steps} (or its step fell below round-off); raise max_steps "
+                "or take fewer periods")
         return np.ascontiguousarray(e.y.transpose(0, 2, 1))
     for i, v in enumerate(vals):
         T = as_scalar(period(v) if callable(period) else period, "period", positive=True)
         te = _section_times(t0, T, n, skip)
         sc = scene.replace(**{param: float(v)})
-        (s,) = _ensemble(sc, [y0], (t0, te[-1] + 0.5 * T), te, rtol=rtol, atol=atol)
-        _check(s)
+        (s,) = _ensemble(sc, [y0], (t0, _section_end(te, T)), te, rtol=rtol, atol=atol,
+                         max_steps=max_steps)
+        _check(s, f"for {param} = {float(v)!r}")
         out[i] = s.y.T
     return out
 
@@ -374,9 +532,16 @@ def lyapunov(system, y0, t, *, dt: float = 1.0, method: str = "variational", d0:
     .. math:: \lambda = \lim_{t\to\infty}\frac1t\ln\frac{|\delta\mathbf y(t)|}{|\delta\mathbf y(0)|}
 
     ``method="variational"`` integrates the tangent equations
-    :math:`\dot{\delta} = J(t, \mathbf y)\,\delta` beside the state;
-    ``method="neighbours"`` follows a neighbour at distance ``d0``.  Either
-    way the separation is renormalised every ``dt`` and the logarithms of the
+    :math:`\dot{\delta} = J(t, \mathbf y)\,\delta` beside the state, as a
+    unit direction u and its log-norm,
+    :math:`\dot u = Ju - (u\cdot Ju)\,u,\ \dot\rho = u\cdot Ju`, so that
+    any exponent, however negative, is resolved to the integration tolerance
+    (a decaying tangent vector never reaches ``atol``).
+    ``method="neighbours"`` follows a neighbour at distance ``d0``; when that
+    separation shrinks to the trajectories' own integration error (about
+    ``rtol |y|``) the exponent is not resolved, and a
+    :class:`LyapunovFloorWarning` says so with the floor's value.  Either way
+    the separation is renormalised every ``dt`` and the logarithms of the
     growth factors are summed (Benettin's method).
 
     Parameters
@@ -417,33 +582,65 @@ def lyapunov(system, y0, t, *, dt: float = 1.0, method: str = "variational", d0:
     logs = np.empty(m)
     times = t0 + dt * np.arange(1, m + 1)
     if method == "variational":
+        # The tangent vector is carried as a direction u and a log-norm rho,
+        #   u' = J u - (u.J u / u.u) u,   rho' = u.J u / u.u,
+        # so |u| stays 1 (exactly, before round-off) and rho integrates the growth
+        # rate itself: no separation shrinks to the integrator's atol, whatever the
+        # exponent (a plain tangent vector decaying as exp(-50 dt) hits that floor).
         def aug(tt, z):
-            yy, dd = z[:nd], z[nd:]
-            return np.concatenate([np.asarray(f(tt, yy)), _jacobian(system, tt, yy) @ dd])
-        z = np.concatenate([y, d])
+            yy, uu = z[:nd], z[nd:2 * nd]
+            Ju = _jacobian(system, tt, yy) @ uu
+            r = float(uu @ Ju) / float(uu @ uu)
+            return np.concatenate([np.asarray(f(tt, yy), dtype=np.float64).reshape(nd),
+                                   Ju - r * uu, [r]])
+        z = np.concatenate([y, d, [0.0]])
         ta = t0
         for i in range(m):
             s = solve(aug, (ta, times[i]), z, rtol=rtol, atol=rtol * 1e-2)
             _check(s)
-            z = s.y[:, -1]
-            g = np.linalg.norm(z[nd:])
-            logs[i] = np.log(g)
-            z[nd:] /= g
+            z = s.y[:, -1].copy()
+            g = np.linalg.norm(z[nd:2 * nd])
+            logs[i] = z[-1] + np.log(g)
+            z[nd:2 * nd] /= g
+            z[-1] = 0.0
             ta = times[i]
     else:
         ref = solve(system, (t0, times[-1]), y, rtol=rtol, atol=rtol * 1e-2, t_eval=times)
         _check(ref)
         ys = np.column_stack([y, ref.y])
         ta = t0
+        floor = None
         for i in range(m):
             w = ys[:, i] + d0 * d
             (s,) = _ensemble(system, [w], (ta, times[i]), None, rtol=rtol, atol=rtol * 1e-2)
             _check(s)
             sep = s.y[:, -1] - ys[:, i + 1]
-            g = np.linalg.norm(sep) / d0
+            nsep = np.linalg.norm(sep)
+            # what the difference of two trajectories resolves: the absolute
+            # tolerance atol = rtol / 100 (errors relative to |y| largely cancel in
+            # the difference of two nearby runs) and the spacing of float64 at |y|;
+            # a separation within 100x of that is noise, and the exponent read from
+            # it a floor, log(100 noise / d0) / dt, not a measurement
+            noise = rtol * 1e-2 + np.finfo(float).eps * np.linalg.norm(ys[:, i + 1])
+            if nsep <= 100.0 * noise and floor is None:
+                floor = (i, nsep)
+            if nsep == 0.0:
+                raise ConvergenceError(
+                    "lyapunov: the neighbour merged with the reference trajectory (separation "
+                    "0 in float64); use method='variational'")
+            g = nsep / d0
             logs[i] = np.log(g)
-            d = sep / np.linalg.norm(sep)
+            d = sep / nsep
             ta = times[i]
+        if floor is not None:
+            warnings.warn(LyapunovFloorWarning(
+                f"lyapunov: the neighbour's separation fell to {floor[1]:.3g} at t = "
+                f"{times[floor[0]]:.6g}, within 100x of what the integration resolves "
+                f"(atol = rtol / 100 = {rtol * 1e-2:.1e}): the exponent is not resolved, "
+                f"the value returned is set by the tolerances (a floor near "
+                f"log(100 atol / d0) / dt = {np.log(100.0 * rtol * 1e-2 / d0) / dt:.3g}); use "
+                "method='variational' (no floor) or a shorter dt"),
+                stacklevel=2)
     running = np.cumsum(logs) / (times - t0)
     lam = float(running[-1])
     return (lam, times, running) if return_history else lam

@@ -80,7 +80,12 @@ def nutation_bounds(I1, I3, mass, g, l, theta0, theta_dot0, phi_dot0, psi_dot0):
 
     :math:`\alpha = 2E'/I_1`, :math:`\beta = 2Mgl/I_1`, :math:`a = p_\psi/I_1`,
     :math:`b = p_\phi/I_1`; the motion lies between the two roots of the cubic f
-    in [-1, 1] that bracket u0 = cos(theta0).
+    in [-1, 1] that bracket u0 = cos(theta0).  They are found by bisection on f
+    written about u0, :math:`f(u_0 + x) = (\dot\theta_0\sin\theta_0)^2 + f'(u_0)x
+    + \tfrac12 f''(u_0)x^2 + \beta x^3`, with the coefficients formed from the rates
+    without cancellation, so the bounds are accurate to round-off also next to steady
+    precession (the double root :math:`\dot\theta_0 = f'(u_0) = 0`, where both
+    bounds are theta0).
 
     Parameters
     ----------
@@ -111,39 +116,57 @@ def nutation_bounds(I1, I3, mass, g, l, theta0, theta_dot0, phi_dot0, psi_dot0):
     s, c = np.sin(th), np.cos(th)
     w3 = psd + phd * c
     a = I3 * w3 / I1
-    b = (I1 * phd * s * s + I3 * w3 * c) / I1
     beta = 2.0 * mass * g * l / I1
-    alpha = thd * thd + phd * phd * s * s + beta * c  # 2 E' / I1
-    coef = [beta, -(alpha + a * a), 2.0 * a * b - beta, alpha - b * b]
+    # f expanded about u0 = cos(theta0), x = u - u0, with coefficients formed from
+    # the physical rates (b - a u0 = phi_dot s^2, alpha - beta u0 = theta_dot^2 +
+    # phi_dot^2 s^2): no cancellation in f(u0) = (s theta_dot)^2, and the two roots
+    # next to u0 come out accurate to round-off in x even where they merge into the
+    # double root of steady precession (roots of the cubic in u found from its
+    # power-basis coefficients are only sqrt(eps) accurate there).
+    p = phd * s * s
+    q = thd * thd + phd * phd * s * s
+    g0 = (s * thd) ** 2                             # f(u0) >= 0
+    g1 = -2.0 * c * q - beta * s * s + 2.0 * a * p  # f'(u0)
+    g2 = -q + 2.0 * beta * c - a * a                # f''(u0) / 2
+    g3 = beta                                       # f'''(u0) / 6
 
-    def f(u):
-        return (1 - u * u) * (alpha - beta * u) - (b - a * u) ** 2
+    def gx(x):
+        return g0 + x * (g1 + x * (g2 + x * g3))
 
-    def fp(u):
-        return -2 * u * (alpha - beta * u) - beta * (1 - u * u) + 2 * a * (b - a * u)
+    # f(-1) = -(b + a)^2 <= 0 <= f(u0) and f(1) = -(b - a)^2 <= 0: one root on each
+    # side of u0 within [-1, 1] (u0 itself when theta_dot0 = 0 and f falls that way)
+    if g0 == 0.0 and g1 == 0.0:
+        return th, th                               # steady precession
+    x_lo = _bracketed_root(gx, 0.0, -1.0 - c) if g0 > 0.0 or g1 < 0.0 else 0.0
+    x_hi = _bracketed_root(gx, 0.0, 1.0 - c) if g0 > 0.0 or g1 > 0.0 else 0.0
+    return _theta_of(th, x_hi), _theta_of(th, x_lo)
 
-    roots = np.roots(coef) if beta != 0 else np.roots(coef[1:])
-    real = sorted(r.real for r in roots if abs(r.imag) <= 1e-7 * max(1.0, abs(r)))
-    polished = []
-    for r in real:
-        for _ in range(8):  # Newton on the cubic itself
-            d = fp(r)
-            if d == 0:
-                break
-            step = f(r) / d
-            r -= step
-            if abs(step) < 1e-17:
-                break
-        polished.append(r)
-    lo = [r for r in polished if r <= c + 1e-12]
-    hi = [r for r in polished if r >= c - 1e-12]
-    if thd == 0.0:  # u0 is itself a turning point
-        lo_u = max([r for r in lo if r < c - 1e-12], default=None)
-        hi_u = min([r for r in hi if r > c + 1e-12], default=None)
-        if lo_u is None and hi_u is None:
-            return th, th  # steady precession
-        u_min, u_max = (lo_u, c) if lo_u is not None and (hi_u is None or f(0.5 * (lo_u + c)) >= 0) else (c, hi_u)
-    else:
-        u_min, u_max = max(lo), min(hi)
-    u_min, u_max = max(u_min, -1.0), min(u_max, 1.0)
-    return float(np.arccos(u_max)), float(np.arccos(u_min))
+
+def _theta_of(th0, x):
+    """theta in [0, pi] with cos(theta) = cos(theta0) + x, from (1 -+ cos theta) / 2 =
+    sin^2 or cos^2 (theta0 / 2) -+ x / 2 (accurate near 0 and pi too)."""
+    if x == 0.0:
+        return float(th0)
+    w = np.sin(0.5 * th0) ** 2 - 0.5 * x           # sin^2(theta / 2)
+    if w <= 0.5:
+        return float(2.0 * np.arcsin(np.sqrt(min(max(w, 0.0), 1.0))))
+    v = np.cos(0.5 * th0) ** 2 + 0.5 * x           # cos^2(theta / 2)
+    return float(2.0 * np.arccos(np.sqrt(min(max(v, 0.0), 1.0))))
+
+
+def _bracketed_root(g, x_in, x_out):
+    """The root of g between x_in (where g >= 0, g rising from 0 into the interval
+    when g(x_in) = 0) and x_out (where g <= 0), by bisection to adjacent floats:
+    the end nearer in |g| is returned."""
+    lo, hi = x_in, x_out            # invariant: g >= 0 at lo (or lo = x_in), g <= 0 at hi
+    for _ in range(2100):           # enough for any pair of floats in [-2, 2]
+        m = 0.5 * (lo + hi)
+        if m == lo or m == hi:
+            break
+        if g(m) > 0.0:
+            lo = m
+        else:
+            hi = m
+    if lo == x_in and g(x_in) == 0.0:
+        return hi
+    return lo if abs(g(lo)) < abs(g(hi)) else hi

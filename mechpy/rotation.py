@@ -38,7 +38,7 @@ __all__ = [
     "euler_matrix", "euler_angles", "angular_velocity", "euler_rates",
     "quat_from_matrix", "matrix_from_quat", "quat_multiply", "quat_normalize",
     "quat_from_euler", "euler_from_quat", "GimbalLockWarning", "SEQUENCES",
-    "ORTH_TOL", "LOCK_TOL",
+    "ORTH_TOL", "LOCK_TOL", "RATES_LOCK_TOL",
 ]
 
 #: Every accepted sequence: 12 intrinsic (upper case), then 12 extrinsic.
@@ -50,8 +50,13 @@ SEQUENCES = tuple(s for case in (str.upper, str.lower)
 ORTH_TOL = 1e-6
 #: Default distance (radians) of the middle angle from its singular values
 #: (0 or pi for proper Euler sequences, +-pi/2 for Tait-Bryan ones) within
-#: which a configuration counts as gimbal lock.
-LOCK_TOL = 1e-12
+#: which :func:`euler_angles` and :func:`euler_from_quat` report gimbal lock:
+#: 0, lock only where the first and third angles are indeterminate in float64
+#: (the sine of that distance below the smallest normal number, 2.2e-308).
+LOCK_TOL = 0.0
+#: Default bound on |det J| below which :func:`euler_rates` raises
+#: :class:`mechpy.SingularityError` (the rates grow as 1 / det J).
+RATES_LOCK_TOL = 1e-12
 
 _SEQ_RE = re.compile(r"^([XYZ]{3}|[xyz]{3})$")
 
@@ -194,23 +199,26 @@ def euler_angles(R, seq: str = "ZXZ", passive: bool = True, *, degrees: bool = F
                  orth_tol: float = ORTH_TOL, lock_tol: float = LOCK_TOL) -> np.ndarray:
     r"""Euler angles of rotation matrices (the inverse of :func:`euler_matrix`).
 
-    The matrix is turned into a quaternion (Markley/Shepperd) and the angles
-    are read from it by the direct method of Bernardes and Viollet (2022),
-    the method SciPy's ``Rotation.as_euler`` uses, with the middle angle
-    computed as :math:`\theta = 2\,\mathrm{atan2}(\sqrt{c^2+d^2}, \sqrt{a^2+b^2})`
-    so that it is accurate to round-off next to 0 and pi.
-
     Ranges: the first and third angles in [-pi, pi]; the middle one in
     [0, pi] for proper Euler sequences (``"ZXZ"``, ...) and [-pi/2, pi/2]
     for Tait-Bryan ones (``"XYZ"``, ...).
 
-    At gimbal lock (the middle angle within ``lock_tol`` of 0 or pi, or of
-    +-pi/2 for Tait-Bryan sequences) only the sum or difference of the first
-    and third angles is determined: the third is set to 0, the triple still
-    reproduces the matrix, and one :class:`GimbalLockWarning` is issued per
-    call.  Just outside ``lock_tol`` the triple is still exact for the
-    matrix (``euler_matrix(euler_angles(R))`` equals ``R`` to round-off),
-    though the first and third angles are individually ill-conditioned.
+    The angles are read from pairs of entries of the matrix, each pair
+    proportional to the sine and cosine of its angle with a common factor
+    (the sine of the middle angle's distance from lock): for the default
+    ``"ZXZ"``, :math:`\theta = \mathrm{atan2}(\sqrt{R_{20}^2 + R_{21}^2}, R_{22})`,
+    :math:`\psi = \mathrm{atan2}(R_{20}, R_{21})`,
+    :math:`\phi = \mathrm{atan2}(R_{02}, -R_{12})` (active R).  So every
+    angle comes back to round-off however close the middle one is to lock
+    (theta = 1e-300 included), as long as that factor is a normal float64.
+
+    At gimbal lock (the factor below the smallest normal number, 2.2e-308, or
+    the middle angle within ``lock_tol`` of 0 or pi, or of +-pi/2 for
+    Tait-Bryan sequences) only the sum or difference of the first and third
+    angles is determined: the third is set to 0, the first is read from what
+    is left of the matrix, and one :class:`GimbalLockWarning` is issued per
+    call.  SciPy's ``as_euler`` reports lock (and loses the first and third
+    angles) within 1e-7 rad; pass ``lock_tol=1e-7`` for the same band.
 
     Parameters
     ----------
@@ -227,7 +235,8 @@ def euler_angles(R, seq: str = "ZXZ", passive: bool = True, *, degrees: bool = F
         ``R`` must satisfy ``max|R R^T - I| <= orth_tol`` (default 1e-6) and
         ``det R > 0``; otherwise :class:`mechpy.DomainError` (a ValueError).
     lock_tol : float
-        Gimbal-lock band (rad), default 1e-12.
+        Gimbal-lock band (rad), default 0: lock only where the angles are
+        indeterminate in float64 (see above).
 
     Returns
     -------
@@ -371,10 +380,13 @@ def quat_from_euler(phi, theta=None, psi=None, seq: str = "ZXZ", passive: bool =
 
 def euler_from_quat(quat, seq: str = "ZXZ", passive: bool = True, *, degrees: bool = False,
                     lock_tol: float = LOCK_TOL) -> np.ndarray:
-    """Euler angles of quaternions (need not be unit): Bernardes and Viollet (2022).
+    r"""Euler angles of quaternions (need not be unit): Bernardes and Viollet (2022).
 
-    Ranges, gimbal-lock handling and the :class:`GimbalLockWarning` are those
-    of :func:`euler_angles`.
+    The middle angle is :math:`\theta = 2\,\mathrm{atan2}(|(c, d)|, |(a, b)|)` and
+    the others :math:`\mathrm{atan2}(b, a) \pm \mathrm{atan2}(-d, c)`, exact to
+    round-off as long as the smaller of :math:`|(a, b)|, |(c, d)|` is a normal
+    number relative to the larger.  Ranges, gimbal-lock handling and the
+    :class:`GimbalLockWarning` are those of :func:`euler_angles`.
 
     Parameters
     ----------
@@ -387,7 +399,7 @@ def euler_from_quat(quat, seq: str = "ZXZ", passive: bool = True, *, degrees: bo
     degrees : bool
         Return degrees instead of radians.
     lock_tol : float
-        Gimbal-lock band (rad), default 1e-12.
+        Gimbal-lock band (rad), default 0 (see :func:`euler_angles`).
 
     Returns
     -------
@@ -451,7 +463,7 @@ def angular_velocity(angles, rates, seq: str = "ZXZ", frame: str = "body") -> np
 
 
 def euler_rates(angles, omega, seq: str = "ZXZ", frame: str = "body", *,
-                lock_tol: float = LOCK_TOL) -> np.ndarray:
+                lock_tol: float = RATES_LOCK_TOL) -> np.ndarray:
     r"""Euler-angle rates from the angular velocity (inverse of :func:`angular_velocity`).
 
     Solves :math:`J(\phi, \theta, \psi)\,(\dot\phi, \dot\theta, \dot\psi)^T = \omega`;

@@ -139,3 +139,16 @@ def test_bad_shapes():
         mp.scenes.Foucault(45.0, -1.0)
     with pytest.raises(TypeError):
         mp.frames.to_rotating("r", [0, 0, 0], [0, 0, 1], 0.0)
+
+
+def test_drop_has_a_step_budget_and_answers_ctrl_c():
+    # a drop from 1e300 m (about 1e150 s of flight) ran for hours; now a stated budget
+    with pytest.raises(mp.StepBudgetError, match="max_steps = 20000"):
+        mp.frames.drop(1e300, 45.0)
+    with pytest.raises(mp.StepBudgetError, match="max_steps = 5 "):
+        mp.frames.drop(1e6, 45.0, max_steps=5)
+    with pytest.raises(ValueError, match="flight time overflows"):
+        mp.frames.projectile([1.0, 0.0, 1e300], 45.0)
+    from sigint import interrupt_delay
+    dt = interrupt_delay("", "mp.frames.drop(1e300, 45.0, max_steps=10 ** 9)", delay=0.5)
+    assert dt < 1.0, f"KeyboardInterrupt {dt} s after SIGINT"   # measured < 0.01 s

@@ -171,8 +171,9 @@ def _allowed():
 COUNTS: dict[str, int] = {}
 
 
-def _run(name, fn, *args, check=None, inf_ok=False, **kw):
-    """Call fn; a documented exception is fine, anything else fails."""
+def _run(name, fn, *args, check=None, inf_ok=False, strict=False, **kw):
+    """Call fn; a documented exception is fine, anything else fails.  With
+    ``strict`` an overflow must be an error even for extreme inputs (never inf)."""
     COUNTS[name] = COUNTS.get(name, 0) + 1
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -180,7 +181,7 @@ def _run(name, fn, *args, check=None, inf_ok=False, **kw):
             out = fn(*args, **kw)
         except _allowed():
             return None
-    _finite(out, name, inf_ok=inf_ok or _extreme((args, kw)))
+    _finite(out, name, inf_ok=inf_ok or (not strict and _extreme((args, kw))))
     if check is not None:
         check(out)
     return out
@@ -372,7 +373,7 @@ def fuzz_inertia():
     def point_masses(data):
         n = data.draw(st.integers(0, 5))
         _run("inertia.point_masses", I.point_masses, data.draw(A(n, pos=True)),
-             data.draw(A(n, 3)), data.draw(st.one_of(st.just((0, 0, 0)), A(3))))
+             data.draw(A(n, 3)), data.draw(st.one_of(st.just((0, 0, 0)), A(3))), strict=True)
 
     shapes = {"sphere": ["radius"], "shell": ["radius"], "box": ["a", "b", "c"],
               "cube": ["side"], "cylinder": ["radius", "height"], "cone": ["radius", "height"],
@@ -500,11 +501,14 @@ def fuzz_modes_rigid():
             assert m.vectors.shape == (nn, nn)
             t = data.draw(A(3))
             _run("Modes.evolve", m.evolve, data.draw(A(nn)), data.draw(A(nn)), t,
-                 check=_shape(len(t), nn) if np.ndim(t) == 1 else None)
+                 check=_shape(len(t), nn) if np.ndim(t) == 1 else None, strict=True)
             _run("Modes.coordinates", m.coordinates, data.draw(A(nn)))
         _run("modes.chain", mp.modes.chain, data.draw(st.one_of(st.integers(-1, 6), _scalar())),
              data.draw(_pos()), data.draw(_pos()),
-             ends=data.draw(st.sampled_from(["fixed", "free", "periodic", "x"])))
+             ends=data.draw(st.sampled_from(["fixed", "free", "periodic", "x"])), strict=True)
+        _run("modes.dispersion_diatomic", mp.modes.dispersion_diatomic, data.draw(_pos()),
+             data.draw(_pos()), data.draw(_pos()), data.draw(_pos()), data.draw(A(3)),
+             strict=True)
         _run("modes.dispersion", mp.modes.dispersion, data.draw(_pos()), data.draw(_pos()),
              data.draw(_pos()), data.draw(A(4)))
 
@@ -610,6 +614,101 @@ def fuzz_core():
     core_args()
 
 
+def fuzz_properties():
+    """Properties that catch whole classes of wrong answers (not only crashes)."""
+    import mechpy as mp
+    from mechpy import rotation as R
+
+    @_settings(EXAMPLES)
+    @given(st.data())
+    def vector_field_pointwise(data):
+        # a callable is evaluated point by point: A @ y on any grid is the linear field
+        A_ = np.array(data.draw(st.lists(st.floats(-3, 3), min_size=4, max_size=4))).reshape(2, 2)
+        shape = tuple(data.draw(st.lists(st.integers(1, 4), min_size=1, max_size=3)))
+        X = np.array(data.draw(st.lists(st.floats(-5, 5), min_size=int(np.prod(shape)),
+                                        max_size=int(np.prod(shape))))).reshape(shape)
+        Y = X[::-1].copy() if X.ndim else X
+        COUNTS["phase.vector_field(A @ y)"] = COUNTS.get("phase.vector_field(A @ y)", 0) + 1
+        U, V = mp.phase.vector_field(lambda t, y: A_ @ y, X, Y)
+        np.testing.assert_allclose(U, A_[0, 0] * X + A_[0, 1] * Y, rtol=1e-14, atol=1e-13)
+        np.testing.assert_allclose(V, A_[1, 0] * X + A_[1, 1] * Y, rtol=1e-14, atol=1e-13)
+
+    @_settings(2 * EXAMPLES)
+    @given(st.data())
+    def euler_near_lock(data):
+        # every angle comes back while the distance from lock has a normal sine
+        seq = data.draw(st.sampled_from(R.SEQUENCES))
+        passive = data.draw(st.booleans())
+        proper = seq[0].lower() == seq[2].lower()
+        k = data.draw(st.integers(0, 307 if proper else 15))
+        dist = data.draw(st.floats(1.0, 9.99)) * 10.0 ** -k
+        phi, psi = data.draw(st.floats(-3.1, 3.1)), data.draw(st.floats(-3.1, 3.1))
+        mid = dist if proper else data.draw(st.sampled_from([1.0, -1.0])) * (np.pi / 2 - dist)
+        a = np.array([phi, mid, psi])
+        COUNTS["rotation.euler_angles(near lock)"] = \
+            COUNTS.get("rotation.euler_angles(near lock)", 0) + 1
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", R.GimbalLockWarning)
+            b = R.euler_angles(R.euler_matrix(a, seq=seq, passive=passive), seq, passive)
+        d = np.angle(np.exp(1j * (b - a)))
+        # phi and psi come from pairs of entries sharing the factor sin or cos of mid, so
+        # its rounding cancels; mid is relative to round-off near 0, absolute near pi/2
+        assert abs(d[1]) <= (4e-15 * abs(mid) if proper else 4e-16), (seq, a, b)
+        assert abs(d[0]) <= 4e-15 and abs(d[2]) <= 4e-15, (seq, a, b)
+
+    @_settings(EXAMPLES)
+    @given(st.data())
+    def shift_to_com_is_physical(data):
+        # the way back from a point is a mass distribution's tensor, or a ValueError
+        m = np.array(data.draw(st.lists(st.floats(0.1, 3.0), min_size=1, max_size=4)))
+        x = np.array(data.draw(st.lists(st.floats(-3, 3), min_size=3 * m.size,
+                                        max_size=3 * m.size))).reshape(-1, 3)
+        p = np.array(data.draw(st.lists(st.floats(-5, 5), min_size=3, max_size=3)))
+        claim = data.draw(st.floats(0.0, 3.0))     # 1: the true offset; else a wrong one
+        com = m @ x / m.sum()
+        Ip = mp.inertia.point_masses(m, x, p)
+        COUNTS["inertia.shift(to=com)"] = COUNTS.get("inertia.shift(to=com)", 0) + 1
+        try:
+            out = mp.inertia.shift(Ip, m.sum(), claim * (p - com), to="com")
+        except ValueError:
+            assert claim > 1.0                     # only a too-large offset is impossible
+            return
+        w = np.linalg.eigvalsh(out)
+        tol = 1e-12 * max(1.0, np.abs(Ip).max())
+        assert w[0] >= -tol and w[0] + w[1] >= w[2] - tol
+
+    @_settings(EXAMPLES)
+    @given(st.data())
+    def nutation_bounds_are_roots(data):
+        I1, I3 = data.draw(st.floats(0.1, 2.0)), data.draw(st.floats(0.05, 2.0))
+        M, g, l = 1.0, 9.81, data.draw(st.floats(0.01, 0.5))
+        th = data.draw(st.floats(0.01, 3.13))
+        thd = data.draw(st.sampled_from([0.0, 1e-9, 1e-4, 0.3]))
+        w3 = data.draw(st.floats(1.0, 300.0))
+        c = np.cos(th)
+        disc = (I3 * w3) ** 2 - 4 * I1 * c * M * g * l
+        ph = 2 * M * g * l / (I3 * w3 + np.sqrt(disc)) if disc >= 0 else 0.5
+        ph *= 1.0 + data.draw(st.sampled_from([0.0, 1e-12, -1e-9, 1e-6, 0.1]))
+        ps = w3 - ph * c
+        COUNTS["rigid.nutation_bounds(property)"] = \
+            COUNTS.get("rigid.nutation_bounds(property)", 0) + 1
+        lo, hi = mp.rigid.nutation_bounds(I1, I3, M, g, l, th, thd, ph, ps)
+        assert 0.0 <= lo <= th <= hi <= np.pi
+        a = I3 * w3 / I1
+        b = (I1 * ph * np.sin(th) ** 2 + I3 * w3 * c) / I1
+        beta = 2 * M * g * l / I1
+        alpha = thd ** 2 + ph ** 2 * np.sin(th) ** 2 + beta * c
+        for u in (np.cos(lo), np.cos(hi)):
+            f = (1 - u * u) * (alpha - beta * u) - (b - a * u) ** 2
+            scale = max(alpha, beta, b * b, a * a, 1.0)
+            assert abs(f) <= 1e-9 * scale, (u, f)
+
+    vector_field_pointwise()
+    euler_near_lock()
+    shift_to_com_is_physical()
+    nutation_bounds_are_roots()
+
+
 GROUPS = {
     "integrate": fuzz_integrate,
     "scenes": fuzz_scenes,
@@ -617,6 +716,7 @@ GROUPS = {
     "rotation": fuzz_rotation,
     "modes_rigid": fuzz_modes_rigid,
     "phase_frames_variational": fuzz_phase_frames_variational,
+    "properties": fuzz_properties,
     "core": fuzz_core,
 }
 
@@ -691,6 +791,56 @@ def test_brachistochrone_exact_cycloid_for_a_shallow_drop():
     # x_end = a (th - sin th) with th -> 2 pi: a -> x_end / (2 pi)
     assert r.radius == pytest.approx(1.0 / (2 * math.pi), rel=1e-12)
     assert r.time_exact == pytest.approx(2 * math.pi * math.sqrt(r.radius / 9.81), rel=1e-12)
+
+
+def test_python_int_beyond_int64_names_the_argument():
+    import mechpy as mp  # was OverflowError "Python int too large to convert to C long"
+    P = mp.scenes.Pendulum()
+    with pytest.raises(ValueError, match="skip"):
+        mp.phase.poincare(P, [0.1, 0.0], 1.0, 3, skip=10 ** 25)
+    with pytest.raises(ValueError, match="skip"):
+        mp.phase.bifurcation(P, "damping", [0.1], [0.1, 0.0], 1.0, 3, 2 ** 64)
+    with pytest.raises(ValueError, match="N"):
+        mp.modes.chain(2 ** 63)
+    with pytest.raises(ValueError, match="n_lon"):
+        mp.inertia.uv_sphere(1.0, 4, 2 ** 70)
+
+
+def test_overflow_is_an_error_not_inf_or_nan():
+    import mechpy as mp
+    from mechpy.errors import NonFiniteError
+    # was [0, nan, 0, ...]: 1e300 * (1e200)^2
+    with pytest.raises(NonFiniteError, match="point_masses.*overflow"):
+        mp.inertia.point_masses([1e300], [[1e200, 0.0, 0.0]])
+    with pytest.raises(NonFiniteError, match="overflow"):
+        mp.inertia.point_masses([1.0], [[0.0, 1e200, 0.0]])
+    # was K with inf on the diagonal (1e308 + 1e308)
+    with pytest.raises(ValueError, match="spring"):
+        mp.modes.chain(3, spring=1e308)
+    with pytest.raises(ValueError, match="springs"):
+        mp.modes.chain(2, springs=[1.0, 1.7e308, 1.7e308])
+    assert np.isfinite(mp.modes.chain(3, spring=8e307)[0]).all()   # 1.6e308 still fits
+    # was OverflowError (1/m1)**2 in Python floats, or inf frequencies
+    with pytest.raises(NonFiniteError, match="dispersion_diatomic"):
+        mp.modes.dispersion_diatomic(5e-324, 1.0, 1e300, 1.0, [0.5])   # sqrt(k/m) ~ 4e311
+    # masses that only overflowed the intermediate 1/m^2 now give the closed form; with
+    # r = m1/m2 = 1e-200 the O(r) terms vanish: optical sqrt(2k/m1), acoustic sqrt(2k/m2)|sin|
+    ac, op = mp.modes.dispersion_diatomic(1e-200, 1.0, 1.0, 1.0, [0.5, np.pi])
+    np.testing.assert_allclose(op, np.sqrt(2e200), rtol=1e-15)
+    np.testing.assert_allclose(ac, np.sqrt(2.0) * np.abs(np.sin([0.25, np.pi / 2])),
+                               rtol=1e-15)
+    ac, op = mp.modes.dispersion_diatomic(1e-300, 1.0, 1e300, 1.0, [np.pi])  # was OverflowError
+    np.testing.assert_allclose([ac[0], op[0]], [np.sqrt(2) * 1e150, np.sqrt(2) * 1e300],
+                               rtol=1e-15)
+    # was NaN: cos(omega t) at omega t = inf
+    m = mp.modes.normal_modes(*mp.modes.chain(3))
+    with pytest.raises(NonFiniteError, match="t"):
+        m.evolve([1.0, 0.0, 0.0], [0.0, 1.0, 0.0], 1e308)
+    q = m.evolve([1.0, 0.0, 0.0], [0.0, 0.0, 0.0], 1e300)      # omega t finite: exact
+    assert np.isfinite(q).all()
+    free = mp.modes.normal_modes(*mp.modes.chain(2, ends="free"))
+    with pytest.raises(NonFiniteError):                       # zero mode drifting past 1e308
+        free.evolve([0.0, 0.0], [1e10, 1e10], 1e300)
 
 
 if __name__ == "__main__":

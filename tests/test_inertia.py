@@ -320,12 +320,70 @@ def test_density_grid_bad_input():
         mi.density_grid(np.ones((2, 2, 2)), (1.0, 1.0))
 
 
+def _bipyramid(n):
+    """Two cones of height 1 on a regular n-gon of circumradius 1: 2n faces, each apex of
+    degree n (the case an edge lookup linear in the degree makes quadratic)."""
+    ph = 2 * np.pi * np.arange(n) / n
+    V = np.concatenate([np.stack([np.cos(ph), np.sin(ph), np.zeros(n)], -1),
+                        [[0, 0, 1.0], [0, 0, -1.0]]])
+    j = np.arange(n)
+    top = np.stack([j, (j + 1) % n, np.full(n, n)], -1)
+    bot = np.stack([(j + 1) % n, j, np.full(n, n + 1)], -1)
+    return V, np.concatenate([top, bot]).astype(np.int64)
+
+
+def test_mesh_high_degree_vertices_bipyramid():
+    # 400k faces, two vertices of degree 200k: took minutes when each edge lookup scanned
+    # the apex's whole list (80k faces: 7 s); now about 0.1 s
+    n = 200_000
+    V, F = _bipyramid(n)
+    b = mi.mesh(V, F)
+    area = 0.5 * n * np.sin(2 * np.pi / n)            # the n-gon
+    assert b.volume == pytest.approx(2 * area / 3, rel=1e-14)      # measured 6e-16
+    np.testing.assert_allclose(b.com, 0.0, atol=1e-16)
+    # the apex's defects are still found: drop one face -> open, at the apex's edges
+    with pytest.raises(mp.MeshError, match="open"):
+        mi.mesh(V, F[1:])
+    G = F.copy()
+    G[n + 5] = G[n + 5][::-1]
+    with pytest.raises(mp.MeshError, match="oriented|open"):
+        mi.mesh(V, G)
+    H = np.concatenate([F, F[:1]])
+    with pytest.raises(mp.MeshError, match="non-manifold"):
+        mi.mesh(V, H)
+
+
+def test_mesh_ctrl_c_is_prompt():
+    from sigint import interrupt_delay
+    setup = ("n = 1_000_000\nph = 2 * np.pi * np.arange(n) / n\n"
+              "V = np.concatenate([np.stack([np.cos(ph), np.sin(ph), np.zeros(n)], -1),"
+              " [[0, 0, 1.0], [0, 0, -1.0]]])\nj = np.arange(n)\n"
+              "F = np.concatenate([np.stack([j, (j + 1) % n, np.full(n, n)], -1),"
+              " np.stack([(j + 1) % n, j, np.full(n, n + 1)], -1)]).astype(np.int64)\n")
+    dt = interrupt_delay(setup, "[mp.inertia.mesh(V, F) for _ in range(20)]", delay=0.3)
+    assert dt < 1.0, f"KeyboardInterrupt {dt} s after SIGINT"   # measured ~0.01 s
+
+
+def test_mesh_out_of_range_is_not_zero_area():
+    V, F = mi.uv_sphere(1.0, 4, 6)
+    # coordinates 1e200: squared edges overflow; said so, not "zero area"
+    with pytest.raises(mp.MeshError, match="overflow"):
+        mi.mesh(V * 1e200, F)
+    with pytest.raises(mp.MeshError, match="underflow"):
+        mi.mesh(V * 1e-200, F)
+    # up to 1e60 the inertia (size^5) fits: exact scaling of the unit result
+    b1, b = mi.mesh(V, F), mi.mesh(V * 2.0 ** 190, F)
+    assert b.volume == b1.volume * 2.0 ** 570
+    np.testing.assert_array_equal(b.inertia, b1.inertia * 2.0 ** 950)
+
+
 # ----------------------------------------------------------------------- Steiner
 
 def test_shift_large_offsets_exact_rounding(rng):
     for _ in range(20):
         A = rng.normal(size=(3, 3))
-        I = A @ A.T
+        S = A @ A.T                            # second moments of some distribution
+        I = np.trace(S) * np.eye(3) - S        # its inertia tensor
         M = rng.uniform(0.5, 2.0)
         a = rng.normal(size=3) * 1e6
         out = mi.shift(I, M, a)
@@ -351,6 +409,37 @@ def test_shift_batched_and_steiner_matches_point_masses(rng):
         mi.shift(Icom[0], 1.0, p[0], to="corner")
     with pytest.raises(ValueError, match="mass"):
         mi.shift(Icom[0], -1.0, p[0])
+
+
+def test_shift_to_com_refuses_an_impossible_tensor(rng):
+    # a unit point mass at distance 1 has I = diag(0, 1, 1) about the origin; claiming its
+    # centre of mass lies 2 away would give moments 1 - 4 < 0
+    I = mi.point_masses([1.0], [[1.0, 0.0, 0.0]])
+    with pytest.raises(ValueError, match="principal moments") as exc:
+        mi.shift(I, 1.0, [2.0, 0.0, 0.0], to="com")
+    assert "a" in str(exc.value) and "mass" in str(exc.value)
+    # the true offset gives exactly zero (a point mass about itself)
+    np.testing.assert_array_equal(mi.shift(I, 1.0, [1.0, 0.0, 0.0], to="com"), 0.0)
+    # I about the centre of mass already, shifted once more: moments 2/5 - 1 < 0
+    ball = mi.solid("sphere", 1.0, radius=1.0)
+    with pytest.raises(ValueError, match="centre of mass"):
+        mi.shift(ball.inertia, 1.0, [0.0, 0.0, 1.0], to="com")
+    # PSD but I1 + I2 < I3 (no mass distribution): also refused
+    with pytest.raises(ValueError, match="I1 \\+ I2 < I3"):
+        mi.shift(np.diag([1.0, 1.0, 5.0]) + 0.0, 1.0, [0.0, 0.0, 1e-3], to="com")
+    # a batch names its bad item; the good ones alone pass
+    m = rng.uniform(0.5, 2.0, 5)
+    x = rng.normal(size=(5, 4, 3))
+    pts = rng.normal(size=(5, 3))
+    com = np.einsum("bn,bnk->bk", m[:, None] * np.ones(4), x) / (4 * m[:, None])
+    Ip = mi.point_masses(m[:, None] * np.ones(4), x, pts)
+    back = mi.shift(Ip, 4 * m, pts - com, to="com")
+    np.testing.assert_allclose(back, mi.point_masses(m[:, None] * np.ones(4), x, com),
+                               rtol=1e-12, atol=1e-12)
+    a = pts - com
+    a[3] *= 10.0
+    with pytest.raises(ValueError, match="item 3"):
+        mi.shift(Ip, 4 * m, a, to="com")
 
 
 # ----------------------------------------------------------------------- principal axes

@@ -453,3 +453,47 @@ def test_random_chains_paths_and_scipy_agree(N, ends, seed):
         np.testing.assert_allclose(modes.omega ** 2, np.maximum(ws, 0), atol=1e-12 * ws[-1] + 1e-300)
         assert m_orthonormality(M, modes.vectors) < 1e-11
         check_sign_rule(modes.vectors)
+
+
+@pytest.mark.parametrize("setup, call", [
+    # a 6000-mass chain: dstemr runs for 10-30 s and cannot be stopped part-way
+    ("import mechpy._core as c\nn = 6000\nkd = np.full(n, 2.0)\nke = np.full(n - 1, -1.0)\n"
+     "md = np.linspace(1.0, 2.0, n)", "[c.modes_tridiag(kd, ke, md) for _ in range(5)]"),
+    ("K, M = mp.modes.chain(6000, sparse=True)",
+     "[mp.modes.normal_modes(K, M) for _ in range(5)]"),
+    ("rng = np.random.default_rng(0)\nA = rng.normal(size=(1500, 1500))\nK = A @ A.T\n"
+     "M = np.eye(1500) + 0.1 * np.diag(rng.uniform(size=1500))",
+     "[mp.modes.normal_modes(K, M, method='dense') for _ in range(5)]"),
+])
+def test_ctrl_c_in_the_eigensolvers_is_prompt(setup, call):
+    # was 35 s late for a long chain: the LAPACK call runs in a worker thread and the
+    # caller answers SIGINT within 50 ms; the worker finishes and frees in the background
+    from sigint import interrupt_delay
+    dt = interrupt_delay(setup, call, delay=0.5)
+    assert dt < 1.0, f"KeyboardInterrupt {dt} s after SIGINT"     # measured < 0.06 s
+
+
+def test_results_after_an_interrupted_solve_are_unchanged():
+    # the same call in one process after an abandoned solve gives the fresh result
+    import subprocess
+    import sys
+    code = """
+import os, signal, threading, numpy as np, mechpy as mp
+signal.signal(signal.SIGINT, signal.default_int_handler)
+K, M = mp.modes.chain(3000, masses=np.linspace(1, 2, 3000), sparse=True)
+threading.Timer(0.3, lambda: os.kill(os.getpid(), signal.SIGINT)).start()
+try:
+    mp.modes.normal_modes(K, M)
+    print("FINISHED")
+except KeyboardInterrupt:
+    print("INTERRUPTED")
+small = mp.modes.normal_modes(*mp.modes.chain(5, masses=[1, 2, 3, 4, 5]))
+print(repr(small.omega.tolist()))
+"""
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                       timeout=300)
+    out = r.stdout.splitlines()
+    assert r.returncode == 0, r.stderr[-2000:]
+    assert out[0] == "INTERRUPTED"
+    ref = mp.modes.normal_modes(*mp.modes.chain(5, masses=[1, 2, 3, 4, 5])).omega
+    assert eval(out[-1]) == ref.tolist()

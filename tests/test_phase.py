@@ -18,6 +18,24 @@ def test_vector_field_scene_and_callable():
     np.testing.assert_allclose(V2, -np.sin(X), rtol=1e-15)
 
 
+def test_vector_field_linear_callable_on_non_square_grid():
+    # A @ y returns the right shape for y of shape (2, ny, nx) and mixes grid points
+    # when taken as vectorised; the field of a linear system is exactly A (x, y).
+    A = np.array([[0.0, 1.0], [-2.0, -0.3]])
+    X, Y = np.meshgrid(np.linspace(-3, 3, 7), [-1.0, 2.0])     # a (2, 7) grid
+    U, V = mp.phase.vector_field(lambda t, y: A @ y, X, Y)
+    np.testing.assert_array_equal(U, Y)
+    np.testing.assert_allclose(V, -2.0 * X - 0.3 * Y, rtol=1e-15, atol=1e-15)
+    # vectorized=True is the caller's promise: a field that acts point-wise
+    Uv, Vv = mp.phase.vector_field(lambda t, y: np.stack([y[1], -2 * y[0] - 0.3 * y[1]]),
+                                   X, Y, vectorized=True)
+    np.testing.assert_allclose(Vv, V, rtol=1e-15, atol=1e-15)
+    with pytest.raises(ValueError, match="vectorized"):
+        mp.phase.vector_field(lambda t, y: y[0], X, Y, vectorized=True)
+    with pytest.raises(TypeError, match="vectorized"):
+        mp.phase.vector_field(lambda t, y: A @ y, X, Y, vectorized="yes")
+
+
 def test_vector_field_bad_grids():
     X = np.zeros((3, 4))
     with pytest.raises(ValueError):
@@ -45,6 +63,22 @@ def test_pendulum_fixed_points():
         else:
             assert p.kind == "saddle" and not p.stable
             np.testing.assert_allclose(sorted(p.eigenvalues.real), [-w0, w0], rtol=1e-12)
+
+
+def test_fixed_points_budget():
+    # 400 seeds per axis (160000 starts) took about 220 s one start at a time; a scene's
+    # starts now run batched, and a Python callable has a stated budget
+    P = mp.scenes.Pendulum(g=9.81, length=2.0)
+    fps = mp.phase.fixed_points(P, [(-7, 7), (-3, 3)], seeds=400)
+    np.testing.assert_allclose([p.x[0] for p in fps], np.pi * np.arange(-2, 3), atol=1e-12)
+    assert [p.kind for p in fps] == ["centre", "saddle", "centre", "saddle", "centre"]
+    f = lambda t, y: np.array([y[1], -np.sin(y[0])])  # noqa: E731
+    with pytest.raises(ValueError, match="max_starts = 10000"):
+        mp.phase.fixed_points(f, [(-7, 7), (-3, 3)], seeds=101)
+    with pytest.raises(ValueError, match="max_starts = 50"):
+        mp.phase.fixed_points(P, [(-7, 7), (-3, 3)], seeds=8, max_starts=50)
+    got = mp.phase.fixed_points(f, [(-7, 7), (-3, 3)], seeds=7, max_starts=49)
+    np.testing.assert_allclose([p.x[0] for p in got], np.pi * np.arange(-2, 3), atol=1e-12)
 
 
 def test_damped_and_vdp_classification():
@@ -114,6 +148,20 @@ def test_bifurcation_against_solve_ivp():
         mp.phase.bifurcation(sc, "mass", vals, [0.1, 0.0], T, 8, 10)
 
 
+def test_lyapunov_strongly_negative_exponent_is_resolved():
+    # y' = A y with A = -50 I + 3 (rotation generator): |delta(t)| = exp(-50 t) |delta(0)|
+    # exactly, so the largest exponent is -50.  A tangent vector renormalised every dt = 1
+    # fell to exp(-50) ~ 2e-22, below atol, and the old estimate was -30.7.
+    A = np.array([[-50.0, 3.0], [-3.0, -50.0]])
+    lam = mp.phase.lyapunov(lambda t, y: A @ y, [1.0, 0.0], 10.0)
+    assert abs(lam + 50.0) < 1e-9                      # measured 5e-11
+    B = np.array([[0.7, 3.0], [-3.0, 0.7]])            # and a growing one: +0.7
+    assert abs(mp.phase.lyapunov(lambda t, y: B @ y, [1.0, 0.0], 10.0) - 0.7) < 3e-8  # 3e-9
+    # the neighbour method cannot resolve it: it says so instead of returning -7.8 silently
+    with pytest.warns(mp.phase.LyapunovFloorWarning, match="variational"):
+        mp.phase.lyapunov(lambda t, y: A @ y, [1.0, 0.0], 10.0, method="neighbours")
+
+
 def test_lyapunov_chaos_and_cycle():
     sc = mp.scenes.Pendulum(drive_amplitude=1.5, **DRIVEN)
     lam, times, run = mp.phase.lyapunov(sc, [0.2, 0.0], 200.0, transient=50.0,
@@ -128,3 +176,55 @@ def test_lyapunov_chaos_and_cycle():
     lamf = mp.phase.lyapunov(mp.scenes.Pendulum(g=1, length=1, damping=0.4), [1e-3, 0.0],
                              100.0, method="variational")
     assert abs(lamf + 0.2) < 0.01
+
+
+# ---- budgets and Ctrl-C ---------------------------------------------------------------
+def test_limit_cycle_unreachable_tol_has_a_budget():
+    vdp = mp.scenes.VanDerPol(1.0)
+    # the spread of successive periods settles near 2e-15 at rtol 1e-12: tol = 1e-16 ran
+    # to t_max (116 s); it now stops when the spread has not halved in `stall` cycles
+    with pytest.raises(mp.ConvergenceError, match="stalled.*rtol"):
+        mp.phase.limit_cycle(vdp, [2.0, 0.0], tol=1e-16)
+    with pytest.raises(mp.ConvergenceError, match="max_periods = 6"):
+        mp.phase.limit_cycle(vdp, [0.01, 0.0], tol=1e-12, max_periods=6)   # needs 7 to 10
+    T, A = mp.phase.limit_cycle(vdp, [2.0, 0.0], tol=1e-12)
+    assert abs(T - 6.6632868593231) < 1e-12                      # measured 6e-14
+
+
+def test_sections_have_a_step_budget_and_a_size_budget():
+    sc = mp.scenes.Pendulum(drive_amplitude=1.2, **DRIVEN)
+    T = 3 * np.pi
+    with pytest.raises(mp.StepBudgetError, match="max_steps"):
+        mp.phase.poincare(sc, [0.1, 0.0], T, 3, skip=10 ** 12)
+    with pytest.raises(mp.StepBudgetError, match="drive_amplitude = 1.1"):
+        mp.phase.bifurcation(sc, "drive_amplitude", [1.1, 1.2], [0.1, 0.0], T, 3, 10 ** 12)
+    with pytest.raises(mp.StepBudgetError, match="drive_amplitude = 1.1"):
+        mp.phase.bifurcation(sc, "drive_amplitude", [1.1], [0.1, 0.0], lambda v: T, 3, 10 ** 12)
+    with pytest.raises(ValueError, match="n must be <= 10000000"):
+        mp.phase.poincare(sc, [0.1, 0.0], T, 10 ** 8)
+    with pytest.raises(ValueError, match="MAX_SECTION_POINTS"):
+        mp.phase.bifurcation(sc, "drive_amplitude", np.ones(100), [0.1, 0.0], T, 10 ** 6, 0)
+    with pytest.raises(ValueError, match="not distinct"):
+        mp.phase.poincare(sc, [0.1, 0.0], T, 5, skip=10 ** 17)
+    # within budget the section is the integration's
+    pts = mp.phase.poincare(sc, [0.1, 0.0], T, 4, skip=2, max_steps=10 ** 5)
+    ref = mp.solve(sc, (0, 6.5 * T), [0.1, 0.0], rtol=1e-12, atol=1e-14,
+                   t_eval=T * np.arange(2, 6))
+    np.testing.assert_allclose(pts, ref.y.T, atol=1e-8)          # measured 2e-10
+
+
+@pytest.mark.parametrize("setup, call", [
+    ("P = mp.scenes.Pendulum(drive_amplitude=1.2, damping=0.5, drive_frequency=2 / 3)",
+     "mp.phase.poincare(P, [0.1, 0.0], 3 * np.pi, 3, skip=10 ** 12, max_steps=10 ** 10)"),
+    ("P = mp.scenes.Pendulum(drive_amplitude=1.2, damping=0.5, drive_frequency=2 / 3)",
+     "mp.phase.bifurcation(P, 'drive_amplitude', [1.1, 1.2], [0.1, 0.0], 3 * np.pi, 3, "
+     "10 ** 12, max_steps=10 ** 10)"),
+    ("V = mp.scenes.VanDerPol(1.0)",
+     "mp.phase.limit_cycle(V, [2.0, 0.0], tol=1e-17, stall=10 ** 6, max_periods=10 ** 6)"),
+    ("f = lambda t, y: np.array([y[1], -np.sin(y[0])])",
+     "mp.phase.fixed_points(f, [(-7, 7), (-3, 3)], seeds=400, max_starts=10 ** 6)"),
+])
+def test_ctrl_c_is_prompt(setup, call):
+    from sigint import interrupt_delay
+    dt = interrupt_delay(setup, call, delay=0.5)
+    assert dt < 1.0, f"KeyboardInterrupt {dt} s after SIGINT"   # measured < 0.05 s

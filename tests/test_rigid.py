@@ -201,6 +201,50 @@ def test_heavy_top_release_from_rest_bound():
     assert abs(s.y[1].max() - hi) < 1e-5
 
 
+def _steady_precession(I1, I3, M, g, l, th0, w3):
+    """(phi_dot, psi_dot) of the slow steady precession at theta0 with spin w3: the root of
+    I1 cos(theta0) phi_dot^2 - I3 w3 phi_dot + M g l = 0 (Goldstein 5.7), stably."""
+    c, A = np.cos(th0), I3 * w3
+    ph = 2.0 * M * g * l / (A + np.sqrt(A * A - 4.0 * I1 * c * M * g * l))
+    return ph, w3 - ph * c
+
+
+def _theta_extremes(top, y0, T):
+    """min and max of theta over [0, T] from the turning points (theta_dot = 0 events)."""
+    ev = lambda t, y: y[4]  # noqa: E731
+    s = mp.solve(top, (0, T), y0, rtol=1e-13, atol=1e-15, events=ev)
+    th = np.concatenate([s.y_events[0][:, 1], [y0[1]]])
+    return th.min(), th.max()
+
+
+TOP = (0.5, 0.2, 1.0, 9.81, 0.1)
+
+
+@pytest.mark.parametrize("th0, w3", [(0.5, 40.0), (1.2, 8.0), (2.6, 400.0),
+                                     (2.99826200791656, 40.0)])
+def test_nutation_bounds_at_steady_precession(th0, w3):
+    # on the steady-precession condition theta stays at theta0 (a double root of f(u))
+    ph, ps = _steady_precession(*TOP, th0, w3)
+    lo, hi = mp.rigid.nutation_bounds(*TOP, th0, 0.0, ph, ps)
+    assert abs(lo - th0) <= 4e-16 and abs(hi - th0) <= 4e-16      # measured 0 .. 1.1e-16
+
+
+@pytest.mark.parametrize("th0, w3", [(0.5, 40.0), (2.99826200791656, 40.0),
+                                     (1.3142822200446478, 40.0)])
+@pytest.mark.parametrize("thd, dphi", [(1e-4, 0.0), (1e-6, 0.0), (0.0, 1e-6), (0.0, -1e-4),
+                                       (1e-9, 1e-9), (1e-3, 1e-5)])
+def test_nutation_bounds_near_steady_precession_match_integration(th0, w3, thd, dphi):
+    # a small nutation about steady precession: the two roots of f next to u0 nearly merge;
+    # from the cubic's power-basis roots they were off by up to 7.5e-9 rad here, or the
+    # call failed, or returned theta_min = 0 (3 rad off at theta0 = 2.998)
+    ph, ps = _steady_precession(*TOP, th0, w3)
+    ph *= 1.0 + dphi
+    lo, hi = mp.rigid.nutation_bounds(*TOP, th0, thd, ph, ps)
+    ref = _theta_extremes(HeavyTop(*TOP), [0.0, th0, 0.0, ph, thd, ps], 3.0)
+    assert lo <= th0 <= hi
+    assert abs(lo - ref[0]) < 5e-14 and abs(hi - ref[1]) < 5e-14   # measured <= 4e-16
+
+
 def test_bad_input():
     with pytest.raises(ValueError):
         RigidBody((1.0, -2.0, 3.0))

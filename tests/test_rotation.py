@@ -149,12 +149,31 @@ def test_round_trip_random_and_at_lock(seq, passive, rng):
     assert round_trip_error(seq, b, passive) <= 1e-14
 
 
+def exact_lock_matrix(seq, a):
+    """Active matrices of the angles a (..., 3) with the middle one at lock (0, pi or
+    +-pi/2), with the entries that vanish at lock set to exactly 0: float64's pi and pi/2
+    are 1e-16 from lock, and there the first and third angles are still determined."""
+    R = rot.euler_matrix(a, seq=seq, passive=False)
+    ax = ["xyz".index(ch) for ch in seq.lower()]
+    if not seq.isupper():
+        ax = ax[::-1]
+    i, j, k = ax
+    if i == k:
+        l = 3 - i - j
+        R[..., i, j] = R[..., i, l] = R[..., j, i] = R[..., l, i] = 0.0
+        R[..., i, i] = np.sign(R[..., i, i])
+    else:
+        R[..., i, i] = R[..., i, j] = R[..., j, k] = R[..., k, k] = 0.0
+        R[..., i, k] = np.sign(R[..., i, k])
+    return R
+
+
 @pytest.mark.parametrize("seq", SEQS)
 def test_exact_lock_third_angle_zero_and_one_warning(seq, rng):
     exact, near = lock_angles(seq)
     a = rng.uniform(-3, 3, (50, 3))
     a[:, 1] = np.repeat(exact, 25)
-    R = rot.euler_matrix(a, seq=seq, passive=False)
+    R = exact_lock_matrix(seq, a)
     with pytest.warns(rot.GimbalLockWarning) as rec:
         b = rot.euler_angles(R, seq, passive=False)
     assert len([w for w in rec if issubclass(w.category, rot.GimbalLockWarning)]) == 1
@@ -166,6 +185,59 @@ def test_exact_lock_third_angle_zero_and_one_warning(seq, rng):
         warnings.simplefilter("ignore", UserWarning)
         ref = Rotation.from_matrix(R).as_euler(seq)
     np.testing.assert_allclose(angle_diff(b, ref), 0, atol=1e-13)
+
+
+@pytest.mark.parametrize("seq", SEQS)
+@pytest.mark.parametrize("passive", [False, True])
+def test_near_lock_angles_are_exact_down_to_the_smallest_normal(seq, passive, rng):
+    # theta = 1e-12 away from lock was reported as lock (third angle 0, the first and third
+    # off by up to 1e-12 and a warning); every angle is determined while the sine of the
+    # distance from lock is a normal number, and comes back to round-off
+    a = rng.uniform(-3, 3, (8 * 6, 3))
+    dist = np.repeat([1e-9, 1e-12, 1e-100, 1e-300, 1e-307, 2.3e-308], 8)
+    proper = seq[0].lower() == seq[2].lower()
+    if proper:
+        a[:, 1] = dist                      # near 0 (pi - dist is not representable)
+    else:
+        a[:, 1] = np.where(np.arange(a.shape[0]) % 2, 1.0, -1.0) * (np.pi / 2 - 1e-9)
+        a[: 8 * 2, 1] = np.pi / 2 - np.repeat([1e-9, 1e-12], 8)
+    R = rot.euler_matrix(a, seq=seq, passive=passive)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", rot.GimbalLockWarning)
+        b = rot.euler_angles(R, seq, passive)
+        # the quaternion holds sin(theta / 2): normal down to theta = 4.5e-308
+        q = rot.quat_from_euler(a[:-8], seq=seq, passive=passive)
+        bq = rot.euler_from_quat(q, seq, passive)
+    # theta to relative round-off; phi and psi individually (measured <= 9e-16)
+    np.testing.assert_allclose(b[:, 1], a[:, 1], rtol=4e-15, atol=0)
+    np.testing.assert_allclose(angle_diff(b[:, [0, 2]], a[:, [0, 2]]), 0, atol=4e-15)
+    if proper:
+        np.testing.assert_allclose(bq[:, 1], a[:-8, 1], rtol=4e-15, atol=0)
+        np.testing.assert_allclose(angle_diff(bq[:, [0, 2]], a[:-8, [0, 2]]), 0, atol=4e-15)
+    else:
+        # near Tait-Bryan lock the angles sit in differences of O(1) quaternion components,
+        # which quat_from_euler rounds: the quaternion, not the angles, comes back
+        q2 = rot.quat_from_euler(bq, seq=seq, passive=passive)
+        np.testing.assert_allclose(np.abs(np.sum(q2 * q, axis=-1)), 1.0, rtol=0,
+                                   atol=2e-15)                        # measured 4.4e-16
+    # SciPy calls all of these locked (its band is 1e-7) and returns psi = 0: its triple
+    # reproduces the matrix too, but not the angles
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        ref = Rotation.from_matrix(R.swapaxes(-1, -2) if passive else R).as_euler(seq)
+    np.testing.assert_allclose(rot.euler_matrix(ref, seq=seq, passive=passive), R, atol=1e-8)
+    np.testing.assert_allclose(rot.euler_matrix(b, seq=seq, passive=passive), R, atol=2e-15)
+
+
+@pytest.mark.parametrize("seq", PROPER)
+def test_lock_below_the_smallest_normal_still_warns(seq):
+    # sin(theta) subnormal: the first and third angles have lost their precision
+    a = np.array([[0.7, 1e-310, 0.4], [0.7, 0.0, 0.4]])
+    R = rot.euler_matrix(a, seq=seq, passive=False)
+    with pytest.warns(rot.GimbalLockWarning, match="2 of 2"):
+        b = rot.euler_angles(R, seq, passive=False)
+    np.testing.assert_array_equal(b[:, 2], 0.0)
+    np.testing.assert_allclose(rot.euler_matrix(b, seq=seq, passive=False), R, atol=4e-16)
 
 
 def test_lock_warning_is_silenceable_and_a_userwarning():

@@ -135,6 +135,12 @@ static void mp_py_mesh_detail(const struct mp_mesh_report *r, char *buf, size_t 
     case MP_MESH_FLAT:
         snprintf(buf, size, "degenerate: the enclosed volume is zero (%.3g)", r->volume);
         break;
+    case MP_MESH_RANGE:
+        snprintf(buf, size, "out of range: with an extent of %.3g the coordinate differences, "
+                 "the volume (extent^3) or the inertia (extent^5) %s float64; rescale the "
+                 "vertices (other units)", r->extent,
+                 !(r->extent <= 1.0) ? "overflow" : "underflow");
+        break;
     default:
         buf[0] = 0;
     }
@@ -161,7 +167,8 @@ static PyObject *py_inertia_mesh(PyObject *self, PyObject *args)
     int rc;
     Py_BEGIN_ALLOW_THREADS
     rc = mp_inertia_mesh((size_t)PyArray_DIM(V, 0), PyArray_DATA(V), (size_t)PyArray_DIM(F, 0),
-                         PyArray_DATA(F), &vol, PyArray_DATA(com), PyArray_DATA(J), &rep);
+                         PyArray_DATA(F), &vol, PyArray_DATA(com), PyArray_DATA(J), &rep,
+                         mp_py_check_interrupt, NULL);
     Py_END_ALLOW_THREADS
     if (rc != MP_OK) {
         char detail[256];

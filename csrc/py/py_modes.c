@@ -2,10 +2,148 @@
  * the GIL released, map the status.  No physics here. */
 #include "mp_py.h"
 
+#include <errno.h>
 #include <limits.h>
+#include <pthread.h>
 #include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
 
 #include "modes.h"
+
+/* ---------------------------------------------------------------- interruptible LAPACK
+ *
+ * LAPACK's eigensolvers cannot be stopped part-way (dstemr took 29 s for a
+ * 10^4-mass chain, dsygvd as long for n = 2000 on a loaded machine).  The
+ * solve runs in a worker thread on buffers the job owns; the calling thread
+ * waits with the GIL released and polls for Ctrl-C every 50 ms.  On Ctrl-C
+ * the call returns at once (KeyboardInterrupt); the worker, which cannot be
+ * cancelled, finishes in the background and frees the job itself.  Whichever
+ * side sees the other's flag last frees the job (under the mutex). */
+struct mp_modes_job {
+    int dense, n;
+    double zero_rtol, w_bad;
+    double *k, *m;          /* dense: K (becomes the vectors) and M, n*n each */
+    double *kd, *ke, *md;   /* chain: bands, n, n-1 (at least 1), n */
+    double *w, *z;          /* results: n, n*n (chain) */
+    int status, done, abandoned;
+    pthread_mutex_t mu;
+    pthread_cond_t cv;
+};
+
+/* Free a job and every buffer it still owns (NULL-safe). */
+static void mp_modes_job_free(struct mp_modes_job *j)
+{
+    if (!j) return;
+    free(j->k); free(j->m); free(j->kd); free(j->ke); free(j->md); free(j->w); free(j->z);
+    pthread_mutex_destroy(&j->mu);
+    pthread_cond_destroy(&j->cv);
+    free(j);
+}
+
+/* A job with zeroed buffers pointers and its lock, or NULL. */
+static struct mp_modes_job *mp_modes_job_new(int dense, int n, double zero_rtol)
+{
+    struct mp_modes_job *j = calloc(1, sizeof *j);
+    if (!j) return NULL;
+    j->dense = dense;
+    j->n = n;
+    j->zero_rtol = zero_rtol;
+    if (pthread_mutex_init(&j->mu, NULL) != 0) { free(j); return NULL; }
+    if (pthread_cond_init(&j->cv, NULL) != 0) {
+        pthread_mutex_destroy(&j->mu);
+        free(j);
+        return NULL;
+    }
+    return j;
+}
+
+/* The solve itself: pure C on the job's buffers. */
+static void mp_modes_job_compute(struct mp_modes_job *j)
+{
+    if (j->dense)
+        j->status = mp_modes_dense(j->n, j->k, j->m, j->zero_rtol, j->w, &j->w_bad);
+    else
+        j->status = mp_modes_tridiag(j->n, j->kd, j->ke, j->md, j->zero_rtol, j->w, j->z,
+                                     &j->w_bad);
+}
+
+/* Worker thread: compute, then hand the job back or, if abandoned, free it. */
+static void *mp_modes_worker(void *arg)
+{
+    struct mp_modes_job *j = arg;
+    mp_modes_job_compute(j);
+    pthread_mutex_lock(&j->mu);
+    j->done = 1;
+    int abandoned = j->abandoned;
+    pthread_cond_signal(&j->cv);
+    pthread_mutex_unlock(&j->mu);
+    if (abandoned) mp_modes_job_free(j);
+    return NULL;
+}
+
+/* Run the job with the GIL released, answering Ctrl-C within about 50 ms.
+ * Returns MP_OK (the job done, the caller owns it) or MP_EINTR (the job now
+ * belongs to the worker; KeyboardInterrupt is set).  Without a thread the
+ * job runs inline. */
+static int mp_modes_run(struct mp_modes_job *j)
+{
+    int rc = MP_OK;
+    Py_BEGIN_ALLOW_THREADS
+    pthread_t tid;
+    if (pthread_create(&tid, NULL, mp_modes_worker, j) != 0) {
+        mp_modes_job_compute(j);
+    } else {
+        pthread_mutex_lock(&j->mu);
+        while (!j->done) {
+            struct timespec ts;
+            clock_gettime(CLOCK_REALTIME, &ts);
+            ts.tv_nsec += 50000000L;
+            if (ts.tv_nsec >= 1000000000L) { ts.tv_sec += 1; ts.tv_nsec -= 1000000000L; }
+            pthread_cond_timedwait(&j->cv, &j->mu, &ts);
+            if (j->done) break;
+            pthread_mutex_unlock(&j->mu);
+            int irc = mp_py_check_interrupt(NULL);
+            pthread_mutex_lock(&j->mu);
+            if (irc != MP_OK && !j->done) {
+                j->abandoned = 1;
+                rc = MP_EINTR;
+                break;
+            }
+        }
+        pthread_mutex_unlock(&j->mu);
+        if (rc == MP_EINTR) pthread_detach(tid);
+        else pthread_join(tid, NULL);
+    }
+    Py_END_ALLOW_THREADS
+    return rc;
+}
+
+/* Free a malloc'd buffer that a NumPy array took over (capsule destructor). */
+static void mp_modes_capsule_free(PyObject *cap)
+{
+    free(PyCapsule_GetPointer(cap, NULL));
+}
+
+/* A float64 array over the malloc'd buffer *buf, which it then owns (*buf is
+ * set to NULL); NULL with an exception on failure (the buffer stays). */
+static PyObject *mp_modes_array_of(double **buf, int nd, npy_intp *dims)
+{
+    PyObject *a = PyArray_SimpleNewFromData(nd, dims, NPY_DOUBLE, *buf);
+    if (!a) return NULL;
+    PyObject *cap = PyCapsule_New(*buf, NULL, mp_modes_capsule_free);
+    if (!cap) {
+        Py_DECREF(a);
+        return NULL;
+    }
+    if (PyArray_SetBaseObject((PyArrayObject *)a, cap) < 0) {   /* steals cap */
+        Py_DECREF(a);
+        return NULL;
+    }
+    *buf = NULL;
+    return a;
+}
 
 /* A square float64 matrix argument (new reference) with its order in *n. */
 static PyArrayObject *mp_py_modes_square(PyObject *obj, const char *name, int *n)
@@ -23,26 +161,44 @@ static PyArrayObject *mp_py_modes_square(PyObject *obj, const char *name, int *n
     return a;
 }
 
-static PyObject *mp_py_modes_result(int status, PyArrayObject *w, PyArrayObject *z,
-                                    double w_bad, const char *context)
+/* The (w, Z) result of a finished job, or the exception of its status; the
+ * job is freed either way. */
+static PyObject *mp_py_modes_result(struct mp_modes_job *j, double **zbuf, const char *context)
 {
-    if (status != MP_OK) {
-        Py_DECREF(w);
-        Py_DECREF(z);
-        if (status == MP_EUNSTABLE) {
+    PyObject *res = NULL;
+    if (j->status != MP_OK) {
+        if (j->status == MP_EUNSTABLE) {
             char detail[96];
-            snprintf(detail, sizeof detail, "eigenvalue omega^2 = %.6g < 0", w_bad);
-            return mp_py_raise_detail(status, context, detail);
+            snprintf(detail, sizeof detail, "eigenvalue omega^2 = %.6g < 0", j->w_bad);
+            mp_py_raise_detail(j->status, context, detail);
+        } else {
+            mp_py_raise(j->status, context);
         }
-        return mp_py_raise(status, context);
+        mp_modes_job_free(j);
+        return NULL;
     }
-    return Py_BuildValue("(NN)", (PyObject *)w, (PyObject *)z);
+    npy_intp s1[1] = {j->n}, s2[2] = {j->n, j->n};
+    PyObject *w = mp_modes_array_of(&j->w, 1, s1);
+    PyObject *z = w ? mp_modes_array_of(zbuf, 2, s2) : NULL;
+    if (w && z) res = Py_BuildValue("(NN)", w, z);
+    else Py_XDECREF(w);
+    mp_modes_job_free(j);
+    return res;
+}
+
+/* A malloc'd copy of a float64 array's data (n doubles, at least 1), or NULL. */
+static double *mp_modes_copy(PyArrayObject *a, size_t n)
+{
+    double *p = malloc((n ? n : 1) * sizeof *p);
+    if (p && n) memcpy(p, PyArray_DATA(a), n * sizeof *p);
+    return p;
 }
 
 PyDoc_STRVAR(modes_dense_doc,
 "modes_dense(K, M, zero_rtol) -> (w, Z)\n\n"
 "Dense K v = w M v by LAPACK dsygvd: w ascending, Z[k] is mode k\n"
-"(M-normalised, sign rule applied).  K and M must be symmetric.");
+"(M-normalised, sign rule applied).  K and M must be symmetric.\n"
+"Ctrl-C returns at once (the solve finishes in the background).");
 
 static PyObject *modes_dense(PyObject *self, PyObject *args)
 {
@@ -65,33 +221,29 @@ static PyObject *modes_dense(PyObject *self, PyObject *args)
         Py_DECREF(m);
         return NULL;
     }
-    /* LAPACK overwrites both: work on copies. */
-    PyArrayObject *z = (PyArrayObject *)PyArray_NewCopy(k, NPY_CORDER);
-    PyArrayObject *mc = (PyArrayObject *)PyArray_NewCopy(m, NPY_CORDER);
+    /* LAPACK overwrites both: the job works on its own copies. */
+    size_t nn = (size_t)n * (size_t)n;
+    struct mp_modes_job *j = mp_modes_job_new(1, n, zero_rtol);
+    if (j) {
+        j->k = mp_modes_copy(k, nn);
+        j->m = mp_modes_copy(m, nn);
+        j->w = malloc((size_t)n * sizeof *j->w);
+    }
     Py_DECREF(k);
     Py_DECREF(m);
-    npy_intp shape[1] = {n};
-    PyArrayObject *w = mp_py_empty(1, shape);
-    if (!z || !mc || !w) {
-        Py_XDECREF(z);
-        Py_XDECREF(mc);
-        Py_XDECREF(w);
-        return NULL;
+    if (!j || !j->k || !j->m || !j->w) {
+        mp_modes_job_free(j);
+        return PyErr_NoMemory();
     }
-    int status;
-    double w_bad = 0.0;
-    Py_BEGIN_ALLOW_THREADS
-    status = mp_modes_dense(n, (double *)PyArray_DATA(z), (double *)PyArray_DATA(mc),
-                            zero_rtol, (double *)PyArray_DATA(w), &w_bad);
-    Py_END_ALLOW_THREADS
-    Py_DECREF(mc);
-    return mp_py_modes_result(status, w, z, w_bad, "normal_modes(K, M)");
+    if (mp_modes_run(j) != MP_OK) return NULL;    /* Ctrl-C: the worker owns j */
+    return mp_py_modes_result(j, &j->k, "normal_modes(K, M)");
 }
 
 PyDoc_STRVAR(modes_tridiag_doc,
 "modes_tridiag(kd, ke, md, zero_rtol) -> (w, Z)\n\n"
 "Chain K v = w M v with K tridiagonal (diagonal kd, off-diagonal ke) and\n"
-"M = diag(md), by LAPACK dstemr on M^-1/2 K M^-1/2: O(n^2).");
+"M = diag(md), by LAPACK dstemr on M^-1/2 K M^-1/2: O(n^2).\n"
+"Ctrl-C returns at once (the solve finishes in the background).");
 
 static PyObject *modes_tridiag(PyObject *self, PyObject *args)
 {
@@ -103,8 +255,8 @@ static PyObject *modes_tridiag(PyObject *self, PyObject *args)
     PyArrayObject *kd = mp_py_array(kdo, "kd", 1);
     PyArrayObject *ke = mp_py_array(keo, "ke", 1);
     PyArrayObject *md = mp_py_array(mdo, "md", 1);
-    PyArrayObject *w = NULL, *z = NULL;
     PyObject *res = NULL;
+    struct mp_modes_job *j = NULL;
     if (!kd || !ke || !md) goto done;
     npy_intp n = PyArray_DIM(kd, 0);
     if (n < 1 || n > 100000 || PyArray_DIM(md, 0) != n || PyArray_DIM(ke, 0) != n - 1) {
@@ -115,24 +267,21 @@ static PyObject *modes_tridiag(PyObject *self, PyObject *args)
     if (mp_py_require_finite(kd, "K") < 0 || mp_py_require_finite(ke, "K") < 0 ||
         mp_py_require_finite(md, "M") < 0)
         goto done;
-    npy_intp s1[1] = {n}, s2[2] = {n, n};
-    w = mp_py_empty(1, s1);
-    z = mp_py_empty(2, s2);
-    if (!w || !z) {
-        Py_XDECREF(w);
-        Py_XDECREF(z);
+    j = mp_modes_job_new(0, (int)n, zero_rtol);
+    if (j) {
+        j->kd = mp_modes_copy(kd, (size_t)n);
+        j->ke = mp_modes_copy(ke, (size_t)n - 1);
+        j->md = mp_modes_copy(md, (size_t)n);
+        j->w = malloc((size_t)n * sizeof *j->w);
+        j->z = malloc((size_t)n * (size_t)n * sizeof *j->z);
+    }
+    if (!j || !j->kd || !j->ke || !j->md || !j->w || !j->z) {
+        mp_modes_job_free(j);
+        PyErr_NoMemory();
         goto done;
     }
-    int status;
-    double w_bad = 0.0;
-    Py_BEGIN_ALLOW_THREADS
-    status = mp_modes_tridiag((int)n, (const double *)PyArray_DATA(kd),
-                              (const double *)PyArray_DATA(ke),
-                              (const double *)PyArray_DATA(md), zero_rtol,
-                              (double *)PyArray_DATA(w),
-                              (double *)PyArray_DATA(z), &w_bad);
-    Py_END_ALLOW_THREADS
-    res = mp_py_modes_result(status, w, z, w_bad, "normal_modes(K, M) (chain)");
+    if (mp_modes_run(j) == MP_OK)      /* else Ctrl-C: the worker owns j */
+        res = mp_py_modes_result(j, &j->z, "normal_modes(K, M) (chain)");
 done:
     Py_XDECREF(kd);
     Py_XDECREF(ke);
