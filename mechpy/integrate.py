@@ -358,6 +358,9 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
     spec, dim = _system_spec(system, args, method)
     if dim is not None and dim != n:
         raise ValueError(f"y0 must have {dim} values for {type(system).__name__}, got {n}")
+    check = getattr(system, "_check_initial", None)   # e.g. constraints a scene imposes
+    if check is not None:
+        check(t0, y0a)
     evs, term, dirs = _events_spec(events)
 
     r = _core.ode_solve(method, spec, t0, tf, y0a, rtol, atol_a, tev, bool(dense_output), evs,

@@ -57,5 +57,6 @@ extern PyMethodDef mp_py_rotation_methods[];
 extern PyMethodDef mp_py_modes_methods[];
 extern PyMethodDef mp_py_variational_methods[];
 extern PyMethodDef mp_py_rigid_methods[];
+extern PyMethodDef mp_py_compiled_methods[];
 
 #endif

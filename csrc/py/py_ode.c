@@ -148,7 +148,8 @@ static int c_rhs2(double t, const double *y, double *dydt, void *data)
 
 /* ---- a system described by the Python layer --------------------------------
  * ("scene", name, params) | ("python", fun, args) | ("cfunc", address, user_data)
- * and the second-order ("python2", accel, args) | ("cfunc2", address, user_data);
+ * and the second-order ("python2", accel, args) | ("cfunc2", address, user_data),
+ * or a generated library ("compiled", (rhs, jac or None, nq), params);
  * a RigidBody scene may carry a C torque: ("scene", name, params, (address, user_data)) */
 
 typedef struct {
@@ -249,6 +250,25 @@ static int py_system_parse(PyObject *spec, size_t n, py_system *s)
         s->prob.rhs = second ? c_rhs2 : c_rhs;
         s->prob.data = second ? (void *)&s->cfn : (void *)&s->cfn.fn;
         s->prob.nq = s->cfn.nq;
+    } else if (strcmp(kind, "compiled") == 0) {
+        /* a generated library (mechpy.symbolic): ((rhs, jac or None, nq), params);
+         * its functions take the parameter vector as data */
+        PyObject *ra, *ja;
+        Py_ssize_t nq;
+        if (!PyArg_ParseTuple(a, "OOn", &ra, &ja, &nq)) return -1;
+        c_fn rf, jf = {NULL, NULL};
+        if (c_address(ra, Py_None, &rf) < 0) return -1;
+        if (ja != Py_None && c_address(ja, Py_None, &jf) < 0) return -1;
+        if (nq < 0 || (size_t)nq * 2 > n) {
+            PyErr_SetString(PyExc_ValueError, "compiled system: bad second-order split nq");
+            return -1;
+        }
+        s->params = mp_py_array(b, "scene parameters", 1);
+        if (!s->params) return -1;
+        *(void **)&s->prob.rhs = *(void **)&rf.f;
+        if (jf.f) *(void **)&s->prob.jac = *(void **)&jf.f;
+        s->prob.data = PyArray_DATA(s->params);
+        s->prob.nq = (size_t)nq;
     } else {
         PyErr_Format(PyExc_ValueError, "unknown system kind %s", kind);
         return -1;
@@ -549,6 +569,14 @@ static PyObject *py_ode_solve_many(PyObject *self, PyObject *args, PyObject *kw)
                 mp_rigid_bind_torque(mod, &torques[i], &probs[i]);
             }
         }
+    } else if (par && strcmp(spec_kind, "compiled") == 0) {
+        /* a compiled system gets its row as its parameter vector */
+        if (np != (size_t)PyArray_SIZE(sys.params)) {
+            PyErr_Format(PyExc_ValueError, "params must have %zd columns (the scene's "
+                         "parameters)", (Py_ssize_t)PyArray_SIZE(sys.params));
+            goto out;
+        }
+        for (size_t i = 0; i < k; i++) probs[i].data = (double *)PyArray_DATA(par) + i * np;
     } else if (par && sys.holds_python) {
         /* a Python system gets its row as leading extra arguments */
         fns = PyMem_Calloc(k, sizeof *fns);

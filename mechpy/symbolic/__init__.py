@@ -1,0 +1,227 @@
+"""A user's own system, compiled: ``mp.coordinates``, ``mp.lagrangian``, ``mp.equations``.
+
+The equations of motion are derived with SymPy (:mod:`.derive`), printed as
+C99 (:mod:`.codegen`), compiled once by the C compiler Python was built with
+and cached on disk (:mod:`.build`), and bound to the integrator engine as a
+scene (:mod:`.scene`).  SymPy is imported only when these functions are
+called, so ``import mechpy`` stays fast.
+"""
+from __future__ import annotations
+
+import hashlib
+import os
+
+__all__ = ["coordinates", "lagrangian", "equations", "CompileError"]
+
+_SOURCES = ("derive.py", "codegen.py")
+_GEN_HASH = None
+
+
+def _generator_hash() -> str:
+    """A hash of the generator's own code: a cached derivation is valid only
+    for the code that made it."""
+    global _GEN_HASH
+    if _GEN_HASH is None:
+        h = hashlib.sha256()
+        here = os.path.dirname(__file__)
+        for name in _SOURCES:
+            with open(os.path.join(here, name), "rb") as f:
+                h.update(f.read())
+        _GEN_HASH = h.hexdigest()
+    return _GEN_HASH
+
+
+def __getattr__(name):
+    if name == "CompileError":
+        from .build import CompileError
+        return CompileError
+    raise AttributeError(name)
+
+
+def coordinates(names):
+    """Generalized coordinates as SymPy functions of time.
+
+    Parameters
+    ----------
+    names : str or sequence of str
+        Names separated by spaces or commas, ``"theta1 theta2"``.
+
+    Returns
+    -------
+    list of sympy.Function
+        One function of ``t`` each (``sympy.physics.mechanics.dynamicsymbols``);
+        ``q.diff()`` is its velocity.  A list even for a single name.
+
+    Examples
+    --------
+    >>> th, = mp.coordinates("theta")
+    >>> L = m * l**2 * th.diff()**2 / 2 + m * g * l * sympy.cos(th)
+    """
+    from .derive import coordinates as _coordinates
+    return _coordinates(names)
+
+
+def _check_params(params):
+    if params is None:
+        return {}
+    if not isinstance(params, dict):
+        raise TypeError(f"params must be a dict {{name: value}}, got {type(params).__name__}")
+    out = {}
+    for k, v in params.items():
+        name = getattr(k, "name", k)
+        if not isinstance(name, str):
+            raise TypeError(f"params keys must be symbol names (str), got {k!r}")
+        out[name] = v
+    return out
+
+
+def _key(kind, parts, param_names) -> str:
+    import sympy as sp
+    h = hashlib.sha256()
+    h.update(kind.encode())
+    for p in parts:
+        h.update(b"\0")
+        h.update(sp.srepr(p).encode() if not isinstance(p, str) else p.encode())
+    h.update(b"\0" + "\0".join(param_names).encode())
+    h.update(b"\0" + _generator_hash().encode())
+    return h.hexdigest()[:40]
+
+
+def _meta(ir, source, constraints=(), numpy_blocks=False):
+    import sympy as sp
+    meta = dict(kind=ir.kind, n=ir.n, nc=ir.nc, k=ir.k, nq=ir.nq, names=ir.names,
+                param_names=ir.param_names, cyclic=ir.cyclic,
+                has_energy="energy" in ir.blocks, source=source,
+                equations=sp.srepr(ir.equations),
+                constraints=[str(g) for g in constraints])
+    if numpy_blocks:
+        sub = {p: sp.Symbol(f"mp_p{i}", real=True) for i, p in enumerate(ir.P)}
+        meta["blocks"] = {k: sp.srepr([sp.sympify(e).xreplace(sub) for e in v])
+                          for k, v in ir.blocks.items()}
+    return meta
+
+
+def _make(kind, ir_fn, key_parts, params, backend, constraints=()):
+    from .. import _core
+    from . import build, codegen
+    from .scene import CompiledScene
+    if backend not in ("c", "numpy"):
+        raise ValueError(f"backend must be 'c' or 'numpy', got {backend!r}")
+    key = _key(kind, key_parts, list(params))
+    if backend == "c":
+        meta = build.load_meta(key)
+        if meta is not None and meta.get("param_names") == list(params):
+            return CompiledScene(meta, params, "c")
+    ir = ir_fn()
+    source = codegen.c_source(ir, _core.STATUS)
+    meta = _meta(ir, source, constraints, numpy_blocks=backend == "numpy")
+    scene = CompiledScene(meta, params, backend)
+    if backend == "c":
+        build.store_meta(key, meta)
+    return scene
+
+
+def lagrangian(L, q, params=None, constraints=(), forces=None, *, baumgarte=None,
+               backend: str = "c"):
+    r"""A scene from a Lagrangian L(q, q', t), compiled to C.
+
+    The Euler-Lagrange equations in mass-matrix form,
+
+    .. math:: M(q, t)\,\ddot q = F(q, \dot q, t) + Q + C^T\lambda, \qquad
+              M = \frac{\partial^2 L}{\partial\dot q\,\partial\dot q}, \quad
+              F = \frac{\partial L}{\partial q}
+                  - \frac{\partial^2 L}{\partial\dot q\,\partial q}\dot q
+                  - \frac{\partial^2 L}{\partial\dot q\,\partial t},
+
+    with holonomic constraints g(q, t) = 0 (C = dg/dq) enforced at the
+    acceleration level with Baumgarte's stabilisation
+    :math:`\ddot g + 2\alpha\dot g + \beta^2 g = 0`, are printed as C (M is
+    never inverted symbolically: a dense LU with partial pivoting solves the
+    (n + k) system at each evaluation), compiled and cached.
+
+    Parameters
+    ----------
+    L : sympy.Expr
+        The Lagrangian in the coordinates, their first derivatives, t
+        (``sympy.Symbol("t")``) and parameter symbols.
+    q : sequence of coordinates
+        From :func:`coordinates`; the state is ``(q_1..q_n, q_dot_1..q_dot_n)``.
+    params : dict
+        A value for every free symbol other than t, keyed by the symbol's
+        name; their order is the order of ``scene.params`` and of the rows of
+        ``mp.solve_many(..., params=...)``.
+    constraints : sequence of sympy.Expr
+        Holonomic constraints g(q, t) = 0.  ``mp.solve`` checks that y0
+        satisfies them (g and g') before it integrates.
+    forces : sequence of sympy.Expr, optional
+        Generalized non-conservative forces Q(q, q', t), one per coordinate.
+    baumgarte : (alpha, beta), optional
+        Stabilisation rates (1/s), default (5, 5) (critically damped).
+    backend : {"c", "numpy"}
+        ``"numpy"`` evaluates the same equations through ``sympy.lambdify``
+        (a Python right-hand side: much slower, no C compiler needed).
+
+    Returns
+    -------
+    CompiledScene
+        A :class:`mechpy.scenes.Scene` with ``rhs``, ``jacobian`` (analytic,
+        constrained systems included), ``energy`` (the Jacobi integral
+        h = sum q' dL/dq' - L), ``momenta``, ``cyclic``, ``equations``,
+        ``c_source``, ``small_oscillations``, and with constraints
+        ``multipliers`` and ``constraint_forces``.  When M is constant, V
+        depends on q alone and there are no forces or constraints, the scene is
+        separable and the symplectic methods take it.
+
+    Raises
+    ------
+    ValueError
+        A free symbol without a value (named), a coordinate absent from L, a
+        wrong number of forces, a velocity-dependent constraint, an
+        expression SymPy cannot print as C (named).
+    CompileError
+        No C compiler, or it failed (the command and its first lines).
+    """
+    from .derive import lagrangian_ir
+    import sympy as sp
+    params = _check_params(params)
+    cons = [] if constraints is None else (list(constraints) if isinstance(
+        constraints, (list, tuple)) else [constraints])
+    parts = [sp.sympify(L), list(q) if isinstance(q, (list, tuple)) else q,
+             [sp.sympify(g) for g in cons],
+             "none" if forces is None else [sp.sympify(f) for f in (
+                 forces if isinstance(forces, (list, tuple)) else [forces])],
+             repr(None if baumgarte is None else tuple(float(x) for x in baumgarte))]
+    return _make("lagrangian", lambda: lagrangian_ir(L, q, params, cons, forces, baumgarte),
+                 parts, params, backend, cons)
+
+
+def equations(rhs, y, params=None, *, energy=None, backend: str = "c"):
+    """A scene from a first-order system y' = rhs(t, y), compiled to C.
+
+    Parameters
+    ----------
+    rhs : sequence of sympy.Expr
+        One expression per state, in the states, t and parameter symbols.
+    y : sequence of states
+        From :func:`coordinates` (functions of t) or plain SymPy symbols.
+    params : dict
+        A value for every free symbol other than t, keyed by name.
+    energy : sympy.Expr, optional
+        A conserved quantity to expose as ``scene.energy(y)``.
+    backend : {"c", "numpy"}
+        ``"numpy"``: ``sympy.lambdify`` instead of C (slower).
+
+    Returns
+    -------
+    CompiledScene
+        ``rhs``, ``jacobian`` (analytic), ``energy`` (when given),
+        ``equations``, ``c_source``.
+    """
+    from .derive import equations_ir
+    import sympy as sp
+    params = _check_params(params)
+    rl = list(rhs) if isinstance(rhs, (list, tuple)) else [rhs]
+    parts = [[sp.sympify(e) for e in rl], list(y) if isinstance(y, (list, tuple)) else y,
+             "none" if energy is None else sp.sympify(energy)]
+    return _make("equations", lambda: equations_ir(rl, y, params, energy), parts, params,
+                 backend)

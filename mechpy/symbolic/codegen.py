@@ -1,0 +1,350 @@
+"""Print an :class:`~mechpy.symbolic.derive.IR` as one C99 source file.
+
+Each block of expressions becomes a static function that evaluates the block
+after common subexpression elimination (SymPy's ``cse``), printed by SymPy's
+C99 printer.  A small dense LU solver with partial pivoting (:data:`RUNTIME`),
+sized by the compile-time dimension and working on stack arrays, solves the
+mass-matrix system at each evaluation.  The exported functions and their
+signatures are the ABI that ``mechpy._core`` binds (see :data:`ABI_VERSION`).
+"""
+from __future__ import annotations
+
+import sympy as sp
+from sympy.printing.c import C99CodePrinter
+from sympy.printing.codeprinter import PrintMethodNotImplementedError
+
+from .build import ABI_VERSION
+
+#: The dense solver, written once.  NA is the size of the linear system.
+RUNTIME = r"""
+/* LU factorisation with partial pivoting of the NA x NA row-major matrix A,
+ * in place; piv receives the row exchanges.  Returns MP_ENONFINITE for a NaN
+ * or inf entry, MP_ESINGULAR when a pivot is zero or below NA eps max|A|
+ * (numerically singular), MP_OK otherwise. */
+static int mp_lu(double *A, int *piv)
+{
+    double amax = 0.0;
+    for (int i = 0; i < NA * NA; i++) {
+        double a = fabs(A[i]);
+        if (!isfinite(a)) return MP_ENONFINITE;
+        if (a > amax) amax = a;
+    }
+    const double tol = NA * DBL_EPSILON * amax;
+    for (int k = 0; k < NA; k++) {
+        int p = k;
+        double best = fabs(A[k * NA + k]);
+        for (int i = k + 1; i < NA; i++) {
+            double a = fabs(A[i * NA + k]);
+            if (a > best) { best = a; p = i; }
+        }
+        if (!(best > tol)) return MP_ESINGULAR;
+        piv[k] = p;
+        if (p != k)
+            for (int j = 0; j < NA; j++) {
+                double s = A[k * NA + j]; A[k * NA + j] = A[p * NA + j]; A[p * NA + j] = s;
+            }
+        const double inv = 1.0 / A[k * NA + k];
+        for (int i = k + 1; i < NA; i++) {
+            double l = A[i * NA + k] * inv;
+            A[i * NA + k] = l;
+            if (l != 0.0)
+                for (int j = k + 1; j < NA; j++) A[i * NA + j] -= l * A[k * NA + j];
+        }
+    }
+    return MP_OK;
+}
+
+/* Solve A x = b in place (x holds b on entry) with the factors of mp_lu. */
+static void mp_lu_solve(const double *LU, const int *piv, double *x)
+{
+    for (int k = 0; k < NA; k++) {
+        int p = piv[k];
+        if (p != k) { double s = x[k]; x[k] = x[p]; x[p] = s; }
+    }
+    for (int i = 1; i < NA; i++) {
+        double s = x[i];
+        for (int j = 0; j < i; j++) s -= LU[i * NA + j] * x[j];
+        x[i] = s;
+    }
+    for (int i = NA - 1; i >= 0; i--) {
+        double s = x[i];
+        for (int j = i + 1; j < NA; j++) s -= LU[i * NA + j] * x[j];
+        x[i] = s / LU[i * NA + i];
+    }
+}
+"""
+
+
+class _Printer(C99CodePrinter):
+    """C99 printer; small integer powers become products (exact, fast)."""
+
+    def _print_Pow(self, expr):
+        b, e = expr.as_base_exp()
+        if e.is_Integer and 2 <= int(e) <= 4:
+            base = self._print(b)
+            return "(" + "*".join([f"({base})"] * int(e)) + ")"
+        if e == -1:
+            return f"(1.0/({self._print(b)}))"
+        return super()._print_Pow(expr)
+
+
+def _block(name, exprs, ir, args, what):
+    """A static function ``name`` writing the expressions to out[]."""
+    sub = {ir.T: sp.Symbol("t", real=True)}
+    for i, p in enumerate(ir.P):
+        sub[p] = sp.Symbol(f"mp_p{i}", real=True)
+    exprs = [sp.sympify(e).xreplace(sub) for e in exprs]
+    reps, red = sp.cse(exprs, symbols=sp.numbered_symbols("mp_c"), optimizations="basic")
+    pr = _Printer()
+    used = set()
+    for e in red:
+        used |= e.free_symbols
+    for _, e in reps:
+        used |= e.free_symbols
+    lines = [f"static void {name}({args})", "{"]
+    for i in range(ir.n):
+        if sp.Symbol(f"mp_y{i}", real=True) in used:
+            lines.append(f"    const double mp_y{i} = y[{i}];")
+    for i in range(len(ir.P)):
+        if sp.Symbol(f"mp_p{i}", real=True) in used:
+            lines.append(f"    const double mp_p{i} = p[{i}];")
+    for i in range(len(ir.Z)):
+        if sp.Symbol(f"mp_z{i}", real=True) in used:
+            lines.append(f"    const double mp_z{i} = z[{i}];")
+    try:
+        for s, e in reps:
+            lines.append(f"    const double {s} = {pr.doprint(e)};")
+        for i, e in enumerate(red):
+            lines.append(f"    out[{i}] = {pr.doprint(e)};")
+    except PrintMethodNotImplementedError as exc:
+        bad = str(exc).split(":")[1].split("\n")[0].strip() if ":" in str(exc) else str(exc)
+        raise ValueError(f"{what}: SymPy cannot print {bad} as C; rewrite it with elementary "
+                         "functions (sin, exp, sqrt, ...) or use backend='numpy'") from None
+    lines.append("    (void)t; (void)y; (void)p; (void)out;")
+    lines.append("}")
+    return "\n".join(lines)
+
+
+def _header(ir, status):
+    n, nc, k = ir.n, ir.nc, ir.k
+    na = nc + k
+    defs = "\n".join(f"#define {name} {value}" for name, value in sorted(status.items()))
+    return f"""/* Generated by mechpy.symbolic: {ir.kind} system, states {ir.names}, parameters
+ * {ir.param_names}.  Exported: mp_gen_rhs, mp_gen_jac, mp_gen_energy, mp_gen_momenta,
+ * mp_gen_multipliers, mp_gen_constraint_forces, mp_gen_lagrangian, mp_gen_dims
+ * (ABI version {ABI_VERSION}).  Every function returns a mechpy status code. */
+#include <float.h>
+#include <math.h>
+#include <stddef.h>
+
+{defs}
+
+#define NS {n}   /* state dimension */
+#define NC {nc}   /* coordinates */
+#define NK {k}   /* constraints */
+#define NA {na}   /* size of the linear system */
+
+const long mp_gen_dims[5] = {{{n}, {ir.nq}, {len(ir.P)}, {k}, {ABI_VERSION}}};
+"""
+
+
+_ARGS = "double t, const double *y, const double *p, double *out"
+_ARGS_Z = "double t, const double *y, const double *p, const double *z, double *out"
+
+
+def _lagrangian_source(ir, status):
+    B = ir.blocks
+    n, k = ir.nc, ir.k
+    parts = [_header(ir, status), RUNTIME,
+             _block("gen_A", B["A"], ir, _ARGS, "the mass matrix"),
+             _block("gen_b", B["b"], ir, _ARGS, "the forces"),
+             _block("gen_D", B["D"], ir, _ARGS_Z, "the Jacobian"),
+             _block("gen_energy", B["energy"], ir, _ARGS, "the energy"),
+             _block("gen_momenta", B["momenta"], ir, _ARGS, "the momenta"),
+             _block("gen_lag", B["lag"], ir, _ARGS, "L")]
+    parts.append(r"""
+/* Solve A z = b at (t, y): z = (q'', -lambda).  A0 receives A before the
+ * factorisation, LU its factors.  Returns MP_ESINGULAR for a singular mass
+ * (or constrained) matrix. */
+static int gen_solve(double t, const double *y, const double *p, double *A0, double *LU,
+                     int *piv, double *z)
+{
+    gen_A(t, y, p, A0);
+    for (int i = 0; i < NA * NA; i++) LU[i] = A0[i];
+    gen_b(t, y, p, z);
+    int rc = mp_lu(LU, piv);
+    if (rc != MP_OK) return rc;
+    mp_lu_solve(LU, piv, z);
+    return MP_OK;
+}
+
+/* dy/dt = (q', q'') at (t, y); params: the parameter vector. */
+int mp_gen_rhs(double t, const double *y, double *dydt, void *params)
+{
+    double A0[NA * NA], LU[NA * NA], z[NA];
+    int piv[NA];
+    int rc = gen_solve(t, y, (const double *)params, A0, LU, piv, z);
+    if (rc != MP_OK) return rc;
+    for (int i = 0; i < NC; i++) {
+        dydt[i] = y[NC + i];
+        dydt[NC + i] = z[i];
+    }
+    return MP_OK;
+}
+
+/* Row-major NS x NS Jacobian of mp_gen_rhs: d q''/d(q, q') = first NC rows of
+ * A^-1 D with D = [db/dq - (dA/dq) z, db/dq' - (dA/dq') z]. */
+int mp_gen_jac(double t, const double *y, double *jac, void *params)
+{
+    const double *p = params;
+    double A0[NA * NA], LU[NA * NA], z[NA], D[NA * 2 * NC], col[NA];
+    int piv[NA];
+    int rc = gen_solve(t, y, p, A0, LU, piv, z);
+    if (rc != MP_OK) return rc;
+    gen_D(t, y, p, z, D);
+    for (int i = 0; i < NS * NS; i++) jac[i] = 0.0;
+    for (int i = 0; i < NC; i++) jac[i * NS + NC + i] = 1.0;
+    for (int c = 0; c < 2 * NC; c++) {
+        for (int r = 0; r < NA; r++) col[r] = D[r * 2 * NC + c];
+        mp_lu_solve(LU, piv, col);
+        for (int i = 0; i < NC; i++) jac[(NC + i) * NS + c] = col[i];
+    }
+    return MP_OK;
+}
+
+/* out[0] = the Jacobi integral h = sum q' dL/dq' - L. */
+int mp_gen_energy(double t, const double *y, double *out, void *params)
+{
+    gen_energy(t, y, (const double *)params, out);
+    return MP_OK;
+}
+
+/* out[i] = dL/dq'_i. */
+int mp_gen_momenta(double t, const double *y, double *out, void *params)
+{
+    gen_momenta(t, y, (const double *)params, out);
+    return MP_OK;
+}
+
+/* At m points (t[i], q[i*NC..], q'[i*NC..]): out[i*K..] with K = 1 + 2NC + 3NC^2:
+ * L, dL/dq, dL/dq', d2L/dqdq, d2L/dqdq' ([a][b] = d2L/dq_a dq'_b), d2L/dq'dq'. */
+int mp_gen_lagrangian(size_t m, const double *t, const double *q, const double *qd,
+                      double *out, void *params)
+{
+    const size_t K = 1 + 2 * NC + 3 * NC * NC;
+    double yy[2 * NC];
+    for (size_t i = 0; i < m; i++) {
+        for (int j = 0; j < NC; j++) {
+            yy[j] = q[i * NC + j];
+            yy[NC + j] = qd[i * NC + j];
+        }
+        gen_lag(t[i], yy, (const double *)params, out + i * K);
+    }
+    return MP_OK;
+}
+""")
+    if k:
+        parts.append(_block("gen_g", B["g"], ir, _ARGS, "the constraints"))
+        parts.append(r"""
+/* out = (g (NK), g' (NK)): the constraints and their rates (not part of the
+ * engine's interface: the initial-state check uses it). */
+int mp_gen_constraints(double t, const double *y, double *out, void *params)
+{
+    gen_g(t, y, (const double *)params, out);
+    return MP_OK;
+}
+
+/* out[c] = lambda_c, the Lagrange multipliers. */
+int mp_gen_multipliers(double t, const double *y, double *out, void *params)
+{
+    double A0[NA * NA], LU[NA * NA], z[NA];
+    int piv[NA];
+    int rc = gen_solve(t, y, (const double *)params, A0, LU, piv, z);
+    if (rc != MP_OK) return rc;
+    for (int c = 0; c < NK; c++) out[c] = -z[NC + c];
+    return MP_OK;
+}
+
+/* out[j] = sum_c lambda_c dg_c/dq_j, the generalized constraint forces. */
+int mp_gen_constraint_forces(double t, const double *y, double *out, void *params)
+{
+    double A0[NA * NA], LU[NA * NA], z[NA];
+    int piv[NA];
+    int rc = gen_solve(t, y, (const double *)params, A0, LU, piv, z);
+    if (rc != MP_OK) return rc;
+    for (int j = 0; j < NC; j++) {
+        double s = 0.0;
+        for (int c = 0; c < NK; c++) s += A0[(NC + c) * NA + j] * -z[NC + c];
+        out[j] = s;
+    }
+    return MP_OK;
+}
+""")
+    else:
+        parts.append(_absent("mp_gen_multipliers") + _absent("mp_gen_constraint_forces"))
+    return "\n".join(parts)
+
+
+def _absent(name, sig="double t, const double *y, double *out, void *params"):
+    return f"""
+/* Not defined for this system: returns MP_EDOM. */
+int {name}({sig})
+{{
+    (void)t; (void)y; (void)out; (void)params;
+    return MP_EDOM;
+}}
+"""
+
+
+def _equations_source(ir, status):
+    B = ir.blocks
+    parts = [_header(ir, status),
+             _block("gen_f", B["f"], ir, _ARGS, "rhs"),
+             _block("gen_J", B["J"], ir, _ARGS, "the Jacobian")]
+    parts.append(r"""
+/* dy/dt = f(t, y). */
+int mp_gen_rhs(double t, const double *y, double *dydt, void *params)
+{
+    gen_f(t, y, (const double *)params, dydt);
+    return MP_OK;
+}
+
+/* Row-major NS x NS df/dy. */
+int mp_gen_jac(double t, const double *y, double *jac, void *params)
+{
+    gen_J(t, y, (const double *)params, jac);
+    return MP_OK;
+}
+""")
+    if "energy" in B:
+        parts.append(_block("gen_energy", B["energy"], ir, _ARGS, "the energy"))
+        parts.append(r"""
+/* out[0] = the given energy. */
+int mp_gen_energy(double t, const double *y, double *out, void *params)
+{
+    gen_energy(t, y, (const double *)params, out);
+    return MP_OK;
+}
+""")
+    else:
+        parts.append(_absent("mp_gen_energy"))
+    parts.append(_absent("mp_gen_momenta") + _absent("mp_gen_multipliers")
+                 + _absent("mp_gen_constraint_forces"))
+    parts.append("""
+/* Not defined for a first-order system: returns MP_EDOM. */
+int mp_gen_lagrangian(size_t m, const double *t, const double *q, const double *qd,
+                      double *out, void *params)
+{
+    (void)m; (void)t; (void)q; (void)qd; (void)out; (void)params;
+    return MP_EDOM;
+}
+""")
+    return "\n".join(parts)
+
+
+def c_source(ir, status: dict) -> str:
+    """The C source of the system ``ir``; ``status`` maps the C core's status
+    names (``MP_OK``, ...) to their values (``mechpy._core.STATUS``)."""
+    if ir.kind == "lagrangian":
+        return _lagrangian_source(ir, status)
+    return _equations_source(ir, status)

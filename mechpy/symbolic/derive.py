@@ -1,0 +1,297 @@
+"""Derive a user's equations of motion with SymPy, as blocks of expressions.
+
+The result of :func:`lagrangian_ir` or :func:`equations_ir` is an :class:`IR`:
+plain SymPy expressions in a fixed set of symbols (time ``T``, the state
+``Y0..``, the parameters ``P0..`` and, for the Jacobian, the unknowns
+``Z0..`` of the linear system), which the C printer (:mod:`.codegen`) and the
+NumPy backend (:mod:`.scene`) both consume.  Nothing here inverts a matrix:
+the mass matrix is printed and solved numerically at each evaluation.
+
+For a Lagrangian L(q, q', t) with n coordinates and k holonomic constraints
+g(q, t) = 0 the blocks are
+
+* ``A`` (n + k, n + k) = [[M, C^T], [C, 0]] with M = d2L/dq'dq' and
+  C = dg/dq, and ``b`` (n + k) = [F + Q, -(dg'/dq q' + dg'/dt) - 2 alpha g'
+  - beta^2 g] with F = dL/dq - (dp/dq) q' - dp/dt, p = dL/dq' and
+  g' = C q' + dg/dt (Baumgarte's stabilisation), so that A [q'', -lambda] = b;
+* ``D`` (n + k, 2n): [db/dq - (dA/dq) z, db/dq' - (dA/dq') z] evaluated at the
+  solution z of A z = b; the Jacobian of q'' is the first n rows of A^-1 D;
+* ``energy`` (1): the Jacobi integral h = sum q' dL/dq' - L;
+* ``momenta`` (n): dL/dq';
+* ``g`` (2k, with constraints): g and g' = C q' + dg/dt;
+* ``lag`` (1 + 2n + 3n^2): L, dL/dq, dL/dq', d2L/dqdq, d2L/dqdq'
+  ([a][b] = d2L/dq_a dq'_b), d2L/dq'dq' (row-major), in q = Y[:n], q' = Y[n:].
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import sympy as sp
+from sympy.physics.mechanics import dynamicsymbols
+
+#: Default Baumgarte stabilisation (alpha, beta) in 1/s: the constraint error
+#: obeys g'' + 2 alpha g' + beta^2 g = 0, critically damped.
+BAUMGARTE = (5.0, 5.0)
+
+
+@dataclass
+class IR:
+    """Blocks of SymPy expressions for one system (see the module docstring)."""
+
+    kind: str                       # "lagrangian" or "equations"
+    n: int                          # state dimension
+    nc: int                         # coordinates (lagrangian) or n (equations)
+    k: int                          # constraints
+    nq: int                         # second-order split for symplectic methods (0: none)
+    T: sp.Symbol
+    Y: list
+    P: list
+    Z: list
+    names: list                     # coordinate / state names
+    param_names: list
+    blocks: dict = field(default_factory=dict)
+    cyclic: list = field(default_factory=list)
+    equations: list = field(default_factory=list)
+
+
+def coordinates(names):
+    """Generalized coordinates as SymPy functions of time.
+
+    Parameters
+    ----------
+    names : str or sequence of str
+        Names separated by spaces or commas (``"theta1 theta2"``), as
+        :func:`sympy.physics.mechanics.dynamicsymbols` takes them.
+
+    Returns
+    -------
+    list of sympy.Function
+        One function of ``t`` per name (a list even for one name); ``q.diff()``
+        (or ``q.diff(t)``) is its velocity.  The time symbol is
+        ``sympy.Symbol("t")``.
+    """
+    if not isinstance(names, str):
+        try:
+            names = " ".join(str(s) for s in names)
+        except TypeError:
+            raise TypeError("names must be a string of coordinate names or a sequence of "
+                            "strings") from None
+    if not names.strip():
+        raise ValueError("names must name at least one coordinate")
+    q = dynamicsymbols(names)
+    return list(q) if isinstance(q, (list, tuple)) else [q]
+
+
+def _as_list(x, what):
+    if x is None:
+        return []
+    if isinstance(x, sp.MatrixBase):
+        return list(x)
+    if isinstance(x, (list, tuple)):
+        return [sp.sympify(e) for e in x]
+    return [sp.sympify(x)]
+
+
+def _coordinate_list(q, what="q"):
+    qs = _as_list(q, what)
+    t = dynamicsymbols._t
+    out = []
+    for i, qi in enumerate(qs):
+        if isinstance(qi, sp.Symbol) and qi != t:
+            out.append(qi)          # plain symbols accepted for first-order states
+            continue
+        if not (isinstance(qi, sp.core.function.AppliedUndef) and qi.args == (t,)):
+            raise TypeError(f"{what}[{i}] = {qi} is not a coordinate: make coordinates with "
+                            "mp.coordinates('q1 q2 ...') (functions of t)")
+        out.append(qi)
+    if not out:
+        raise ValueError(f"{what} must hold at least one coordinate")
+    if len(set(out)) != len(out):
+        raise ValueError(f"{what} holds a coordinate twice")
+    return out
+
+
+def _name(qi):
+    return qi.func.__name__ if isinstance(qi, sp.core.function.AppliedUndef) else qi.name
+
+
+def _params(params, exprs, t, allowed_extra=()):
+    """Parameter symbols in the order of ``params``; checks every free symbol
+    has a value and every key names a symbol."""
+    if params is None:
+        params = {}
+    if not isinstance(params, dict):
+        raise TypeError("params must be a dict {name: value}")
+    free = set()
+    for e in exprs:
+        free |= {s for s in e.free_symbols if s != t}
+    free -= set(allowed_extra)
+    by_name = {}
+    for s in free:
+        by_name.setdefault(s.name, s)
+    missing = sorted(set(by_name) - set(params))
+    if missing:
+        raise ValueError(f"symbol(s) {missing} have no value: give them in params "
+                         f"(params={{{', '.join(repr(m) + ': ...' for m in missing)}}})")
+    unknown = [k for k in params if k not in by_name]
+    if unknown:
+        raise ValueError(f"params {unknown} name no symbol of the system "
+                         f"(its symbols: {sorted(by_name)})")
+    return list(params), [by_name[k] for k in params]
+
+
+def _check_functions(e, what):
+    """No function of t other than the coordinates may remain."""
+    rest = e.atoms(sp.core.function.AppliedUndef) | e.atoms(sp.Derivative)
+    if rest:
+        raise ValueError(f"{what} depends on {sorted(map(str, rest))}, which are not "
+                         "coordinates or their first derivatives")
+
+
+def lagrangian_ir(L, q, params=None, constraints=(), forces=None, baumgarte=None) -> IR:
+    """The blocks of a Lagrangian system (see the module docstring)."""
+    t = dynamicsymbols._t
+    qs = _coordinate_list(q)
+    if any(isinstance(qi, sp.Symbol) for qi in qs):
+        raise TypeError("coordinates of a Lagrangian must be functions of t: make them with "
+                        "mp.coordinates('q1 q2 ...')")
+    n = len(qs)
+    L = sp.sympify(L)
+    if not isinstance(L, sp.Expr) or isinstance(L, sp.MatrixBase):
+        raise TypeError("L must be a scalar SymPy expression")
+    cons = _as_list(constraints, "constraints")
+    if forces is None:
+        Qf = [sp.S.Zero] * n
+    else:
+        Qf = _as_list(forces, "forces")
+        if len(Qf) != n:
+            raise ValueError(f"forces must have one entry per coordinate: got {len(Qf)} for "
+                             f"{n} coordinate(s) {[_name(x) for x in qs]}")
+    k = len(cons)
+    if baumgarte is None:
+        baumgarte = BAUMGARTE
+    try:
+        alpha, beta = (float(x) for x in baumgarte)
+    except (TypeError, ValueError):
+        raise TypeError("baumgarte must be a pair (alpha, beta) of numbers (1/s)") from None
+    if not (alpha >= 0 and beta >= 0):
+        raise ValueError(f"baumgarte (alpha, beta) must be non-negative, got {baumgarte}")
+
+    T = sp.Symbol("mp_t", real=True)
+    Q = [sp.Symbol(f"mp_y{i}", real=True) for i in range(n)]
+    U = [sp.Symbol(f"mp_y{n + i}", real=True) for i in range(n)]
+    d2s = {qi.diff(t): Ui for qi, Ui in zip(qs, U)}
+    f2s = {qi: Qi for qi, Qi in zip(qs, Q)}
+
+    def plain(e, what):
+        second = [d for d in e.atoms(sp.Derivative) if d.derivative_count > 1]
+        if second:
+            raise ValueError(f"{what} contains second derivatives {sorted(map(str, second))}")
+        e = e.xreplace(d2s).xreplace(f2s)
+        _check_functions(e, what)
+        return e.xreplace({t: T})
+
+    Lx = plain(L, "L")
+    cx = [plain(g, f"constraints[{i}]") for i, g in enumerate(cons)]
+    Fx = [plain(f, f"forces[{i}]") for i, f in enumerate(Qf)]
+    for i, qi in enumerate(qs):
+        if Q[i] not in Lx.free_symbols and U[i] not in Lx.free_symbols:
+            raise ValueError(f"coordinate {_name(qi)} does not appear in L")
+    for i, g in enumerate(cx):
+        if set(U) & g.free_symbols:
+            raise ValueError(f"constraints[{i}] depends on velocities: only holonomic "
+                             "constraints g(q, t) = 0 are supported")
+        if not (set(Q) & g.free_symbols):
+            raise ValueError(f"constraints[{i}] does not depend on the coordinates")
+    names, P = _params(params, [Lx] + cx + Fx, T, allowed_extra=Q + U)
+
+    p = [sp.diff(Lx, Ui) for Ui in U]
+    M = sp.Matrix(n, n, lambda i, j: sp.diff(p[i], U[j]))
+    F = [sp.diff(Lx, Q[i]) - sum(sp.diff(p[i], Q[j]) * U[j] for j in range(n))
+         - sp.diff(p[i], T) + Fx[i] for i in range(n)]
+    NA = n + k
+    A = sp.zeros(NA, NA)
+    A[:n, :n] = M
+    b = list(F)
+    for c, g in enumerate(cx):
+        Crow = [sp.diff(g, Qj) for Qj in Q]
+        for j in range(n):
+            A[n + c, j] = Crow[j]
+            A[j, n + c] = Crow[j]
+        gd = sum(Crow[j] * U[j] for j in range(n)) + sp.diff(g, T)
+        rest = sum(sp.diff(gd, Q[j]) * U[j] for j in range(n)) + sp.diff(gd, T)
+        b.append(-rest - 2 * alpha * gd - beta ** 2 * g)
+    gdots = [sum(sp.diff(g, Q[j]) * U[j] for j in range(n)) + sp.diff(g, T) for g in cx]
+    Z = [sp.Symbol(f"mp_z{i}", real=True) for i in range(NA)]
+    D = sp.zeros(NA, 2 * n)
+    for i in range(NA):
+        for c, v in enumerate(Q + U):
+            D[i, c] = sp.diff(b[i], v) - sum(sp.diff(A[i, j], v) * Z[j] for j in range(NA)
+                                             if A[i, j] != 0)
+    dLdq = [sp.diff(Lx, Qi) for Qi in Q]
+    lag = ([Lx] + dLdq + p + [sp.diff(dLdq[a], Q[c]) for a in range(n) for c in range(n)]
+           + [sp.diff(dLdq[a], U[c]) for a in range(n) for c in range(n)] + list(M))
+    energy = sum(U[i] * p[i] for i in range(n)) - Lx
+
+    ir = IR("lagrangian", 2 * n, n, k, 0, T, Q + U, P, Z, [_name(x) for x in qs], names)
+    ir.blocks = dict(A=list(A), b=b, D=list(D), energy=[energy], momenta=p, lag=lag)
+    if k:
+        ir.blocks["g"] = cx + gdots
+    others = set().union(*(e.free_symbols for e in cx + Fx)) if (cx or Fx) else set()
+    ir.cyclic = [ir.names[i] for i in range(n)
+                 if Q[i] not in Lx.free_symbols and Q[i] not in others]
+    # separable: constant mass matrix, dL/dq of q alone, no forces or constraints
+    velo = set(U) | {T}
+    if (k == 0 and all(f == 0 for f in Fx) and all(not (e.free_symbols & (set(Q) | {T}))
+                                                    for e in p)
+            and all(not (e.free_symbols & velo) for e in dLdq)):
+        ir.nq = n
+    # the equations of motion as SymPy sees them, in the user's coordinates
+    back = {**{Qi: qi for Qi, qi in zip(Q, qs)}, **{Ui: qi.diff(t) for Ui, qi in zip(U, qs)},
+            T: t}
+    acc = [qi.diff(t, 2) for qi in qs]
+    lam = [sp.Symbol(f"lambda{c + 1}") for c in range(k)]
+    eqs = []
+    for i in range(n):
+        lhs = sum(M[i, j].xreplace(back) * acc[j] for j in range(n))
+        rhs = F[i].xreplace(back) + sum(lam[c] * A[n + c, i].xreplace(back) for c in range(k))
+        eqs.append(sp.Eq(lhs, rhs))
+    eqs += [sp.Eq(g.xreplace(back), 0) for g in cx]
+    ir.equations = eqs
+    return ir
+
+
+def equations_ir(rhs, y, params=None, energy=None) -> IR:
+    """The blocks of a first-order system y' = rhs(t, y): ``f`` (n), ``J``
+    (n x n, df/dy row-major) and, when given, ``energy`` (1)."""
+    t = dynamicsymbols._t
+    ys = _coordinate_list(y, "y")
+    n = len(ys)
+    fs = _as_list(rhs, "rhs")
+    if len(fs) != n:
+        raise ValueError(f"rhs must have one expression per state: got {len(fs)} for {n} "
+                         f"state(s) {[_name(x) for x in ys]}")
+    T = sp.Symbol("mp_t", real=True)
+    Y = [sp.Symbol(f"mp_y{i}", real=True) for i in range(n)]
+    sub = {yi: Yi for yi, Yi in zip(ys, Y)}
+
+    def plain(e, what):
+        ders = [d for d in e.atoms(sp.Derivative)]
+        if ders:
+            raise ValueError(f"{what} contains derivatives {sorted(map(str, ders))}: a "
+                             "first-order system's right-hand side depends on y and t only")
+        e = e.xreplace(sub)
+        _check_functions(e, what)
+        return e.xreplace({t: T})
+
+    fx = [plain(f, f"rhs[{i}]") for i, f in enumerate(fs)]
+    ex = [] if energy is None else [plain(sp.sympify(energy), "energy")]
+    names, P = _params(params, fx + ex, T, allowed_extra=Y)
+    J = [sp.diff(fx[i], Y[j]) for i in range(n) for j in range(n)]
+    ir = IR("equations", n, n, 0, 0, T, Y, P, [], [_name(x) for x in ys], names)
+    ir.blocks = dict(f=fx, J=J)
+    if ex:
+        ir.blocks["energy"] = ex
+    ir.equations = [sp.Eq(yi.diff(t) if not isinstance(yi, sp.Symbol) else
+                          sp.Derivative(yi, t), f) for yi, f in zip(ys, fs)]
+    return ir

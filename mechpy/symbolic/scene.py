@@ -1,0 +1,368 @@
+"""The scene of a user's compiled system: :class:`CompiledScene`.
+
+It binds a generated library (:mod:`.codegen`, :mod:`.build`) to the one
+integrator engine as a system of kind ``"compiled"``, or, with
+``backend="numpy"``, evaluates the same expression blocks in Python through
+``sympy.lambdify`` (slower, no compiler needed).
+"""
+from __future__ import annotations
+
+import ctypes
+
+import numpy as np
+
+from .. import _core
+from .._validate import as_array, as_scalar
+from ..scenes import Scene
+
+__all__ = ["CompiledScene"]
+
+#: Outputs and their lengths: per function, (C symbol, length as a function of
+#: (n, nc, k)).
+_FUNCS = {
+    "rhs": ("mp_gen_rhs", lambda n, nc, k: n),
+    "jac": ("mp_gen_jac", lambda n, nc, k: n * n),
+    "energy": ("mp_gen_energy", lambda n, nc, k: 1),
+    "momenta": ("mp_gen_momenta", lambda n, nc, k: nc),
+    "multipliers": ("mp_gen_multipliers", lambda n, nc, k: k),
+    "constraint_forces": ("mp_gen_constraint_forces", lambda n, nc, k: nc),
+    "constraints": ("mp_gen_constraints", lambda n, nc, k: 2 * k),
+}
+
+
+class _NumpyFunctions:
+    """The IR's blocks as NumPy functions of (t, y, p), one state at a time."""
+
+    def __init__(self, kind, nc, k, T, Y, P, Z, blocks):
+        import sympy as sp
+        self.kind, self.nc, self.k = kind, nc, k
+        self.na = nc + k
+        self.f = {}
+        for name, exprs in blocks.items():
+            args = (T, Y, P, Z) if name == "D" else (T, Y, P)
+            self.f[name] = sp.lambdify(args, list(exprs), "numpy")
+
+    def _solve(self, t, y, p):
+        from .. import SingularityError
+        A = np.array(self.f["A"](t, y, p), dtype=float).reshape(self.na, self.na)
+        b = np.array(self.f["b"](t, y, p), dtype=float)
+        if np.linalg.cond(A) > 1e15:
+            raise SingularityError("the mass matrix d2L/dqd2 (with the constraint Jacobian) "
+                                   f"is singular at t = {t!r}, y = {list(y)}")
+        return A, np.linalg.solve(A, b)
+
+    def __call__(self, what, t, y, p):
+        nc, k = self.nc, self.k
+        if self.kind == "equations":
+            if what == "rhs":
+                return np.array(self.f["f"](t, y, p), dtype=float)
+            if what == "jac":
+                return np.array(self.f["J"](t, y, p), dtype=float)
+            return np.array(self.f[what](t, y, p), dtype=float)
+        if what in ("energy", "momenta", "lag"):
+            return np.array(self.f[what](t, y, p), dtype=float)
+        if what == "constraints":
+            return np.array(self.f["g"](t, y, p), dtype=float)
+        A, z = self._solve(t, y, p)
+        if what == "rhs":
+            return np.concatenate([y[nc:], z[:nc]])
+        if what == "jac":
+            D = np.array(self.f["D"](t, y, p, z), dtype=float).reshape(self.na, 2 * nc)
+            X = np.linalg.solve(A, D)[:nc]
+            J = np.zeros((2 * nc, 2 * nc))
+            J[:nc, nc:] = np.eye(nc)
+            J[nc:] = X
+            return J.reshape(-1)
+        lam = -z[nc:]
+        if what == "multipliers":
+            return lam
+        if what == "constraint_forces":
+            return A[nc:, :nc].T @ lam
+        raise KeyError(what)
+
+
+class CompiledScene(Scene):
+    """A system derived from the user's SymPy expressions, compiled to C.
+
+    Made by :func:`mechpy.lagrangian` or :func:`mechpy.equations`; see there
+    for the meaning of the state and of each method.  It is a
+    :class:`mechpy.scenes.Scene`: ``mp.solve`` and ``mp.solve_many`` run its
+    generated right-hand side and Jacobian in C with the GIL released (the
+    NumPy backend calls Python at each evaluation).
+    """
+
+    def __init__(self, meta: dict, params: dict, backend: str = "c", numpy_fns=None):
+        self._meta = meta
+        names = meta["param_names"]
+        if set(params) != set(names):
+            unknown = sorted(set(params) - set(names))
+            missing = sorted(set(names) - set(params))
+            raise TypeError(f"parameters {names}: unknown {unknown}, missing {missing}")
+        self._params = {nm: as_scalar(params[nm], f"params[{nm!r}]") for nm in names}
+        self._dim = int(meta["n"])
+        self._nc = int(meta["nc"])
+        self._k = int(meta["k"])
+        self._backend = backend
+        self._vec = np.array(list(self._params.values()), dtype=np.float64)
+        self._eqs = None
+        if backend == "c":
+            from .build import build
+            self._lib, self._path, self._compiled = build(meta["source"])
+            self._addr = {w: ctypes.cast(getattr(self._lib, sym), ctypes.c_void_p).value
+                          for w, (sym, _) in _FUNCS.items()
+                          if w != "constraints" or self._k}
+            self._addr_lag = ctypes.cast(self._lib.mp_gen_lagrangian, ctypes.c_void_p).value
+            self._np = None
+        elif backend == "numpy":
+            if numpy_fns is None:
+                numpy_fns = _numpy_from_meta(meta)
+            self._np = numpy_fns
+            self._compiled = False
+        else:
+            raise ValueError(f"backend must be 'c' or 'numpy', got {backend!r}")
+
+    # -- the scene interface --------------------------------------------------
+    @property
+    def params(self) -> dict:
+        """The parameters (a copy), in the order of the parameter vector."""
+        return dict(self._params)
+
+    def _vector(self) -> np.ndarray:
+        return self._vec.copy()
+
+    def replace(self, **changes) -> "CompiledScene":
+        """A copy with some parameters changed (same library, no recompilation)."""
+        unknown = set(changes) - set(self._params)
+        if unknown:
+            raise TypeError(f"unknown parameter(s) {sorted(unknown)}; parameters are "
+                            f"{list(self._params)}")
+        p = self.params
+        p.update(changes)
+        return CompiledScene(self._meta, p, self._backend, self._np)
+
+    def _spec(self, method: str) -> tuple:
+        """The system spec for _core: the generated library's functions."""
+        nq = int(self._meta["nq"])
+        if self._backend == "c":
+            return ("compiled", (self._addr["rhs"], self._addr["jac"], nq), self._vector())
+        if nq:
+            return ("python2", self._py_accel, ())
+        return ("python", self._py_rhs, ())
+
+    def _py_rhs(self, t, y, *p):
+        return self._np("rhs", t, y, np.asarray(p) if p else self._vec)
+
+    def _py_accel(self, t, q, *p):
+        y = np.concatenate([q, np.zeros_like(q)])
+        return self._np("rhs", t, y, np.asarray(p) if p else self._vec)[self._nc:]
+
+    def _eval(self, what, t, y, *, flat=False):
+        """Function ``what`` at (t, y) for y of shape (dim, ...) -> (m, nout)."""
+        y = as_array(y, "y", min_ndim=1)
+        if y.shape[0] != self._dim:
+            raise ValueError(f"y must have {self._dim} components along its first axis, "
+                             f"got shape {y.shape}")
+        t = as_scalar(t, "t")
+        Y = np.ascontiguousarray(y.reshape(self._dim, -1).T)
+        nout = _FUNCS[what][1](self._dim, self._nc, self._k)
+        if self._backend == "c":
+            ctx = ("the mass matrix d2L/dqd2" + (" with the constraint Jacobian"
+                                                  if self._k else "")
+                   if self._meta["kind"] == "lagrangian" else self._meta["kind"])
+            out = _core.compiled_eval(self._addr[what], self._vec, t, Y, nout,
+                                      f"{what} of the compiled system: {ctx}")
+        else:
+            out = np.array([self._np(what, t, row, self._vec) for row in Y]).reshape(-1, nout)
+        return out, y.shape[1:]
+
+    @staticmethod
+    def _shape(out, rest, lead):
+        """(m, prod(lead)) -> lead + rest."""
+        return np.moveaxis(out, 0, -1).reshape(tuple(lead) + tuple(rest))
+
+    def rhs(self, t, y) -> np.ndarray:
+        """dy/dt at (t, y); y of shape (dim, ...)."""
+        out, rest = self._eval("rhs", t, y)
+        return self._shape(out, rest, (self._dim,))
+
+    def jacobian(self, t, y) -> np.ndarray:
+        """df/dy, shape (dim, dim, ...): analytic, through the same linear solve
+        as the right-hand side (d q''/dq = A^-1 (db/dq - (dA/dq) z))."""
+        out, rest = self._eval("jac", t, y)
+        return self._shape(out, rest, (self._dim, self._dim))
+
+    def energy(self, y, t: float = 0.0):
+        """The Jacobi integral h = sum q' dL/dq' - L for states (dim, ...) -> (...)
+        (for :func:`mechpy.equations`, the ``energy`` expression given there)."""
+        if not self._meta["has_energy"]:
+            raise AttributeError("this system has no energy: give mp.equations(..., "
+                                 "energy=expression)")
+        out, rest = self._eval("energy", t, y)
+        return out.reshape(rest) if rest else float(out[0, 0])
+
+    def momenta(self, y, t: float = 0.0) -> np.ndarray:
+        """Generalized momenta p = dL/dq', shape (n, ...) for y of shape (dim, ...)."""
+        self._need_lagrangian("momenta")
+        out, rest = self._eval("momenta", t, y)
+        return self._shape(out, rest, (self._nc,))
+
+    def multipliers(self, t, y) -> np.ndarray:
+        """The Lagrange multipliers lambda, shape (k, ...): the equations of
+        motion are d/dt dL/dq' - dL/dq = Q + sum_c lambda_c dg_c/dq."""
+        self._need_constraints("multipliers")
+        out, rest = self._eval("multipliers", t, y)
+        return self._shape(out, rest, (self._k,))
+
+    def constraint_forces(self, t, y) -> np.ndarray:
+        """The generalized constraint forces sum_c lambda_c dg_c/dq, shape (n, ...)
+        (in Cartesian coordinates, the force the constraint exerts)."""
+        self._need_constraints("constraint_forces")
+        out, rest = self._eval("constraint_forces", t, y)
+        return self._shape(out, rest, (self._nc,))
+
+    def constraints(self, t, y) -> np.ndarray:
+        """The constraint values g and their rates g', shape (2k, ...)."""
+        self._need_constraints("constraints")
+        out, rest = self._eval("constraints", t, y)
+        return self._shape(out, rest, (2 * self._k,))
+
+    def _need_lagrangian(self, what):
+        if self._meta["kind"] != "lagrangian":
+            raise AttributeError(f"{what} needs a system made by mp.lagrangian")
+
+    def _need_constraints(self, what):
+        if not self._k:
+            raise AttributeError(f"{what}: the system has no constraints")
+
+    # -- initial-state check (mechpy.solve calls it) ----------------------------
+    def _check_initial(self, t0, y0, tol: float = 1e-8):
+        """Raise if y0 violates a constraint (|g| or |g'| above tol, scaled by
+        the state's size) or the mass matrix is singular at (t0, y0)."""
+        y0 = np.asarray(y0, dtype=float)
+        if self._k:
+            gv = self.constraints(t0, y0)
+            scale = max(1.0, float(np.max(np.abs(y0))))
+            for c in range(self._k):
+                if not abs(gv[c]) <= tol * scale ** 2:
+                    raise ValueError(f"y0 violates constraint {c}: g = {gv[c]!r} "
+                                     f"({self._meta['constraints'][c]} = 0); place the initial "
+                                     "state on the constraint")
+                if not abs(gv[self._k + c]) <= tol * scale ** 2:
+                    raise ValueError(f"y0 violates the rate of constraint {c}: g' = "
+                                     f"{gv[self._k + c]!r}; the initial velocity must be "
+                                     "tangent to the constraint")
+        if self._meta["kind"] == "lagrangian":
+            self.rhs(t0, y0)   # raises SingularityError naming the mass matrix
+
+    # -- what a Lagrangian gives besides -----------------------------------------
+    @property
+    def coordinates(self) -> list:
+        """The names of the coordinates (or states)."""
+        return list(self._meta["names"])
+
+    @property
+    def cyclic(self) -> list:
+        """Names of the ignorable coordinates (absent from L, the forces and
+        the constraints): their momenta are conserved."""
+        return list(self._meta["cyclic"])
+
+    @property
+    def c_source(self) -> str:
+        """The generated C source."""
+        return self._meta["source"]
+
+    @property
+    def equations(self) -> list:
+        """The equations of motion as SymPy ``Eq``: M q'' = F + Q + C^T lambda
+        (and g = 0) for a Lagrangian, y' = f for a first-order system."""
+        if self._eqs is None:
+            import sympy as sp
+            from sympy.physics.mechanics import dynamicsymbols  # noqa: F401
+            self._eqs = sp.sympify(self._meta["equations"])
+        return list(self._eqs)
+
+    @property
+    def _lagrangian_c(self) -> tuple:
+        """(address of mp_gen_lagrangian, parameter vector) for the variational
+        solvers: ``int f(size_t m, const double *t, const double *q, const
+        double *qd, double *out, void *params)``."""
+        self._need_lagrangian("_lagrangian_c")
+        if self._backend != "c":
+            raise AttributeError("_lagrangian_c needs backend='c'")
+        return self._addr_lag, self._vector()
+
+    def _lagrangian_values(self, t, q, qd) -> np.ndarray:
+        """L and its derivatives (K = 1 + 2d + 3d^2 values) at one point."""
+        d = self._nc
+        K = 1 + 2 * d + 3 * d * d
+        q = np.ascontiguousarray(q, dtype=float)
+        qd = np.ascontiguousarray(qd, dtype=float)
+        if self._backend == "numpy":
+            return np.array(self._np("lag", t, np.concatenate([q, qd]), self._vec))
+        out = np.zeros(K)
+        dp = ctypes.POINTER(ctypes.c_double)
+        f = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_size_t, dp, dp, dp, dp,
+                             ctypes.c_void_p)(self._addr_lag)
+        tt = np.array([float(t)])
+        f(1, tt.ctypes.data_as(dp), q.ctypes.data_as(dp), qd.ctypes.data_as(dp),
+          out.ctypes.data_as(dp), self._vec.ctypes.data)
+        return out
+
+    def small_oscillations(self, q0, t: float = 0.0):
+        """Normal modes about the equilibrium q0: K = -d2L/dqdq and
+        M = d2L/dq'dq' at (q0, q' = 0) -> :class:`mechpy.modes.Modes`.
+
+        Raises ValueError if q0 is not an equilibrium (dL/dq != 0 there).
+        Generalized forces (damping, drive) are not part of the modes.
+        """
+        from ..modes import normal_modes
+        self._need_lagrangian("small_oscillations")
+        if self._k:
+            raise ValueError("small_oscillations needs an unconstrained system: write L in "
+                             "independent coordinates")
+        d = self._nc
+        q0 = as_array(q0, "q0", shape=(d,))
+        v = self._lagrangian_values(t, q0, np.zeros(d))
+        grad = v[1:1 + d]
+        o = 1 + 2 * d
+        K = -v[o:o + d * d].reshape(d, d)
+        M = v[o + 2 * d * d:o + 3 * d * d].reshape(d, d)
+        scale = max(1.0, float(np.max(np.abs(K))) * max(1.0, float(np.max(np.abs(q0)))))
+        if not np.all(np.abs(grad) <= 1e-9 * scale):
+            raise ValueError(f"q0 = {list(q0)} is not an equilibrium: dV/dq = {list(-grad)}")
+        return normal_modes(K, M)
+
+    # -- identity, pickling -------------------------------------------------------
+    def __repr__(self):
+        args = ", ".join(f"{k}={v!r}" for k, v in self._params.items())
+        return (f"CompiledScene({self._meta['kind']}, states={self._meta['names']}, {args}"
+                f"{', backend=numpy' if self._backend == 'numpy' else ''})")
+
+    def __eq__(self, other):
+        return (type(other) is CompiledScene and self._meta["source"] == other._meta["source"]
+                and self._params == other._params and self._backend == other._backend)
+
+    def __hash__(self):
+        return hash((self._meta["source"], tuple(self._params.items())))
+
+    def __reduce__(self):
+        meta = self._meta
+        if self._backend == "numpy" and "blocks" not in meta:
+            raise TypeError("a numpy-backend scene made in this process pickles only with "
+                            "its blocks: rebuild it with mp.lagrangian on the other side")
+        return (_rebuild_compiled, (meta, self._params, self._backend))
+
+
+def _rebuild_compiled(meta, params, backend):
+    return CompiledScene(meta, params, backend)
+
+
+def _numpy_from_meta(meta):
+    import sympy as sp
+    blocks = {k: sp.sympify(v) for k, v in meta["blocks"].items()}
+    n, nc, k = meta["n"], meta["nc"], meta["k"]
+    T = sp.Symbol("mp_t", real=True)
+    Y = [sp.Symbol(f"mp_y{i}", real=True) for i in range(n)]
+    Z = [sp.Symbol(f"mp_z{i}", real=True) for i in range(nc + k)]
+    P = [sp.Symbol(f"mp_p{i}", real=True) for i in range(len(meta["param_names"]))]
+    return _NumpyFunctions(meta["kind"], nc, k, T, Y, P, Z, blocks)
