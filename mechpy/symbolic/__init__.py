@@ -95,7 +95,7 @@ def _meta(ir, source, constraints=(), numpy_blocks=False):
                 equations=sp.srepr(ir.equations),
                 constraints=[str(g) for g in constraints])
     if numpy_blocks:
-        sub = {p: sp.Symbol(f"mp_p{i}", real=True) for i, p in enumerate(ir.P)}
+        sub = {p: sp.Symbol(f"mp_p{i}") for i, p in enumerate(ir.P)}
         meta["blocks"] = {k: sp.srepr([sp.sympify(e).xreplace(sub) for e in v])
                           for k, v in ir.blocks.items()}
     return meta

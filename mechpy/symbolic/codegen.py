@@ -90,11 +90,11 @@ class _Printer(C99CodePrinter):
 
 def _block(name, exprs, ir, args, what):
     """A static function ``name`` writing the expressions to out[]."""
-    sub = {ir.T: sp.Symbol("t", real=True)}
+    sub = {ir.T: sp.Symbol("t")}
     for i, p in enumerate(ir.P):
-        sub[p] = sp.Symbol(f"mp_p{i}", real=True)
+        sub[p] = sp.Symbol(f"mp_p{i}")
     exprs = [sp.sympify(e).xreplace(sub) for e in exprs]
-    reps, red = sp.cse(exprs, symbols=sp.numbered_symbols("mp_c"), optimizations="basic")
+    reps, red = sp.cse(exprs, symbols=sp.numbered_symbols("mp_c"))
     pr = _Printer()
     used = set()
     for e in red:
@@ -103,13 +103,13 @@ def _block(name, exprs, ir, args, what):
         used |= e.free_symbols
     lines = [f"static void {name}({args})", "{"]
     for i in range(ir.n):
-        if sp.Symbol(f"mp_y{i}", real=True) in used:
+        if sp.Symbol(f"mp_y{i}") in used:
             lines.append(f"    const double mp_y{i} = y[{i}];")
     for i in range(len(ir.P)):
-        if sp.Symbol(f"mp_p{i}", real=True) in used:
+        if sp.Symbol(f"mp_p{i}") in used:
             lines.append(f"    const double mp_p{i} = p[{i}];")
     for i in range(len(ir.Z)):
-        if sp.Symbol(f"mp_z{i}", real=True) in used:
+        if sp.Symbol(f"mp_z{i}") in used:
             lines.append(f"    const double mp_z{i} = z[{i}];")
     try:
         for s, e in reps:

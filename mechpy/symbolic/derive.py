@@ -177,9 +177,9 @@ def lagrangian_ir(L, q, params=None, constraints=(), forces=None, baumgarte=None
     if not (alpha >= 0 and beta >= 0):
         raise ValueError(f"baumgarte (alpha, beta) must be non-negative, got {baumgarte}")
 
-    T = sp.Symbol("mp_t", real=True)
-    Q = [sp.Symbol(f"mp_y{i}", real=True) for i in range(n)]
-    U = [sp.Symbol(f"mp_y{n + i}", real=True) for i in range(n)]
+    T = sp.Symbol("mp_t")
+    Q = [sp.Symbol(f"mp_y{i}") for i in range(n)]
+    U = [sp.Symbol(f"mp_y{n + i}") for i in range(n)]
     d2s = {qi.diff(t): Ui for qi, Ui in zip(qs, U)}
     f2s = {qi: Qi for qi, Qi in zip(qs, Q)}
 
@@ -205,32 +205,44 @@ def lagrangian_ir(L, q, params=None, constraints=(), forces=None, baumgarte=None
             raise ValueError(f"constraints[{i}] does not depend on the coordinates")
     names, P = _params(params, [Lx] + cx + Fx, T, allowed_extra=Q + U)
 
+    # Derivatives are taken of the smallest pieces (SymPy's cost grows faster
+    # than linearly with an expression's size): F and its Jacobian are
+    # assembled from dL/dq, dp/dq, dp/dt and their own derivatives.
+    V = Q + U
     p = [sp.diff(Lx, Ui) for Ui in U]
+    dLdq = [sp.diff(Lx, Qi) for Qi in Q]
     M = sp.Matrix(n, n, lambda i, j: sp.diff(p[i], U[j]))
-    F = [sp.diff(Lx, Q[i]) - sum(sp.diff(p[i], Q[j]) * U[j] for j in range(n))
-         - sp.diff(p[i], T) + Fx[i] for i in range(n)]
+    Pq = [[sp.diff(p[i], Q[j]) for j in range(n)] for i in range(n)]
+    Pt = [sp.diff(p[i], T) for i in range(n)]
+    rest = [sum(Pq[i][j] * U[j] for j in range(n)) + Pt[i] - Fx[i] for i in range(n)]
+    F = [dLdq[i] - rest[i] for i in range(n)]
+    Lqv = [[sp.diff(dLdq[i], v) for v in V] for i in range(n)]
     NA = n + k
     A = sp.zeros(NA, NA)
     A[:n, :n] = M
     b = list(F)
+    gdots = []
     for c, g in enumerate(cx):
         Crow = [sp.diff(g, Qj) for Qj in Q]
         for j in range(n):
             A[n + c, j] = Crow[j]
             A[j, n + c] = Crow[j]
         gd = sum(Crow[j] * U[j] for j in range(n)) + sp.diff(g, T)
-        rest = sum(sp.diff(gd, Q[j]) * U[j] for j in range(n)) + sp.diff(gd, T)
-        b.append(-rest - 2 * alpha * gd - beta ** 2 * g)
-    gdots = [sum(sp.diff(g, Q[j]) * U[j] for j in range(n)) + sp.diff(g, T) for g in cx]
-    Z = [sp.Symbol(f"mp_z{i}", real=True) for i in range(NA)]
+        gdots.append(gd)
+        gdd = sum(sp.diff(gd, Q[j]) * U[j] for j in range(n)) + sp.diff(gd, T)
+        b.append(-gdd - 2 * alpha * gd - beta ** 2 * g)
+    Z = [sp.Symbol(f"mp_z{i}") for i in range(NA)]
     D = sp.zeros(NA, 2 * n)
+    AZ = [sum(A[i, j] * Z[j] for j in range(NA)) for i in range(NA)]   # (A z)_i
     for i in range(NA):
-        for c, v in enumerate(Q + U):
-            D[i, c] = sp.diff(b[i], v) - sum(sp.diff(A[i, j], v) * Z[j] for j in range(NA)
-                                             if A[i, j] != 0)
-    dLdq = [sp.diff(Lx, Qi) for Qi in Q]
-    lag = ([Lx] + dLdq + p + [sp.diff(dLdq[a], Q[c]) for a in range(n) for c in range(n)]
-           + [sp.diff(dLdq[a], U[c]) for a in range(n) for c in range(n)] + list(M))
+        for c, v in enumerate(V):
+            if i < n:   # d/dv of dL/dq_i - (sum_j Pq_ij U_j + Pt_i - Q_i)
+                db = Lqv[i][c] - sp.diff(rest[i], v)
+            else:
+                db = sp.diff(b[i], v)
+            D[i, c] = db - sp.diff(AZ[i], v)
+    lag = ([Lx] + dLdq + p + [Lqv[a][c] for a in range(n) for c in range(n)]
+           + [Lqv[a][n + c] for a in range(n) for c in range(n)] + list(M))
     energy = sum(U[i] * p[i] for i in range(n)) - Lx
 
     ir = IR("lagrangian", 2 * n, n, k, 0, T, Q + U, P, Z, [_name(x) for x in qs], names)
@@ -271,8 +283,8 @@ def equations_ir(rhs, y, params=None, energy=None) -> IR:
     if len(fs) != n:
         raise ValueError(f"rhs must have one expression per state: got {len(fs)} for {n} "
                          f"state(s) {[_name(x) for x in ys]}")
-    T = sp.Symbol("mp_t", real=True)
-    Y = [sp.Symbol(f"mp_y{i}", real=True) for i in range(n)]
+    T = sp.Symbol("mp_t")
+    Y = [sp.Symbol(f"mp_y{i}") for i in range(n)]
     sub = {yi: Yi for yi, Yi in zip(ys, Y)}
 
     def plain(e, what):

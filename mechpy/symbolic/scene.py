@@ -361,8 +361,8 @@ def _numpy_from_meta(meta):
     import sympy as sp
     blocks = {k: sp.sympify(v) for k, v in meta["blocks"].items()}
     n, nc, k = meta["n"], meta["nc"], meta["k"]
-    T = sp.Symbol("mp_t", real=True)
-    Y = [sp.Symbol(f"mp_y{i}", real=True) for i in range(n)]
-    Z = [sp.Symbol(f"mp_z{i}", real=True) for i in range(nc + k)]
-    P = [sp.Symbol(f"mp_p{i}", real=True) for i in range(len(meta["param_names"]))]
+    T = sp.Symbol("mp_t")
+    Y = [sp.Symbol(f"mp_y{i}") for i in range(n)]
+    Z = [sp.Symbol(f"mp_z{i}") for i in range(nc + k)]
+    P = [sp.Symbol(f"mp_p{i}") for i in range(len(meta["param_names"]))]
     return _NumpyFunctions(meta["kind"], nc, k, T, Y, P, Z, blocks)

@@ -1,0 +1,659 @@
+"""A user's own system compiled to C: mp.coordinates, mp.lagrangian, mp.equations.
+
+Checked against equations derived by hand (double and spherical pendulum,
+written below in NumPy), SciPy's solve_ivp on them, the built-in scenes
+(Pendulum, HeavyTop) rebuilt from their Lagrangians, closed forms (normal-mode
+frequencies, string tension), conservation laws, and the cache's behaviour
+across processes."""
+import os
+import pickle
+import subprocess
+import sys
+import textwrap
+
+import numpy as np
+import pytest
+import sympy as sp
+from scipy.integrate import solve_ivp
+
+import mechpy as mp
+
+t = sp.Symbol("t")
+G = 9.81
+
+
+@pytest.fixture(scope="module", autouse=True)
+def cache(tmp_path_factory):
+    """A fresh cache folder for this module (the first build compiles)."""
+    d = str(tmp_path_factory.mktemp("mechpy_cache"))
+    old = os.environ.get("MECHPY_CACHE_DIR")
+    os.environ["MECHPY_CACHE_DIR"] = d
+    yield d
+    if old is None:
+        del os.environ["MECHPY_CACHE_DIR"]
+    else:
+        os.environ["MECHPY_CACHE_DIR"] = old
+
+
+# ---- systems ----------------------------------------------------------------
+
+def double_pendulum_L():
+    th1, th2 = mp.coordinates("theta1 theta2")
+    m1, m2, l1, l2, g = sp.symbols("m1 m2 l1 l2 g")
+    x1, y1 = l1 * sp.sin(th1), -l1 * sp.cos(th1)
+    x2, y2 = x1 + l2 * sp.sin(th2), y1 - l2 * sp.cos(th2)
+    T = m1 / 2 * (x1.diff(t) ** 2 + y1.diff(t) ** 2) + m2 / 2 * (x2.diff(t) ** 2
+                                                                 + y2.diff(t) ** 2)
+    return T - (m1 * g * y1 + m2 * g * y2), [th1, th2]
+
+
+DP = dict(m1=1.3, m2=0.7, l1=1.1, l2=0.8, g=G)
+
+
+@pytest.fixture(scope="module")
+def double_pendulum():
+    L, q = double_pendulum_L()
+    return mp.lagrangian(L, q, params=DP)
+
+
+def dp_hand(t_, y, m1=1.3, m2=0.7, l1=1.1, l2=0.8, g=G):
+    """The textbook double pendulum (angles from the downward vertical)."""
+    a1, a2, w1, w2 = y
+    d = a1 - a2
+    M = np.array([[(m1 + m2) * l1, m2 * l2 * np.cos(d)], [l1 * np.cos(d), l2]])
+    F = np.array([-m2 * l2 * w2 ** 2 * np.sin(d) - (m1 + m2) * g * np.sin(a1),
+                  l1 * w1 ** 2 * np.sin(d) - g * np.sin(a2)])
+    return np.concatenate([[w1, w2], np.linalg.solve(M, F)])
+
+
+def spherical_L():
+    th, ph = mp.coordinates("theta phi")
+    m, l, g = sp.symbols("m l g")
+    L = m * l ** 2 / 2 * (th.diff(t) ** 2 + sp.sin(th) ** 2 * ph.diff(t) ** 2) \
+        + m * g * l * sp.cos(th)
+    return L, [th, ph]
+
+
+SP = dict(m=0.5, l=1.2, g=G)
+
+
+@pytest.fixture(scope="module")
+def spherical():
+    L, q = spherical_L()
+    return mp.lagrangian(L, q, params=SP)
+
+
+def sp_hand(t_, y, l=1.2, g=G):
+    """Spherical pendulum, theta from the downward vertical."""
+    th, ph, thd, phd = y
+    return np.array([thd, phd, np.sin(th) * np.cos(th) * phd ** 2 - g / l * np.sin(th),
+                     -2.0 * thd * phd * np.cos(th) / np.sin(th)])
+
+
+def pendulum_L():
+    th, = mp.coordinates("theta")
+    m, l, g = sp.symbols("m length g")
+    return m * l ** 2 / 2 * th.diff(t) ** 2 + m * g * l * sp.cos(th), [th]
+
+
+@pytest.fixture(scope="module")
+def pendulum():
+    L, q = pendulum_L()
+    return mp.lagrangian(L, q, params=dict(m=1.0, length=1.0, g=G))
+
+
+def cartesian_pendulum(**kw):
+    x, y = mp.coordinates("x y")
+    m, g, l = sp.symbols("m g l")
+    L = m / 2 * (x.diff(t) ** 2 + y.diff(t) ** 2) - m * g * y
+    return mp.lagrangian(L, [x, y], params=dict(m=0.8, g=G, l=1.0),
+                         constraints=[x ** 2 + y ** 2 - l ** 2], **kw)
+
+
+def cart_state(theta, omega, l=1.0):
+    return np.array([l * np.sin(theta), -l * np.cos(theta), l * np.cos(theta) * omega,
+                     l * np.sin(theta) * omega])
+
+
+def fd_jacobian(f, y, h=1e-6):
+    J = np.empty((y.size, y.size))
+    for j in range(y.size):
+        e = np.zeros(y.size)
+        e[j] = h * max(1.0, abs(y[j]))
+        J[:, j] = (f(y + e) - f(y - e)) / (2 * e[j])
+    return J
+
+
+# ---- against equations derived by hand ------------------------------------
+
+def test_double_pendulum_rhs_against_hand_equations(double_pendulum, rng):
+    s = double_pendulum
+    assert s.dim == 4 and list(s.params) == list(DP)
+    Y = rng.uniform(-3, 3, size=(4, 50))
+    f = s.rhs(0.0, Y)
+    ref = np.stack([dp_hand(0, y) for y in Y.T], axis=1)
+    assert f.shape == (4, 50)
+    assert np.abs(f - ref).max() < 1e-12 * np.abs(ref).max()   # measured 1.5e-15 relative
+    y = Y[:, 0]
+    assert s.rhs(0.0, y).shape == (4,)
+    J = s.jacobian(0.0, Y[:, :3])
+    assert J.shape == (4, 4, 3)
+    for i in range(3):
+        Jref = fd_jacobian(lambda v: dp_hand(0, v), Y[:, i])
+        assert np.abs(J[:, :, i] - Jref).max() < 1e-7 * np.abs(Jref).max()  # measured 3e-9
+
+
+def test_double_pendulum_trajectory_against_solve_ivp(double_pendulum):
+    y0 = [1.2, -0.4, 0.3, 0.0]
+    te = np.linspace(0, 5, 51)
+    ours = mp.solve(double_pendulum, (0, 5), y0, rtol=1e-12, atol=1e-12, t_eval=te)
+    ref = solve_ivp(dp_hand, (0, 5), y0, method="DOP853", rtol=1e-12, atol=1e-12, t_eval=te)
+    assert np.abs(ours.y - ref.y).max() < 1e-8     # measured 2e-10 (chaotic: grows with t)
+    # the Jacobi integral is the energy here, conserved
+    E = double_pendulum.energy(ours.y)
+    assert E.shape == (51,)
+    assert np.abs(E - E[0]).max() < 1e-9 * abs(E[0])   # measured 2e-12 relative
+
+
+def test_double_pendulum_normal_modes():
+    L, q = double_pendulum_L()
+    s = mp.lagrangian(L, q, params=dict(m1=1.0, m2=1.0, l1=0.5, l2=0.5, g=G))
+    modes = s.small_oscillations([0.0, 0.0])
+    ref = G / 0.5 * np.array([2 - np.sqrt(2), 2 + np.sqrt(2)])
+    assert np.allclose(modes.omega ** 2, ref, rtol=1e-12, atol=0)   # measured 2e-16
+    # the slow mode is in phase, amplitude ratio sqrt 2
+    v = modes.vectors[:, 0]
+    assert v[1] / v[0] == pytest.approx(np.sqrt(2), rel=1e-12)
+    with pytest.raises(ValueError, match="not an equilibrium"):
+        s.small_oscillations([0.3, 0.0])
+
+
+def test_spherical_pendulum(spherical, rng):
+    s = spherical
+    Y = np.vstack([rng.uniform(0.2, 2.9, 20), rng.uniform(-3, 3, 20), rng.uniform(-2, 2, 20),
+                   rng.uniform(-2, 2, 20)])
+    ref = np.stack([sp_hand(0, y) for y in Y.T], axis=1)
+    assert np.abs(s.rhs(0.0, Y) - ref).max() < 1e-12 * np.abs(ref).max()   # measured 4e-16
+    assert s.cyclic == ["phi"]
+    y0 = [1.0, 0.0, 0.2, 1.5]
+    te = np.linspace(0, 20, 201)
+    sol = mp.solve(s, (0, 20), y0, rtol=1e-11, atol=1e-12, t_eval=te)
+    ref = solve_ivp(sp_hand, (0, 20), y0, method="DOP853", rtol=1e-11, atol=1e-12, t_eval=te)
+    assert np.abs(sol.y - ref.y).max() < 1e-7    # measured 2.4e-9
+    p = s.momenta(sol.y)
+    assert p.shape == (2, 201)
+    m, l = SP["m"], SP["l"]
+    # p_phi = m l^2 sin^2 theta phi_dot, conserved (phi is cyclic)
+    assert np.allclose(p[1], m * l * l * np.sin(sol.y[0]) ** 2 * sol.y[3], rtol=1e-13)
+    assert np.abs(p[1] - p[1, 0]).max() < 1e-9 * abs(p[1, 0])   # measured 6e-12
+    E = s.energy(sol.y)
+    assert np.abs(E - E[0]).max() < 1e-9 * abs(E[0])            # measured 5e-12
+
+
+def test_lagrangian_c_for_the_variational_solvers(spherical):
+    import ctypes
+    addr, p = spherical._lagrangian_c
+    assert isinstance(addr, int) and p.tolist() == list(SP.values())
+    dp = ctypes.POINTER(ctypes.c_double)
+    f = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_size_t, dp, dp, dp, dp, ctypes.c_void_p)(addr)
+    m, l, g = SP["m"], SP["l"], SP["g"]
+
+    def Lnum(q, qd):
+        return m * l * l / 2 * (qd[0] ** 2 + np.sin(q[0]) ** 2 * qd[1] ** 2) \
+            + m * g * l * np.cos(q[0])
+
+    q = np.array([[0.7, 0.1], [1.3, -2.0]])
+    qd = np.array([[0.4, -0.9], [1.1, 0.3]])
+    tt = np.zeros(2)
+    out = np.zeros((2, 1 + 4 + 12))
+    assert f(2, tt.ctypes.data_as(dp), q.ctypes.data_as(dp), qd.ctypes.data_as(dp),
+             out.ctypes.data_as(dp), p.ctypes.data) == 0
+    h = 1e-5
+    for i in range(2):
+        assert out[i, 0] == pytest.approx(Lnum(q[i], qd[i]), rel=1e-14)
+        for a in range(2):
+            e = np.eye(2)[a] * h
+            dq = (Lnum(q[i] + e, qd[i]) - Lnum(q[i] - e, qd[i])) / (2 * h)
+            dv = (Lnum(q[i], qd[i] + e) - Lnum(q[i], qd[i] - e)) / (2 * h)
+            assert out[i, 1 + a] == pytest.approx(dq, abs=1e-8)       # central differences
+            assert out[i, 3 + a] == pytest.approx(dv, abs=1e-8)
+        # d2L/dqd dqd = diag(m l^2, m l^2 sin^2 theta)
+        Mref = np.diag([m * l * l, m * l * l * np.sin(q[i, 0]) ** 2])
+        assert np.allclose(out[i, 13:17].reshape(2, 2), Mref, rtol=1e-14, atol=1e-15)
+        # d2L/dq dqd: only [theta][phi_dot] = m l^2 2 sin cos phi_dot
+        Bref = np.zeros((2, 2))
+        Bref[0, 1] = m * l * l * 2 * np.sin(q[i, 0]) * np.cos(q[i, 0]) * qd[i, 1]
+        assert np.allclose(out[i, 9:13].reshape(2, 2), Bref, rtol=1e-14, atol=1e-15)
+
+
+# ---- the built-in scenes rebuilt from their Lagrangians ----------------------
+
+def test_pendulum_from_lagrangian_equals_builtin(pendulum):
+    te = np.linspace(0, 10, 101)
+    ref = mp.solve(mp.scenes.Pendulum(length=1.0), (0, 10), [2.5, 0.0], rtol=1e-10, t_eval=te)
+    ours = mp.solve(pendulum, (0, 10), [2.5, 0.0], rtol=1e-10, t_eval=te)
+    assert np.abs(ours.y - ref.y).max() < 1e-9    # measured 3e-14
+    assert pendulum.dim == 2 and pendulum._meta["nq"] == 1   # separable
+
+
+def test_damped_pendulum_through_forces():
+    L, q = pendulum_L()
+    b = sp.Symbol("b")
+    s = mp.lagrangian(L, q, params=dict(m=2.0, length=0.7, g=G, b=0.3),
+                      forces=[-b * 2.0 * 0.7 ** 2 * q[0].diff(t)])
+    assert s._meta["nq"] == 0      # a force: not separable
+    te = np.linspace(0, 10, 101)
+    ref = mp.solve(mp.scenes.Pendulum(length=0.7, damping=0.3), (0, 10), [1.0, 0.5],
+                   rtol=1e-11, atol=1e-12, t_eval=te)
+    ours = mp.solve(s, (0, 10), [1.0, 0.5], rtol=1e-11, atol=1e-12, t_eval=te)
+    assert np.abs(ours.y - ref.y).max() < 1e-9    # measured 4e-13
+
+
+def test_heavy_top_from_lagrangian_equals_builtin():
+    ph, th, ps = mp.coordinates("phi theta psi")
+    I1, I3, M, g, l = sp.symbols("I1 I3 mass g l")
+    w3 = ps.diff(t) + ph.diff(t) * sp.cos(th)
+    L = I1 / 2 * (th.diff(t) ** 2 + ph.diff(t) ** 2 * sp.sin(th) ** 2) + I3 / 2 * w3 ** 2 \
+        - M * g * l * sp.cos(th)
+    par = dict(I1=1.2, I3=0.6, mass=1.5, g=G, l=0.4)
+    s = mp.lagrangian(L, [ph, th, ps], params=par)
+    assert s.cyclic == ["phi", "psi"]
+    top = mp.scenes.HeavyTop(**par)
+    y0 = [0.0, 0.6, 0.0, 0.4, 0.0, 9.0]
+    Y = np.array([y0, [0.3, 1.2, -0.5, -0.7, 0.8, 4.0]]).T
+    assert np.allclose(s.rhs(0, Y), top.rhs(0, Y), rtol=1e-13, atol=1e-13)
+    assert np.allclose(s.jacobian(0, Y), top.jacobian(0, Y), rtol=1e-11, atol=1e-11)
+    te = np.linspace(0, 10, 101)
+    for method in ("dop853", "radau"):
+        a = mp.solve(s, (0, 10), y0, method=method, rtol=1e-10, t_eval=te)
+        b = mp.solve(top, (0, 10), y0, method=method, rtol=1e-10, t_eval=te)
+        assert np.abs(a.y - b.y).max() < 1e-9     # measured 6e-13 (dop853), 4e-12 (radau)
+    E = s.energy(a.y)
+    assert np.abs(E - top.energy(a.y)).max() < 1e-12 * abs(E[0])   # h is the top's energy
+    p = s.momenta(a.y)
+    assert np.allclose(p[0], top.p_phi(a.y), rtol=1e-13)
+    assert np.allclose(p[2], top.p_psi(a.y), rtol=1e-13)
+
+
+# ---- constraints -------------------------------------------------------------
+
+def test_cartesian_pendulum_with_constraint():
+    s = cartesian_pendulum()
+    assert s._meta["k"] == 1 and s.dim == 4
+    th0, w0 = 1.2, 0.3
+    te = np.linspace(0, 10, 201)
+    sol = mp.solve(s, (0, 10), cart_state(th0, w0), rtol=1e-11, atol=1e-12, t_eval=te)
+    ref = mp.solve(mp.scenes.Pendulum(length=1.0), (0, 10), [th0, w0], rtol=1e-11,
+                   atol=1e-12, t_eval=te)
+    theta = np.arctan2(sol.y[0], -sol.y[1])
+    assert np.abs(theta - ref.y[0]).max() < 1e-8      # measured 9e-11
+    # the string tension m (g cos theta + l theta_dot^2), along -r
+    f = s.constraint_forces(0.0, sol.y)
+    assert f.shape == (2, 201)
+    tension = 0.8 * (G * np.cos(ref.y[0]) + ref.y[1] ** 2)
+    assert np.abs(np.hypot(f[0], f[1]) - tension).max() < 1e-8 * tension.max()  # measured 1e-10
+    r = sol.y[:2]
+    assert np.all(np.sum(f * r, axis=0) < 0)          # it pulls towards the pivot
+    lam = s.multipliers(0.0, sol.y)
+    assert lam.shape == (1, 201)
+    assert np.allclose(f, 2 * r * lam, rtol=1e-13, atol=1e-13)   # C^T lambda, C = 2 (x, y)
+    J = s.jacobian(0.3, sol.y[:, 50])
+    Jref = fd_jacobian(lambda v: s.rhs(0.3, v), sol.y[:, 50])
+    assert np.abs(J - Jref).max() < 1e-6 * np.abs(Jref).max()   # measured 2e-9
+
+
+def test_constraint_drift_over_a_long_run():
+    s = cartesian_pendulum()
+    sol = mp.solve(s, (0, 1000), cart_state(2.0, 0.0), rtol=1e-9, atol=1e-10,
+                   t_eval=np.linspace(0, 1000, 2001))
+    g = s.constraints(0.0, sol.y)[0]
+    # Baumgarte (alpha = beta = 5/s) holds the drift at the integrator's local
+    # error level: measured max |x^2 + y^2 - l^2| = 1.6e-9 over the first 100 s,
+    # 1.2e-8 over 1000 s (~500 swings of 2 rad)
+    assert np.abs(g).max() < 1e-7
+    # without stabilisation the drift grows along the run: measured 1.0e-5
+    # after 100 s, 1.0e-3 after 1000 s
+    s0 = cartesian_pendulum(baumgarte=(0.0, 0.0))
+    sol0 = mp.solve(s0, (0, 1000), cart_state(2.0, 0.0), rtol=1e-9, atol=1e-10,
+                    t_eval=np.linspace(0, 1000, 2001))
+    g0 = s0.constraints(0.0, sol0.y)[0]
+    assert np.abs(g0).max() > 1e4 * np.abs(g).max()
+
+
+def test_initial_state_must_satisfy_the_constraint():
+    s = cartesian_pendulum()
+    with pytest.raises(ValueError, match="violates constraint 0"):
+        mp.solve(s, (0, 1), [1.0, -0.5, 0.0, 0.0])
+    with pytest.raises(ValueError, match="rate of constraint 0"):
+        mp.solve(s, (0, 1), [0.0, -1.0, 0.0, 1.0])
+
+
+# ---- first-order systems -------------------------------------------------------
+
+def test_equations_first_order_against_solve_ivp():
+    x, y = mp.coordinates("x y")
+    a, b, c, d = sp.symbols("a b c d")
+    rhs = [a * x - b * x * y, d * x * y - c * y]
+    H = d * x - c * sp.log(x) + b * y - a * sp.log(y)
+    s = mp.equations(rhs, [x, y], params=dict(a=1.1, b=0.4, c=0.4, d=0.1), energy=H)
+    assert s.dim == 2
+
+    def lv(t_, v):
+        return [1.1 * v[0] - 0.4 * v[0] * v[1], 0.1 * v[0] * v[1] - 0.4 * v[1]]
+
+    te = np.linspace(0, 50, 101)
+    sol = mp.solve(s, (0, 50), [10.0, 5.0], rtol=1e-11, atol=1e-12, t_eval=te)
+    ref = solve_ivp(lv, (0, 50), [10.0, 5.0], method="DOP853", rtol=1e-11, atol=1e-12,
+                    t_eval=te)
+    assert np.abs(sol.y - ref.y).max() < 1e-7      # measured 3e-9 (populations ~ 10-30)
+    E = s.energy(sol.y)
+    assert np.abs(E - E[0]).max() < 1e-9           # measured 2e-11
+    J = s.jacobian(0.0, [2.0, 3.0])
+    assert np.allclose(J, [[1.1 - 0.4 * 3, -0.4 * 2], [0.1 * 3, 0.1 * 2 - 0.4]], rtol=1e-15)
+    assert isinstance(s.equations[0], sp.Eq)
+    with pytest.raises(AttributeError, match="mp.lagrangian"):
+        s.momenta([1.0, 1.0])
+
+
+def test_equations_with_time_and_radau():
+    y, = mp.coordinates("y")
+    k = sp.Symbol("k")
+    s = mp.equations([-k * (y - sp.cos(t))], [y], params=dict(k=1e4))   # stiff
+    sol = mp.solve(s, (0, 2), [0.0], method="radau", rtol=1e-8, atol=1e-10)
+    ex = (1e8 * np.cos(2) + 1e4 * np.sin(2)) / (1e8 + 1)   # the slow manifold, t >> 1/k
+    assert sol.y[0, -1] == pytest.approx(ex, abs=1e-8)    # measured 2e-11
+    assert sol.nsteps < 200 and sol.njev >= 1
+
+
+# ---- the engine: every method, ensembles -----------------------------------------
+
+def test_every_method_runs(pendulum, double_pendulum):
+    y0p = [1.0, 0.0]
+    ref_p = mp.solve(pendulum, (0, 2), y0p, rtol=1e-13, atol=1e-13).y[:, -1]
+    y0d = [0.5, 0.2, 0.0, 0.0]
+    ref_d = mp.solve(double_pendulum, (0, 2), y0d, rtol=1e-13, atol=1e-13).y[:, -1]
+    seen = []
+    for m in mp.methods():
+        name = m["name"]
+        if name.startswith("rigid:"):
+            with pytest.raises(ValueError):
+                mp.solve(double_pendulum, (0, 2), y0d, method=name, h=1e-3)
+            continue
+        kw = {} if m["adaptive"] else {"h": 1e-3}
+        kw["rtol"] = 1e-8
+        systems = [(pendulum, y0p, ref_p)]
+        if not (m["symplectic"] and not m["implicit"]):
+            systems.append((double_pendulum, y0d, ref_d))
+        else:
+            with pytest.raises(ValueError, match="separable"):
+                mp.solve(double_pendulum, (0, 2), y0d, method=name, **kw)
+        for s, y0, ref in systems:
+            sol = mp.solve(s, (0, 2), y0, method=name, **kw)
+            assert sol.success, name
+            # measured: 2e-5 worst (gsl:rk1imp, first order, h = 1e-3 ... its own steps)
+            assert np.abs(sol.y[:, -1] - ref).max() < 1e-3, name
+        seen.append(name)
+    assert {"verlet", "yoshida4", "yoshida6", "gauss4", "radau", "gsl:msbdf"} <= set(seen)
+
+
+def test_solve_many_with_per_trajectory_params(double_pendulum):
+    m1 = np.array([0.5, 1.0, 2.0])
+    y0s = np.array([[1.0, 0.5, 0.0, 0.0]] * 3)
+    te = np.linspace(0, 3, 7)
+    ens = mp.solve_many(double_pendulum, (0, 3), y0s, params={"m1": m1}, t_eval=te,
+                        rtol=1e-10, threads=2)
+    assert ens.y.shape == (3, 4, 7) and ens.success.all()
+    for i, v in enumerate(m1):
+        one = mp.solve(double_pendulum.replace(m1=v), (0, 3), y0s[i], rtol=1e-10, t_eval=te)
+        assert np.array_equal(ens.y[i], one.y)    # the same engine, bit for bit
+        ref = solve_ivp(lambda tt, y: dp_hand(tt, y, m1=v), (0, 3), y0s[i], method="DOP853",
+                        rtol=1e-12, atol=1e-12, t_eval=te)
+        assert np.abs(one.y - ref.y).max() < 1e-7      # measured 4e-9
+    with pytest.raises(ValueError, match="columns"):
+        mp.solve_many(double_pendulum, (0, 1), y0s, params=np.ones((3, 2)))
+
+
+def test_replace_shares_the_library(double_pendulum):
+    s2 = double_pendulum.replace(g=1.62)
+    assert s2._path == double_pendulum._path and not s2._compiled
+    assert s2.params["g"] == 1.62 and double_pendulum.params["g"] == G
+    y = np.array([0.4, 0.1, 0.0, 0.0])
+    assert np.allclose(s2.rhs(0, y), dp_hand(0, y, g=1.62), rtol=1e-13)
+    with pytest.raises(TypeError, match="unknown"):
+        double_pendulum.replace(mass=1.0)
+
+
+# ---- scale: the n-link pendulum on a cart ------------------------------------------
+
+def test_pendulum_on_a_cart_scales_to_ten_coordinates():
+    N = 10   # the cart and 9 links
+    q = mp.coordinates("x " + " ".join(f"th{i}" for i in range(1, N)))
+    g, Mc, m, l = sp.symbols("g M m l")
+    T = Mc / 2 * q[0].diff(t) ** 2
+    V = 0
+    px, py = q[0], 0
+    for i in range(1, N):
+        px, py = px + l * sp.sin(q[i]), py - l * sp.cos(q[i])
+        T += m / 2 * (px.diff(t) ** 2 + py.diff(t) ** 2)
+        V += m * g * py
+    s = mp.lagrangian(T - V, q, params=dict(g=G, M=2.0, m=0.5, l=0.3))
+    assert s.dim == 20 and s.cyclic == ["x"]
+    y0 = np.zeros(20)
+    y0[1:N] = np.linspace(0.1, 0.5, N - 1)
+    sol = mp.solve(s, (0, 5), y0, rtol=1e-10, atol=1e-12)
+    E = s.energy(sol.y)
+    assert abs(E[-1] - E[0]) < 1e-8 * abs(E[0]) + 1e-9    # measured 3e-10
+    p = s.momenta(sol.y)
+    assert abs(p[0, -1] - p[0, 0]) < 1e-9                 # cart momentum, measured 1e-12
+    J = s.jacobian(0.0, sol.y[:, -1])
+    Jref = fd_jacobian(lambda v: s.rhs(0.0, v), sol.y[:, -1])
+    assert np.abs(J - Jref).max() < 1e-6 * np.abs(Jref).max()   # measured 4e-9
+
+
+# ---- the cache, processes, pickling ------------------------------------------------
+
+def _run(code, env_extra, cwd):
+    env = dict(os.environ, **env_extra)
+    return subprocess.run([sys.executable, "-c", textwrap.dedent(code)], capture_output=True,
+                          text=True, env=env, cwd=cwd, timeout=300)
+
+
+def test_second_build_loads_from_disk(tmp_path, monkeypatch):
+    from mechpy.symbolic import build
+    monkeypatch.setenv("MECHPY_CACHE_DIR", str(tmp_path))
+    L, q = pendulum_L()
+    L = L + sp.Symbol("k") * q[0] ** 4        # a system no other test builds
+    s = mp.lagrangian(L, q, params=dict(m=1.0, length=1.0, g=G, k=0.1))
+    assert s._compiled
+    sos = [f for f in os.listdir(tmp_path) if f.endswith(".so")]
+    assert len(sos) == 1
+    mtime = os.path.getmtime(tmp_path / sos[0])
+    # a fresh process: the library and the derivation come from the folder
+    code = f"""
+        import sympy as sp, mechpy as mp
+        from mechpy.symbolic import build
+        def fail(*a):
+            raise AssertionError("compiled again")
+        build._compile = fail
+        t = sp.Symbol("t")
+        th, = mp.coordinates("theta")
+        m, l, g, k = sp.symbols("m length g k")
+        L = m * l**2 / 2 * th.diff(t)**2 + m * g * l * sp.cos(th) + k * th**4
+        s = mp.lagrangian(L, [th], params=dict(m=1.0, length=1.0, g={G!r}, k=0.1))
+        assert not s._compiled
+        print(repr(float(s.rhs(0.0, [0.3, 0.0])[1])))
+    """
+    r = _run(code, {"MECHPY_CACHE_DIR": str(tmp_path)}, tmp_path)
+    assert r.returncode == 0, r.stderr
+    assert float(r.stdout) == s.rhs(0.0, [0.3, 0.0])[1]
+    assert os.path.getmtime(tmp_path / sos[0]) == mtime
+    # in this process: the library is loaded once
+    monkeypatch.setattr(build, "_compile", None)
+    s2 = mp.lagrangian(L, q, params=dict(m=2.0, length=1.0, g=G, k=0.1))
+    assert not s2._compiled and s2._path == s._path
+
+
+def test_two_processes_building_at_once(tmp_path):
+    code = f"""
+        import sympy as sp, mechpy as mp
+        t = sp.Symbol("t")
+        a, b = mp.coordinates("a b")
+        k = sp.Symbol("kappa")
+        L = (a.diff(t)**2 + b.diff(t)**2) / 2 - k * (a**2 + b**2 + a**2 * b**2) / 2
+        s = mp.lagrangian(L, [a, b], params=dict(kappa=1.5))
+        sol = mp.solve(s, (0, 5), [0.3, 0.1, 0.0, 0.2], rtol=1e-10)
+        print(repr(sol.y[0, -1]))
+    """
+    env = dict(os.environ, MECHPY_CACHE_DIR=str(tmp_path))
+    procs = [subprocess.Popen([sys.executable, "-c", textwrap.dedent(code)], env=env,
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                              cwd=tmp_path) for _ in range(2)]
+    outs = [p.communicate(timeout=300) for p in procs]
+    assert all(p.returncode == 0 for p in procs), [e for _, e in outs]
+    assert outs[0][0] == outs[1][0]
+    files = os.listdir(tmp_path)
+    assert len([f for f in files if f.endswith(".so")]) == 1
+    assert not [f for f in files if f.startswith(".mp_")]    # no temporaries left
+
+
+def test_pickle_loads_in_a_fresh_process(double_pendulum, tmp_path):
+    s = double_pendulum.replace(m2=1.1)
+    blob = tmp_path / "scene.pkl"
+    blob.write_bytes(pickle.dumps(s))
+    assert pickle.loads(pickle.dumps(s)) == s
+    y0 = [1.0, 0.5, 0.0, 0.0]
+    ref = mp.solve(s, (0, 2), y0, rtol=1e-10).y[:, -1]
+    code = f"""
+        import pickle, sys, numpy as np, mechpy as mp
+        s = pickle.loads(open({str(blob)!r}, "rb").read())
+        assert "sympy" not in sys.modules, "loading needed SymPy"
+        print(repr(s.params["m2"]))
+        print(" ".join(repr(float(v)) for v in mp.solve(s, (0, 2), {y0!r}, rtol=1e-10).y[:, -1]))
+    """
+    # another cache folder: the receiving side compiles from the pickled source
+    r = _run(code, {"MECHPY_CACHE_DIR": str(tmp_path / "other")}, tmp_path)
+    assert r.returncode == 0, r.stderr
+    lines = r.stdout.split("\n")
+    assert float(lines[0]) == 1.1
+    assert np.array_equal(np.array(lines[1].split(), dtype=float), ref)
+
+
+# ---- the NumPy backend -------------------------------------------------------------------
+
+def test_numpy_backend_equals_c(double_pendulum, rng):
+    L, q = double_pendulum_L()
+    s = mp.lagrangian(L, q, params=DP, backend="numpy")
+    Y = rng.uniform(-2, 2, size=(4, 5))
+    assert np.allclose(s.rhs(0, Y), double_pendulum.rhs(0, Y), rtol=1e-13, atol=1e-13)
+    assert np.allclose(s.jacobian(0, Y), double_pendulum.jacobian(0, Y), rtol=1e-12,
+                       atol=1e-12)
+    assert np.allclose(s.energy(Y), double_pendulum.energy(Y), rtol=1e-14)
+    te = np.linspace(0, 2, 5)
+    a = mp.solve(s, (0, 2), Y[:, 0], rtol=1e-10, t_eval=te)
+    b = mp.solve(double_pendulum, (0, 2), Y[:, 0], rtol=1e-10, t_eval=te)
+    assert np.abs(a.y - b.y).max() < 1e-11       # measured 1e-14
+    ens = mp.solve_many(s, (0, 1), Y[:, :2].T, params={"m1": [1.0, 2.0]}, rtol=1e-10)
+    ref = mp.solve_many(double_pendulum, (0, 1), Y[:, :2].T, params={"m1": [1.0, 2.0]},
+                        rtol=1e-10)
+    assert np.abs(ens.y - ref.y).max() < 1e-11
+    assert pickle.loads(pickle.dumps(s)).rhs(0, Y).tolist() == s.rhs(0, Y).tolist()
+    c = cartesian_pendulum(backend="numpy")
+    y = cart_state(0.7, 0.4)
+    assert np.allclose(c.constraint_forces(0, y), cartesian_pendulum().constraint_forces(0, y),
+                       rtol=1e-13)
+
+
+# ---- what the scene tells -------------------------------------------------------------------
+
+def test_equations_and_source(double_pendulum):
+    eqs = double_pendulum.equations
+    assert len(eqs) == 2 and all(isinstance(e, sp.Eq) for e in eqs)
+    # the equations hold for the hand-derived accelerations
+    th1, th2 = mp.coordinates("theta1 theta2")
+    y = np.array([0.4, -0.3, 0.2, 0.5])
+    a = dp_hand(0, y)[2:]
+    subs = {th1.diff(t, 2): a[0], th2.diff(t, 2): a[1]}
+    subs.update({th1.diff(t): y[2], th2.diff(t): y[3]})
+    subs.update({th1: y[0], th2: y[1]})
+    subs.update({sp.Symbol(k): v for k, v in DP.items()})
+    for e in eqs:
+        assert float((e.lhs - e.rhs).subs(subs)) == pytest.approx(0.0, abs=1e-12)
+    src = double_pendulum.c_source
+    assert "int mp_gen_rhs(double t, const double *y, double *dydt, void *params)" in src
+    assert "mp_gen_lagrangian(size_t m" in src and "mp_gen_dims[5]" in src
+    assert f"#define MP_ESINGULAR {mp._core.STATUS['MP_ESINGULAR']}" in src
+
+
+# ---- bad input ----------------------------------------------------------------------------------
+
+def test_missing_parameter_is_named():
+    L, q = double_pendulum_L()
+    with pytest.raises(ValueError, match=r"\['l2', 'm2'\] have no value"):
+        mp.lagrangian(L, q, params=dict(m1=1.0, l1=1.0, g=G))
+    with pytest.raises(ValueError, match="name no symbol"):
+        mp.lagrangian(L, q, params=dict(DP, mass=1.0))
+
+
+def test_coordinate_missing_from_L():
+    a, b = mp.coordinates("a b")
+    with pytest.raises(ValueError, match="coordinate b does not appear in L"):
+        mp.lagrangian(a.diff(t) ** 2 / 2 - a ** 2 / 2, [a, b])
+    with pytest.raises(TypeError, match="not a coordinate"):
+        mp.lagrangian(a.diff(t) ** 2, [a, sp.Symbol("x") + 1])
+    c, = mp.coordinates("c")
+    with pytest.raises(ValueError, match="not coordinates"):
+        mp.lagrangian(a.diff(t) ** 2 + c ** 2, [a])
+
+
+def test_singular_mass_matrix_at_the_initial_state():
+    x, = mp.coordinates("x")
+    s = mp.lagrangian(x ** 2 * x.diff(t) ** 2 / 2 - x ** 2 / 2, [x])
+    with pytest.raises(mp.SingularityError, match="mass matrix"):
+        mp.solve(s, (0, 1), [0.0, 1.0])
+    with pytest.raises(mp.SingularityError, match="mass matrix"):
+        s.rhs(0, [0.0, 1.0])
+    assert mp.solve(s, (0, 0.1), [1.0, 0.0]).success
+
+
+def test_unprintable_expression_is_named():
+    x, = mp.coordinates("x")
+    with pytest.raises(ValueError, match="besselj"):
+        mp.lagrangian(x.diff(t) ** 2 / 2 - sp.besselj(0, x), [x])
+
+
+def test_wrong_number_of_forces():
+    L, q = double_pendulum_L()
+    with pytest.raises(ValueError, match="one entry per coordinate: got 1 for 2"):
+        mp.lagrangian(L, q, params=DP, forces=[q[0].diff(t)])
+
+
+def test_bad_constraints_and_equations():
+    x, y = mp.coordinates("x y")
+    L = (x.diff(t) ** 2 + y.diff(t) ** 2) / 2
+    with pytest.raises(ValueError, match="holonomic"):
+        mp.lagrangian(L, [x, y], constraints=[x.diff(t) - 1])
+    with pytest.raises(ValueError, match="one expression per state"):
+        mp.equations([x], [x, y])
+    with pytest.raises(ValueError, match="backend"):
+        mp.lagrangian(L, [x, y], backend="fortran")
+
+
+def test_compile_failure_names_the_command(monkeypatch, tmp_path):
+    monkeypatch.setenv("MECHPY_CACHE_DIR", str(tmp_path))
+    monkeypatch.setenv("MECHPY_CC", "/nonexistent/cc")
+    x, = mp.coordinates("x")
+    with pytest.raises(mp.CompileError, match="/nonexistent/cc"):
+        mp.lagrangian(x.diff(t) ** 2 / 2 - x ** 4, [x])
+    monkeypatch.setenv("MECHPY_CC", "false")
+    with pytest.raises(mp.CompileError, match="failed .exit 1. on 'false"):
+        mp.lagrangian(x.diff(t) ** 2 / 2 - x ** 4, [x])
+    assert isinstance(mp.CompileError("x"), RuntimeError)
+    # without a compiler, the numpy backend
+    s = mp.lagrangian(x.diff(t) ** 2 / 2 - x ** 4, [x], backend="numpy")
+    assert s.rhs(0, [1.0, 0.0])[1] == -4.0
+
+
+def test_import_does_not_load_sympy():
+    r = subprocess.run([sys.executable, "-c", "import sys, mechpy; "
+                        "print('sympy' in sys.modules)"], capture_output=True, text=True)
+    assert r.stdout.strip() == "False", r.stderr
