@@ -166,15 +166,24 @@ def _lagrangian_source(ir, status):
 /* Solve A z = b at (t, y): z = (q'', -lambda).  A0 receives A before the
  * factorisation, LU its factors.  Returns MP_ESINGULAR for a singular mass
  * (or constrained) matrix. */
-static int gen_solve(double t, const double *y, const double *p, double *A0, double *LU,
-                     int *piv, double *z)
+static inline int gen_solve(double t, const double *y, const double *p, double *A0,
+                            double *LU, int *piv, double *z)
 {
     gen_A(t, y, p, A0);
-    for (int i = 0; i < NA * NA; i++) LU[i] = A0[i];
     gen_b(t, y, p, z);
+#if NA == 1
+    /* one coordinate: z = b / A */
+    piv[0] = 0;
+    LU[0] = A0[0];
+    if (!isfinite(LU[0])) return MP_ENONFINITE;
+    if (LU[0] == 0.0) return MP_ESINGULAR;
+    z[0] /= LU[0];
+#else
+    for (int i = 0; i < NA * NA; i++) LU[i] = A0[i];
     int rc = mp_lu(LU, piv);
     if (rc != MP_OK) return rc;
     mp_lu_solve(LU, piv, z);
+#endif
     return MP_OK;
 }
 

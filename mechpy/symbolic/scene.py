@@ -105,6 +105,10 @@ class CompiledScene(Scene):
         self._backend = backend
         self._vec = np.array(list(self._params.values()), dtype=np.float64)
         self._eqs = None
+        solve = ("the mass matrix d2L/dqd2" + (" with the constraint Jacobian" if self._k
+                                               else "")
+                 if meta["kind"] == "lagrangian" else meta["kind"])
+        self._context = {w: f"{w} of the compiled system: {solve}" for w in _FUNCS}
         if backend == "c":
             from .build import build
             self._lib, self._path, self._compiled = build(meta["source"])
@@ -164,16 +168,15 @@ class CompiledScene(Scene):
                              f"got shape {y.shape}")
         t = as_scalar(t, "t")
         Y = np.ascontiguousarray(y.reshape(self._dim, -1).T)
+        return self._raw(what, t, Y), y.shape[1:]
+
+    def _raw(self, what, t, Y):
+        """Function ``what`` at time t for the rows of Y (m, dim) -> (m, nout)."""
         nout = _FUNCS[what][1](self._dim, self._nc, self._k)
         if self._backend == "c":
-            ctx = ("the mass matrix d2L/dqd2" + (" with the constraint Jacobian"
-                                                  if self._k else "")
-                   if self._meta["kind"] == "lagrangian" else self._meta["kind"])
-            out = _core.compiled_eval(self._addr[what], self._vec, t, Y, nout,
-                                      f"{what} of the compiled system: {ctx}")
-        else:
-            out = np.array([self._np(what, t, row, self._vec) for row in Y]).reshape(-1, nout)
-        return out, y.shape[1:]
+            return _core.compiled_eval(self._addr[what], self._vec, t, Y, nout,
+                                       self._context[what])
+        return np.array([self._np(what, t, row, self._vec) for row in Y]).reshape(-1, nout)
 
     @staticmethod
     def _shape(out, rest, lead):
@@ -236,11 +239,12 @@ class CompiledScene(Scene):
 
     # -- initial-state check (mechpy.solve calls it) ----------------------------
     def _check_initial(self, t0, y0, tol: float = 1e-8):
-        """Raise if y0 violates a constraint (|g| or |g'| above tol, scaled by
-        the state's size) or the mass matrix is singular at (t0, y0)."""
-        y0 = np.asarray(y0, dtype=float)
+        """Raise if y0 (validated, (n,) float64) violates a constraint (|g| or
+        |g'| above tol, scaled by the state's size) or the mass matrix is
+        singular at (t0, y0).  Cheap: one or two evaluations in C."""
+        Y = y0.reshape(1, -1)
         if self._k:
-            gv = self.constraints(t0, y0)
+            gv = self._raw("constraints", t0, Y)
             scale = max(1.0, float(np.max(np.abs(y0))))
             for c in range(self._k):
                 if not abs(gv[c]) <= tol * scale ** 2:
@@ -252,7 +256,7 @@ class CompiledScene(Scene):
                                      f"{gv[self._k + c]!r}; the initial velocity must be "
                                      "tangent to the constraint")
         if self._meta["kind"] == "lagrangian":
-            self.rhs(t0, y0)   # raises SingularityError naming the mass matrix
+            self._raw("rhs", t0, Y)   # raises SingularityError naming the mass matrix
 
     # -- what a Lagrangian gives besides -----------------------------------------
     @property
