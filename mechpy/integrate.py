@@ -471,6 +471,9 @@ def solve_many(system, t_span: Sequence[float], y0s, *, params=None, t_eval=None
     if dim is not None and dim != n:
         raise ValueError(f"y0s must have {dim} columns for {type(system).__name__}, got {n}")
     par = _ensemble_params(system, params, k)
+    check = getattr(system, "_check_initial", None)   # e.g. constraints a scene imposes
+    if check is not None and k:
+        check(t0, Y0)
     if threads is None:
         nthreads = os.cpu_count() or 1
     else:

@@ -326,6 +326,12 @@ def test_initial_state_must_satisfy_the_constraint():
         mp.solve(s, (0, 1), [1.0, -0.5, 0.0, 0.0])
     with pytest.raises(ValueError, match="rate of constraint 0"):
         mp.solve(s, (0, 1), [0.0, -1.0, 0.0, 1.0])
+    good = cart_state(0.5, 0.2)
+    with pytest.raises(ValueError, match=r"y0 \(row 1 of y0s\) violates constraint 0"):
+        mp.solve_many(s, (0, 1), [good, [1.0, -0.5, 0.0, 0.0]])
+    ens = mp.solve_many(s, (0, 1), [good, cart_state(-0.3, 1.0)], rtol=1e-10)
+    one = mp.solve(s, (0, 1), cart_state(-0.3, 1.0), rtol=1e-10)
+    assert np.array_equal(ens.y[1, :, -1], one.y[:, -1])
 
 
 # ---- first-order systems -------------------------------------------------------
@@ -612,6 +618,11 @@ def test_singular_mass_matrix_at_the_initial_state():
         mp.solve(s, (0, 1), [0.0, 1.0])
     with pytest.raises(mp.SingularityError, match="mass matrix"):
         s.rhs(0, [0.0, 1.0])
+    with pytest.raises(mp.SingularityError, match="mass matrix"):
+        mp.solve_many(s, (0, 1), [[1.0, 0.0], [0.0, 1.0]])
+    sn = mp.lagrangian(x ** 2 * x.diff(t) ** 2 / 2 - x ** 2 / 2, [x], backend="numpy")
+    with pytest.raises(mp.SingularityError, match="mass matrix"):
+        mp.solve(sn, (0, 1), [0.0, 1.0])
     assert mp.solve(s, (0, 0.1), [1.0, 0.0]).success
 
 

@@ -101,7 +101,9 @@ def _block(name, exprs, ir, args, what):
         used |= e.free_symbols
     for _, e in reps:
         used |= e.free_symbols
-    lines = [f"static void {name}({args})", "{"]
+    lines = [f"/* out[0..{len(exprs) - 1}] = {what} at (t, y), parameters p"
+             + (", unknowns z" if "const double *z" in args else "") + ". */",
+             f"static void {name}({args})", "{"]
     for i in range(ir.n):
         if sp.Symbol(f"mp_y{i}") in used:
             lines.append(f"    const double mp_y{i} = y[{i}];")
@@ -157,7 +159,7 @@ def _lagrangian_source(ir, status):
     n, k = ir.nc, ir.k
     parts = [_header(ir, status), RUNTIME,
              _block("gen_A", B["A"], ir, _ARGS, "the mass matrix"),
-             _block("gen_b", B["b"], ir, _ARGS, "the forces"),
+             _block("gen_b", B["b"], ir, _ARGS, "the equations of motion (right-hand side)"),
              _block("gen_D", B["D"], ir, _ARGS_Z, "the Jacobian"),
              _block("gen_energy", B["energy"], ir, _ARGS, "the energy"),
              _block("gen_momenta", B["momenta"], ir, _ARGS, "the momenta"),

@@ -239,22 +239,26 @@ class CompiledScene(Scene):
 
     # -- initial-state check (mechpy.solve calls it) ----------------------------
     def _check_initial(self, t0, y0, tol: float = 1e-8):
-        """Raise if y0 (validated, (n,) float64) violates a constraint (|g| or
-        |g'| above tol, scaled by the state's size) or the mass matrix is
-        singular at (t0, y0).  Cheap: one or two evaluations in C."""
-        Y = y0.reshape(1, -1)
+        """Raise if an initial state (validated float64, (n,) or rows (k, n))
+        violates a constraint (|g| or |g'| above tol, scaled by the state's
+        size) or the mass matrix is singular there.  One C evaluation per
+        function for all rows."""
+        Y = np.ascontiguousarray(y0.reshape(-1, self._dim))
         if self._k:
             gv = self._raw("constraints", t0, Y)
-            scale = max(1.0, float(np.max(np.abs(y0))))
-            for c in range(self._k):
-                if not abs(gv[c]) <= tol * scale ** 2:
-                    raise ValueError(f"y0 violates constraint {c}: g = {gv[c]!r} "
-                                     f"({self._meta['constraints'][c]} = 0); place the initial "
-                                     "state on the constraint")
-                if not abs(gv[self._k + c]) <= tol * scale ** 2:
-                    raise ValueError(f"y0 violates the rate of constraint {c}: g' = "
-                                     f"{gv[self._k + c]!r}; the initial velocity must be "
-                                     "tangent to the constraint")
+            scale = np.maximum(1.0, np.max(np.abs(Y), axis=1)) ** 2
+            checks = (("constraint", "g", slice(0, self._k),
+                       "place the initial state on the constraint"),
+                      ("the rate of constraint", "g'", slice(self._k, None),
+                       "the initial velocity must be tangent to the constraint"))
+            for what, sym, cols, hint in checks:
+                bad = np.argwhere(~(np.abs(gv[:, cols]) <= tol * scale[:, None]))
+                if bad.size:
+                    i, c = bad[0]
+                    row = f" (row {i} of y0s)" if y0.ndim > 1 else ""
+                    raise ValueError(f"y0{row} violates {what} {c}: {sym} = "
+                                     f"{gv[i, cols][c]!r} ({self._meta['constraints'][c]} = 0); "
+                                     f"{hint}")
         if self._meta["kind"] == "lagrangian":
             self._raw("rhs", t0, Y)   # raises SingularityError naming the mass matrix
 
