@@ -201,10 +201,11 @@ def _pydy_generator():
 
 class _Stages:
     """Times the stages of ``mp.lagrangian`` (derivation, C printing, compiling
-    and loading) by wrapping the functions it calls, within a ``with`` block,
-    in a fresh cache folder (so that the first build compiles).  ``seconds``
-    maps "derive", "codegen", "compile" to the time spent in each; a stage
-    whose function is not found is absent, the total is always there."""
+    and loading) by wrapping the functions it calls, within a ``with`` block
+    that points ``MECHPY_CACHE_DIR`` at a new empty folder (``cache``, removed
+    on exit), so that a first build compiles.  ``seconds`` maps "derive",
+    "codegen", "compile" to the time spent in each (a stage whose function is
+    not found is absent) and "total" to the block's time."""
 
     def __init__(self):
         self.seconds = {}
@@ -227,8 +228,9 @@ class _Stages:
     def __enter__(self):
         from mechpy.symbolic import build, codegen, derive
         self._dir = tempfile.TemporaryDirectory(prefix="mechpy-cache-")
+        self.cache = self._dir.name
         self._old = os.environ.get("MECHPY_CACHE_DIR")
-        os.environ["MECHPY_CACHE_DIR"] = self._dir.name
+        os.environ["MECHPY_CACHE_DIR"] = self.cache
         self._wrap(derive, "lagrangian_ir", "derive")
         self._wrap(codegen, "c_source", "codegen")
         self._wrap(build, "build", "compile")
@@ -243,7 +245,7 @@ class _Stages:
             del os.environ["MECHPY_CACHE_DIR"]
         else:
             os.environ["MECHPY_CACHE_DIR"] = self._old
-        self.cache = self._dir.name
+        self._dir.cleanup()
         return False
 
 
@@ -348,10 +350,9 @@ def _build_rows():
         first = dict(st.seconds)
         mp.lagrangian(L, q, params=DP_PARAMS)
         first_total, again = t1 - t0, time.perf_counter() - t1
-        cached = min(cache_build_time(st._dir.name, "L, q = double_pendulum_lagrangian()",
+        cached = min(cache_build_time(st.cache, "L, q = double_pendulum_lagrangian()",
                                        "mp.lagrangian(L, q, params=DP_PARAMS)")
                      for _ in range(3))
-    st._dir.cleanup()
     stages = ", ".join(f"{k} {first[k]:.3f} s" for k in ("derive", "codegen", "compile")
                        if k in first)
     rows.append(dict(problem=problem, impl="mp.lagrangian, first build (empty cache folder)",
@@ -391,7 +392,6 @@ def _cart_rows(n, rtols, T):
     st = _Stages()
     with st:
         own = mp.lagrangian(L, q, params=vals)
-    st._dir.cleanup()
     sec = st.seconds
     for k, label in (("derive", "derivation (Euler-Lagrange blocks)"),
                      ("codegen", "code generation (CSE, C printing)"),
