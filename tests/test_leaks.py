@@ -43,8 +43,33 @@ def _raiser(*a):
     raise ZeroDivisionError("from the user's callback")
 
 
+def _compiled():
+    """A compiled pendulum and a system with a singular mass matrix at x = 0,
+    built in a temporary cache folder."""
+    import tempfile
+
+    import sympy as sp
+    old = os.environ.get("MECHPY_CACHE_DIR")
+    os.environ["MECHPY_CACHE_DIR"] = tempfile.mkdtemp(prefix="mechpy_leaks_")
+    try:
+        t = sp.Symbol("t")
+        th, = mp.coordinates("theta")
+        m = sp.Symbol("m")
+        pend = mp.lagrangian(m * th.diff(t) ** 2 / 2 + m * 9.81 * sp.cos(th), [th],
+                             params={"m": 1.0})
+        x, = mp.coordinates("x")
+        sing = mp.lagrangian(x ** 2 * x.diff(t) ** 2 / 2 - x ** 2 / 2, [x])
+    finally:
+        if old is None:
+            del os.environ["MECHPY_CACHE_DIR"]
+        else:
+            os.environ["MECHPY_CACHE_DIR"] = old
+    return pend, sing
+
+
 def _cases():
     P = mp.scenes.Pendulum()
+    CP, CS = _compiled()
     R = mp.rotation
     V, F = mp.inertia.uv_sphere(1.0, 4, 6)
     K, M = mp.modes.chain(6, masses=np.linspace(1, 2, 6))
@@ -72,6 +97,12 @@ def _cases():
                                                    np.ones((2, 1)), params=np.ones((2, 1)),
                                                    rtol=1e-3),
         "solve_many python raises": lambda: mp.solve_many(_raiser, (0, 1), np.ones((2, 1))),
+        "compiled scene": lambda: (CP.rhs(0.0, [1.0, 0.0]), CP.jacobian(0.0, [1.0, 0.0]),
+                                   CP.energy([1.0, 0.0]), CP.momenta([1.0, 0.0])),
+        "compiled singular mass matrix": lambda: CS.rhs(0.0, [0.0, 1.0]),
+        "solve compiled": lambda: mp.solve(CP, (0, 0.5), [1.0, 0.0], method="radau"),
+        "solve_many compiled params": lambda: mp.solve_many(
+            CP, (0, 0.5), np.ones((3, 2)), params={"m": [1.0, 2.0, 3.0]}, threads=2),
         "methods": mp.methods,
         "scene": lambda: (P.rhs(0.0, [1.0, 0.0]), P.jacobian(0.0, [1.0, 0.0]),
                           P.energy([1.0, 0.0]), mp.scenes.VanDerPol(mu=2.0)),

@@ -8,7 +8,6 @@ called, so ``import mechpy`` stays fast.
 """
 from __future__ import annotations
 
-import hashlib
 import os
 
 __all__ = ["coordinates", "lagrangian", "equations", "CompileError"]
@@ -20,6 +19,7 @@ _GEN_HASH = None
 def _generator_hash() -> str:
     """A hash of the generator's own code: a cached derivation is valid only
     for the code that made it."""
+    import hashlib
     global _GEN_HASH
     if _GEN_HASH is None:
         h = hashlib.sha256()
@@ -76,6 +76,8 @@ def _check_params(params):
 
 
 def _key(kind, parts, param_names) -> str:
+    import hashlib
+
     import sympy as sp
     h = hashlib.sha256()
     h.update(kind.encode())

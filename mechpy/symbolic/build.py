@@ -12,15 +12,11 @@ system at once are safe.
 """
 from __future__ import annotations
 
-import ctypes
-import hashlib
-import json
 import os
-import shlex
-import subprocess
-import sysconfig
-import tempfile
 import threading
+
+# ctypes, hashlib, json, shlex, subprocess, sysconfig and tempfile are imported
+# where they are used: importing mechpy must stay fast.
 
 #: Version of the generated libraries' interface (function set, signatures,
 #: mp_gen_dims); part of every library's cache key.
@@ -62,11 +58,14 @@ def cache_dir() -> str:
 
 def compiler() -> list:
     """The compiler command: ``MECHPY_CC`` if set, else sysconfig's ``CC``, else ``cc``."""
+    import shlex
+    import sysconfig
     cc = os.environ.get("MECHPY_CC") or sysconfig.get_config_var("CC") or "cc"
     return shlex.split(cc)
 
 
 def _key(source: str, cmd: list) -> str:
+    import hashlib
     h = hashlib.sha256()
     for part in (source, " ".join(cmd), " ".join(FLAGS + LIBS), f"abi{ABI_VERSION}"):
         h.update(part.encode())
@@ -75,6 +74,8 @@ def _key(source: str, cmd: list) -> str:
 
 
 def _compile(source: str, cmd: list, target: str, folder: str) -> None:
+    import subprocess
+    import tempfile
     fd, src = tempfile.mkstemp(suffix=".c", prefix=".mp_", dir=folder)
     tmp_so = src[:-2] + ".so"
     try:
@@ -100,7 +101,7 @@ def _compile(source: str, cmd: list, target: str, folder: str) -> None:
                 pass
 
 
-def build(source: str) -> tuple[ctypes.CDLL, str, bool]:
+def build(source: str):
     """Compile ``source`` (or find it in the cache) and load it.
 
     Returns
@@ -108,6 +109,7 @@ def build(source: str) -> tuple[ctypes.CDLL, str, bool]:
     (library, path, compiled)
         The loaded ``ctypes.CDLL``, its file, and whether this call compiled it.
     """
+    import ctypes
     cmd = compiler()
     folder = cache_dir()
     path = os.path.join(folder, f"mp_{_key(source, cmd)}.so")
@@ -134,6 +136,7 @@ def _meta_path(key: str) -> str:
 
 def load_meta(key: str):
     """The stored description of a derived system, or None."""
+    import json
     try:
         with open(_meta_path(key)) as f:
             return json.load(f)
@@ -143,6 +146,8 @@ def load_meta(key: str):
 
 def store_meta(key: str, meta: dict) -> None:
     """Store a derived system's description (atomically)."""
+    import json
+    import tempfile
     folder = cache_dir()
     fd, tmp = tempfile.mkstemp(suffix=".json", prefix=".mp_", dir=folder)
     try:

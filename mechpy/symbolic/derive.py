@@ -1,10 +1,10 @@
 """Derive a user's equations of motion with SymPy, as blocks of expressions.
 
 The result of :func:`lagrangian_ir` or :func:`equations_ir` is an :class:`IR`:
-plain SymPy expressions in a fixed set of symbols (time ``T``, the state
-``Y0..``, the parameters ``P0..`` and, for the Jacobian, the unknowns
-``Z0..`` of the linear system), which the C printer (:mod:`.codegen`) and the
-NumPy backend (:mod:`.scene`) both consume.  Nothing here inverts a matrix:
+plain SymPy expressions in a fixed set of symbols (time ``mp_t``, the state
+``mp_y0..``, the user's parameter symbols and, for the Jacobian, the unknowns
+``mp_z0..`` of the linear system), which the C printer (:mod:`.codegen`) and
+the NumPy backend (:mod:`.scene`) both consume.  Nothing here inverts a matrix:
 the mass matrix is printed and solved numerically at each evaluation.
 
 For a Lagrangian L(q, q', t) with n coordinates and k holonomic constraints
@@ -20,7 +20,7 @@ g(q, t) = 0 the blocks are
 * ``momenta`` (n): dL/dq';
 * ``g`` (2k, with constraints): g and g' = C q' + dg/dt;
 * ``lag`` (1 + 2n + 3n^2): L, dL/dq, dL/dq', d2L/dqdq, d2L/dqdq'
-  ([a][b] = d2L/dq_a dq'_b), d2L/dq'dq' (row-major), in q = Y[:n], q' = Y[n:].
+  ([a][b] = d2L/dq_a dq'_b), d2L/dq'dq' (row-major), in q = y[:n], q' = y[n:].
 """
 from __future__ import annotations
 
@@ -216,7 +216,13 @@ def lagrangian_ir(L, q, params=None, constraints=(), forces=None, baumgarte=None
     Pt = [sp.diff(p[i], T) for i in range(n)]
     rest = [sum(Pq[i][j] * U[j] for j in range(n)) + Pt[i] - Fx[i] for i in range(n)]
     F = [dLdq[i] - rest[i] for i in range(n)]
-    Lqv = [[sp.diff(dLdq[i], v) for v in V] for i in range(n)]
+    # d2L/dq_i dq_c (symmetric: the upper triangle is taken) and
+    # d2L/dq_i dq'_c = dp_c/dq_i (already in Pq)
+    Lqq = [[None] * n for _ in range(n)]
+    for i in range(n):
+        for c in range(i, n):
+            Lqq[i][c] = Lqq[c][i] = sp.diff(dLdq[i], Q[c])
+    Lqv = [Lqq[i] + [Pq[c][i] for c in range(n)] for i in range(n)]
     NA = n + k
     A = sp.zeros(NA, NA)
     A[:n, :n] = M
