@@ -427,7 +427,8 @@ def _cart_rows(n, rtols, T):
     stage(f"PyDy: code generation ({backend})", "pydy-stage", tg["codegen"],
           note="CSE and C printing" if backend == "cython" else "lambdify")
     stage(f"PyDy: compilation ({backend})", "pydy-stage", tg["compile"],
-          note=f"Cython + cc; generate_ode_function in all {total:.2f} s")
+          note=("Cython + cc; " if backend == "cython" else "nothing to compile; ")
+          + f"generate_ode_function in all {total:.2f} s")
     p = np.array([vals[str(c)] for c in consts])
 
     # the reference: mechpy dop853 at 1e-13, checked against PyDy's own equations
