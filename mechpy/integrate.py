@@ -473,7 +473,7 @@ def solve_many(system, t_span: Sequence[float], y0s, *, params=None, t_eval=None
     par = _ensemble_params(system, params, k)
     check = getattr(system, "_check_initial", None)   # e.g. constraints a scene imposes
     if check is not None and k:
-        check(t0, Y0)
+        check(t0, Y0) if par is None else check(t0, Y0, params=par)
     if threads is None:
         nthreads = os.cpu_count() or 1
     else:

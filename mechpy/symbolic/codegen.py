@@ -18,10 +18,12 @@ from .build import ABI_VERSION
 #: The dense solver, written once.  NA is the size of the linear system.
 RUNTIME = r"""
 /* LU factorisation with partial pivoting of the NA x NA row-major matrix A,
- * in place; piv receives the row exchanges.  Returns MP_ENONFINITE for a NaN
+ * in place; piv receives the row exchanges, dinv the inverses of the pivots
+ * (the solve multiplies: no division waits on the right-hand side).  Returns
+ * MP_ENONFINITE for a NaN
  * or inf entry, MP_ESINGULAR when a pivot is zero or below NA eps max|A|
  * (numerically singular), MP_OK otherwise. */
-static int mp_lu(double *A, int *piv)
+static int mp_lu(double *A, int *piv, double *dinv)
 {
     double amax = 0.0;
     for (int i = 0; i < NA * NA; i++) {
@@ -44,6 +46,7 @@ static int mp_lu(double *A, int *piv)
                 double s = A[k * NA + j]; A[k * NA + j] = A[p * NA + j]; A[p * NA + j] = s;
             }
         const double inv = 1.0 / A[k * NA + k];
+        dinv[k] = inv;
         for (int i = k + 1; i < NA; i++) {
             double l = A[i * NA + k] * inv;
             A[i * NA + k] = l;
@@ -55,7 +58,7 @@ static int mp_lu(double *A, int *piv)
 }
 
 /* Solve A x = b in place (x holds b on entry) with the factors of mp_lu. */
-static void mp_lu_solve(const double *LU, const int *piv, double *x)
+static void mp_lu_solve(const double *LU, const int *piv, const double *dinv, double *x)
 {
     for (int k = 0; k < NA; k++) {
         int p = piv[k];
@@ -69,7 +72,7 @@ static void mp_lu_solve(const double *LU, const int *piv, double *x)
     for (int i = NA - 1; i >= 0; i--) {
         double s = x[i];
         for (int j = i + 1; j < NA; j++) s -= LU[i * NA + j] * x[j];
-        x[i] = s / LU[i * NA + i];
+        x[i] = s * dinv[i];
     }
 }
 """
@@ -169,22 +172,24 @@ def _lagrangian_source(ir, status):
  * factorisation, LU its factors.  Returns MP_ESINGULAR for a singular mass
  * (or constrained) matrix. */
 static inline int gen_solve(double t, const double *y, const double *p, double *A0,
-                            double *LU, int *piv, double *z)
+                            double *LU, int *piv, double *dinv, double *z)
 {
+    /* A is factorised before b is evaluated: the division overlaps b's work */
     gen_A(t, y, p, A0);
-    gen_b(t, y, p, z);
 #if NA == 1
-    /* one coordinate: z = b / A */
     piv[0] = 0;
     LU[0] = A0[0];
     if (!isfinite(LU[0])) return MP_ENONFINITE;
     if (LU[0] == 0.0) return MP_ESINGULAR;
-    z[0] /= LU[0];
+    dinv[0] = 1.0 / LU[0];
+    gen_b(t, y, p, z);
+    z[0] *= dinv[0];
 #else
     for (int i = 0; i < NA * NA; i++) LU[i] = A0[i];
-    int rc = mp_lu(LU, piv);
+    int rc = mp_lu(LU, piv, dinv);
     if (rc != MP_OK) return rc;
-    mp_lu_solve(LU, piv, z);
+    gen_b(t, y, p, z);
+    mp_lu_solve(LU, piv, dinv, z);
 #endif
     return MP_OK;
 }
@@ -192,9 +197,9 @@ static inline int gen_solve(double t, const double *y, const double *p, double *
 /* dy/dt = (q', q'') at (t, y); params: the parameter vector. */
 int mp_gen_rhs(double t, const double *y, double *dydt, void *params)
 {
-    double A0[NA * NA], LU[NA * NA], z[NA];
+    double A0[NA * NA], LU[NA * NA], dinv[NA], z[NA];
     int piv[NA];
-    int rc = gen_solve(t, y, (const double *)params, A0, LU, piv, z);
+    int rc = gen_solve(t, y, (const double *)params, A0, LU, piv, dinv, z);
     if (rc != MP_OK) return rc;
     for (int i = 0; i < NC; i++) {
         dydt[i] = y[NC + i];
@@ -208,16 +213,16 @@ int mp_gen_rhs(double t, const double *y, double *dydt, void *params)
 int mp_gen_jac(double t, const double *y, double *jac, void *params)
 {
     const double *p = params;
-    double A0[NA * NA], LU[NA * NA], z[NA], D[NA * 2 * NC], col[NA];
+    double A0[NA * NA], LU[NA * NA], dinv[NA], z[NA], D[NA * 2 * NC], col[NA];
     int piv[NA];
-    int rc = gen_solve(t, y, p, A0, LU, piv, z);
+    int rc = gen_solve(t, y, p, A0, LU, piv, dinv, z);
     if (rc != MP_OK) return rc;
     gen_D(t, y, p, z, D);
     for (int i = 0; i < NS * NS; i++) jac[i] = 0.0;
     for (int i = 0; i < NC; i++) jac[i * NS + NC + i] = 1.0;
     for (int c = 0; c < 2 * NC; c++) {
         for (int r = 0; r < NA; r++) col[r] = D[r * 2 * NC + c];
-        mp_lu_solve(LU, piv, col);
+        mp_lu_solve(LU, piv, dinv, col);
         for (int i = 0; i < NC; i++) jac[(NC + i) * NS + c] = col[i];
     }
     return MP_OK;
@@ -268,9 +273,9 @@ int mp_gen_constraints(double t, const double *y, double *out, void *params)
 /* out[c] = lambda_c, the Lagrange multipliers. */
 int mp_gen_multipliers(double t, const double *y, double *out, void *params)
 {
-    double A0[NA * NA], LU[NA * NA], z[NA];
+    double A0[NA * NA], LU[NA * NA], dinv[NA], z[NA];
     int piv[NA];
-    int rc = gen_solve(t, y, (const double *)params, A0, LU, piv, z);
+    int rc = gen_solve(t, y, (const double *)params, A0, LU, piv, dinv, z);
     if (rc != MP_OK) return rc;
     for (int c = 0; c < NK; c++) out[c] = -z[NC + c];
     return MP_OK;
@@ -279,9 +284,9 @@ int mp_gen_multipliers(double t, const double *y, double *out, void *params)
 /* out[j] = sum_c lambda_c dg_c/dq_j, the generalized constraint forces. */
 int mp_gen_constraint_forces(double t, const double *y, double *out, void *params)
 {
-    double A0[NA * NA], LU[NA * NA], z[NA];
+    double A0[NA * NA], LU[NA * NA], dinv[NA], z[NA];
     int piv[NA];
-    int rc = gen_solve(t, y, (const double *)params, A0, LU, piv, z);
+    int rc = gen_solve(t, y, (const double *)params, A0, LU, piv, dinv, z);
     if (rc != MP_OK) return rc;
     for (int j = 0; j < NC; j++) {
         double s = 0.0;

@@ -170,13 +170,14 @@ class CompiledScene(Scene):
         Y = np.ascontiguousarray(y.reshape(self._dim, -1).T)
         return self._raw(what, t, Y), y.shape[1:]
 
-    def _raw(self, what, t, Y):
-        """Function ``what`` at time t for the rows of Y (m, dim) -> (m, nout)."""
+    def _raw(self, what, t, Y, vec=None):
+        """Function ``what`` at time t for the rows of Y (m, dim) -> (m, nout),
+        with the parameter vector ``vec`` (default: the scene's)."""
         nout = _FUNCS[what][1](self._dim, self._nc, self._k)
+        vec = self._vec if vec is None else vec
         if self._backend == "c":
-            return _core.compiled_eval(self._addr[what], self._vec, t, Y, nout,
-                                       self._context[what])
-        return np.array([self._np(what, t, row, self._vec) for row in Y]).reshape(-1, nout)
+            return _core.compiled_eval(self._addr[what], vec, t, Y, nout, self._context[what])
+        return np.array([self._np(what, t, row, vec) for row in Y]).reshape(-1, nout)
 
     @staticmethod
     def _shape(out, rest, lead):
@@ -238,14 +239,26 @@ class CompiledScene(Scene):
             raise AttributeError(f"{what}: the system has no constraints")
 
     # -- initial-state check (mechpy.solve calls it) ----------------------------
-    def _check_initial(self, t0, y0, tol: float = 1e-8):
-        """Raise if an initial state (validated float64, (n,) or rows (k, n))
-        violates a constraint (|g| or |g'| above tol, scaled by the state's
-        size) or the mass matrix is singular there.  One C evaluation per
-        function for all rows."""
+    def _check_initial(self, t0, y0, params=None, tol: float = 1e-8):
+        """Raise if an initial state (validated float64, (n,) or rows (k, n),
+        with ``params`` rows (k, p) if given) violates a constraint (|g| or
+        |g'| above tol, scaled by the state's size) or the mass matrix is
+        singular there.  One C evaluation per function (per row with params)."""
         Y = np.ascontiguousarray(y0.reshape(-1, self._dim))
+        if params is None:
+            vecs = [(self._vec, slice(None))]
+        else:
+            if params.shape[1] != self._vec.size:
+                raise ValueError(f"params must have {self._vec.size} columns (the scene's "
+                                 f"parameters {list(self._params)}), got {params.shape[1]}")
+            vecs = [(np.ascontiguousarray(params[i]), slice(i, i + 1))
+                    for i in range(Y.shape[0])]
+        for vec, rows in vecs:
+            self._check_rows(t0, Y[rows], vec, rows.start or 0, y0.ndim > 1, tol)
+
+    def _check_rows(self, t0, Y, vec, first, many, tol):
         if self._k:
-            gv = self._raw("constraints", t0, Y)
+            gv = self._raw("constraints", t0, Y, vec)
             scale = np.maximum(1.0, np.max(np.abs(Y), axis=1)) ** 2
             checks = (("constraint", "g", slice(0, self._k),
                        "place the initial state on the constraint"),
@@ -255,12 +268,12 @@ class CompiledScene(Scene):
                 bad = np.argwhere(~(np.abs(gv[:, cols]) <= tol * scale[:, None]))
                 if bad.size:
                     i, c = bad[0]
-                    row = f" (row {i} of y0s)" if y0.ndim > 1 else ""
+                    row = f" (row {first + i} of y0s)" if many else ""
                     raise ValueError(f"y0{row} violates {what} {c}: {sym} = "
                                      f"{gv[i, cols][c]!r} ({self._meta['constraints'][c]} = 0); "
                                      f"{hint}")
         if self._meta["kind"] == "lagrangian":
-            self._raw("rhs", t0, Y)   # raises SingularityError naming the mass matrix
+            self._raw("rhs", t0, Y, vec)   # raises SingularityError naming the mass matrix
 
     # -- what a Lagrangian gives besides -----------------------------------------
     @property
