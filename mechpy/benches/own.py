@@ -175,6 +175,20 @@ def _err(y, ref):
     return float(np.max(np.abs(np.asarray(y) - ref)))
 
 
+def _paired_times(fns, repeat=41):
+    """Median wall time of each of ``fns``, called in alternation (after one
+    warm-up each), so that a change in the machine's load falls on all alike."""
+    for f in fns:
+        f()
+    times = [[] for _ in fns]
+    for _ in range(repeat):
+        for f, ts in zip(fns, times):
+            t0 = time.perf_counter()
+            f()
+            ts.append(time.perf_counter() - t0)
+    return [float(np.median(ts)) for ts in times]
+
+
 def _pydy_generator():
     """PyDy's Cython generator with its code generation and compilation timed
     apart (``timings``), or None when Cython is missing."""
@@ -273,7 +287,6 @@ def _pendulum_rows(rtols):
     from scipy.special import ellipj, ellipk
 
     import mechpy as mp
-    from mechpy._timing import median_time
     theta0, T = 2.5, 10.0
     k = np.sin(theta0 / 2)
     sn, cn, _, _ = ellipj(ellipk(k * k) - np.sqrt(G) * T, k * k)
@@ -285,13 +298,16 @@ def _pendulum_rows(rtols):
     problem = "pendulum theta0=2.5, t=10: compiled Lagrangian vs Pendulum (exact elliptic)"
     rows = []
     for rtol in rtols:
-        for impl, path, sc in (("mechpy dop853 (compiled Lagrangian)", "lagrangian", own),
-                               ("mechpy dop853 (Pendulum, hand-written C)", "scene", hand)):
-            fn = lambda sc=sc: mp.solve(sc, (0, T), y0, rtol=rtol, atol=rtol * 1e-3)  # noqa: E731
+        fns = [lambda sc=sc: mp.solve(sc, (0, T), y0, rtol=rtol, atol=rtol * 1e-3)
+               for sc in (own, hand)]
+        times = _paired_times(fns, repeat=41)
+        for (impl, path), fn, t in zip((("mechpy dop853 (compiled Lagrangian)", "lagrangian"),
+                                        ("mechpy dop853 (Pendulum, hand-written C)", "scene")),
+                                       fns, times):
             s = fn()
             rows.append(dict(problem=problem, impl=impl, path=path, method="dop853", rtol=rtol,
-                             error=_err(s.y[:, -1], ref), nfev=int(s.nfev),
-                             time=median_time(fn, repeat=15, budget=1.0)))
+                             error=_err(s.y[:, -1], ref), nfev=int(s.nfev), time=t,
+                             note="timed in alternation with the other row"))
     return rows
 
 
