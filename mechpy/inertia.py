@@ -521,7 +521,7 @@ def solid(shape: str, mass, **dims) -> Body:
     --------
     >>> import mechpy as mp
     >>> cone = mp.inertia.solid("cone", 2.0, radius=1.0, height=4.0)
-    >>> cone.inertia_about([0, 0, 3.0])[0, 0]     # about the apex: 3/5 M (R^2/4 + h^2)
+    >>> float(cone.inertia_about([0, 0, 3.0])[0, 0])   # about the apex: 3/5 M (R^2/4 + h^2)
     19.5
     """
     if not isinstance(shape, str) or shape not in SHAPES:

@@ -417,6 +417,38 @@ def _ensemble_params(system, params, k):
     return p
 
 
+class _TqdmProgress:
+    """A ``tqdm.auto`` bar fed by the C ensemble's (done, total) reports."""
+
+    def __init__(self, tqdm, total: int):
+        self.bar = tqdm(total=total, desc="solve_many", unit="traj")
+
+    def report(self, done: int, total: int) -> None:
+        # a broken display never costs the results: warn once, stop drawing
+        if self.bar is None:
+            return
+        try:
+            self.bar.update(done - self.bar.n)
+        except Exception as exc:
+            import warnings
+            warnings.warn(f"solve_many: progress bar failed ({exc!r}); continuing without it",
+                          RuntimeWarning, stacklevel=2)
+            self.bar = None
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+
+
+def _progress_bar(k: int):
+    """A tqdm progress bar for k trajectories, or None when tqdm is not installed."""
+    try:
+        from tqdm.auto import tqdm
+    except ImportError:
+        return None
+    return _TqdmProgress(tqdm, k)
+
+
 def solve_many(system, t_span: Sequence[float], y0s, *, params=None, t_eval=None,
                method: str = "dop853", rtol: float = 1e-8, atol=1e-10,
                threads: int | None = None, progress: bool = False, args: tuple = (),
@@ -443,7 +475,8 @@ def solve_many(system, t_span: Sequence[float], y0s, *, params=None, t_eval=None
     threads : int, optional
         Threads to use (default: all cores).
     progress : bool
-        Print a progress line to stderr.
+        Show progress as trajectories finish: a ``tqdm.auto`` bar when tqdm
+        is installed (a widget in notebooks), else a line on stderr.
 
     Returns
     -------
@@ -480,7 +513,15 @@ def solve_many(system, t_span: Sequence[float], y0s, *, params=None, t_eval=None
         nthreads = as_int(threads, "threads", minimum=1)
     if not isinstance(progress, (bool, np.bool_)):
         raise TypeError("progress must be a bool")
-    yout, st, nfev = _core.ode_solve_many(method, spec, t0, tf, Y0, rtol, atol_a, tev, par, args,
-                                          hh, fs, ms, budget, int(nthreads), bool(progress))
+    bar = _progress_bar(k) if progress else None
+    try:
+        yout, st, nfev = _core.ode_solve_many(
+            method, spec, t0, tf, Y0, rtol, atol_a, tev, par, args, hh, fs, ms, budget,
+            int(nthreads), bool(progress) if bar is None else bar.report)
+        if bar is not None:
+            bar.report(k, k)    # the C side reports from one thread: it may miss the last
+    finally:
+        if bar is not None:
+            bar.close()
     status = np.where(st == 0, 0, np.where(st == _core.STATUS_ENONFINITE, -2, -1))
     return EnsembleSolution(t=tev, y=yout, success=status == 0, status=status, nfev=nfev)

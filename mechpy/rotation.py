@@ -38,7 +38,7 @@ __all__ = [
     "euler_matrix", "euler_angles", "angular_velocity", "euler_rates",
     "quat_from_matrix", "matrix_from_quat", "quat_multiply", "quat_normalize",
     "quat_from_euler", "euler_from_quat", "GimbalLockWarning", "SEQUENCES",
-    "ORTH_TOL", "LOCK_TOL", "RATES_LOCK_TOL",
+    "ORTH_TOL", "LOCK_TOL", "RATES_LOCK_TOL", "to_scipy", "from_scipy",
 ]
 
 #: Every accepted sequence: 12 intrinsic (upper case), then 12 extrinsic.
@@ -504,3 +504,103 @@ def euler_rates(angles, omega, seq: str = "ZXZ", frame: str = "body", *,
     a, w, shape = _pair(angles, omega, "omega")
     out = _core.rotation_euler_rates(a, w, seq, space, _tol(lock_tol, "lock_tol"))
     return out.reshape(shape + (3,))
+
+
+def _scipy_rotation():
+    """SciPy's ``Rotation`` class, or an ImportError that says what to install."""
+    try:
+        from scipy.spatial.transform import Rotation
+    except ImportError as exc:  # pragma: no cover - SciPy is a test dependency
+        raise ImportError("to_scipy and from_scipy need SciPy (pip install scipy)") from exc
+    return Rotation
+
+
+def to_scipy(R, *, passive: bool = False, orth_tol: float = ORTH_TOL):
+    r"""A :class:`scipy.spatial.transform.Rotation` of rotation matrices.
+
+    Parameters
+    ----------
+    R : array_like, shape (3, 3) or (k, 3, 3)
+        Rotation matrices: active ones (``passive=False``, as
+        :func:`matrix_from_quat` and ``euler_matrix(..., passive=False)`` give
+        them and as SciPy's ``as_matrix`` reads them), or coordinate
+        transformations :math:`\lambda = R^T` (``passive=True``, as the default
+        ``euler_matrix`` gives them).  ``max|R R^T - I| <= orth_tol`` and
+        ``det R > 0`` are required (:class:`mechpy.DomainError` otherwise):
+        the matrix is checked, never silently orthogonalised.
+    passive : bool
+        Whether ``R`` is the passive matrix (default False).
+    orth_tol : float
+        Default :data:`ORTH_TOL`.
+
+    Returns
+    -------
+    scipy.spatial.transform.Rotation
+        Single for ``R`` of shape (3, 3), a stack of k otherwise; built from
+        :func:`quat_from_matrix`, so ``to_scipy(R).as_matrix()`` is ``R`` (or
+        ``R.T`` when ``passive``) to round-off.
+
+    See Also
+    --------
+    from_scipy : the way back.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import mechpy as mp
+    >>> lam = mp.rotation.euler_matrix(0.3, 0.2, 0.1)          # textbook ZXZ, passive
+    >>> rot = mp.rotation.to_scipy(lam, passive=True)
+    >>> np.allclose(rot.as_euler("ZXZ"), [0.3, 0.2, 0.1])
+    True
+    """
+    Rotation = _scipy_rotation()
+    passive = _flag(passive, "passive")
+    R = _matrices(R)
+    if R.ndim > 3:
+        raise ValueError(f"R must have shape (3, 3) or (k, 3, 3), got {R.shape}")
+    q = quat_from_matrix(R, orth_tol=orth_tol)
+    if passive:
+        q = q * np.array([-1.0, -1.0, -1.0, 1.0])   # the inverse rotation: lambda^T
+    return Rotation.from_quat(q)
+
+
+def from_scipy(rot, *, passive: bool = False) -> np.ndarray:
+    r"""Rotation matrices of a :class:`scipy.spatial.transform.Rotation`.
+
+    Parameters
+    ----------
+    rot : scipy.spatial.transform.Rotation
+        A single rotation or a stack of them.
+    passive : bool
+        False (default): the active matrices ``rot.as_matrix()``; True: their
+        transposes, the coordinate transformations :math:`\lambda` that the
+        default :func:`euler_matrix` uses.
+
+    Returns
+    -------
+    ndarray, shape (3, 3) or (k, 3, 3)
+        Rotation matrices (dimensionless), float64, C-contiguous.
+
+    See Also
+    --------
+    to_scipy : the way there.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import mechpy as mp
+    >>> from scipy.spatial.transform import Rotation
+    >>> rot = Rotation.from_euler("ZXZ", [0.3, 0.2, 0.1])
+    >>> np.allclose(mp.rotation.from_scipy(rot, passive=True),
+    ...             mp.rotation.euler_matrix(0.3, 0.2, 0.1))
+    True
+    """
+    Rotation = _scipy_rotation()
+    if not isinstance(rot, Rotation):
+        raise TypeError(f"rot must be a scipy.spatial.transform.Rotation, got "
+                        f"{type(rot).__name__}")
+    passive = _flag(passive, "passive")
+    m = np.asarray(rot.as_matrix(), dtype=np.float64)
+    if passive:
+        m = np.swapaxes(m, -1, -2)
+    return np.ascontiguousarray(m)

@@ -136,17 +136,6 @@ def _rebuild(cls, params):
     return cls(**params)
 
 
-def _ellipk_from_complement(kc):
-    """Complete elliptic integral K for complementary modulus kc = sqrt(1 - k^2),
-    by the arithmetic-geometric mean (accurate near k = 1, where 1 - k^2 cancels)."""
-    a, b = 1.0, abs(kc)
-    for _ in range(60):
-        if abs(a - b) <= 1e-16 * a:
-            break
-        a, b = 0.5 * (a + b), np.sqrt(a * b)
-    return np.pi / (2.0 * a)
-
-
 class Pendulum(Scene):
     r"""The plane pendulum, optionally damped and driven.
 
@@ -175,7 +164,7 @@ class Pendulum(Scene):
         if not 0 < abs(a) < np.pi:
             raise ValueError("amplitude must be in (0, pi) in magnitude")
         p = self._params
-        return 4.0 * np.sqrt(p["length"] / p["g"]) * _ellipk_from_complement(np.cos(0.5 * a))
+        return 4.0 * np.sqrt(p["length"] / p["g"]) * _core.ellipk_complement(np.cos(0.5 * a))
 
 
 class VanDerPol(Scene):

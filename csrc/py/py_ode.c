@@ -474,13 +474,31 @@ out:
 
 /* ---- ode_solve_many ----------------------------------------------------- */
 
+/* Progress of an ensemble: what the callback below is handed as ctx. */
+typedef struct {
+    size_t last;       /* trajectories done at the last report */
+    PyObject *report;  /* Python callable report(done, total), or NULL for a stderr line */
+} many_progress_ctx;
+
+/* Called by mp_ode_solve_many (from any worker thread, GIL not held) as
+ * trajectories finish; reports at most once per percent and at the end, to
+ * ctx->report(done, total) or as a line on stderr.  An exception raised by
+ * the callable is printed as unraisable and ignored: progress never stops a
+ * solve. */
 static void many_progress(size_t done, size_t total, void *ctx)
 {
-    size_t *last = ctx;
-    if (done != total && done * 100 / total == *last * 100 / total) return;
-    *last = done;
+    many_progress_ctx *c = ctx;
+    if (done != total && done * 100 / total == c->last * 100 / total) return;
+    c->last = done;
     PyGILState_STATE g = PyGILState_Ensure();
-    PySys_WriteStderr("\rsolve_many: %zu/%zu trajectories%s", done, total, done == total ? "\n" : "");
+    if (c->report) {
+        PyObject *r = PyObject_CallFunction(c->report, "nn", (Py_ssize_t)done, (Py_ssize_t)total);
+        if (r) Py_DECREF(r);
+        else PyErr_WriteUnraisable(c->report);
+    } else {
+        PySys_WriteStderr("\rsolve_many: %zu/%zu trajectories%s", done, total,
+                          done == total ? "\n" : "");
+    }
     PyGILState_Release(g);
 }
 
@@ -494,8 +512,9 @@ static PyObject *py_ode_solve_many(PyObject *self, PyObject *args, PyObject *kw)
     PyObject *spec, *y0o, *atolo, *tevo, *paro, *eargs;
     double t0, tf, rtol, h, first_step, max_step;
     long max_steps;
-    int threads, progress;
-    if (!PyArg_ParseTupleAndKeywords(args, kw, "sOddOdOOOOdddlip", kwlist, &mname, &spec, &t0,
+    int threads;
+    PyObject *progress;  /* False, True (a stderr line) or a callable report(done, total) */
+    if (!PyArg_ParseTupleAndKeywords(args, kw, "sOddOdOOOOdddliO", kwlist, &mname, &spec, &t0,
                                      &tf, &y0o, &rtol, &atolo, &tevo, &paro, &eargs, &h,
                                      &first_step, &max_step, &max_steps, &threads, &progress))
         return NULL;
@@ -626,16 +645,17 @@ static PyObject *py_ode_solve_many(PyObject *self, PyObject *args, PyObject *kw)
     fill_options(&o, rtol, atol, first_step, max_step, h, max_steps, tev);
     npy_intp shape[3] = {(npy_intp)k, (npy_intp)n, (npy_intp)nt};
     if (!(yout = mp_py_empty(3, shape))) goto out;
-    size_t last = 0;
+    many_progress_ctx pctx = {0, PyCallable_Check(progress) ? progress : NULL};
+    int want_progress = pctx.report || PyObject_IsTrue(progress) == 1;
     int rc;
     if (sys.holds_python) {
         rc = mp_ode_solve_many(m, probs, k, t0, tf, PyArray_DATA(y0s), &o, 1, PyArray_DATA(yout),
-                               status, nfev, progress ? many_progress : NULL, &last);
+                               status, nfev, want_progress ? many_progress : NULL, &pctx);
     } else {
         Py_BEGIN_ALLOW_THREADS
         rc = mp_ode_solve_many(m, probs, k, t0, tf, PyArray_DATA(y0s), &o, threads,
                                PyArray_DATA(yout), status, nfev,
-                               progress ? many_progress : NULL, &last);
+                               want_progress ? many_progress : NULL, &pctx);
         Py_END_ALLOW_THREADS
     }
     if (rc != MP_OK) {

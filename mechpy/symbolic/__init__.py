@@ -54,8 +54,13 @@ def coordinates(names):
 
     Examples
     --------
+    >>> import sympy
+    >>> import mechpy as mp
     >>> th, = mp.coordinates("theta")
+    >>> m, g, l = sympy.symbols("m g l", positive=True)
     >>> L = m * l**2 * th.diff()**2 / 2 + m * g * l * sympy.cos(th)
+    >>> th.diff()
+    Derivative(theta(t), t)
     """
     from .derive import coordinates as _coordinates
     return _coordinates(names)
