@@ -10,7 +10,7 @@ centre of mass and inertia tensor about the centre of mass,
 
 and from it the inertia about any point (Steiner), principal moments and axes,
 the type of top, angular momentum ``L = I omega`` and rotational energy
-``T = omega . I omega / 2``.  Units are those of the input: mass [M], lengths
+``T = omega^T I omega / 2``.  Units are those of the input: mass [M], lengths
 [L], inertia [M L^2], angular velocity [1/T], energy [M L^2 / T^2].
 
 The numerical work (point-mass sums, Steiner's theorem with exact products,
@@ -264,7 +264,7 @@ def angular_momentum(I, omega) -> np.ndarray:
 
 
 def kinetic_energy(I, omega) -> np.ndarray | float:
-    """Rotational kinetic energy ``T = omega . I omega / 2`` [M L^2 / T^2].
+    """Rotational kinetic energy ``T = omega^T I omega / 2`` [M L^2 / T^2].
 
     Parameters
     ----------
@@ -488,7 +488,7 @@ def solid(shape: str, mass, **dims) -> Body:
     ==============  ===========================  ===========================================
     ``sphere``      radius R                     2/5 M R^2 (all axes)
     ``shell``       radius R (thin)              2/3 M R^2 (all axes)
-    ``box``         a, b, c (full edges x, y, z) I_xx = M (b^2 + c^2)/12, cyclic
+    ``box``         edges a, b, c along x, y, z  I_xx = M (b^2 + c^2)/12, cyclic
     ``cube``        side s                       M s^2 / 6 (all axes)
     ``cylinder``    radius R, height h           I_zz = M R^2/2, I_xx = I_yy = M (3R^2 + h^2)/12
     ``tube``        radius R, inner_radius r, h  I_zz = M (R^2 + r^2)/2,

@@ -4,7 +4,7 @@ The scenes are :class:`mechpy.scenes.RigidBody` (Euler's equations, an
 optional torque, constant in the body frame or a C callback, and quaternion
 orientation) and :class:`mechpy.scenes.HeavyTop`; the geometric methods
 ``"rigid:split"`` and ``"rigid:split4"`` of :func:`mechpy.solve` integrate a
-torque-free or constant-torque ``RigidBody`` keeping |L| and |q| to round-off
+torque-free or constant-torque ``RigidBody`` keeping ``|L|`` and ``|q|`` to round-off
 (about 1e-15 relative after 10^6 steps).
 """
 from __future__ import annotations

@@ -54,7 +54,7 @@ ORTH_TOL = 1e-6
 #: 0, lock only where the first and third angles are indeterminate in float64
 #: (the sine of that distance below the smallest normal number, 2.2e-308).
 LOCK_TOL = 0.0
-#: Default bound on |det J| below which :func:`euler_rates` raises
+#: Default bound on ``|det J|`` below which :func:`euler_rates` raises
 #: :class:`mechpy.SingularityError` (the rates grow as 1 / det J).
 RATES_LOCK_TOL = 1e-12
 

@@ -305,7 +305,7 @@ class RigidBody(Scene):
     :func:`mechpy.solve_many`).  ``energy`` is the rotational kinetic energy
     :math:`T = \tfrac12\sum_i I_i\omega_i^2` (J).  The geometric methods
     ``"rigid:split"`` (order 2) and ``"rigid:split4"`` (order 4) of
-    :func:`mechpy.solve` keep |L| and |q| to round-off; they take a constant
+    :func:`mechpy.solve` keep ``|L|`` and ``|q|`` to round-off; they take a constant
     torque, not a callback.
     """
 

@@ -63,6 +63,23 @@ if [ "$(cat .venv/.mechpy-stamp 2>/dev/null)" != "$stamp" ]; then
     echo "$stamp" > .venv/.mechpy-stamp
 fi
 
+# 3b. The docs job ------------------------------------------------------------
+#   bash scripts/dev.sh docs     # set up (with the docs extra), then: the site, built with
+#                                #   warnings as errors, into docs/_build/html (index.html)
+if [ "$job" = docs ]; then
+    reqs=$(sed -n '/^docs = \[/,/^\]/p' pyproject.toml | grep -o '"[^"]*"' | tr -d '"')
+    dstamp=$(printf '%s\n' "$reqs" | sha256sum | cut -c1-16)
+    if [ "$(cat .venv/.mechpy-docs-stamp 2>/dev/null)" != "$dstamp" ]; then
+        say "installing the docs extra into .venv"
+        # shellcheck disable=SC2086  # one requirement a word
+        "$vpy" -m pip install -q $reqs
+        echo "$dstamp" > .venv/.mechpy-docs-stamp
+    fi
+    MPLBACKEND=Agg "$vpy" -m sphinx -W --keep-going -b html docs docs/_build/html "$@"
+    say "the site is in docs/_build/html/index.html"
+    exit 0
+fi
+
 # 4. The job -----------------------------------------------------------------
 case "$job" in
     tour)  exec "$vpy" -m mechpy tour "$@" ;;
