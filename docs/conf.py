@@ -48,7 +48,7 @@ nb_execution_timeout = 600
 nb_execution_raise_on_error = True
 nb_execution_show_tb = True
 nb_merge_streams = True
-os.environ.setdefault("MPLBACKEND", "Agg")
+os.environ.pop("MPLBACKEND", None)   # the kernels draw inline figures
 myst_enable_extensions = ["dollarmath", "amsmath", "colon_fence", "deflist"]
 myst_heading_anchors = 3
 # the notebooks hold widgets and animations as HTML; mime types Sphinx cannot show
@@ -56,13 +56,40 @@ myst_heading_anchors = 3
 nb_mime_priority_overrides = [("html", "application/vnd.jupyter.widget-view+json", None)]
 suppress_warnings = ["mystnb.unknown_mime_type"]
 
+# ---- math: a local MathJax when the machine has one ---------------------------
+# Debian's libjs-mathjax (MathJax 2, installed by `scripts/dev.sh docs`) is copied
+# into the site, so that formulas render without a network; elsewhere Sphinx's
+# default MathJax from its CDN is used.
+MATHJAX_SRC = Path(os.environ.get("MECHPY_MATHJAX", "/usr/share/javascript/mathjax"))
+_mathjax_static = []
+if (MATHJAX_SRC / "MathJax.js").is_file():
+    import shutil
+
+    _dst = HERE / "_build" / "_mathjax" / "mathjax"
+    if not (_dst / "MathJax.js").is_file():
+        for part in ("MathJax.js", "config/TeX-AMS_CHTML.js", "extensions", "jax/element",
+                     "jax/input/TeX", "jax/output/CommonHTML", "fonts/HTML-CSS/TeX/woff"):
+            src, dst = MATHJAX_SRC / part, _dst / part
+            dst.parent.mkdir(parents=True, exist_ok=True)
+            if src.is_dir():
+                shutil.copytree(src, dst, dirs_exist_ok=True)
+            elif src.is_file():
+                shutil.copyfile(src, dst)
+    _mathjax_static = [str(_dst.parent)]
+    mathjax_path = "mathjax/MathJax.js?config=TeX-AMS_CHTML"
+    # myst-nb marks notebook cells tex2jax_ignore; the math inside them is
+    # marked "math" and processed all the same (as Sphinx asks of MathJax 3)
+    mathjax2_config = {"tex2jax": {"processClass": "math|output_area",
+                                   "ignoreClass": "tex2jax_ignore|mathjax_ignore|document"},
+                       "messageStyle": "none"}
+
 # ---- links -------------------------------------------------------------------
 intersphinx_mapping = {}   # offline build: no inventories are fetched
 
 # ---- HTML --------------------------------------------------------------------
 html_theme = "pydata_sphinx_theme"
 html_title = f"mechpy {release}"
-html_static_path = ["_static"]
+html_static_path = ["_static"] + _mathjax_static
 html_css_files = ["mechpy.css"]
 html_theme_options = {
     "navbar_align": "left",
