@@ -42,10 +42,17 @@ static int gsl_status(gsl_state *st, int rc)
     return rc == MP_ENONFINITE ? GSL_FAILURE : GSL_EBADFUNC;
 }
 
+/* GSL forms its stage times as t + c h with its own rounding: a time an ulp
+ * past either end of the interval is taken as that end. */
+static double gsl_clamp_t(const mp_ode_ws *w, double t)
+{
+    return t > w->t_end ? w->t_end : t < w->t_start ? w->t_start : t;
+}
+
 static int gsl_fn(double t, const double y[], double dydt[], void *params)
 {
     gsl_state *st = params;
-    return gsl_status(st, mp_ode_ws_rhs(st->w, t, y, dydt));
+    return gsl_status(st, mp_ode_ws_rhs(st->w, gsl_clamp_t(st->w, t), y, dydt));
 }
 
 static int gsl_jacfn(double t, const double y[], double *dfdy, double dfdt[], void *params)
@@ -53,6 +60,7 @@ static int gsl_jacfn(double t, const double y[], double *dfdy, double dfdt[], vo
     gsl_state *st = params;
     mp_ode_ws *w = st->w;
     size_t n = w->n;
+    t = gsl_clamp_t(w, t);
     int rc = mp_ode_ws_rhs(w, t, y, st->f0);
     if (rc == MP_OK) rc = mp_ode_ws_jac(w, t, y, st->f0, dfdy, st->ytmp, st->ftmp);
     if (rc == MP_OK) {
