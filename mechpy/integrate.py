@@ -391,7 +391,11 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
         void *user_data)`` as a ctypes function pointer, a
         ``scipy.LowLevelCallable`` or a numba ``cfunc``.
     t_span : (t0, tf)
-        Interval of integration, ``t0 < tf``.
+        Interval of integration; ``tf < t0`` integrates backwards (as in
+        SciPy: ``t``, ``t_eval`` and ``t_events`` then decrease).  The
+        right-hand side is never evaluated outside the interval, except by
+        ``yoshida4``/``yoshida6``, whose negative sub-steps sample it up to
+        0.35 h (0.16 h) beyond a step's ends.
     y0 : array_like, shape (n,)
         Initial state.
     method : str
@@ -402,12 +406,15 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
         (symplectic, for q'' = a(t, q): an undamped scene or
         :class:`SecondOrder`) and ``"gauss4"`` (implicit, symplectic), which
         need ``h``; GSL's steppers ``"gsl:rkf45"``, ``"gsl:rk8pd"``,
-        ``"gsl:msadams"``, ``"gsl:msbdf"``, ``"gsl:bsimp"``, ...
+        ``"gsl:msadams"``, ``"gsl:msbdf"``, ``"gsl:bsimp"``, ...  SciPy's
+        names run their nearest counterparts: ``"RK45"`` dopri5, ``"DOP853"``
+        dop853, ``"Radau"`` radau, ``"BDF"`` gsl:msbdf (GSL's variable-order
+        BDF), ``"LSODA"`` auto (see :data:`SCIPY_METHODS`).
     rtol, atol : float or array_like
         Relative and absolute tolerances: the local error estimate e of each
         step satisfies ``rms(e / (atol + rtol |y|)) <= 1``.
     t_eval : array_like, optional
-        Increasing times in ``t_span`` at which to store the solution, filled
+        Times in ``t_span``, ordered along the integration, at which to store the solution, filled
         from each step's interpolant (the steps are never forced onto them).
     dense_output : bool
         Return a continuous solution in ``sol``.
@@ -420,13 +427,14 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
     h : float
         Step of fixed-step methods.
     first_step, max_step : float
-        Initial step (default: Hairer's estimate) and largest step.
+        Initial step (default: Hairer's estimate; at most ``|tf - t0|``) and
+        largest step.
     max_steps : int
         Budget of attempted steps; when it runs out the solve ends with
         ``status = -1``.
-    jac : callable, optional
-        ``jac(t, y, *args)`` -> (n, n) Jacobian for methods that use one
-        (scenes bring their own analytic Jacobian).
+    jac : callable or array_like (n, n), optional
+        ``jac(t, y, *args)`` -> (n, n) Jacobian, or a constant matrix, for
+        methods that use one (scenes bring their own analytic Jacobian).
 
     Returns
     -------
@@ -438,9 +446,12 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
     Notes
     -----
     Units are those of the system: t in the unit its rates are given in.
-    An exception raised by a Python callable propagates with its traceback;
-    a NaN or inf from the right-hand side raises ``NonFiniteError``; Ctrl-C
-    raises ``KeyboardInterrupt``.  Integration failures (budget exhausted,
+    An exception raised by a Python callable (or a ctypes callback written in
+    Python) propagates with its traceback; Ctrl-C raises
+    ``KeyboardInterrupt``.  A NaN or inf in a trial stage rejects the step
+    (h shrinks tenfold); at an accepted state, or when no step avoids it, it
+    raises ``NonFiniteError`` naming the component; a C callback's outputs
+    are NaN until it writes them.  Integration failures (budget exhausted,
     step below round-off) are reported in ``status``/``message`` as SciPy does.
     """
     y0a = as_array(y0, "y0", ndim=1)
@@ -527,8 +538,10 @@ def solve_many(system, t_span: Sequence[float], y0s, *, params=None, t_eval=None
     ----------
     system : Scene, callable or C callback
         As for :func:`solve`.  Scenes and C callbacks run with the GIL released
-        on ``threads`` threads; a Python callable runs on one thread.
+        on ``threads`` threads; a Python callable (or a ctypes callback
+        written in Python) runs on one thread.
     t_span : (t0, tf)
+        ``tf < t0`` integrates backwards, as in :func:`solve`.
     y0s : array_like, shape (k, n)
         Initial states.
     params : array_like (k, p) or dict, optional

@@ -39,7 +39,7 @@ typedef struct mp_ode_options {
     double max_step;          /* may be inf */
     double h;                 /* step of fixed-step methods */
     long max_steps;           /* budget of attempted steps */
-    const double *t_eval;     /* increasing, inside [t0, tf], or NULL */
+    const double *t_eval;     /* ordered along the integration, inside the interval, or NULL */
     size_t n_eval;
     int dense;                /* keep every step's interpolant */
     size_t n_events;
