@@ -164,14 +164,12 @@ static double quintic_hermite(mp_ode_ws *w, double h, const double *ym, const do
     double *c = w->coef, est = 0.0;
     mp_ode_dense_hermite(n, h, w->y, w->ynew, w->f, w->fnew, c);
     for (size_t i = 0; i < n; i++) {
-        double e1 = fabs(ym[i] - 0.5 * (w->y[i] + w->ynew[i]));
+        double dy = w->ynew[i] - w->y[i], chord = 0.5 * (w->y[i] + w->ynew[i]);
+        double p_m = chord + 0.125 * h * (w->f[i] - w->fnew[i]); /* the cubic at s = 1/2 */
+        double e1 = fabs(ym[i] - chord), e3 = fabs(ym[i] - p_m);
         double sc = w->o->atol[i] + w->o->rtol * fabs(ym[i]);
-        double e3 = fabs(ym[i] - (0.5 * (w->y[i] + w->ynew[i]) +
-                                  0.125 * h * (w->f[i] - w->fnew[i])));
         double q = e1 > 0.0 ? fmin(e3, e3 * e3 / e1) / sc : 0.0;
         est += q * q;
-        double dy = w->ynew[i] - w->y[i];
-        double p_m = 0.5 * (w->y[i] + w->ynew[i]) + 0.125 * h * (w->f[i] - w->fnew[i]);
         double dp_m = 1.5 * dy - 0.25 * h * (w->f[i] + w->fnew[i]); /* d/ds at s = 1/2 */
         double c6 = 16.0 * (h * fm[i] - dp_m);
         c[4 * n + i] = 16.0 * (ym[i] - p_m) - 0.5 * c6;
@@ -187,8 +185,8 @@ static int gsl_finish(mp_ode_ws *w, double t, double h, int need_dense)
     /* until the first interpolant has set h_cap, every step of a solve with
      * output between steps builds one (GSL would grow the step unchecked) */
     if (st->half && st->h_cap == 0.0 && (o->n_eval || o->dense || o->n_events)) need_dense = 1;
-    if (!need_dense) { /* GSL keeps its own derivatives: w->f goes stale */
-        st->f_stale = 1;
+    if (!need_dense) { /* without GSL's f at the new point, w->f goes stale */
+        if (!w->fnew_valid) st->f_stale = 1;
         return MP_OK;
     }
     int rc;
