@@ -163,7 +163,7 @@ def _method_names():
 def _python_backed(obj) -> bool:
     """True for a ctypes callback made from a Python function (directly or
     inside a scipy.LowLevelCallable): ctypes swallows its exceptions."""
-    if type(obj).__name__ == "LowLevelCallable" and isinstance(obj, tuple):
+    if isinstance(obj, tuple) and type(obj).__name__ == "LowLevelCallable":
         obj = tuple.__getitem__(obj, 1)
     if not isinstance(obj, ctypes._CFuncPtr):
         return False
@@ -173,14 +173,11 @@ def _python_backed(obj) -> bool:
 
 
 @contextlib.contextmanager
-def _catch_unraisable(active: bool):
-    """Collect the exceptions ctypes would print and drop (sys.unraisablehook)
-    in this thread while the solve runs; the C core checks the list after
-    every call of the system and raises the first one again."""
-    if not active:
-        yield None
-        return
-    caught: list = []
+def _catch_unraisable(caught: list):
+    """Collect into ``caught`` the exceptions ctypes would print and drop
+    (sys.unraisablehook) in this thread while the solve runs; the C core
+    checks the list after every call of the system and raises the first one
+    again."""
     me = threading.get_ident()
     prev = sys.unraisablehook
 
@@ -201,13 +198,14 @@ def _catch_unraisable(active: bool):
         sys.unraisablehook = prev
 
 
-def _watch_needed(system) -> bool:
-    from .scenes import Scene
+def _watch_list(system):
+    """An empty list to collect a ctypes callback's swallowed exceptions in,
+    or None when the system has no callback written in Python."""
     if isinstance(system, SecondOrder):
-        return _python_backed(system.accel)
-    if isinstance(system, Scene):
-        return _python_backed(getattr(system, "_torque_fn", None))
-    return _python_backed(system)
+        obj = system.accel
+    else:  # a scene carries its torque callback (RigidBody) as _torque_fn
+        obj = getattr(system, "_torque_fn", system)
+    return [] if _python_backed(obj) else None
 
 
 def _c_address(obj):
@@ -466,15 +464,22 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
         if isinstance(jac, (str, bytes)):
             raise TypeError("jac must be callable or a constant (n, n) array")
         jac = as_array(jac, "jac", shape=(n, n))
-    _rigid_split_check(method, system)
+    if method[0] == "r" and method.startswith("rigid:"):
+        _rigid_split_check(method, system)
     spec, dim = _system_spec(system, args, method)
     if dim is not None and dim != n:
         raise ValueError(f"y0 must have {dim} values for {type(system).__name__}, got {n}")
     evs, term, dirs = _events_spec(events)
 
-    with _catch_unraisable(_watch_needed(system)) as watch:
+    watch = _watch_list(system)
+    if watch is None:
         r = _core.ode_solve(method, spec, t0, tf, y0a, rtol, atol_a, tev, bool(dense_output),
-                            evs, term, dirs, args, jac, hh, fs, ms, budget, watch)
+                            evs, term, dirs, args, jac, hh, fs, ms, budget)
+    else:
+        with _catch_unraisable(watch):
+            r = _core.ode_solve(method, spec, t0, tf, y0a, rtol, atol_a, tev,
+                                bool(dense_output), evs, term, dirs, args, jac, hh, fs, ms,
+                                budget, watch)
     st = r["status"]
     if st == 0:
         status = 1 if r["terminated"] else 0
@@ -579,7 +584,8 @@ def solve_many(system, t_span: Sequence[float], y0s, *, params=None, t_eval=None
         method, t_span, rtol, atol, n, h, first_step, max_step, max_steps)
     tev = np.array([tf]) if t_eval is None else _t_eval(t_eval, t0, tf)
     args = _as_args(args)
-    _rigid_split_check(method, system)
+    if method[0] == "r" and method.startswith("rigid:"):
+        _rigid_split_check(method, system)
     spec, dim = _system_spec(system, args, method)
     if dim is not None and dim != n:
         raise ValueError(f"y0s must have {dim} columns for {type(system).__name__}, got {n}")
@@ -590,7 +596,8 @@ def solve_many(system, t_span: Sequence[float], y0s, *, params=None, t_eval=None
         nthreads = as_int(threads, "threads", minimum=1)
     if not isinstance(progress, (bool, np.bool_)):
         raise TypeError("progress must be a bool")
-    with _catch_unraisable(_watch_needed(system)) as watch:
+    watch = _watch_list(system)
+    with _catch_unraisable(watch) if watch is not None else contextlib.nullcontext():
         yout, st, nfev = _core.ode_solve_many(method, spec, t0, tf, Y0, rtol, atol_a, tev, par,
                                               args, hh, fs, ms, budget, int(nthreads),
                                               bool(progress), watch)
