@@ -24,7 +24,7 @@ typedef struct {
     gsl_odeiv2_system sys;
     gsl_odeiv2_driver *d;
     mp_ode_ws *w;
-    int status;        /* the first failure of a callback */
+    int status;        /* the last failure of a callback in this step */
     int f_stale;       /* w->f is not f at the current point (a step without dense output) */
     gsl_odeiv2_step *half; /* one-step rows: a second stepper for the midpoint */
     double h_cap;      /* longest step whose interpolant meets the tolerance (0: none yet) */
