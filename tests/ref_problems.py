@@ -406,3 +406,11 @@ def error_norm(y, ref, rtol, atol):
 
 def max_abs_error(y, ref):
     return float(np.max(np.abs(np.asarray(y) - ref)))
+
+
+def relative_error(y, ref, atol):
+    """max_i |y_i - ref_i| / max(|ref_i|, 10 atol_i): relative where a component is
+    well above its absolute tolerance, in units of 10 atol where it is not (E5's
+    y1 ~ 1e-290 and y4 = 0)."""
+    atol = np.broadcast_to(atol, np.shape(ref))
+    return float(np.max(np.abs(np.asarray(y) - ref) / np.maximum(np.abs(ref), 10 * atol)))
