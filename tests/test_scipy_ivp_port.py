@@ -593,7 +593,7 @@ def test_t_eval_early_event(method):
     assert res.success
     assert res.message == "A termination event occurred."
     assert res.status == 1
-    assert res.t.size == 0 and res.y.size == 0
+    assert np.size(res.t) == 0 and np.size(res.y) == 0
     assert len(res.t_events) == 1
     assert res.t_events[0].size == 1
     assert res.t_events[0][0] == 7
