@@ -1,7 +1,7 @@
 """The stiff problems of the IVP test set (Mazzia and Magherini, release 2.4):
 HIRES, OREGO, ROBER, VDPOL (mu = 1000, the plain form on [0, 2000]) and E5,
-against the test set's published end values, with its absolute tolerances and
-the analytic Jacobians.
+against the test set's published end values, with absolute tolerances below the
+components that matter and the analytic Jacobians.
 
 * radau beside SciPy's Radau (the same method): error within 3x, nfev within
   1.5x, at rtol 1e-8 (and 1e-6 over the set);
