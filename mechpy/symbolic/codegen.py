@@ -111,8 +111,9 @@ class _Emitter:
     maps symbols to their C names.
     """
 
-    def __init__(self, names):
+    def __init__(self, names, coef=()):
         self.names = names
+        self.coef = frozenset(coef)
         self.count = {}
         self.temps = {}
         self.lines = []
@@ -181,9 +182,38 @@ class _Emitter:
             return f"(1.0/sqrt({self.expr(b)}))"
         return None
 
+    def _terms(self, args):
+        """C texts of the terms of a sum, terms that differ only by a factor of
+        numbers and parameters gathered: c1 X + c2 X -> (c1 + c2) X, the sum
+        of coefficients a temporary shared by every sum that has it."""
+        groups = {}
+        for a in args:
+            if a.is_Mul:
+                co = [f for f in a.args if f.is_Number or f in self.coef]
+                core = [f for f in a.args if not (f.is_Number or f in self.coef)]
+                co, core = (_product(co), _product(core)) if co else (sp.S.One, a)
+            elif a.is_Number or a in self.coef:
+                co, core = a, sp.S.One
+            else:
+                co, core = sp.S.One, a
+            groups.setdefault(core, []).append((co, a))
+        out = []
+        for core, terms in groups.items():
+            if len(terms) == 1 or core is sp.S.One:
+                out.extend(self.expr(a) for _, a in terms)
+                continue
+            c = sp.Add(*[co for co, _ in terms])
+            ct = self.expr(c)
+            if c not in self.temps:
+                text, ct = ct, f"mp_c{len(self.temps)}"
+                self.temps[c] = ct
+                self.lines.append(f"    const double {ct} = {text};")
+            out.append(f"{ct}*{self.expr(core)}")
+        return out
+
     def _render(self, x):
         if x.is_Add:
-            return "(" + " + ".join(self.expr(a) for a in x.args) + ")"
+            return "(" + " + ".join(self._terms(x.args)) + ")"
         if x.is_Mul:
             num, den = [], []
             for a in x.args:
@@ -213,13 +243,20 @@ class _Emitter:
         return self._fallback(x)
 
 
+def _product(factors):
+    """The product of already canonical factors, without re-evaluating it."""
+    if not factors:
+        return sp.S.One
+    return factors[0] if len(factors) == 1 else sp.Mul._from_args(factors)
+
+
 def _block(name, exprs, ir, args, what):
     """A static function ``name`` writing the expressions to out[]."""
     names = {ir.T: "t"}
     for i, p in enumerate(ir.P):
         names[p] = f"mp_p{i}"
     exprs = [sp.sympify(e) for e in exprs]
-    em = _Emitter(names)
+    em = _Emitter(names, ir.P)
     for e in exprs:
         em.scan(e)
     outs = []
