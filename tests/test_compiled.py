@@ -477,6 +477,8 @@ def test_pendulum_on_a_cart_scales_to_ten_coordinates():
         V += m * g * py
     s = mp.lagrangian(T - V, q, params=dict(g=G, M=2.0, m=0.5, l=0.3))
     assert s.dim == 20 and s.cyclic == ["x"]
+    from mechpy.symbolic import build
+    assert len(build.units(s.c_source)) == 2     # the Jacobian compiled beside the rest
     y0 = np.zeros(20)
     y0[1:N] = np.linspace(0.1, 0.5, N - 1)
     sol = mp.solve(s, (0, 5), y0, rtol=1e-10, atol=1e-12)
@@ -695,6 +697,23 @@ def test_compile_failure_names_the_command(monkeypatch, tmp_path):
     # without a compiler, the numpy backend
     s = mp.lagrangian(x.diff(t) ** 2 / 2 - x ** 4, [x], backend="numpy")
     assert s.rhs(0, [1.0, 0.0])[1] == -4.0
+
+
+def test_translation_units_compile_link_and_clean_up(tmp_path):
+    import ctypes
+
+    from mechpy.symbolic import build
+    shared = "int twice(int x);\n"
+    good = shared + build.UNIT + "int quad(int x) { return twice(twice(x)); }\n" \
+        + build.UNIT + "int twice(int x) { return 2 * x; }\n"
+    assert len(build.units(good)) == 2
+    so = str(tmp_path / "good.so")
+    build._compile(good, build.compiler(), so, str(tmp_path))
+    assert ctypes.CDLL(so).quad(5) == 20
+    bad = good + build.UNIT + "int broken(int x) { return x +; }\n"
+    with pytest.raises(mp.CompileError, match="failed"):
+        build._compile(bad, build.compiler(), str(tmp_path / "bad.so"), str(tmp_path))
+    assert sorted(os.listdir(tmp_path)) == ["good.so"]      # no temporaries left
 
 
 def test_import_does_not_load_sympy():

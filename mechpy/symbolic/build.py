@@ -30,6 +30,9 @@ FLAGS = ("-O2", "-fPIC", "-shared", "-std=c99")
 #: Source size (characters) from which -O1 replaces -O2.
 LARGE = 150_000
 LIBS = ("-lm",)
+#: A line that separates translation units in a generated source (see
+#: :func:`units`): large systems compile as several units at once.
+UNIT = "\n/* ---- mechpy: translation unit ---- */\n"
 
 #: Libraries loaded in this process, by path (a library is loaded once).
 _LOADED: dict = {}
@@ -84,28 +87,79 @@ def _key(source: str, cmd: list) -> str:
     return h.hexdigest()[:32]
 
 
-def _compile(source: str, cmd: list, target: str, folder: str) -> None:
+def _run(full: list):
+    """Start the compiler command ``full``; CompileError if it cannot run."""
     import subprocess
-    import tempfile
-    fd, src = tempfile.mkstemp(suffix=".c", prefix=".mp_", dir=folder)
-    tmp_so = src[:-2] + ".so"
     try:
-        with os.fdopen(fd, "w") as f:
-            f.write(source)
-        full = cmd + list(_flags(source)) + ["-o", tmp_so, src] + list(LIBS)
-        try:
-            r = subprocess.run(full, capture_output=True, text=True)
-        except OSError as exc:
-            raise CompileError(f"cannot run the C compiler {' '.join(full)!r}: {exc}. Install "
-                               "a C compiler (Debian: apt-get install gcc), set MECHPY_CC, or "
-                               "use backend='numpy'") from None
-        if r.returncode != 0:
-            msg = "\n".join((r.stderr or r.stdout).strip().splitlines()[:12])
-            raise CompileError(f"the C compiler failed (exit {r.returncode}) on "
-                               f"{' '.join(full)!r}:\n{msg}")
+        return subprocess.Popen(full, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                text=True)
+    except OSError as exc:
+        raise CompileError(f"cannot run the C compiler {' '.join(full)!r}: {exc}. Install "
+                           "a C compiler (Debian: apt-get install gcc), set MECHPY_CC, or "
+                           "use backend='numpy'") from None
+
+
+def _wait(proc, full: list) -> None:
+    """Wait for ``proc`` (started by _run on ``full``); CompileError if it failed."""
+    out, err = proc.communicate()
+    if proc.returncode != 0:
+        msg = "\n".join((err or out).strip().splitlines()[:12])
+        raise CompileError(f"the C compiler failed (exit {proc.returncode}) on "
+                           f"{' '.join(full)!r}:\n{msg}")
+
+
+def units(source: str) -> list:
+    """The translation units of ``source``: the whole source, or, when it holds
+    :data:`UNIT` lines, the text before the first one (declarations shared by
+    every unit) followed by each section after it."""
+    parts = source.split(UNIT)
+    if len(parts) == 1:
+        return [source]
+    return [parts[0] + part for part in parts[1:]]
+
+
+def _compile(source: str, cmd: list, target: str, folder: str) -> None:
+    """Compile ``source`` into the shared library ``target`` (moved into place
+    atomically).  Several translation units (see :func:`units`) are compiled
+    at once, each by its own compiler process, then linked.  Temporary files
+    in ``folder`` are removed on every path; CompileError on failure."""
+    import tempfile
+    flags = list(_flags(source))
+    made = []
+    procs = []
+    try:
+        fd, tmp_so = tempfile.mkstemp(suffix=".so", prefix=".mp_", dir=folder)
+        os.close(fd)
+        made.append(tmp_so)
+        parts = units(source)
+        srcs = []
+        for text in parts:
+            fd, src = tempfile.mkstemp(suffix=".c", prefix=".mp_", dir=folder)
+            made.append(src)
+            with os.fdopen(fd, "w") as f:
+                f.write(text)
+            srcs.append(src)
+        if len(srcs) == 1:
+            full = cmd + flags + ["-o", tmp_so, srcs[0]] + list(LIBS)
+            _wait(_run(full), full)
+        else:
+            compile_flags = [f for f in flags if f != "-shared"]
+            objs = [src[:-2] + ".o" for src in srcs]
+            made += objs
+            for src, obj in zip(srcs, objs):
+                full = cmd + compile_flags + ["-c", "-o", obj, src]
+                procs.append((_run(full), full))
+            while procs:
+                proc, full = procs.pop(0)
+                _wait(proc, full)
+            full = cmd + ["-shared", "-o", tmp_so] + objs + list(LIBS)
+            _wait(_run(full), full)
         os.replace(tmp_so, target)
     finally:
-        for f in (src, tmp_so):
+        for proc, _ in procs:      # a unit failed: stop the others
+            proc.kill()
+            proc.communicate()
+        for f in made:
             try:
                 os.unlink(f)
             except FileNotFoundError:

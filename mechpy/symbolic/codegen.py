@@ -15,7 +15,12 @@ import sympy as sp
 from sympy.printing.c import C99CodePrinter
 from sympy.printing.codeprinter import PrintMethodNotImplementedError
 
+from . import build
 from .build import ABI_VERSION
+
+#: Generated blocks (characters) from which a Lagrangian system's Jacobian
+#: compiles as a translation unit of its own, beside the rest.
+SPLIT = 60_000
 
 #: The dense solver, written once.  NA is the size of the linear system.
 RUNTIME = r"""
@@ -250,8 +255,9 @@ def _product(factors):
     return factors[0] if len(factors) == 1 else sp.Mul._from_args(factors)
 
 
-def _block(name, exprs, ir, args, what):
-    """A static function ``name`` writing the expressions to out[]."""
+def _block(name, exprs, ir, args, what, static=True):
+    """A function ``name`` (static unless ``static`` is False) writing the
+    expressions to out[]."""
     names = {ir.T: "t"}
     for i, p in enumerate(ir.P):
         names[p] = f"mp_p{i}"
@@ -270,7 +276,7 @@ def _block(name, exprs, ir, args, what):
     body = "\n".join(em.lines + outs)
     lines = [f"/* out[0..{len(exprs) - 1}] = {what} at (t, y), parameters p"
              + (", unknowns z" if "const double *z" in args else "") + ". */",
-             f"static void {name}({args})", "{"]
+             f"{'static ' if static else ''}void {name}({args})", "{"]
     # the inputs the body reads, as locals (no reload after each store to out)
     used = set(re.findall(r"\bmp_[ypz]\d+\b", body))
     for i in range(ir.n):
@@ -306,9 +312,12 @@ def _header(ir, status):
 #define NC {nc}   /* coordinates */
 #define NK {k}   /* constraints */
 #define NA {na}   /* size of the linear system */
-
-const long mp_gen_dims[5] = {{{n}, {ir.nq}, {len(ir.P)}, {k}, {ABI_VERSION}}};
 """
+
+
+def _dims(ir):
+    return (f"const long mp_gen_dims[5] = {{{ir.n}, {ir.nq}, {len(ir.P)}, {ir.k}, "
+            f"{ABI_VERSION}}};\n")
 
 
 _ARGS = "double t, const double *y, const double *p, double *out"
@@ -318,13 +327,24 @@ _ARGS_Z = "double t, const double *y, const double *p, const double *z, double *
 def _lagrangian_source(ir, status):
     B = ir.blocks
     n, k = ir.nc, ir.k
-    parts = [_header(ir, status), RUNTIME,
-             _block("gen_A", B["A"], ir, _ARGS, "the mass matrix"),
-             _block("gen_b", B["b"], ir, _ARGS, "the equations of motion (right-hand side)"),
-             _block("gen_D", B["D"], ir, _ARGS_Z, "the Jacobian"),
-             _block("gen_energy", B["energy"], ir, _ARGS, "the energy"),
-             _block("gen_momenta", B["momenta"], ir, _ARGS, "the momenta"),
-             _block("gen_lag", B["lag"], ir, _ARGS, "L")]
+    blocks = [_block("gen_A", B["A"], ir, _ARGS, "the mass matrix"),
+              _block("gen_b", B["b"], ir, _ARGS, "the equations of motion (right-hand side)"),
+              _block("gen_energy", B["energy"], ir, _ARGS, "the energy"),
+              _block("gen_momenta", B["momenta"], ir, _ARGS, "the momenta"),
+              _block("gen_lag", B["lag"], ir, _ARGS, "L")]
+    jac = _block("gen_D", B["D"], ir, _ARGS_Z, "the Jacobian", static=False)
+    if len(jac) + sum(map(len, blocks)) > SPLIT:
+        # the Jacobian's block compiles beside the rest (see build.units)
+        parts = [_header(ir, status), "#if defined(__GNUC__)\n#define MP_HIDDEN "
+                 "__attribute__((visibility(\"hidden\")))\n#else\n#define MP_HIDDEN\n#endif\n"
+                 f"MP_HIDDEN void gen_D({_ARGS_Z});", build.UNIT, _dims(ir),
+                 RUNTIME] + blocks
+        tail = [build.UNIT, jac]
+    else:
+        parts = [_header(ir, status), _dims(ir), RUNTIME, jac.replace("\nvoid gen_D(",
+                                                                        "\nstatic void gen_D(")]
+        parts += blocks
+        tail = []
     parts.append(r"""
 /* Solve A z = b at (t, y): z = (q'', -lambda).  A0 receives A before the
  * factorisation, LU its factors.  Returns MP_ESINGULAR for a singular mass
@@ -456,7 +476,7 @@ int mp_gen_constraint_forces(double t, const double *y, double *out, void *param
 """)
     else:
         parts.append(_absent("mp_gen_multipliers") + _absent("mp_gen_constraint_forces"))
-    return "\n".join(parts)
+    return "\n".join(parts + tail)
 
 
 def _absent(name, sig="double t, const double *y, double *out, void *params"):
@@ -472,7 +492,7 @@ int {name}({sig})
 
 def _equations_source(ir, status):
     B = ir.blocks
-    parts = [_header(ir, status),
+    parts = [_header(ir, status), _dims(ir),
              _block("gen_f", B["f"], ir, _ARGS, "rhs"),
              _block("gen_J", B["J"], ir, _ARGS, "the Jacobian")]
     parts.append(r"""
