@@ -5,6 +5,9 @@ side runs in C), a Python callable with SciPy's signature ``f(t, y, *args)``,
 or a low-level C callback ``void f(double t, const double *y, double *dydt,
 void *user_data)`` given as a ctypes function pointer, a
 ``scipy.LowLevelCallable`` or a numba ``cfunc``.
+
+Array shapes follow the layout rule in :mod:`mechpy` (``help(mechpy)``):
+states first, as SciPy's: ``Solution.y`` (n, m), ``EnsembleSolution.y`` (k, n, m).
 """
 from __future__ import annotations
 
