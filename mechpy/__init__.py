@@ -16,16 +16,17 @@ walks them all and checks it):
    states takes ``y`` of shape (n, ...) and returns its components first too: (n, ...)
    for ``rhs``, (n, n, ...) for ``jacobian``, (p, ...) for p quantities per state
    (``momenta``, ``constraint_forces``, ``multipliers``, ``normal_force``), (...) for
-   one number per state (``energy``).  A time ``t`` is a scalar or broadcasts against
-   the trailing axes (...).
+   one number per state (``energy``).  A time ``t`` is a scalar applied to every state;
+   where times per state are taken they broadcast against the axes (...)
+   (``RotatingHoop.normal_force``), and ``Solution.sol(t)`` is (n, ...) for t of shape (...).
 2. **Everything else is a NumPy stack**: batch axes first, then the component axes
    last: a vector (..., 3), a matrix (..., 3, 3), a quaternion (..., 4) (rotation,
    inertia, stress, frames).  A series a function samples at times ``t`` is
    (len(t), n) (``rigid.free_rotation``, ``Modes.evolve``, ``frames.to_rotating``), a
    set of points is (n_points, dim) (``phase.poincare``).
 
-A scalar input gives the output without its batch axes (a float for a scalar
-quantity); results are float64 NumPy arrays.
+A scalar input gives the output without its batch axes; results are NumPy
+arrays of float64.
 """
 from . import _core
 from .errors import *  # noqa: F401,F403

@@ -245,7 +245,8 @@ class CentralForce:
     def rhs(self, t, y):
         """d/dt of the state (r, phi, r_dot, phi_dot), for :func:`mechpy.solve`."""
         r, _, rd, phid = y
-        return [rd, phid, r * phid * phid - self.k / (self.m * r * r), -2 * rd * phid / r]
+        return np.array([rd, phid, r * phid * phid - self.k / (self.m * r * r),
+                         -2 * rd * phid / r], dtype=np.float64)
 
     def momenta(self, y):
         """(p_r, p_phi) = (m r_dot, m r^2 phi_dot) for states (4, ...)."""
@@ -278,7 +279,8 @@ class RotatingHoop:
     def rhs(self, t, y):
         """d/dt (theta, theta_dot), for :func:`mechpy.solve`."""
         th, thd = y
-        return [thd, np.sin(th) * (self.omega ** 2 * np.cos(th) - self.g / self.R)]
+        return np.array([thd, np.sin(th) * (self.omega ** 2 * np.cos(th) - self.g / self.R)],
+                        dtype=np.float64)
 
     def jacobi_integral(self, y):
         """h(theta, theta_dot) (J) for states (2, ...)."""
