@@ -218,9 +218,12 @@ def _trajectory3d_case(b):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    ax = mp.plot.trajectory3d(_r(3, 7))     # a path (3, m), as sol.y[:3]
+    path = _r(3, 7)                          # a path (3, m), as sol.y[:3]
+    ax = mp.plot.trajectory3d(path)
+    drawn = np.array(ax.lines[0].get_data_3d())
     plt.close("all")
-    return [("returns axes", np.zeros(0), (0,))] if ax is not None else []
+    assert np.array_equal(drawn, path)       # rows read as x, y, z: not transposed
+    return [("drawn path", drawn, (3, 7))]
 
 
 # clause 2: NumPy stacks (batch first, components last)
