@@ -20,6 +20,9 @@ coupled equations into independent oscillators for the normal coordinates
 
 Units: any consistent set.  With masses in kg and spring constants in N/m,
 ``omega`` is in rad/s and ``frequencies`` in Hz.
+
+Array shapes follow the layout rule in :mod:`mechpy` (``help(mechpy)``):
+coordinates last (NumPy stacks): ``Modes.evolve`` (len(t), n), ``coordinates`` (..., n).
 """
 from __future__ import annotations
 
