@@ -16,6 +16,9 @@ the type of top, angular momentum ``L = I omega`` and rotational energy
 The numerical work (point-mass sums, Steiner's theorem with exact products,
 the symmetric 3x3 eigen-solver, mesh validation and integration, grids) runs
 in mechpy's C core.
+
+Array shapes follow the layout rule in :mod:`mechpy` (``help(mechpy)``):
+NumPy stacks: vectors (..., 3), tensors (..., 3, 3).
 """
 from __future__ import annotations
 

@@ -5,6 +5,9 @@ side runs in C), a Python callable with SciPy's signature ``f(t, y, *args)``,
 or a low-level C callback ``void f(double t, const double *y, double *dydt,
 void *user_data)`` given as a ctypes function pointer, a
 ``scipy.LowLevelCallable`` or a numba ``cfunc``.
+
+Array shapes follow the layout rule in :mod:`mechpy` (``help(mechpy)``):
+states first, as SciPy's: ``Solution.y`` (n, m), ``EnsembleSolution.y`` (k, n, m).
 """
 from __future__ import annotations
 
@@ -103,9 +106,9 @@ class DenseOutput:
     """Continuous solution: ``sol(t)`` gives y at any t in ``[t_min, t_max]``.
 
     Like SciPy's ``OdeSolution``: a scalar t gives shape (n,), an array of
-    times shape (n, len(t)).  Each step's interpolant is the method's own
-    (4th order for dopri5, 7th for dop853, cubic Hermite otherwise); it is
-    evaluated in C.
+    times shape (n, len(t)), times of any shape (...) shape (n, ...).  Each
+    step's interpolant is the method's own (4th order for dopri5, 7th for
+    dop853, cubic Hermite otherwise); it is evaluated in C.
     """
 
     def __init__(self, seg_t, seg_h, seg_c, backward=False):
@@ -124,7 +127,7 @@ class DenseOutput:
         if not np.all(np.isfinite(tq)):
             raise ValueError("t must be finite")
         out = _core.ode_dense_eval(*self._seg, tq)
-        return out[0] if scalar else out.T
+        return out[0] if scalar else out.T.reshape(out.shape[1:] + t.shape)
 
     def __repr__(self):
         return f"DenseOutput(t_min={self.t_min}, t_max={self.t_max}, segments={self.n_segments})"

@@ -20,6 +20,9 @@ coupled equations into independent oscillators for the normal coordinates
 
 Units: any consistent set.  With masses in kg and spring constants in N/m,
 ``omega`` is in rad/s and ``frequencies`` in Hz.
+
+Array shapes follow the layout rule in :mod:`mechpy` (``help(mechpy)``):
+coordinates last (NumPy stacks): ``Modes.evolve`` (len(t), n), ``coordinates`` (..., n).
 """
 from __future__ import annotations
 
@@ -277,9 +280,12 @@ def normal_modes(K, M=None, *, method: str = "auto", zero_tol: float | None = No
     -----
     The eigenvectors satisfy ``V^T M V = I`` and ``K V = M V diag(omega^2)``.
     The computation runs in C with the GIL released.  LAPACK cannot be stopped
-    part-way, so it runs in a worker thread: Ctrl-C raises ``KeyboardInterrupt``
-    within about 50 ms, and the abandoned solve finishes in the background (its
-    CPU time, up to the full solve's) and frees its memory.
+    part-way.  The chain solver (``dstemr``) runs in a worker thread: Ctrl-C
+    raises ``KeyboardInterrupt`` within about 50 ms, and the abandoned solve
+    finishes in the background (its CPU time, up to the full solve's) and frees
+    its memory.  The dense solver (``dsygvd``) uses the threaded BLAS, which
+    cannot be abandoned safely, so it runs in the calling thread and Ctrl-C
+    arrives when it returns (about 1 s for n = 1500).
 
     Examples
     --------

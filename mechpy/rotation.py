@@ -22,6 +22,9 @@ stands for the matrix that :func:`matrix_from_quat` makes of it.
 Every function is vectorised over leading batch axes and runs its loop in C
 with the GIL released.  Angles are in radians, rates and angular velocities
 in rad/s (any consistent time unit).
+
+Array shapes follow the layout rule in :mod:`mechpy` (``help(mechpy)``):
+NumPy stacks: angles (..., 3), matrices (..., 3, 3), quaternions (..., 4).
 """
 from __future__ import annotations
 

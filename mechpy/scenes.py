@@ -7,6 +7,9 @@ binds the cheapest right-hand side for the parameters given.
 Every scene has ``dim``, ``params`` (a dict), ``rhs(t, y)``,
 ``jacobian(t, y)``, ``energy(y)`` (vectorised over trailing axes: ``y`` of
 shape (dim, ...) as in ``Solution.y``), ``replace(**changes)``, and pickles.
+
+Array shapes follow the layout rule in :mod:`mechpy` (``help(mechpy)``):
+functions of states take y (dim, ...) and return (dim, ...), (dim, dim, ...) or (...).
 """
 from __future__ import annotations
 

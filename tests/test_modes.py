@@ -461,9 +461,7 @@ def test_random_chains_paths_and_scipy_agree(N, ends, seed):
      "md = np.linspace(1.0, 2.0, n)", "[c.modes_tridiag(kd, ke, md) for _ in range(5)]"),
     ("K, M = mp.modes.chain(6000, sparse=True)",
      "[mp.modes.normal_modes(K, M) for _ in range(5)]"),
-    ("rng = np.random.default_rng(0)\nA = rng.normal(size=(1500, 1500))\nK = A @ A.T\n"
-     "M = np.eye(1500) + 0.1 * np.diag(rng.uniform(size=1500))",
-     "[mp.modes.normal_modes(K, M, method='dense') for _ in range(5)]"),
+    # the dense solve (dsygvd) runs in the calling thread: see test_dense_interrupt_exits
 ])
 def test_ctrl_c_in_the_eigensolvers_is_prompt(setup, call):
     # was 35 s late for a long chain: the LAPACK call runs in a worker thread and the
@@ -471,6 +469,19 @@ def test_ctrl_c_in_the_eigensolvers_is_prompt(setup, call):
     from sigint import interrupt_delay
     dt = interrupt_delay(setup, call, delay=0.5)
     assert dt < 1.0, f"KeyboardInterrupt {dt} s after SIGINT"     # measured < 0.06 s
+
+
+def test_dense_interrupt_exits():
+    """Regression: the dense solve ran in an abandoned worker thread after Ctrl-C and
+    OpenBLAS's exit-time shutdown then waited forever for its pool (4 hangs in 6 runs).
+    It now runs in the calling thread: Ctrl-C arrives when the current solve ends
+    (one n = 1500 solve: about 1 s here) and the interpreter exits."""
+    from sigint import interrupt_delay
+    setup = ("rng = np.random.default_rng(0)\nA = rng.normal(size=(1500, 1500))\n"
+             "K = A @ A.T\nM = np.eye(1500) + 0.1 * np.diag(rng.uniform(size=1500))")
+    dt = interrupt_delay(setup, "[mp.modes.normal_modes(K, M, method='dense') for _ in "
+                         "range(50)]", delay=0.3, timeout=60.0)
+    assert dt < 20.0, f"KeyboardInterrupt {dt} s after SIGINT"   # one solve: ~1-3 s
 
 
 def test_results_after_an_interrupted_solve_are_unchanged():

@@ -86,13 +86,16 @@ static void *mp_modes_worker(void *arg)
 /* Run the job with the GIL released, answering Ctrl-C within about 50 ms.
  * Returns MP_OK (the job done, the caller owns it) or MP_EINTR (the job now
  * belongs to the worker; KeyboardInterrupt is set).  Without a thread the
- * job runs inline. */
+ * job runs inline.  The dense solve always runs inline: dsygvd calls the
+ * threaded BLAS, and a worker abandoned inside it makes OpenBLAS's exit-time
+ * shutdown wait forever for its thread pool (the interpreter then hangs at
+ * exit); the chain's dstemr stays on level-1 BLAS and can be abandoned. */
 static int mp_modes_run(struct mp_modes_job *j)
 {
     int rc = MP_OK;
     Py_BEGIN_ALLOW_THREADS
     pthread_t tid;
-    if (pthread_create(&tid, NULL, mp_modes_worker, j) != 0) {
+    if (j->dense || pthread_create(&tid, NULL, mp_modes_worker, j) != 0) {
         mp_modes_job_compute(j);
     } else {
         pthread_mutex_lock(&j->mu);
