@@ -523,8 +523,8 @@ def to_scipy(R, *, passive: bool = False, orth_tol: float = ORTH_TOL):
 
     Parameters
     ----------
-    R : array_like, shape (3, 3) or (k, 3, 3)
-        Rotation matrices: active ones (``passive=False``, as
+    R : array_like, shape (..., 3, 3)
+        Rotation matrices (more than one batch axis needs SciPy >= 1.17): active ones (``passive=False``, as
         :func:`matrix_from_quat` and ``euler_matrix(..., passive=False)`` give
         them and as SciPy's ``as_matrix`` reads them), or coordinate
         transformations :math:`\lambda = R^T` (``passive=True``, as the default
@@ -539,7 +539,7 @@ def to_scipy(R, *, passive: bool = False, orth_tol: float = ORTH_TOL):
     Returns
     -------
     scipy.spatial.transform.Rotation
-        Single for ``R`` of shape (3, 3), a stack of k otherwise; built from
+        Single for ``R`` of shape (3, 3), of shape ``R.shape[:-2]`` otherwise; built from
         :func:`quat_from_matrix`, so ``to_scipy(R).as_matrix()`` is ``R`` (or
         ``R.T`` when ``passive``) to round-off.
 
@@ -559,12 +559,16 @@ def to_scipy(R, *, passive: bool = False, orth_tol: float = ORTH_TOL):
     Rotation = _scipy_rotation()
     passive = _flag(passive, "passive")
     R = _matrices(R)
-    if R.ndim > 3:
-        raise ValueError(f"R must have shape (3, 3) or (k, 3, 3), got {R.shape}")
     q = quat_from_matrix(R, orth_tol=orth_tol)
     if passive:
         q = q * np.array([-1.0, -1.0, -1.0, 1.0])   # the inverse rotation: lambda^T
-    return Rotation.from_quat(q)
+    try:
+        return Rotation.from_quat(q)
+    except ValueError as exc:
+        if q.ndim > 2:   # SciPy before 1.17: one batch axis at most
+            raise ValueError(f"R of shape {R.shape}: this SciPy's Rotation takes (3, 3) or "
+                             f"(k, 3, 3) only") from exc
+        raise
 
 
 def from_scipy(rot, *, passive: bool = False) -> np.ndarray:
@@ -581,8 +585,9 @@ def from_scipy(rot, *, passive: bool = False) -> np.ndarray:
 
     Returns
     -------
-    ndarray, shape (3, 3) or (k, 3, 3)
-        Rotation matrices (dimensionless), float64, C-contiguous.
+    ndarray, shape (..., 3, 3)
+        Rotation matrices (dimensionless), float64, C-contiguous; the batch
+        axes are ``rot``'s shape.
 
     See Also
     --------

@@ -273,7 +273,8 @@ def _rotation_case(b):
             ("quat_multiply", R.quat_multiply(q, q), b + (4,)),
             ("quat_normalize", R.quat_normalize(_r(*b, 4)), b + (4,)),
             ("quat_from_euler", R.quat_from_euler(ang), b + (4,)),
-            ("euler_from_quat", R.euler_from_quat(q), b + (3,))]
+            ("euler_from_quat", R.euler_from_quat(q), b + (3,)),
+            ("from_scipy(to_scipy)", R.from_scipy(R.to_scipy(M)), b + (3, 3))]
 
 
 def _free_rotation_case(b):
@@ -512,7 +513,7 @@ TABLE = {
     **{f"mechpy.rotation.{n}": (STACK, _rotation_case) for n in (
         "euler_matrix", "euler_angles", "angular_velocity", "euler_rates", "quat_from_matrix",
         "matrix_from_quat", "quat_multiply", "quat_normalize", "quat_from_euler",
-        "euler_from_quat")},
+        "euler_from_quat", "to_scipy", "from_scipy")},
     "mechpy.rotation.GimbalLockWarning": (NONE, None),
     # rigid
     "mechpy.rigid.free_rotation": (STACK, _free_rotation_case),
