@@ -34,7 +34,7 @@ int mp_ode_ws_jac(mp_ode_ws *w, double t, const double *y, const double *f0, dou
                   double *scratch_y, double *scratch_f)
 {
     size_t n = w->n;
-    w->njev++;
+    if (!w->p->jac_const) w->njev++;
     if (w->p->jac) {
         int rc = w->p->jac(t, y, jac, w->p->data);
         if (rc != MP_OK) return rc;
