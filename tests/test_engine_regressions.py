@@ -362,7 +362,7 @@ def test_constant_jacobian_array():
     f = lambda t, y: A @ y
     ours = mp.solve(f, (0, 1), [1.0, 1.0], method="radau", jac=A, rtol=1e-8, atol=1e-10)
     ref = solve_ivp(f, (0, 1), [1.0, 1.0], method="Radau", jac=A, rtol=1e-12, atol=1e-14)
-    assert ours.njev >= 1
+    assert ours.njev == 0  # an array is no evaluation: SciPy counts none either
     assert np.max(np.abs(ours.y[:, -1] - ref.y[:, -1])) < 1e-8
     with pytest.raises(ValueError, match="jac"):
         mp.solve(f, (0, 1), [1.0, 1.0], method="radau", jac=np.eye(3))
