@@ -138,7 +138,9 @@ static int gsl_step(mp_ode_ws *w, double t, double h, double *err)
     w->nreject_inner += (long)(st->d->e->failed_steps - failed);
     *err = 0.0;
     if (g != GSL_SUCCESS && st->status != MP_OK) return st->status;
-    if (g == GSL_FAILURE) return MP_ESTEP; /* step size underflow */
+    /* step size underflow: GSL_FAILURE from evolve, GSL_EUNDRFLW from bsimp
+     * when t + h == t */
+    if (g == GSL_FAILURE || g == GSL_EUNDRFLW) return MP_ESTEP;
     if (g != GSL_SUCCESS) return MP_EGSL;
     w->h_taken = tt == t1 ? h : tt - t; /* the driver sets t = t_end on a final step */
     w->h_next = hh;

@@ -30,6 +30,9 @@ typedef struct mp_ode_problem {
      * (q[nq], v[nq]) with q' = v and v' = a(t, q) independent of v, so the
      * second half of rhs(t, (q, v)) is the acceleration.  0: not separable. */
     size_t nq;
+    /* jac returns the same matrix everywhere (SciPy's array jac): it is not
+     * counted as an evaluation (njev), as SciPy counts none. */
+    int jac_const;
 } mp_ode_problem;
 
 typedef struct mp_ode_options {

@@ -540,6 +540,7 @@ static PyObject *py_ode_solve(PyObject *self, PyObject *args, PyObject *kw)
         cj.J = PyArray_DATA(jm);
         prob.rhs = const_jac_rhs;
         prob.jac = const_jac_jac;
+        prob.jac_const = 1;
         prob.data = &cj;
     } else if (jaco != Py_None) {
         wj.inner = prob;
