@@ -340,7 +340,7 @@ static int py_system_parse(PyObject *spec, size_t n, py_system *s)
         PyObject *ra, *ja;
         Py_ssize_t nq;
         if (!PyArg_ParseTuple(a, "OOn", &ra, &ja, &nq)) return -1;
-        c_fn rf, jf = {NULL, NULL};
+        c_fn rf, jf = {0};
         if (c_address(ra, Py_None, &rf) < 0) return -1;
         if (ja != Py_None && c_address(ja, Py_None, &jf) < 0) return -1;
         if (nq < 0 || (size_t)nq * 2 > n) {
