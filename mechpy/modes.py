@@ -281,7 +281,7 @@ def normal_modes(K, M=None, *, method: str = "auto", zero_tol: float | None = No
     The eigenvectors satisfy ``V^T M V = I`` and ``K V = M V diag(omega^2)``.
     The computation runs in C with the GIL released, in the calling thread.
     LAPACK cannot be stopped part-way.  Above 1024 masses the chain solver
-    calls ``dstemr`` on chunks of max(256, n/16) eigenvalue indices and checks
+    calls ``dstemr`` on chunks of max(128, n/48) eigenvalue indices and checks
     for Ctrl-C between chunks, so ``KeyboardInterrupt`` arrives within one
     chunk (well under 1 s for 6000 masses); the chunked solve takes about twice
     as long as one ``dstemr`` call for the whole spectrum (bisection instead of
