@@ -91,13 +91,16 @@ class Scene:
                 raise ValueError(f"params[{name!r}] must have shape ({k},), got {c.shape}")
         return np.ascontiguousarray(np.stack(cols, axis=1))
 
-    def _eval(self, what, t, y):
+    def _state_rows(self, t, y):
+        """Check (t, y) with y of shape (dim, ...); -> (t, rows (m, dim), y)."""
         y = as_array(y, "y", min_ndim=1)
         if y.shape[0] != self._dim:
             raise ValueError(f"y must have {self._dim} components along its first axis, "
                              f"got shape {y.shape}")
-        t = as_scalar(t, "t")
-        flat = np.ascontiguousarray(y.reshape(self._dim, -1).T)
+        return as_scalar(t, "t"), np.ascontiguousarray(y.reshape(self._dim, -1).T), y
+
+    def _eval(self, what, t, y):
+        t, flat, y = self._state_rows(t, y)
         out = _core.scene_eval(self._model, self._vector(), what, t, flat)
         rest = y.shape[1:]
         if what == "energy":
