@@ -122,8 +122,13 @@ def test_long_c_call_releases_the_gil(entry, monkeypatch):
         LONG[entry]()
 
     monkeypatch.setattr(_core, entry, timed)
-    length, ran = _python_ran_during(call)
-    assert length > 4 * EDGE, f"{entry}: the call ({length:.3f} s) is too short to tell"
+    # The OS may deschedule either thread for longer than EDGE on a loaded machine, so
+    # each check gets three tries: one clear observation decides.
+    for _ in range(3):
+        length, ran = _python_ran_during(call)
+        assert length > 4 * EDGE, f"{entry}: the call ({length:.3f} s) is too short to tell"
+        if ran:
+            break
     assert ran, f"{entry}: the main thread did not run during the C call"
 
 
@@ -135,6 +140,9 @@ def test_the_check_sees_a_call_that_holds_the_gil():
         sum(range(20_000_000))
         record("end")
 
-    length, ran = _python_ran_during(call)
-    assert length > 4 * EDGE
+    for _ in range(3):
+        length, ran = _python_ran_during(call)
+        assert length > 4 * EDGE
+        if not ran:
+            break
     assert not ran
