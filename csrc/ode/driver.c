@@ -166,6 +166,18 @@ void mp_ode_result_free(mp_ode_result *r)
     memset(r, 0, sizeof *r);
 }
 
+/* Contract: out = r's status (MP_TERMINATED for a terminal event), where and
+ * what failed, and its evaluation count. */
+void mp_ode_result_outcome(const mp_ode_result *r, mp_ode_outcome *out)
+{
+    out->status = r->status == MP_OK && r->terminated ? MP_TERMINATED : r->status;
+    out->stiff = r->stiff;
+    out->bad_what = r->bad_what;
+    out->bad_index = r->bad_index;
+    out->t_fail = r->t_fail;
+    out->nfev = r->nfev;
+}
+
 int mp_ode_result_dense_eval(size_t n, size_t ncoef, size_t nseg, const double *seg_t,
                              const double *seg_h, const double *seg_c, const double *tq,
                              size_t nq, double *out)
