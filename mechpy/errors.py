@@ -6,9 +6,7 @@ it its exception class, its message and the ``status`` number a
 :class:`~mechpy.integrate.Solution` reports.  Each class derives from
 :class:`MechpyError` and from the builtin a SciPy user would catch.
 
-Which failures raise
---------------------
-``solve`` and ``solve_many`` follow one rule, chosen by their ``errors``
+**Which failures raise.** ``solve`` and ``solve_many`` follow one rule, chosen by their ``errors``
 argument:
 
 * ``errors="auto"`` (the default): the integration giving up -- the step
@@ -30,8 +28,8 @@ raised by argument validation before any C code runs; an exception raised
 inside a user callback propagates unchanged, with its traceback; Ctrl-C raises
 ``KeyboardInterrupt``; these three never become a status.
 
-The table
----------
+**The table** (C status, class, its builtin base, ``Solution.status``, what
+``errors="auto"`` does, message):
 """
 from ._core import (  # noqa: F401
     STATUS_TABLE as _TABLE,
