@@ -1,8 +1,12 @@
-/* mechpy C core: status codes shared by every fallible function.
+/* mechpy C core: status codes shared by every fallible function, and the one
+ * table that describes them.
  *
  * Every fallible function returns one of these; results go through
- * out-parameters.  The binding (csrc/py/errors.c) maps each code to one
- * Python exception class in a single table. */
+ * out-parameters.  The status travels unchanged to Python, where the table
+ * below (exposed as mechpy._core.STATUS_TABLE) gives it its exception class,
+ * its message and the status number a Solution reports: csrc/py/errors.c,
+ * mechpy/errors.py and mechpy/integrate.py read it and hold no text of their
+ * own. */
 #ifndef MP_STATUS_H
 #define MP_STATUS_H
 
@@ -21,10 +25,35 @@ enum mp_status {
     MP_EMESH,       /* a mesh is open, non-manifold, inside out or degenerate */
     MP_EGSL,        /* GSL returned an unexpected error */
     MP_EUNSTABLE,   /* a physical system is unstable (negative stiffness eigenvalue) */
+    /* Not a failure and returned by no function: the table's row for a solve
+     * that a terminal event ended (mp_ode_result.terminated). */
+    MP_TERMINATED,
     MP_NSTATUS
 };
 
-/* A short English description of a status code (static storage). */
+/* What a status means, to the binding and to the user. */
+typedef struct mp_status_info {
+    int status;
+    const char *name;      /* the C name, "MP_EMAXSTEPS" */
+    /* the Python class: a mechpy.errors class, or a builtin the binding keeps
+     * ("MemoryError", "RuntimeError", "KeyboardInterrupt"); NULL: no failure */
+    const char *exception;
+    const char *base;      /* a mechpy class's builtin base: "ValueError", ... */
+    const char *message;   /* the message (a class's docstring is the same text) */
+    int solve_status;      /* Solution.status: 0, 1, or negative (-1 as SciPy's) */
+    /* solve/solve_many with errors="auto": 1 raises, 0 is a status; 2 always
+     * raises (the failure cannot be a status: a callback's own exception,
+     * Ctrl-C, memory) */
+    int raises;
+} mp_status_info;
+
+/* The table, one row per status in enum order (mp_status_table[s].status == s). */
+extern const mp_status_info mp_status_table[MP_NSTATUS];
+
+/* The row of a status; unknown codes get a generic row (static storage). */
+const mp_status_info *mp_status_lookup(int status);
+
+/* The row's message (static storage). */
 const char *mp_status_message(int status);
 
 #endif

@@ -49,10 +49,30 @@ class SecondOrder:
     def __repr__(self):
         return f"SecondOrder({self.accel!r})"
 
-_MESSAGES = {
-    0: "The solver successfully reached the end of the integration interval.",
-    1: "A termination event occurred.",
-}
+#: The status table of the C core (``mechpy._core.STATUS_TABLE``): per C status
+#: code its exception class, message, Solution status and whether it raises.
+_STATUS = {row["code"]: row for row in _core.STATUS_TABLE}
+_ERRORS = ("auto", "raise", "status")
+
+
+def _errors_mode(errors) -> str:
+    if not isinstance(errors, str) or errors not in _ERRORS:
+        raise ValueError(f"errors must be one of {_ERRORS}, got {errors!r}")
+    return errors
+
+
+def _raises(code: int, errors: str) -> bool:
+    """Whether the outcome ``code`` raises under ``errors`` (the table decides
+    for "auto"; a failure that cannot be a status always raises)."""
+    row = _STATUS[code]
+    if row["solve_status"] >= 0:
+        return False
+    return errors == "raise" or row["raises"] == 2 or (errors == "auto" and row["raises"] == 1)
+
+
+def _status_error(code: int, where: str, message: str) -> Exception:
+    """The exception of the outcome ``code``: its class from the table."""
+    return _STATUS[code]["exception"](f"{where}: {message}")
 
 
 class Solution(dict):
@@ -72,11 +92,35 @@ class Solution(dict):
         Right-hand side evaluations, Jacobian evaluations, LU decompositions,
         accepted and rejected steps.
     status : int
-        0 end reached, 1 terminal event, -1 integration failure.
+        0 end reached, 1 terminal event, negative a failure: -1 the step
+        budget ran out or the step fell below round-off (SciPy's -1), and with
+        ``errors="status"`` the other kinds (-2 a NaN or inf, -3 a singular
+        state, ...; the table in :mod:`mechpy.errors`).
     message : str
+        What happened, and for a failure where (t, the component).
     success : bool
         ``status >= 0``.
+
+    Methods
+    -------
+    raise_for_status()
+        Raise the failure's exception (:class:`mechpy.StepBudgetError`,
+        :class:`mechpy.StepSizeError`, ...); nothing when ``success``.
     """
+
+    def raise_for_status(self) -> None:
+        """Raise the exception of a failed solve; return None when it succeeded.
+
+        Raises
+        ------
+        mechpy.MechpyError
+            The class the status table gives the failure (for ``status = -1``
+            :class:`mechpy.StepBudgetError` or :class:`mechpy.StepSizeError`),
+            with the solve's message.
+        """
+        code = self.__dict__.get("_code", 0)
+        if _STATUS[code]["solve_status"] < 0:
+            raise _status_error(code, "solve", self["message"])
 
     def __getattr__(self, name):
         try:
@@ -362,6 +406,12 @@ def _common(method, t_span, rtol, atol, n, h, first_step, max_step, max_steps):
     return method, t0, tf, rtol, atol_a, hh, fs, ms, budget
 
 
+def _options(t0, tf, rtol, atol, t_eval, h, first_step, max_step, max_steps) -> dict:
+    """The options ``_core.ode_solve`` and ``ode_solve_many`` share, by name."""
+    return dict(t0=t0, tf=tf, rtol=rtol, atol=atol, t_eval=t_eval, h=h, first_step=first_step,
+                max_step=max_step, max_steps=max_steps)
+
+
 def _t_eval(t_eval, t0, tf):
     tev = as_array(t_eval, "t_eval", ndim=1, allow_empty=True)
     lo, hi = min(t0, tf), max(t0, tf)
@@ -388,7 +438,8 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
           rtol: float = 1e-8, atol=1e-10, t_eval=None, dense_output: bool = False,
           events=None, args: tuple = (), h: float | None = None,
           first_step: float | None = None, max_step: float = np.inf,
-          max_steps: int = 10_000_000, jac: Callable | None = None) -> Solution:
+          max_steps: int = 10_000_000, jac: Callable | None = None,
+          errors: str = "auto") -> Solution:
     """Solve an initial value problem dy/dt = f(t, y), y(t0) = y0.
 
     Parameters
@@ -444,6 +495,15 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
     jac : callable or array_like (n, n), optional
         ``jac(t, y, *args)`` -> (n, n) Jacobian, or a constant matrix, for
         methods that use one (scenes bring their own analytic Jacobian).
+    errors : {"auto", "raise", "status"}
+        What a failure does.  ``"auto"``: the integration giving up (step
+        budget, step size) ends with ``status = -1`` and a message, as
+        SciPy's ``solve_ivp``; a NaN or inf, a singular state or a domain
+        error raises (:class:`mechpy.NonFiniteError`, ...).  ``"raise"``:
+        every failure raises (:class:`mechpy.StepBudgetError`,
+        :class:`mechpy.StepSizeError` too).  ``"status"``: every failure is a
+        negative ``status`` with its message.  An exception of a Python
+        callback, Ctrl-C and memory exhaustion always raise.
 
     Returns
     -------
@@ -461,7 +521,8 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
     (h shrinks tenfold); at an accepted state, or when no step avoids it, it
     raises ``NonFiniteError`` naming the component; a C callback's outputs
     are NaN until it writes them.  Integration failures (budget exhausted,
-    step below round-off) are reported in ``status``/``message`` as SciPy does.
+    step below round-off) are reported in ``status``/``message`` as SciPy does
+    (see ``errors``); ``Solution.raise_for_status()`` raises them.
     """
     y0a = as_array(y0, "y0", ndim=1)
     n = y0a.size
@@ -485,29 +546,21 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
         check(t0, y0a)
     evs, term, dirs = _events_spec(events)
 
+    errors = _errors_mode(errors)
+
+    opts = _options(t0, tf, rtol, atol_a, tev, hh, fs, ms, budget)
+    kw = dict(dense=bool(dense_output), events=evs, terminal=term, direction=dirs, args=args,
+              jac=jac)
     watch = _watch_list(system)
     if watch is None:
-        r = _core.ode_solve(method, spec, t0, tf, y0a, rtol, atol_a, tev, bool(dense_output),
-                            evs, term, dirs, args, jac, hh, fs, ms, budget)
+        r = _core.ode_solve(method, spec, y0a, opts, **kw)
     else:
         with _catch_unraisable(watch):
-            r = _core.ode_solve(method, spec, t0, tf, y0a, rtol, atol_a, tev,
-                                bool(dense_output), evs, term, dirs, args, jac, hh, fs, ms,
-                                budget, watch)
-    st = r["status"]
-    if st == 0:
-        status = 1 if r["terminated"] else 0
-        message = _MESSAGES[status]
-    else:
-        status = -1
-        if st == _core.STATUS_EMAXSTEPS:
-            message = (f"Required step budget max_steps={budget} exhausted at "
-                       f"t = {r['t_fail']!r}.")
-        else:
-            message = f"Step size fell below round-off at t = {r['t_fail']!r}."
-        if r["stiff"]:
-            message += (" The problem appears stiff: try method='radau', 'auto' or "
-                        "'gsl:msbdf'.")
+            r = _core.ode_solve(method, spec, y0a, opts, watch=watch, **kw)
+    code = r["code"]
+    if _raises(code, errors):
+        raise _status_error(code, "solve", r["message"])
+    status = _STATUS[code]["solve_status"]
     sol = None
     if dense_output and r["dense"] is not None:
         sol = DenseOutput(*r["dense"], backward=bool(r["backward"]))
@@ -515,21 +568,48 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
     if evs is not None:
         t_events = [te for te, _ in r["events"]]
         y_events = [ye for _, ye in r["events"]]
-    return Solution(t=r["t"], y=r["y"].T, sol=sol, t_events=t_events, y_events=y_events,
-                    nfev=r["nfev"], njev=r["njev"], nlu=r["nlu"], nsteps=r["nsteps"],
-                    nreject=r["nreject"], status=status, message=message,
-                    success=status >= 0)
+    out = Solution(t=r["t"], y=r["y"].T, sol=sol, t_events=t_events, y_events=y_events,
+                   nfev=r["nfev"], njev=r["njev"], nlu=r["nlu"], nsteps=r["nsteps"],
+                   nreject=r["nreject"], status=status, message=r["message"],
+                   success=status >= 0)
+    object.__setattr__(out, "_code", code)
+    return out
 
 
 
 class EnsembleSolution(Solution):
     """Result of :func:`solve_many`: ``t`` (m,), ``y`` (k, n, m), ``success``
-    (k,), ``status`` (k,) (0 end reached, -1 step budget or step size failure,
-    -2 a NaN or inf in the right-hand side), ``nfev`` (k,)."""
+    (k,), ``status`` (k,), ``message`` (a list of k str), ``nfev`` (k,).
+
+    ``status[i]`` is what :func:`solve` reports for trajectory i: 0 end
+    reached, -1 step budget or step size, and with ``errors="status"`` the
+    other failures' numbers (-2 a NaN or inf, -3 a singular state, ...; the
+    table in :mod:`mechpy.errors`); ``message[i]`` says what happened where.
+    ``raise_for_status()`` raises the first failed trajectory's exception,
+    naming its index.
+    """
+
+    def raise_for_status(self) -> None:
+        """Raise the exception of the first failed trajectory (by index), naming
+        it; return None when every trajectory succeeded.
+
+        Raises
+        ------
+        mechpy.MechpyError
+            The class the status table gives that trajectory's failure.
+        """
+        _raise_first(self.__dict__.get("_code", np.zeros(0, int)), self["message"], "raise")
 
     def __repr__(self):
         return (f"EnsembleSolution(k={self['y'].shape[0]}, n={self['y'].shape[1]}, "
                 f"m={self['t'].size}, all success={bool(np.all(self['success']))})")
+
+
+def _raise_first(codes, messages, errors: str) -> None:
+    """Raise the first trajectory's failure that raises under ``errors``."""
+    for i, c in enumerate(np.asarray(codes).tolist()):
+        if _raises(c, errors):
+            raise _status_error(c, f"solve_many: trajectory {i}", messages[i])
 
 
 def _ensemble_params(system, params, k):
@@ -582,7 +662,8 @@ def solve_many(system, t_span: Sequence[float], y0s, *, params=None, t_eval=None
                method: str = "dop853", rtol: float = 1e-8, atol=1e-10,
                threads: int | None = None, progress: bool = False, args: tuple = (),
                h: float | None = None, first_step: float | None = None,
-               max_step: float = np.inf, max_steps: int = 10_000_000) -> EnsembleSolution:
+               max_step: float = np.inf, max_steps: int = 10_000_000,
+               errors: str = "auto") -> EnsembleSolution:
     """Integrate k initial states (an ensemble) in C, on several threads.
 
     Parameters
@@ -608,12 +689,19 @@ def solve_many(system, t_span: Sequence[float], y0s, *, params=None, t_eval=None
     progress : bool
         Show progress as trajectories finish: a ``tqdm.auto`` bar when tqdm
         is installed (a widget in notebooks), else a line on stderr.
+    errors : {"auto", "raise", "status"}
+        As for :func:`solve`, per trajectory: ``"auto"`` reports the step
+        budget and step size in ``status`` and raises the first trajectory
+        (by index) whose failure raises in :func:`solve` (a NaN or inf, a
+        singular state), naming it; ``"raise"`` raises the first failed
+        trajectory's exception; ``"status"`` reports every failure (a sweep
+        across singular states keeps its other trajectories).
 
     Returns
     -------
     EnsembleSolution
         ``t`` (m,), ``y`` (k, n, m), ``success`` (k,), ``status`` (k,),
-        ``nfev`` (k,).
+        ``message`` (k str), ``nfev`` (k,).
 
     Notes
     -----
@@ -646,17 +734,24 @@ def solve_many(system, t_span: Sequence[float], y0s, *, params=None, t_eval=None
         nthreads = as_int(threads, "threads", minimum=1)
     if not isinstance(progress, (bool, np.bool_)):
         raise TypeError("progress must be a bool")
+    errors = _errors_mode(errors)
+    opts = _options(t0, tf, rtol, atol_a, tev, hh, fs, ms, budget)
     watch = _watch_list(system)
     bar = _progress_bar(k) if progress else None
     try:
         with _catch_unraisable(watch) if watch is not None else contextlib.nullcontext():
-            yout, st, nfev = _core.ode_solve_many(
-                method, spec, t0, tf, Y0, rtol, atol_a, tev, par, args, hh, fs, ms, budget,
-                int(nthreads), bool(progress) if bar is None else bar.report, watch)
+            r = _core.ode_solve_many(method, spec, Y0, opts, params=par, args=args,
+                                     threads=int(nthreads),
+                                     progress=bool(progress) if bar is None else bar.report,
+                                     watch=watch)
         if bar is not None:
             bar.report(k, k)    # the C side reports from one thread: it may miss the last
     finally:
         if bar is not None:
             bar.close()
-    status = np.where(st == 0, 0, np.where(st == _core.STATUS_ENONFINITE, -2, -1))
-    return EnsembleSolution(t=tev, y=yout, success=status == 0, status=status, nfev=nfev)
+    _raise_first(r["code"], r["message"], errors)
+    status = np.array([_STATUS[c]["solve_status"] for c in r["code"].tolist()], dtype=int)
+    out = EnsembleSolution(t=tev, y=r["y"], success=status >= 0, status=status,
+                           message=r["message"], nfev=r["nfev"])
+    object.__setattr__(out, "_code", r["code"])
+    return out

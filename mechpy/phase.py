@@ -503,7 +503,7 @@ def bifurcation(scene, param: str, values, y0, period, n: int, skip: int, *, t0:
         t_end = _section_end(te, T)
         e = solve_many(scene, (t0, t_end), np.tile(y0, (vals.size, 1)),
                        params={param: vals}, t_eval=te, rtol=rtol, atol=atol,
-                       max_steps=max_steps)
+                       max_steps=max_steps, errors="status")
         if not np.all(e.success):
             bad = int(np.flatnonzero(~e.success)[0])
             from .errors import NonFiniteError, StepBudgetError

@@ -581,6 +581,7 @@ _LAG, _BODY, _MODES = "mechpy.symbolic.lagrangian", "mechpy.inertia.Body", "mech
 METHODS = {
     **{f"Scene.{n}": _SCENE for n in ("replace", "ensemble_params", "rhs", "jacobian", "energy")},
     "Scene.dim": None, "Scene.params": None,
+    "Solution.raise_for_status": None, "EnsembleSolution.raise_for_status": None,
     "Pendulum.period": _SCENE, "Kepler.initial_state": _SCENE,
     "Foucault.precession_rate": _SCENE,
     **{f"RigidBody.{n}": _RB for n in ("rhs", "jacobian", "moments", "initial_state",

@@ -100,6 +100,8 @@ def _cases():
         "compiled scene": lambda: (CP.rhs(0.0, [1.0, 0.0]), CP.jacobian(0.0, [1.0, 0.0]),
                                    CP.energy([1.0, 0.0]), CP.momenta([1.0, 0.0])),
         "compiled singular mass matrix": lambda: CS.rhs(0.0, [0.0, 1.0]),
+        # a solve's NaN is a status the C core returns; the scene evaluation raises it in C
+        "scene rhs NaN": lambda: mp.scenes.Kepler().rhs(0.0, np.zeros(4)),
         "solve compiled": lambda: mp.solve(CP, (0, 0.5), [1.0, 0.0], method="radau"),
         "solve_many compiled params": lambda: mp.solve_many(
             CP, (0, 0.5), np.ones((3, 2)), params={"m": [1.0, 2.0, 3.0]}, threads=2),

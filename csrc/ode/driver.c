@@ -96,6 +96,20 @@ void mp_ode_dense_hermite(size_t n, double h, const double *y0, const double *y1
     }
 }
 
+/* Contract: fnew = f(t + h, ynew) unless the step left it (w->fnew_valid), it
+ * being the next step's first stage; with need_dense also the cubic Hermite
+ * interpolant.  The finish of every method without an interpolant of its own. */
+int mp_ode_finish_fnew_hermite(mp_ode_ws *w, double t, double h, int need_dense)
+{
+    if (!w->fnew_valid) {
+        int rc = mp_ode_ws_rhs(w, t + h, w->ynew, w->fnew);
+        if (rc != MP_OK) return rc;
+        w->fnew_valid = 1;
+    }
+    if (need_dense) mp_ode_dense_hermite(w->n, h, w->y, w->ynew, w->f, w->fnew, w->coef);
+    return MP_OK;
+}
+
 static int grow(void **p, size_t *cap, size_t need, size_t elem)
 {
     if (need <= *cap) return MP_OK;
@@ -164,6 +178,18 @@ void mp_ode_result_free(mp_ode_result *r)
     free(r->ev_count);
     free(r->ev_cap);
     memset(r, 0, sizeof *r);
+}
+
+/* Contract: out = r's status (MP_TERMINATED for a terminal event), where and
+ * what failed, and its evaluation count. */
+void mp_ode_result_outcome(const mp_ode_result *r, mp_ode_outcome *out)
+{
+    out->status = r->status == MP_OK && r->terminated ? MP_TERMINATED : r->status;
+    out->stiff = r->stiff;
+    out->bad_what = r->bad_what;
+    out->bad_index = r->bad_index;
+    out->t_fail = r->t_fail;
+    out->nfev = r->nfev;
 }
 
 int mp_ode_result_dense_eval(size_t n, size_t ncoef, size_t nseg, const double *seg_t,
@@ -340,6 +366,92 @@ static int first_step(mp_ode_ws *w, double t0, double tf, double hmax, double *h
     return MP_OK;
 }
 
+/* ---- output -------------------------------------------------------------- */
+
+/* Contract: the output of an accepted step [t, t + h] ending at tnew, or at
+ * tend < tnew where a terminal event cut it: the t_eval rows up to tend from
+ * the interpolant (the step's end itself exactly), from index *ie on, and the
+ * step's segment when every step is kept.  MP_OK or MP_ENOMEM. */
+static int output_step(mp_ode_result *r, const mp_ode_options *o, const mp_ode_ws *w, double t,
+                       double h, double tnew, double tend, size_t *ie, double *ytmp)
+{
+    size_t n = w->n;
+    for (; *ie < o->n_eval && o->t_eval[*ie] <= tend; ++*ie) {
+        double te = o->t_eval[*ie];
+        if (te == tnew) memcpy(ytmp, w->ynew, n * sizeof(double));
+        else mp_ode_dense_eval(w->coef, w->ncoef, n, (te - t) / h, ytmp);
+        int rc = push_sample(r, te, ytmp);
+        if (rc != MP_OK) return rc;
+    }
+    return o->dense ? push_segment(r, t, h, w->coef) : MP_OK;
+}
+
+/* ---- step-size control and method switching ------------------------------ */
+
+/* The controller's memory between steps. */
+typedef struct {
+    double facold;      /* the last accepted error (Lund stabilisation) */
+    int rejected;       /* the last attempt was rejected */
+    int nonfinite;      /* ... because of a non-finite trial stage */
+    int stiff_count, calm_count; /* Hairer's stiffness test; the switching row's */
+} ode_control;
+
+/* Contract: Hairer's controller for a method with its own error estimate.
+ * Returns 1 when the step (scaled error err) is accepted, with *hnew the next
+ * step; 0 when rejected (also for a NaN err), with *h the step to retry. */
+static int control(const mp_ode_method *cur, ode_control *c, double err, double *h,
+                   double *hnew)
+{
+    if (!(err <= 1.0)) {
+        c->nonfinite = !isfinite(err);
+        double fac = isfinite(err) ? fmin(1.0 / cur->fac_min, pow(err, cur->expo) / cur->safety)
+                                   : 10.0;
+        *h /= fac;
+        c->rejected = 1;
+        return 0;
+    }
+    double fac11 = pow(err, cur->expo);
+    /* Lund stabilisation only for methods with beta > 0 (dopri5) */
+    double fac = cur->beta > 0.0 ? fac11 / pow(c->facold, cur->beta) : fac11;
+    fac = fmax(1.0 / cur->fac_max, fmin(1.0 / cur->fac_min, fac / cur->safety));
+    *hnew = *h / fac;
+    c->facold = fmax(err, 1e-4);
+    if (c->rejected) *hnew = fmin(*hnew, *h);
+    c->rejected = c->nonfinite = 0;
+    return 1;
+}
+
+/* Contract: the switching row m after an accepted step ending at t, next step
+ * h: to the stiff method when the stiffness test fired, back when the stiff
+ * method's steps are within the explicit stability region.  On a switch the
+ * methods' states are swapped, the interpolant cleared, f(t, y) made current
+ * and the controller restarted.  MP_OK or the right-hand side's failure. */
+static int switch_method(const mp_ode_method *m, mp_ode_ws *w, const mp_ode_method **cur,
+                         ode_control *c, double t, double h, mp_ode_result *r)
+{
+    const mp_ode_method *next = *cur;
+    if (*cur == m->nonstiff && c->stiff_count >= 15) next = m->stiff;
+    else if (*cur == m->stiff && w->jnorm > 0 && h * w->jnorm < 0.5 * m->nonstiff->stiff_rho) {
+        if (++c->calm_count >= 10) next = m->nonstiff;
+    } else if (*cur == m->stiff) {
+        c->calm_count = 0;
+    }
+    if (next == *cur) return MP_OK;
+    void *sw = w->state; w->state = w->state2; w->state2 = sw;
+    *cur = next;
+    w->m = next;
+    /* the new method may write fewer interpolant slots: the rest are zero */
+    memset(w->coef, 0, m->ncoef * w->n * sizeof(double));
+    if (next->restart) next->restart(w);
+    int rc = w->fnew_valid ? MP_OK : mp_ode_ws_rhs(w, t, w->y, w->f);
+    if (rc != MP_OK) return rc;
+    c->stiff_count = c->calm_count = 0;
+    c->facold = 1e-4;
+    c->rejected = 0;
+    r->nswitch++;
+    return MP_OK;
+}
+
 /* ---- the driver --------------------------------------------------------- */
 
 /* A switching row counts an explicit step as stiff from this fraction of the
@@ -442,9 +554,7 @@ static int solve_forward(const mp_ode_method *m, const mp_ode_problem *p, double
     else if ((rc = first_step(&w, t0, tf, hmax, &h)) != MP_OK) goto done;
     h = fmin(h, hmax);
 
-    double facold = 1e-4;
-    int rejected = 0, stiff_count = 0, calm_count = 0;
-    int nonfinite = 0; /* the last rejection was a non-finite trial stage */
+    ode_control c = {1e-4, 0, 0, 0, 0};
     long attempts = 0;
     while (t < tf) {
         if (attempts >= o->max_steps) { rc = MP_EMAXSTEPS; break; }
@@ -460,7 +570,7 @@ static int solve_forward(const mp_ode_method *m, const mp_ode_problem *p, double
         }
         if (cur->adaptive && !cur->self_controlled &&
             h <= 16.0 * DBL_EPSILON * fmax(fabs(t), 1e-300)) {
-            rc = nonfinite ? MP_ENONFINITE : MP_ESTEP;
+            rc = c.nonfinite ? MP_ENONFINITE : MP_ESTEP;
             break;
         }
         double err = 0.0, hnew = h;
@@ -470,7 +580,7 @@ static int solve_forward(const mp_ode_method *m, const mp_ode_problem *p, double
         if (rc == MP_ENONFINITE && cur->adaptive && !cur->self_controlled) {
             /* a trial stage overflowed: reject and shrink as Hairer's codes do */
             h /= 10.0;
-            rejected = nonfinite = 1;
+            c.rejected = c.nonfinite = 1;
             r->nreject++;
             rc = MP_OK;
             continue;
@@ -480,25 +590,9 @@ static int solve_forward(const mp_ode_method *m, const mp_ode_problem *p, double
             last = last && w.h_taken >= h;
             h = w.h_taken;
             hnew = w.h_next;
-        } else if (cur->adaptive) {
-            if (!(err <= 1.0)) { /* rejected (also when err is NaN) */
-                nonfinite = !isfinite(err);
-                double fac = isfinite(err) ? fmin(1.0 / cur->fac_min,
-                                                  pow(err, cur->expo) / cur->safety)
-                                           : 10.0;
-                h /= fac;
-                rejected = 1;
-                r->nreject++;
-                continue;
-            }
-            double fac11 = pow(err, cur->expo);
-            /* Lund stabilisation only for methods with beta > 0 (dopri5) */
-            double fac = cur->beta > 0.0 ? fac11 / pow(facold, cur->beta) : fac11;
-            fac = fmax(1.0 / cur->fac_max, fmin(1.0 / cur->fac_min, fac / cur->safety));
-            hnew = h / fac;
-            facold = fmax(err, 1e-4);
-            if (rejected) hnew = fmin(hnew, h);
-            rejected = nonfinite = 0;
+        } else if (cur->adaptive && !control(cur, &c, err, &h, &hnew)) {
+            r->nreject++;
+            continue;
         }
         double tnew = last ? tf : t + h;
         /* the interpolant is built only for a step that needs it: one holding a
@@ -514,10 +608,10 @@ static int solve_forward(const mp_ode_method *m, const mp_ode_problem *p, double
         if (w.rho > 0.0) {
             double rho_stiff = m->nonstiff ? MP_ODE_SWITCH_FRAC * cur->stiff_rho : cur->stiff_rho;
             if (w.rho > rho_stiff) {
-                calm_count = 0;
-                if (++stiff_count >= 15) r->stiff = 1;
-            } else if (++calm_count >= 6) {
-                stiff_count = 0;
+                c.calm_count = 0;
+                if (++c.stiff_count >= 15) r->stiff = 1;
+            } else if (++c.calm_count >= 6) {
+                c.stiff_count = 0;
             }
         }
         double s_stop = 2.0;
@@ -526,16 +620,7 @@ static int solve_forward(const mp_ode_method *m, const mp_ode_problem *p, double
             if (rc != MP_OK) break;
         }
         double tend = s_stop <= 1.0 ? t + s_stop * h : tnew;
-        if (o->n_eval) {
-            while (ie < o->n_eval && o->t_eval[ie] <= tend) {
-                double te = o->t_eval[ie];
-                if (te == tnew) memcpy(ytmp, w.ynew, n * sizeof(double));
-                else mp_ode_dense_eval(w.coef, w.ncoef, n, (te - t) / h, ytmp);
-                if ((rc = push_sample(r, te, ytmp)) != MP_OK) goto done;
-                ie++;
-            }
-        }
-        if (o->dense && (rc = push_segment(r, t, h, w.coef)) != MP_OK) break;
+        if ((rc = output_step(r, o, &w, t, h, tnew, tend, &ie, ytmp)) != MP_OK) break;
         r->nsteps++;
         if (s_stop <= 1.0) {
             mp_ode_dense_eval(w.coef, w.ncoef, n, s_stop, ytmp);
@@ -552,28 +637,7 @@ static int solve_forward(const mp_ode_method *m, const mp_ode_problem *p, double
         h = fmin(cur->adaptive ? hnew : o->h, hmax);
         /* the switching row: to the stiff method when the test fires, back when
          * the stiff method's steps are within the explicit stability region */
-        if (m->nonstiff) {
-            const mp_ode_method *next = cur;
-            if (cur == m->nonstiff && stiff_count >= 15) next = m->stiff;
-            else if (cur == m->stiff && w.jnorm > 0 && h * w.jnorm < 0.5 * m->nonstiff->stiff_rho) {
-                if (++calm_count >= 10) next = m->nonstiff;
-            } else if (cur == m->stiff) {
-                calm_count = 0;
-            }
-            if (next != cur) {
-                void *sw2 = w.state; w.state = w.state2; w.state2 = sw2;
-                cur = next;
-                w.m = cur;
-                /* the new method may write fewer interpolant slots: the rest are zero */
-                memset(w.coef, 0, m->ncoef * n * sizeof(double));
-                if (cur->restart) cur->restart(&w);
-                if (!w.fnew_valid && (rc = mp_ode_ws_rhs(&w, t, w.y, w.f)) != MP_OK) break;
-                stiff_count = calm_count = 0;
-                facold = 1e-4;
-                rejected = 0;
-                r->nswitch++;
-            }
-        }
+        if (m->nonstiff && (rc = switch_method(m, &w, &cur, &c, t, h, r)) != MP_OK) break;
     }
     r->t_fail = t;
 

@@ -25,8 +25,7 @@ typedef struct {
     const double *y0s;
     const mp_ode_options *o;
     double *yout;
-    int *status;
-    long *nfev;
+    mp_ode_outcome *out;
     atomic_size_t next, done;
     atomic_int stop;    /* set on interrupt or a fatal error */
     int fatal;          /* first fatal status (written once, under stop) */
@@ -79,12 +78,11 @@ static void *ens_run(void *argp)
         if (i >= e->k) break;
         mp_ode_result r;
         int rc = mp_ode_solve(e->m, &e->probs[i], e->t0, e->tf, e->y0s + i * e->n, &o, &r);
-        e->nfev[i] = r.nfev;
+        mp_ode_result_outcome(&r, &e->out[i]);
         double *dst = e->yout + i * e->n * e->nt; /* (n, nt) block */
         for (size_t j = 0; j < e->nt; j++)
             for (size_t c = 0; c < e->n; c++)
                 dst[c * e->nt + j] = j < r.m ? r.y[j * e->n + c] : NAN;
-        e->status[i] = rc;
         mp_ode_result_free(&r);
         if (rc == MP_EINTR || rc == MP_ECALLBACK || rc == MP_ENOMEM) {
             if (!atomic_exchange(&e->stop, 1)) e->fatal = rc;
@@ -99,7 +97,7 @@ static void *ens_run(void *argp)
 
 int mp_ode_solve_many(const mp_ode_method *m, const mp_ode_problem *probs, size_t k, double t0,
                       double tf, const double *y0s, const mp_ode_options *o, int threads,
-                      double *yout, int *status, long *nfev,
+                      double *yout, mp_ode_outcome *out,
                       void (*progress)(size_t, size_t, void *), void *progress_ctx)
 {
     if (k == 0) return MP_OK;
@@ -115,8 +113,7 @@ int mp_ode_solve_many(const mp_ode_method *m, const mp_ode_problem *probs, size_
     e.y0s = y0s;
     e.o = o;
     e.yout = yout;
-    e.status = status;
-    e.nfev = nfev;
+    e.out = out;
     e.interrupt = o->interrupt;
     e.interrupt_ctx = o->interrupt_ctx;
     e.progress = progress;
@@ -124,7 +121,8 @@ int mp_ode_solve_many(const mp_ode_method *m, const mp_ode_problem *probs, size_
     atomic_init(&e.next, 0);
     atomic_init(&e.done, 0);
     atomic_init(&e.stop, 0);
-    for (size_t i = 0; i < k; i++) status[i] = -1; /* not run */
+    for (size_t i = 0; i < k; i++) /* not run (the ensemble was stopped) */
+        out[i] = (mp_ode_outcome){.status = MP_EINTR, .t_fail = t0};
     if (threads < 1) threads = 1;
     if ((size_t)threads > k) threads = (int)k;
     pthread_t *tid = threads > 1 ? malloc((size_t)(threads - 1) * sizeof *tid) : NULL;

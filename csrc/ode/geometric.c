@@ -78,10 +78,8 @@ static int yoshida6_step(mp_ode_ws *w, double t, double h, double *err)
 /* fnew = f(t + h, ynew) came out of the last kick */
 static int fsal_hermite_finish(mp_ode_ws *w, double t, double h, int need_dense)
 {
-    (void)t;
     w->fnew_valid = 1;
-    if (need_dense) mp_ode_dense_hermite(w->n, h, w->y, w->ynew, w->f, w->fnew, w->coef);
-    return MP_OK;
+    return mp_ode_finish_fnew_hermite(w, t, h, need_dense);
 }
 
 #define MP_SPLIT_ROW(nm, ord)                                                                 \
@@ -105,12 +103,8 @@ static const double gl_a[2][2] = {{0.25, 0.25 - SQ3_6}, {0.25 + SQ3_6, 0.25}};
  * is too large for it), not a bad right-hand side. */
 static int gl_stage(mp_ode_ws *w, double t, const double *Y, double *K)
 {
-    int rc = w->p->rhs(t, Y, K, w->p->data);
-    w->nfev++;
-    if (rc != MP_OK) return rc;
-    for (size_t i = 0; i < w->n; i++)
-        if (!isfinite(K[i])) return MP_ENOCONV;
-    return MP_OK;
+    int rc = mp_ode_ws_rhs(w, t, Y, K);
+    return rc == MP_ENONFINITE ? MP_ENOCONV : rc;
 }
 
 /* LAPACK (Fortran calling convention) */

@@ -194,14 +194,7 @@ static int gsl_finish(mp_ode_ws *w, double t, double h, int need_dense)
     int rc;
     if (st->f_stale && (rc = mp_ode_ws_rhs(w, t, w->y, w->f)) != MP_OK) return rc;
     st->f_stale = 0;
-    if (!w->fnew_valid) {
-        if ((rc = mp_ode_ws_rhs(w, t + h, w->ynew, w->fnew)) != MP_OK) return rc;
-        w->fnew_valid = 1;
-    }
-    if (!st->half) {
-        mp_ode_dense_hermite(w->n, h, w->y, w->ynew, w->f, w->fnew, w->coef);
-        return MP_OK;
-    }
+    if ((rc = mp_ode_finish_fnew_hermite(w, t, h, !st->half)) != MP_OK || !st->half) return rc;
     /* the midpoint: half a step of the same method from (t, y) */
     memcpy(st->ym, w->y, w->n * sizeof(double));
     gsl_odeiv2_step_reset(st->half);

@@ -81,6 +81,19 @@ typedef struct mp_ode_result {
     double **ev_t, **ev_y;
 } mp_ode_result;
 
+/* How a solve ended: what the binding turns into a status and a message. */
+typedef struct mp_ode_outcome {
+    int status;       /* MP_OK, MP_TERMINATED (a terminal event) or the failure */
+    int stiff;        /* Hairer's stiffness test fired */
+    int bad_what;     /* MP_ENONFINITE: see mp_ode_result */
+    size_t bad_index;
+    double t_fail;    /* where it failed */
+    long nfev;
+} mp_ode_outcome;
+
+/* The outcome of a finished solve. */
+void mp_ode_result_outcome(const mp_ode_result *r, mp_ode_outcome *out);
+
 typedef struct mp_ode_ws mp_ode_ws;
 
 /* One integration method: a row of the table in methods.c. */

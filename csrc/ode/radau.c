@@ -137,13 +137,22 @@ static int radau_jac(mp_ode_ws *w, double t)
     return MP_OK;
 }
 
+/* Contract: the real and complex eigenvalues of Radau IIA's inverse
+ * coefficient matrix over h (the shifts of its two linear systems). */
+static void radau_eig(double h, double *mr, double complex *mc)
+{
+    *mr = (3.0 + cbrt(9.0) - cbrt(3.0)) / h;
+    *mc = (3.0 + 0.5 * (cbrt(3.0) - cbrt(9.0)) -
+           0.5 * I * (pow(3.0, 5.0 / 6.0) + pow(3.0, 7.0 / 6.0))) / h;
+}
+
 static int radau_lu(mp_ode_ws *w, double h)
 {
     radau_state *st = w->state;
     int n = st->n, info = 0;
-    double mr = (3.0 + cbrt(9.0) - cbrt(3.0)) / h;
-    double complex mc = (3.0 + 0.5 * (cbrt(3.0) - cbrt(9.0)) -
-                         0.5 * I * (pow(3.0, 5.0 / 6.0) + pow(3.0, 7.0 / 6.0))) / h;
+    double mr;
+    double complex mc;
+    radau_eig(h, &mr, &mc);
     for (int j = 0; j < n; j++)
         for (int i = 0; i < n; i++) {
             double a = -st->J[(size_t)i * n + j];
@@ -181,9 +190,9 @@ static int radau_newton(mp_ode_ws *w, double t, double h, double tol, int *iters
 {
     radau_state *st = w->state;
     size_t n = (size_t)st->n;
-    double mr = (3.0 + cbrt(9.0) - cbrt(3.0)) / h;
-    double complex mc = (3.0 + 0.5 * (cbrt(3.0) - cbrt(9.0)) -
-                         0.5 * I * (pow(3.0, 5.0 / 6.0) + pow(3.0, 7.0 / 6.0))) / h;
+    double mr;
+    double complex mc;
+    radau_eig(h, &mr, &mc);
     double *Z = st->Z, *W = st->W, *F = st->F, *dW = st->dW;
     double dw_old = -1.0;
     *rate = -1.0;
@@ -381,12 +390,4 @@ const mp_ode_method mp_ode_radau = {
     .dense_order = 3, .ncoef = 4, .nscratch = 0, .self_controlled = 1,
     .alloc = radau_alloc, .free = radau_free, .restart = radau_restart,
     .step = radau_step, .finish = radau_finish,
-};
-
-extern const mp_ode_method mp_ode_dop853;
-
-const mp_ode_method mp_ode_auto = {
-    .name = "auto", .order = 8, .adaptive = 1, .implicit = 1, .needs_jacobian = 1,
-    .dense_order = 3, .ncoef = 8, .nscratch = 15,
-    .nonstiff = &mp_ode_dop853, .stiff = &mp_ode_radau,
 };

@@ -58,17 +58,6 @@ static int rk4_step(mp_ode_ws *w, double t, double h, double *err)
     return MP_OK;
 }
 
-/* f at the new point is the next step's first stage: computing it here costs
- * nothing extra, and gives the cubic Hermite interpolant. */
-int mp_ode_finish_fnew_hermite(mp_ode_ws *w, double t, double h, int need_dense)
-{
-    int rc = mp_ode_ws_rhs(w, t + h, w->ynew, w->fnew);
-    if (rc != MP_OK) return rc;
-    w->fnew_valid = 1;
-    if (need_dense) mp_ode_dense_hermite(w->n, h, w->y, w->ynew, w->f, w->fnew, w->coef);
-    return MP_OK;
-}
-
 const mp_ode_method mp_ode_rk4 = {
     .name = "rk4", .order = 4, .adaptive = 0, .dense_order = 3, .ncoef = 4, .nscratch = 4,
     .step = rk4_step, .finish = mp_ode_finish_fnew_hermite,

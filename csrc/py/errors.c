@@ -1,49 +1,72 @@
-/* The one table that maps C status codes to Python exceptions. */
+/* Status codes to Python exceptions: the classes and STATUS_TABLE are made
+ * from the one table in mp_status.c; nothing here holds message text. */
 #include "mp_py.h"
 
+#include <string.h>
 #include <stdio.h>
 #include <math.h>
 
 /* Classes are created once at module init and never change afterwards. */
 static PyObject *mp_exc[MP_NSTATUS];
 static PyObject *mp_base_error;
+static PyObject *mp_linalg_error; /* numpy.linalg.LinAlgError (owned) */
 
-struct mp_exc_def {
-    int status;
-    const char *name;      /* attribute name on mechpy._core */
-    const char *doc;
-    PyObject **extra_base; /* a builtin base besides MechpyError, or NULL */
-};
+/* Contract: the builtin class a table row names ("ValueError", "LinAlgError",
+ * "MemoryError", ...), a borrowed reference, or NULL for a name not listed. */
+static PyObject *builtin_class(const char *name)
+{
+    static const struct { const char *name; PyObject **cls; } known[] = {
+        {"ValueError", &PyExc_ValueError}, {"RuntimeError", &PyExc_RuntimeError},
+        {"MemoryError", &PyExc_MemoryError}, {"KeyboardInterrupt", &PyExc_KeyboardInterrupt},
+    };
+    if (strcmp(name, "LinAlgError") == 0) return mp_linalg_error;
+    for (size_t i = 0; i < sizeof known / sizeof known[0]; i++)
+        if (strcmp(known[i].name, name) == 0) return *known[i].cls;
+    return NULL;
+}
 
-/* Builtin bases are looked up at init (they are stable singletons). */
-static PyObject *mp_py_ValueError, *mp_py_RuntimeError, *mp_py_LinAlgError;
+/* Contract: add _core.STATUS ({C name: code}, what generated C prints its
+ * #defines from) and _core.STATUS_TABLE (one dict per row: code, name,
+ * exception (the class), message, solve_status, raises).  0 or -1. */
+static int add_status_tables(PyObject *module)
+{
+    PyObject *names = PyDict_New(), *rows = PyTuple_New(MP_NSTATUS);
+    if (!names || !rows) goto fail;
+    for (int s = 0; s < MP_NSTATUS; s++) {
+        const mp_status_info *r = &mp_status_table[s];
+        PyObject *cls = s == MP_OK || s == MP_TERMINATED ? Py_None : mp_py_exception_for(s);
+        PyObject *row = Py_BuildValue("{s:i,s:s,s:O,s:s,s:i,s:i}", "code", s, "name", r->name,
+                                      "exception", cls, "message", r->message, "solve_status",
+                                      r->solve_status, "raises", r->raises);
+        if (!row) goto fail;
+        PyTuple_SET_ITEM(rows, s, row);
+        PyObject *v = PyLong_FromLong(s);
+        if (!v || PyDict_SetItemString(names, r->name, v) < 0) {
+            Py_XDECREF(v);
+            goto fail;
+        }
+        Py_DECREF(v);
+    }
+    if (PyModule_AddObject(module, "STATUS", names) < 0) goto fail;
+    names = NULL;
+    if (PyModule_AddObject(module, "STATUS_TABLE", rows) < 0) goto fail;
+    return 0;
+fail:
+    Py_XDECREF(names);
+    Py_XDECREF(rows);
+    return -1;
+}
 
-static const struct mp_exc_def mp_exc_table[] = {
-    {MP_EDOM, "DomainError", "An argument is outside its domain.", &mp_py_ValueError},
-    {MP_EMAXSTEPS, "StepBudgetError", "The step budget (max_steps) ran out.", &mp_py_RuntimeError},
-    {MP_ESTEP, "StepSizeError", "The step size fell below round-off.", &mp_py_RuntimeError},
-    {MP_ENOTSPD, "NotPositiveDefiniteError",
-     "A matrix that must be symmetric positive definite is not.", &mp_py_LinAlgError},
-    {MP_ENONFINITE, "NonFiniteError", "A NaN or inf was produced.", &mp_py_ValueError},
-    {MP_ENOCONV, "ConvergenceError", "An iteration did not converge.", &mp_py_RuntimeError},
-    {MP_ESINGULAR, "SingularityError",
-     "A singular configuration (gimbal lock, singular matrix).", &mp_py_ValueError},
-    {MP_EMESH, "MeshError", "A mesh is open, non-manifold, inside out or degenerate.",
-     &mp_py_ValueError},
-    {MP_EGSL, "GSLError", "GSL reported an unexpected error.", &mp_py_RuntimeError},
-    {MP_EUNSTABLE, "UnstableSystemError",
-     "A physical system is unstable (a negative stiffness eigenvalue).", &mp_py_ValueError},
-};
-
+/* Contract: create MechpyError and one class per table row that has a builtin
+ * base (dual inheritance: MechpyError and that builtin), add them and the
+ * status tables to the module.  0 or -1 with an exception set. */
 int mp_py_errors_init(PyObject *module)
 {
     PyObject *linalg = PyImport_ImportModule("numpy.linalg");
     if (!linalg) return -1;
-    mp_py_LinAlgError = PyObject_GetAttrString(linalg, "LinAlgError");
+    mp_linalg_error = PyObject_GetAttrString(linalg, "LinAlgError");
     Py_DECREF(linalg);
-    if (!mp_py_LinAlgError) return -1;
-    mp_py_ValueError = PyExc_ValueError;
-    mp_py_RuntimeError = PyExc_RuntimeError;
+    if (!mp_linalg_error) return -1;
 
     mp_base_error = PyErr_NewExceptionWithDoc(
         "mechpy.MechpyError", "Base class of every error mechpy raises.", PyExc_Exception, NULL);
@@ -51,29 +74,43 @@ int mp_py_errors_init(PyObject *module)
     Py_INCREF(mp_base_error);
     if (PyModule_AddObject(module, "MechpyError", mp_base_error) < 0) return -1;
 
-    for (size_t i = 0; i < sizeof mp_exc_table / sizeof mp_exc_table[0]; i++) {
-        const struct mp_exc_def *d = &mp_exc_table[i];
-        char qual[96];
-        snprintf(qual, sizeof qual, "mechpy.%s", d->name);
-        PyObject *bases = PyTuple_Pack(2, mp_base_error, *d->extra_base);
+    for (int s = 0; s < MP_NSTATUS; s++) {
+        const mp_status_info *d = &mp_status_table[s];
+        if (!d->base) continue;
+        PyObject *extra = builtin_class(d->base);
+        if (!extra) {
+            PyErr_Format(PyExc_RuntimeError, "status table: unknown base %s", d->base);
+            return -1;
+        }
+        char qual[96], doc[160];
+        snprintf(qual, sizeof qual, "mechpy.%s", d->exception);
+        snprintf(doc, sizeof doc, "Raised when %s.", d->message);
+        PyObject *bases = PyTuple_Pack(2, mp_base_error, extra);
         if (!bases) return -1;
-        PyObject *cls = PyErr_NewExceptionWithDoc(qual, d->doc, bases, NULL);
+        PyObject *cls = PyErr_NewExceptionWithDoc(qual, doc, bases, NULL);
         Py_DECREF(bases);
         if (!cls) return -1;
-        mp_exc[d->status] = cls;
+        mp_exc[s] = cls;
         Py_INCREF(cls);
-        if (PyModule_AddObject(module, d->name, cls) < 0) return -1;
+        if (PyModule_AddObject(module, d->exception, cls) < 0) return -1;
     }
-    return 0;
+    return add_status_tables(module);
 }
 
+/* Contract: the class a status raises (borrowed): its mechpy class, or the
+ * builtin its row names (MemoryError, RuntimeError, KeyboardInterrupt). */
 PyObject *mp_py_exception_for(int status)
 {
-    if (status == MP_ENOMEM) return PyExc_MemoryError;
     if (status > 0 && status < MP_NSTATUS && mp_exc[status]) return mp_exc[status];
+    const mp_status_info *r = mp_status_lookup(status);
+    PyObject *cls = r->exception && !r->base ? builtin_class(r->exception) : NULL;
+    if (cls) return cls;
     return mp_base_error ? mp_base_error : PyExc_RuntimeError;
 }
 
+/* Contract: raise the status's class with "context: message (detail)"; an
+ * exception a callback already set (MP_ECALLBACK, MP_EINTR) is kept with its
+ * traceback.  Returns NULL. */
 PyObject *mp_py_raise_detail(int status, const char *context, const char *detail)
 {
     if ((status == MP_ECALLBACK || status == MP_EINTR) && PyErr_Occurred())
@@ -82,8 +119,7 @@ PyObject *mp_py_raise_detail(int status, const char *context, const char *detail
         PyErr_NoMemory();
         return NULL;
     }
-    PyObject *cls = (status == MP_ECALLBACK || status == MP_EINTR)
-                        ? PyExc_RuntimeError : mp_py_exception_for(status);
+    PyObject *cls = mp_py_exception_for(status);
     if (detail && detail[0])
         PyErr_Format(cls, "%s: %s (%s)", context ? context : "mechpy",
                      mp_status_message(status), detail);

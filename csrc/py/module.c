@@ -11,31 +11,6 @@ static struct PyModuleDef mp_core_module = {
     "mechpy's C core (integrators, scenes, inertia, rotations, normal modes).", -1, NULL,
 };
 
-/* _core.STATUS: every status code by its C name, the one source from which
- * generated C (mechpy.symbolic) prints its #defines. */
-static int add_status_table(PyObject *m)
-{
-    static const struct { const char *name; int value; } codes[] = {
-        {"MP_OK", MP_OK}, {"MP_EDOM", MP_EDOM}, {"MP_ENOMEM", MP_ENOMEM},
-        {"MP_EMAXSTEPS", MP_EMAXSTEPS}, {"MP_ESTEP", MP_ESTEP}, {"MP_ENOTSPD", MP_ENOTSPD},
-        {"MP_ECALLBACK", MP_ECALLBACK}, {"MP_EINTR", MP_EINTR}, {"MP_ENONFINITE", MP_ENONFINITE},
-        {"MP_ENOCONV", MP_ENOCONV}, {"MP_ESINGULAR", MP_ESINGULAR}, {"MP_EMESH", MP_EMESH},
-        {"MP_EGSL", MP_EGSL}, {"MP_EUNSTABLE", MP_EUNSTABLE},
-    };
-    PyObject *d = PyDict_New();
-    if (!d) return -1;
-    for (size_t i = 0; i < sizeof codes / sizeof codes[0]; i++) {
-        PyObject *v = PyLong_FromLong(codes[i].value);
-        if (!v || PyDict_SetItemString(d, codes[i].name, v) < 0) {
-            Py_XDECREF(v);
-            Py_DECREF(d);
-            return -1;
-        }
-        Py_DECREF(v);
-    }
-    return PyModule_AddObject(m, "STATUS", d) < 0 ? (Py_DECREF(d), -1) : 0;
-}
-
 PyMODINIT_FUNC PyInit__core(void)
 {
     PyMethodDef *tables[] = {
@@ -52,13 +27,8 @@ PyMODINIT_FUNC PyInit__core(void)
     for (size_t i = 0; i < sizeof tables / sizeof tables[0]; i++) {
         if (PyModule_AddFunctions(m, tables[i]) < 0) goto fail;
     }
-    if (mp_py_errors_init(m) < 0) goto fail;
+    if (mp_py_errors_init(m) < 0) goto fail; /* classes, STATUS, STATUS_TABLE */
     if (PyModule_AddStringConstant(m, "gsl_version", GSL_VERSION) < 0) goto fail;
-    if (PyModule_AddIntConstant(m, "STATUS_EMAXSTEPS", MP_EMAXSTEPS) < 0 ||
-        PyModule_AddIntConstant(m, "STATUS_ESTEP", MP_ESTEP) < 0 ||
-        PyModule_AddIntConstant(m, "STATUS_ENONFINITE", MP_ENONFINITE) < 0)
-        goto fail;
-    if (add_status_table(m) < 0) goto fail;
     return m;
 fail:
     Py_DECREF(m);

@@ -361,34 +361,43 @@ static int py_system_parse(PyObject *spec, size_t n, py_system *s)
     return 0;
 }
 
-/* Contract: raise NonFiniteError for a solve that ended with MP_ENONFINITE,
- * naming what produced the value: a C callback's unwritten output, the torque
- * callback, an event function, the Jacobian or the right-hand side. */
-static void raise_nonfinite(const py_system *sys, const mp_ode_result *r)
+/* Contract: the message of a solve's outcome as a new str: the status table's
+ * message, then in parentheses where the failure happened (t, the step budget,
+ * for MP_ENONFINITE what produced the value: a C callback's unwritten output,
+ * the torque callback, an event function, the Jacobian or the right-hand
+ * side) and, when Hairer's test found the problem stiff, the methods to try. */
+static PyObject *ode_message(const py_system *sys, const mp_ode_outcome *out, long max_steps)
 {
-    char detail[160];
-    const char *what = "solve";
-    size_t i = r->bad_index;
-    if (r->bad_what == MP_ODE_BAD_EVENT) {
-        snprintf(detail, sizeof detail, "events[%zu] returned NaN or inf at t = %.17g", i,
-                 r->t_fail);
-    } else if (r->bad_what == MP_ODE_BAD_JAC) {
+    char detail[256];
+    size_t i = out->bad_index;
+    double t = out->t_fail;
+    int st = out->status;
+    if (st == MP_OK || st == MP_TERMINATED) return PyUnicode_FromString(mp_status_message(st));
+    if (st == MP_EMAXSTEPS) {
+        snprintf(detail, sizeof detail, "max_steps=%ld, at t = %.17g", max_steps, t);
+    } else if (st != MP_ENONFINITE) {
+        snprintf(detail, sizeof detail, "at t = %.17g", t);
+    } else if (out->bad_what == MP_ODE_BAD_EVENT) {
+        snprintf(detail, sizeof detail, "events[%zu] returned NaN or inf at t = %.17g", i, t);
+    } else if (out->bad_what == MP_ODE_BAD_JAC) {
         snprintf(detail, sizeof detail, "jac[%zu, %zu] is NaN or inf near t = %.17g",
-                 i / sys->prob.n, i % sys->prob.n, r->t_fail);
+                 i / sys->prob.n, i % sys->prob.n, t);
     } else if (sys->prob.rhs == c_rhs) {
         snprintf(detail, sizeof detail, "the C callback left dydt[%zu] unwritten or NaN "
-                 "(or returned inf) near t = %.17g", i, r->t_fail);
+                 "(or returned inf) near t = %.17g", i, t);
     } else if (sys->prob.rhs == c_rhs2 && i >= sys->prob.nq) {
         snprintf(detail, sizeof detail, "the C callback left acc[%zu] unwritten or NaN "
-                 "(or returned inf) near t = %.17g", i - sys->prob.nq, r->t_fail);
+                 "(or returned inf) near t = %.17g", i - sys->prob.nq, t);
     } else if (sys->torque.fn && i < 3) {
         snprintf(detail, sizeof detail, "the torque callback left tau[%zu] unwritten or NaN "
-                 "(or the right-hand side overflowed) near t = %.17g", i, r->t_fail);
+                 "(or the right-hand side overflowed) near t = %.17g", i, t);
     } else {
         snprintf(detail, sizeof detail, "the right-hand side gave dydt[%zu] = NaN or inf "
-                 "near t = %.17g", i, r->t_fail);
+                 "near t = %.17g", i, t);
     }
-    mp_py_raise_detail(MP_ENONFINITE, what, detail);
+    return PyUnicode_FromFormat("%s (%s)%s", mp_status_message(st), detail,
+                                out->stiff ? "; the problem appears stiff: try method='radau', "
+                                             "'auto' or 'gsl:msbdf'" : "");
 }
 
 /* ---- results ---------------------------------------------------------------- */
@@ -402,7 +411,11 @@ static PyObject *array_from(const double *src, int nd, const npy_intp *shape)
     return (PyObject *)a;
 }
 
-static PyObject *result_to_python(const mp_ode_result *r, int dense)
+/* Contract: the dict ode_solve returns for a finished solve (any status the
+ * table lets be a status): samples, dense segments, events, counts, "code"
+ * (the C status, MP_TERMINATED for a terminal event) and "message". */
+static PyObject *result_to_python(const py_system *sys, const mp_ode_result *r, int dense,
+                                  long max_steps)
 {
     npy_intp n = (npy_intp)r->n, m = (npy_intp)r->m;
     npy_intp s1[1] = {m}, s2[2] = {m, n};
@@ -437,12 +450,15 @@ static PyObject *result_to_python(const mp_ode_result *r, int dense)
         }
         PyList_SET_ITEM(ev, (Py_ssize_t)k, pair);
     }
-    out = Py_BuildValue("{s:i,s:i,s:i,s:i,s:l,s:d,s:N,s:N,s:l,s:l,s:l,s:l,s:l,s:N,s:N}", "status",
-                        r->status, "terminated", r->terminated, "backward", r->backward, "stiff",
-                        r->stiff, "nswitch",
-                        r->nswitch, "t_fail", r->t_fail, "t", t, "y", y,
-                        "nfev", r->nfev, "njev", r->njev, "nlu", r->nlu, "nsteps", r->nsteps,
-                        "nreject", r->nreject, "dense", den, "events", ev);
+    mp_ode_outcome oc;
+    mp_ode_result_outcome(r, &oc);
+    PyObject *msg = ode_message(sys, &oc, max_steps);
+    if (!msg) goto fail;
+    out = Py_BuildValue("{s:i,s:N,s:i,s:l,s:N,s:N,s:l,s:l,s:l,s:l,s:l,s:N,s:N}", "code",
+                        oc.status, "message", msg, "backward", r->backward, "nswitch",
+                        r->nswitch, "t", t, "y", y, "nfev", r->nfev, "njev", r->njev, "nlu",
+                        r->nlu, "nsteps", r->nsteps, "nreject", r->nreject, "dense", den,
+                        "events", ev);
     return out;
 fail:
     Py_XDECREF(t);
@@ -452,39 +468,87 @@ fail:
     return NULL;
 }
 
-/* The options ode_solve and ode_solve_many share. */
-static void fill_options(mp_ode_options *o, double rtol, PyArrayObject *atol, double first_step,
-                         double max_step, double h, long max_steps, PyArrayObject *tev)
+/* The options ode_solve and ode_solve_many share, as integrate.py hands them
+ * over: one dict, parsed here and nowhere else. */
+typedef struct {
+    double t0, tf, rtol, h, first_step, max_step;
+    long max_steps;
+    PyArrayObject *atol, *tev; /* owned; tev NULL: no t_eval */
+} ode_args;
+
+static void ode_args_clear(ode_args *a)
 {
+    Py_CLEAR(a->atol);
+    Py_CLEAR(a->tev);
+}
+
+/* Contract: parse the dict {t0, tf, rtol, atol (n,), t_eval (m,) or None, h,
+ * first_step, max_step, max_steps} into a and fill o from it (o points into
+ * a's arrays: clear a after the solve).  0, or -1 with an exception set. */
+static int ode_args_parse(PyObject *opts, size_t n, ode_args *a, mp_ode_options *o)
+{
+    static char *kwlist[] = {"t0", "tf", "rtol", "atol", "t_eval", "h", "first_step",
+                             "max_step", "max_steps", NULL};
+    PyObject *atolo, *tevo, *empty = PyTuple_New(0);
+    memset(a, 0, sizeof *a);
+    if (!empty) return -1;
+    if (!PyDict_Check(opts)) {
+        Py_DECREF(empty);
+        PyErr_SetString(PyExc_TypeError, "options must be a dict");
+        return -1;
+    }
+    int ok = PyArg_ParseTupleAndKeywords(empty, opts, "|$dddOOdddl", kwlist, &a->t0, &a->tf,
+                                         &a->rtol, &atolo, &tevo, &a->h, &a->first_step,
+                                         &a->max_step, &a->max_steps);
+    Py_DECREF(empty);
+    if (!ok) return -1;
+    if (PyDict_Size(opts) != 9) {
+        PyErr_SetString(PyExc_TypeError, "options need t0, tf, rtol, atol, t_eval, h, "
+                                         "first_step, max_step and max_steps");
+        return -1;
+    }
+    if (!(a->atol = mp_py_array(atolo, "atol", 1))) return -1;
+    if ((size_t)PyArray_SIZE(a->atol) != n) {
+        PyErr_SetString(PyExc_ValueError, "atol must be a scalar or have one value per state");
+        ode_args_clear(a);
+        return -1;
+    }
+    if (tevo != Py_None && !(a->tev = mp_py_array(tevo, "t_eval", 1))) {
+        ode_args_clear(a);
+        return -1;
+    }
     memset(o, 0, sizeof *o);
-    o->rtol = rtol;
-    o->atol = PyArray_DATA(atol);
-    o->first_step = first_step;
-    o->max_step = max_step;
-    o->h = h;
-    o->max_steps = max_steps;
-    o->t_eval = tev ? PyArray_DATA(tev) : NULL;
-    o->n_eval = tev ? (size_t)PyArray_SIZE(tev) : 0;
+    o->rtol = a->rtol;
+    o->atol = PyArray_DATA(a->atol);
+    o->first_step = a->first_step;
+    o->max_step = a->max_step;
+    o->h = a->h;
+    o->max_steps = a->max_steps;
+    o->t_eval = a->tev ? PyArray_DATA(a->tev) : NULL;
+    o->n_eval = a->tev ? (size_t)PyArray_SIZE(a->tev) : 0;
     o->interrupt = mp_py_check_interrupt;
+    return 0;
 }
 
 /* ---- ode_solve ------------------------------------------------------------ */
 
+/* Contract: ode_solve(method, system, y0, options, *, dense, events, terminal,
+ * direction, args, jac, watch) -> the dict of result_to_python.  A failure the
+ * status table marks as always raising (a callback's exception, Ctrl-C,
+ * memory) raises; every other outcome is returned with its code and message
+ * (integrate.py decides, from the same table, what raises). */
 static PyObject *py_ode_solve(PyObject *self, PyObject *args, PyObject *kw)
 {
     (void)self;
-    static char *kwlist[] = {"method", "system", "t0", "tf", "y0", "rtol", "atol", "t_eval",
-                             "dense", "events", "terminal", "direction", "args", "jac", "h",
-                             "first_step", "max_step", "max_steps", "watch", NULL};
+    static char *kwlist[] = {"method", "system", "y0", "options", "dense", "events", "terminal",
+                             "direction", "args", "jac", "watch", NULL};
     const char *mname;
-    PyObject *spec, *y0o, *atolo, *tevo, *evo, *termo, *diro, *eargs, *jaco, *watch = Py_None;
-    double t0, tf, rtol, h, first_step, max_step;
-    int dense;
-    long max_steps;
-    if (!PyArg_ParseTupleAndKeywords(args, kw, "sOddOdOOpOOOOOdddl|O", kwlist, &mname, &spec,
-                                     &t0, &tf, &y0o, &rtol, &atolo, &tevo, &dense, &evo, &termo,
-                                     &diro, &eargs, &jaco, &h, &first_step, &max_step, &max_steps,
-                                     &watch))
+    PyObject *spec, *y0o, *opts, *evo = Py_None, *termo = Py_None, *diro = Py_None,
+             *eargs = NULL, *jaco = Py_None, *watch = Py_None;
+    int dense = 0;
+    if (!PyArg_ParseTupleAndKeywords(args, kw, "sOOO|$pOOOO!OO", kwlist, &mname, &spec, &y0o,
+                                     &opts, &dense, &evo, &termo, &diro, &PyTuple_Type, &eargs,
+                                     &jaco, &watch))
         return NULL;
     if (watch != Py_None && !PyList_Check(watch)) {
         PyErr_SetString(PyExc_TypeError, "watch must be a list");
@@ -495,8 +559,13 @@ static PyObject *py_ode_solve(PyObject *self, PyObject *args, PyObject *kw)
         PyErr_Format(PyExc_ValueError, "unknown method %s", mname);
         return NULL;
     }
-    PyArrayObject *y0 = NULL, *atol = NULL, *tev = NULL, *term = NULL, *dir = NULL, *jm = NULL;
+    if (!eargs) eargs = PyTuple_New(0);
+    else Py_INCREF(eargs);
+    if (!eargs) return NULL;
+    PyArrayObject *y0 = NULL, *term = NULL, *dir = NULL, *jm = NULL;
     PyObject *result = NULL;
+    ode_args oa = {0};
+    mp_ode_options o;
     py_system sys;
     py_with_jac wj;
     py_watched wd;
@@ -508,13 +577,7 @@ static PyObject *py_ode_solve(PyObject *self, PyObject *args, PyObject *kw)
     y0 = mp_py_array(y0o, "y0", 1);
     if (!y0) goto out;
     size_t n = (size_t)PyArray_SIZE(y0);
-    atol = mp_py_array(atolo, "atol", 1);
-    if (!atol) goto out;
-    if ((size_t)PyArray_SIZE(atol) != n) {
-        PyErr_SetString(PyExc_ValueError, "atol must be a scalar or have one value per state");
-        goto out;
-    }
-    if (tevo != Py_None && !(tev = mp_py_array(tevo, "t_eval", 1))) goto out;
+    if (ode_args_parse(opts, n, &oa, &o) < 0) goto out;
     if (py_system_parse(spec, n, &sys) < 0) goto out;
     mp_ode_problem prob = sys.prob;
     int holds_python = sys.holds_python;
@@ -550,8 +613,6 @@ static PyObject *py_ode_solve(PyObject *self, PyObject *args, PyObject *kw)
         prob.data = &wj;
         holds_python = 1;
     }
-    mp_ode_options o;
-    fill_options(&o, rtol, atol, first_step, max_step, h, max_steps, tev);
     o.dense = dense;
     if (evo != Py_None) {
         Py_ssize_t ne = PyList_Size(evo);
@@ -585,26 +646,21 @@ static PyObject *py_ode_solve(PyObject *self, PyObject *args, PyObject *kw)
     mp_ode_result r;
     int rc;
     if (holds_python) {
-        rc = mp_ode_solve(m, &prob, t0, tf, PyArray_DATA(y0), &o, &r);
+        rc = mp_ode_solve(m, &prob, oa.t0, oa.tf, PyArray_DATA(y0), &o, &r);
     } else {
         Py_BEGIN_ALLOW_THREADS
-        rc = mp_ode_solve(m, &prob, t0, tf, PyArray_DATA(y0), &o, &r);
+        rc = mp_ode_solve(m, &prob, oa.t0, oa.tf, PyArray_DATA(y0), &o, &r);
         Py_END_ALLOW_THREADS
     }
-    if (rc == MP_OK || rc == MP_EMAXSTEPS || rc == MP_ESTEP) {
-        result = result_to_python(&r, dense);
-    } else if (rc == MP_ENONFINITE) {
-        raise_nonfinite(&sys, &r);
-    } else {
-        mp_py_raise(rc, "solve");
-    }
+    if (mp_status_lookup(rc)->raises == 2) mp_py_raise(rc, "solve");
+    else result = result_to_python(&sys, &r, dense, oa.max_steps);
     mp_ode_result_free(&r);
 out:
     py_system_clear(&sys);
+    ode_args_clear(&oa);
     PyMem_Free(pe.fns);
+    Py_XDECREF(eargs);
     Py_XDECREF(y0);
-    Py_XDECREF(atol);
-    Py_XDECREF(tev);
     Py_XDECREF(term);
     Py_XDECREF(dir);
     Py_XDECREF(jm);
@@ -641,21 +697,21 @@ static void many_progress(size_t done, size_t total, void *ctx)
     PyGILState_Release(g);
 }
 
+/* Contract: ode_solve_many(method, system, y0s, options, *, params, args,
+ * threads, progress, watch) -> {"y": (k, n, m), "code": (k,) C statuses,
+ * "message": k str, "nfev": (k,)}.  options must hold a t_eval.  An ensemble
+ * stopped by a callback's exception, Ctrl-C or memory raises. */
 static PyObject *py_ode_solve_many(PyObject *self, PyObject *args, PyObject *kw)
 {
     (void)self;
-    static char *kwlist[] = {"method", "system", "t0", "tf", "y0s", "rtol", "atol", "t_eval",
-                             "params", "args", "h", "first_step", "max_step", "max_steps",
-                             "threads", "progress", "watch", NULL};
+    static char *kwlist[] = {"method", "system", "y0s", "options", "params", "args", "threads",
+                             "progress", "watch", NULL};
     const char *mname;
-    PyObject *spec, *y0o, *atolo, *tevo, *paro, *eargs, *watch = Py_None;
-    double t0, tf, rtol, h, first_step, max_step;
-    long max_steps;
-    int threads;
-    PyObject *progress;  /* False, True (a stderr line) or a callable report(done, total) */
-    if (!PyArg_ParseTupleAndKeywords(args, kw, "sOddOdOOOOdddliO|O", kwlist, &mname, &spec, &t0,
-                                     &tf, &y0o, &rtol, &atolo, &tevo, &paro, &eargs, &h,
-                                     &first_step, &max_step, &max_steps, &threads, &progress,
+    PyObject *spec, *y0o, *opts, *paro = Py_None, *eargs = NULL, *watch = Py_None;
+    int threads = 1;
+    PyObject *progress = Py_False; /* False, True (a stderr line) or a callable report(done, total) */
+    if (!PyArg_ParseTupleAndKeywords(args, kw, "sOOO|$OO!iOO", kwlist, &mname, &spec, &y0o,
+                                     &opts, &paro, &PyTuple_Type, &eargs, &threads, &progress,
                                      &watch))
         return NULL;
     if (watch != Py_None && !PyList_Check(watch)) {
@@ -664,25 +720,32 @@ static PyObject *py_ode_solve_many(PyObject *self, PyObject *args, PyObject *kw)
     }
     const mp_ode_method *m = mp_ode_method_find(mname);
     if (!m) return PyErr_Format(PyExc_ValueError, "unknown method %s", mname);
-    PyArrayObject *y0s = NULL, *atol = NULL, *tev = NULL, *par = NULL, *yout = NULL,
-                  *st = NULL, *nf = NULL;
-    PyObject *result = NULL, **tuples = NULL;
+    if (!eargs) eargs = PyTuple_New(0);
+    else Py_INCREF(eargs);
+    if (!eargs) return NULL;
+    PyArrayObject *y0s = NULL, *par = NULL, *yout = NULL, *st = NULL, *nf = NULL;
+    PyObject *result = NULL, **tuples = NULL, *msgs = NULL;
+    ode_args oa = {0};
+    mp_ode_options o;
+    mp_ode_outcome *outc = NULL;
     mp_ode_problem *probs = NULL;
     py_fn *fns = NULL;
     c_fn *cfns = NULL;
     mp_rigid_torque *torques = NULL;
     py_watched *watched = NULL;
-    int *status = NULL;
-    long *nfev = NULL;
     py_system sys;
     memset(&sys, 0, sizeof sys);
     size_t k = 0, np = 0;
 
-    if (!(y0s = mp_py_array(y0o, "y0s", 2)) || !(atol = mp_py_array(atolo, "atol", 1)) ||
-        !(tev = mp_py_array(tevo, "t_eval", 1)))
-        goto out;
+    if (!(y0s = mp_py_array(y0o, "y0s", 2))) goto out;
     k = (size_t)PyArray_DIM(y0s, 0);
-    size_t n = (size_t)PyArray_DIM(y0s, 1), nt = (size_t)PyArray_SIZE(tev);
+    size_t n = (size_t)PyArray_DIM(y0s, 1);
+    if (ode_args_parse(opts, n, &oa, &o) < 0) goto out;
+    if (!oa.tev) {
+        PyErr_SetString(PyExc_ValueError, "solve_many needs t_eval");
+        goto out;
+    }
+    size_t nt = o.n_eval;
     if (paro != Py_None) {
         if (!(par = mp_py_array(paro, "params", 2))) goto out;
         if ((size_t)PyArray_DIM(par, 0) != k) {
@@ -697,9 +760,8 @@ static PyObject *py_ode_solve_many(PyObject *self, PyObject *args, PyObject *kw)
         goto out;
     }
     probs = PyMem_Calloc(k ? k : 1, sizeof *probs);
-    status = PyMem_Calloc(k ? k : 1, sizeof *status);
-    nfev = PyMem_Calloc(k ? k : 1, sizeof *nfev);
-    if (!probs || !status || !nfev) {
+    outc = PyMem_Calloc(k ? k : 1, sizeof *outc);
+    if (!probs || !outc) {
         PyErr_NoMemory();
         goto out;
     }
@@ -795,21 +857,20 @@ static PyObject *py_ode_solve_many(PyObject *self, PyObject *args, PyObject *kw)
         for (size_t i = 0; i < k; i++) watch_problem(&probs[i], &watched[i], watch);
         holds_python = 1;
     }
-    mp_ode_options o;
-    fill_options(&o, rtol, atol, first_step, max_step, h, max_steps, tev);
     npy_intp shape[3] = {(npy_intp)k, (npy_intp)n, (npy_intp)nt};
     if (!(yout = mp_py_empty(3, shape))) goto out;
     many_progress_ctx pctx = {0, PyCallable_Check(progress) ? progress : NULL};
     int want_progress = pctx.report || PyObject_IsTrue(progress) == 1;
     int rc;
     if (holds_python) {
-        rc = mp_ode_solve_many(m, probs, k, t0, tf, PyArray_DATA(y0s), &o, 1, PyArray_DATA(yout),
-                               status, nfev, want_progress ? many_progress : NULL, &pctx);
+        rc = mp_ode_solve_many(m, probs, k, oa.t0, oa.tf, PyArray_DATA(y0s), &o, 1,
+                               PyArray_DATA(yout), outc, want_progress ? many_progress : NULL,
+                               &pctx);
     } else {
         Py_BEGIN_ALLOW_THREADS
-        rc = mp_ode_solve_many(m, probs, k, t0, tf, PyArray_DATA(y0s), &o, threads,
-                               PyArray_DATA(yout), status, nfev,
-                               want_progress ? many_progress : NULL, &pctx);
+        rc = mp_ode_solve_many(m, probs, k, oa.t0, oa.tf, PyArray_DATA(y0s), &o, threads,
+                               PyArray_DATA(yout), outc, want_progress ? many_progress : NULL,
+                               &pctx);
         Py_END_ALLOW_THREADS
     }
     if (rc != MP_OK) {
@@ -820,11 +881,16 @@ static PyObject *py_ode_solve_many(PyObject *self, PyObject *args, PyObject *kw)
     st = (PyArrayObject *)PyArray_SimpleNew(1, ks, NPY_INT);
     nf = (PyArrayObject *)PyArray_SimpleNew(1, ks, NPY_LONG);
     if (!st || !nf) goto out;
+    if (!(msgs = PyList_New((Py_ssize_t)k))) goto out;
     for (size_t i = 0; i < k; i++) {
-        ((int *)PyArray_DATA(st))[i] = status[i];
-        ((long *)PyArray_DATA(nf))[i] = nfev[i];
+        ((int *)PyArray_DATA(st))[i] = outc[i].status;
+        ((long *)PyArray_DATA(nf))[i] = outc[i].nfev;
+        PyObject *msg = ode_message(&sys, &outc[i], oa.max_steps);
+        if (!msg) goto out;
+        PyList_SET_ITEM(msgs, (Py_ssize_t)i, msg);
     }
-    result = Py_BuildValue("(OOO)", yout, st, nf);
+    result = Py_BuildValue("{s:O,s:O,s:O,s:O}", "y", yout, "code", st, "message", msgs, "nfev",
+                           nf);
 out:
     if (tuples)
         for (size_t i = 0; i < k; i++) Py_XDECREF(tuples[i]);
@@ -834,12 +900,12 @@ out:
     PyMem_Free(torques);
     PyMem_Free(watched);
     PyMem_Free(probs);
-    PyMem_Free(status);
-    PyMem_Free(nfev);
+    PyMem_Free(outc);
     py_system_clear(&sys);
+    ode_args_clear(&oa);
+    Py_XDECREF(eargs);
+    Py_XDECREF(msgs);
     Py_XDECREF(y0s);
-    Py_XDECREF(atol);
-    Py_XDECREF(tev);
     Py_XDECREF(par);
     Py_XDECREF(yout);
     Py_XDECREF(st);
