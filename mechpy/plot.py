@@ -747,8 +747,8 @@ def animate(system, sol, *, kind=None, t=None, frames=None, fps=20, trail=None, 
         raise ValueError("trail must be a non-negative time or np.inf, got nan")
     three_d = kind in ("top", "rigid")
     if ax is None:
-        fig = plt.figure(figsize=(5.5, 5.5) if kind != "chain" else (8, 4.5),
-                         layout="constrained")
+        # small and at 80 dpi: every frame is a PNG in to_jshtml
+        fig = plt.figure(figsize=(4.5, 4.5) if kind != "chain" else (7, 4), dpi=80)
         ax = fig.add_subplot(projection="3d" if three_d else None)
     else:
         if three_d != (getattr(ax, "name", "") == "3d"):
@@ -766,6 +766,8 @@ def animate(system, sol, *, kind=None, t=None, frames=None, fps=20, trail=None, 
         return (*update(k), clock)
 
     frame(0)
+    if fig.get_layout_engine() is None:
+        fig.tight_layout()
     anim = animation.FuncAnimation(fig, frame, frames=samples.size, interval=1000.0 / fps,
                                    blit=False)
     anim.samples = samples
