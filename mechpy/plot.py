@@ -7,9 +7,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._validate import as_array, as_int
+from ._validate import as_array, as_int, as_scalar
 
-__all__ = ["phase_portrait", "work_precision", "modes", "trajectory3d", "animate_field"]
+__all__ = ["phase_portrait", "work_precision", "modes", "trajectory3d", "animate_field", "animate"]
 
 
 def _plt():
@@ -335,10 +335,442 @@ def _animate_field(system, xlim, ylim, *, particles, frames, dt, trail, respawn,
 
     anim = animation.FuncAnimation(fig, step, frames=frames, interval=interval, blit=True)
     if path is not None:
-        path = str(path)
-        if path.endswith(".html"):
-            with open(path, "w") as fh:
-                fh.write(anim.to_jshtml())
-        else:
-            anim.save(path, writer=animation.PillowWriter(fps=max(1, 1000 // interval)))
+        _save(anim, path, max(1, 1000 // interval))
+    return anim
+
+
+# ---------------------------------------------------------------- the motion itself
+
+_KINDS = ("pendulum", "double_pendulum", "foucault", "top", "rigid", "chain")
+_TYPED = {"foucault": "Foucault", "top": "HeavyTop", "rigid": "RigidBody", "chain": "SpringChain"}
+_DEFAULT_TRAIL = {"pendulum": 0.2, "double_pendulum": 0.2, "foucault": np.inf, "top": np.inf,
+                  "rigid": 0.25, "chain": 0.0}   # fractions of the time span
+
+
+def _kind_of(system, kind, dim):
+    """The kind of drawing for ``system``: ``kind`` checked against the scene,
+    or chosen from the scene's type."""
+    from . import scenes as S
+    if not isinstance(system, S.Scene):
+        raise TypeError("system must be a mechpy scene (the one that made sol), "
+                        f"got {type(system).__name__}")
+    if kind is None:
+        for k, cls in _TYPED.items():
+            if isinstance(system, getattr(S, cls)):
+                return k
+        if isinstance(system, S.Pendulum):
+            return "pendulum"
+        names = system.params
+        if dim == 4 and {"l1", "l2"} <= set(names):
+            return "double_pendulum"
+        if dim == 2 and ({"length"} & set(names) or {"l"} & set(names)):
+            return "pendulum"
+        raise TypeError(f"animate cannot tell what to draw for a {type(system).__name__}: "
+                        f"give kind, one of {_KINDS}")
+    if not isinstance(kind, str) or kind not in _KINDS:
+        raise ValueError(f"kind must be one of {_KINDS}, got {kind!r}")
+    if kind in _TYPED and not isinstance(system, getattr(S, _TYPED[kind])):
+        raise TypeError(f"kind={kind!r} draws a mp.scenes.{_TYPED[kind]}, "
+                        f"got {type(system).__name__}")
+    need = {"pendulum": 2, "double_pendulum": 4}.get(kind)
+    if need is not None and dim != need:
+        raise TypeError(f"kind={kind!r} needs a system of {need} states (angles from the "
+                        f"downward vertical and their rates), got {dim}")
+    return kind
+
+
+def _samples(system, sol, t):
+    """(t (m,), y (n, m)) from a Solution or an array (n, m) with times t."""
+    if hasattr(sol, "t") and hasattr(sol, "y"):
+        if t is not None:
+            raise ValueError("t is given with a Solution: it carries its own times sol.t")
+        tt, y = sol.t, sol.y
+    elif isinstance(sol, (np.ndarray, list, tuple)):
+        if t is None:
+            raise ValueError("sol is an array (n, m): give its times t (m,)")
+        tt, y = t, sol
+    else:
+        raise TypeError("sol must be a Solution of mp.solve or an array of states (n, m), "
+                        f"got {type(sol).__name__}")
+    y = as_array(y, "sol.y", ndim=2, allow_empty=True)
+    tt = as_array(tt, "t", ndim=1, allow_empty=True)
+    if y.shape[1] == 0 or tt.size == 0:
+        raise ValueError("sol is empty: it has no samples to draw (integrate with t_eval)")
+    if tt.size != y.shape[1]:
+        raise ValueError(f"t has {tt.size} times but sol.y has {y.shape[1]} samples (n, m)")
+    if y.shape[0] != system.dim:
+        raise ValueError(f"sol.y has {y.shape[0]} rows but a {type(system).__name__} has "
+                         f"{system.dim} states: the state axis comes first, (n, m)")
+    dt = np.diff(tt)
+    if not (np.all(dt > 0) or np.all(dt < 0)):
+        raise ValueError("t must be strictly monotonic")
+    return tt, y
+
+
+def _trail(ax, color):
+    """An empty fading trail (a line collection, 3-D on 3-D axes)."""
+    if ax.name == "3d":
+        from mpl_toolkits.mplot3d.art3d import Line3DCollection
+        lc = Line3DCollection([np.zeros((2, 3))], linewidths=1.2)
+        ax.add_collection3d(lc, autolim=False)
+    else:
+        from matplotlib.collections import LineCollection
+        lc = LineCollection([], linewidths=1.2)
+        ax.add_collection(lc)
+    lc.set_gid("trail")
+    lc._mp_color = color
+    return lc
+
+
+def _fade(lc, pts):
+    """Draw the points ``pts`` (k, d), oldest first, as segments fading in."""
+    from matplotlib.colors import to_rgba
+    if len(pts) < 2:
+        lc.set_segments([])
+        return
+    segs = np.stack([pts[:-1], pts[1:]], axis=1)
+    rgba = np.tile(to_rgba(lc._mp_color), (len(segs), 1))
+    rgba[:, 3] = np.linspace(0.08, 1.0, len(segs))
+    lc.set_segments(segs)
+    lc.set_color(rgba)
+
+
+def _window(t, trail):
+    """first(k): the first sample within ``trail`` time units before sample k."""
+    s = np.abs(t - t[0])
+    return lambda k: int(np.searchsorted(s, s[k] - trail, side="left"))
+
+
+def _planar_pendulum(ax, system, t, y, trail, lengths):
+    """Rods from the pivot through the bobs; a fading trail of the last bob."""
+    two = y.shape[0] == 4
+    p = system.params
+    if lengths is None:
+        keys = ("l1", "l2") if two else ("length",) if "length" in p else ("l",)
+        if not set(keys) <= set(p):
+            raise ValueError("lengths is needed: the system has no length parameters "
+                             f"{keys}")
+        lengths = [p[k] for k in keys]
+    ls = as_array(lengths, "lengths", shape=(2 if two else 1,), positive=True)
+    # x to the right, y up, angles from the downward vertical
+    xs = np.cumsum(ls[:, None] * np.sin(y[:ls.size]), axis=0)
+    ys = np.cumsum(-ls[:, None] * np.cos(y[:ls.size]), axis=0)
+    reach = ls.sum() * 1.12
+    ax.set_xlim(-reach, reach)
+    ax.set_ylim(-reach, reach)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y, up (m)")
+    ax.plot([0.0], [0.0], "k+", ms=8)
+    tr = _trail(ax, "tab:orange")
+    (rod,) = ax.plot([], [], "-", color="0.3", lw=2, gid="rod")
+    (bob,) = ax.plot([], [], "o", color="tab:blue", ms=10, gid="bob", zorder=3)
+    first = _window(t, trail)
+
+    def update(k):
+        rod.set_data(np.r_[0.0, xs[:, k]], np.r_[0.0, ys[:, k]])
+        bob.set_data(xs[:, k], ys[:, k])
+        _fade(tr, np.column_stack([xs[-1, first(k):k + 1], ys[-1, first(k):k + 1]]))
+        return rod, bob, tr
+    return update
+
+
+def _foucault(ax, system, t, y, trail, lengths):
+    """The bob seen from above, tracing its rosette in the floor plane."""
+    r = np.max(np.hypot(y[0], y[1])) * 1.15 or 1.0
+    ax.set_xlim(-r, r)
+    ax.set_ylim(-r, r)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x, east (m)")
+    ax.set_ylabel("y, north (m)")
+    ax.plot([0.0], [0.0], "k+", ms=8)
+    tr = _trail(ax, "tab:blue")
+    (bob,) = ax.plot([], [], "o", color="tab:red", ms=8, gid="bob", zorder=3)
+    first = _window(t, trail)
+
+    def update(k):
+        bob.set_data(y[0, k:k + 1], y[1, k:k + 1])
+        _fade(tr, y[:2, first(k):k + 1].T)
+        return bob, tr
+    return update
+
+
+def _sphere_axes(ax, label):
+    ax.set_xlim(-1, 1)
+    ax.set_ylim(-1, 1)
+    ax.set_zlim(-1, 1)
+    ax.set_box_aspect((1, 1, 1))
+    ax.set_xlabel("x")
+    ax.set_ylabel("y")
+    ax.set_zlabel(label)
+
+
+def _top(ax, system, t, y, trail, lengths):
+    """The symmetry axis e3 of a heavy top on the unit sphere, its tip's path,
+    and the nutation bounds as two circles of latitude."""
+    from .rigid import nutation_bounds
+    from .rotation import euler_matrix
+    e3 = euler_matrix(y[0], y[1], y[2])[:, 2, :]        # passive lambda: row 3 is e3
+    p = system.params
+    _sphere_axes(ax, "z, up")
+    phi = np.linspace(0.0, 2 * np.pi, 121)
+    try:
+        bounds = nutation_bounds(p["I1"], p["I3"], p["mass"], p["g"], p["l"], y[1, 0],
+                                 y[4, 0], y[3, 0], y[5, 0])
+    except ValueError:       # upright or inverted start: Euler angles are singular there
+        bounds = ()
+    for th, ls in zip(bounds, ("--", ":")):
+        ax.plot(np.sin(th) * np.cos(phi), np.sin(th) * np.sin(phi), np.full_like(phi, np.cos(th)),
+                ls, color="0.4", lw=1, gid="bound",
+                label=rf"$\theta$ = {th:.3f} rad")
+    if bounds:
+        ax.legend(loc="upper left", bbox_to_anchor=(0.0, 1.0), fontsize=7,
+                  title="nutation bounds", title_fontsize=7)
+    tr = _trail(ax, "tab:orange")
+    (axis,) = ax.plot([], [], [], "-", color="tab:blue", lw=2.5, gid="axis")
+    (tip,) = ax.plot([], [], [], "o", color="tab:blue", ms=5, gid="tip")
+    first = _window(t, trail)
+
+    def update(k):
+        axis.set_data_3d([0.0, e3[k, 0]], [0.0, e3[k, 1]], [0.0, e3[k, 2]])
+        tip.set_data_3d(e3[k:k + 1, 0], e3[k:k + 1, 1], e3[k:k + 1, 2])
+        _fade(tr, e3[first(k):k + 1])
+        return axis, tip, tr
+    return update
+
+
+def _rigid(ax, system, t, y, trail, lengths):
+    """The body axes of a free rigid body in space (columns of R(q)), the tips'
+    fading paths and the fixed angular momentum direction."""
+    from .integrate import solve
+    from .rotation import matrix_from_quat
+    if y.shape[0] == 3:      # no orientation in the state: integrate it alongside
+        oriented = system.replace(orientation=True)
+        y = solve(oriented, (t[0], t[-1]), oriented.initial_state(y[:, 0]), t_eval=t,
+                  rtol=1e-11, atol=1e-12).y if t.size > 1 else \
+            oriented.initial_state(y[:, 0])[:, None]
+    R = matrix_from_quat(y[3:7].T)                          # (m, 3, 3), body to space
+    L = np.einsum("mij,jm->mi", R, system.moments[:, None] * y[:3])
+    Lhat = L[0] / (np.linalg.norm(L[0]) or 1.0)
+    _sphere_axes(ax, "z")
+    ax.plot([0, Lhat[0]], [0, Lhat[1]], [0, Lhat[2]], "k--", lw=1, gid="L",
+            label="angular momentum L (fixed)")
+    arts, trails = [], []
+    for j, c in enumerate(("tab:red", "tab:green", "tab:blue")):
+        (ln,) = ax.plot([], [], [], "-", color=c, lw=2.5, gid=f"axis{j + 1}",
+                        label=f"body axis {j + 1} ($I_{j + 1}$ = {system.moments[j]:.3g})")
+        arts.append(ln)
+        trails.append(_trail(ax, c))
+    ax.legend(loc="upper left", bbox_to_anchor=(0.0, 1.0), fontsize=7)
+    first = _window(t, trail)
+
+    def update(k):
+        for j in range(3):
+            a = R[k, :, j]
+            arts[j].set_data_3d([0.0, a[0]], [0.0, a[1]], [0.0, a[2]])
+            _fade(trails[j], R[first(k):k + 1, :, j])
+        return (*arts, *trails)
+    return update
+
+
+def _chain(ax, system, t, y, trail, lengths):
+    """A spring chain: the displacements against the mass index (markers, the
+    solution; dashed, the exact normal-mode superposition of Modes.evolve for
+    linear springs), and below them the masses moving along the chain."""
+    N = system.N
+    x = y[:N]
+    idx = np.arange(1, N + 1)
+    A = np.max(np.abs(x)) or 1.0
+    row = -1.6 * A
+    scale = 0.4 / A                       # the largest displacement: 0.4 of the spacing
+    walls = [0, N + 1] if system.params["ends"] == "fixed" else []
+    lo, hi = (0.5 if not walls else -0.3), (N + 0.5 if not walls else N + 1.3)
+    ax.set_xlim(lo, hi)
+    ax.set_ylim(row - 0.6 * A, 1.25 * A)
+    ax.set_xlabel("mass index (equilibrium position, spacings)")
+    ax.set_ylabel("displacement x_i (m)")
+    ax.axhline(0.0, color="0.7", lw=0.6)
+    for w in walls:
+        ax.plot([w, w], [row - 0.3 * A, row + 0.3 * A], "k-", lw=3)
+    exact = None
+    if not system.nonlinear:
+        exact = system.modes().evolve(x[:, 0], y[N:, 0], t - t[0])       # (m, N)
+        (mline,) = ax.plot([], [], "--", color="0.3", lw=1, gid="modes",
+                           label="normal modes (Modes.evolve)")
+    (dots,) = ax.plot([], [], "o", color="tab:blue", ms=5, gid="displacement",
+                      label="solution x_i(t)")
+    (spring,) = ax.plot([], [], "-", color="0.5", lw=1, gid="springs")
+    (masses,) = ax.plot([], [], "s", color="tab:red", ms=7, gid="masses",
+                        label="masses along the chain (displacement x 0.4/max|x|)")
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=3, fontsize=7)
+
+    def update(k):
+        dots.set_data(idx, x[:, k])
+        pos = idx + scale * x[:, k]
+        masses.set_data(pos, np.full(N, row))
+        spring.set_data(np.r_[walls[:1], pos, walls[1:]], np.full(N + len(walls), row))
+        out = [dots, masses, spring]
+        if exact is not None:
+            mline.set_data(idx, exact[k])
+            out.append(mline)
+        return tuple(out)
+    return update
+
+
+_DRAW = {"pendulum": _planar_pendulum, "double_pendulum": _planar_pendulum,
+         "foucault": _foucault, "top": _top, "rigid": _rigid, "chain": _chain}
+
+
+def _save(anim, path, fps):
+    """Write ``anim`` to ``path``: .html (JavaScript), .mp4 (ffmpeg), else GIF (Pillow)."""
+    from matplotlib import animation
+    path = str(path)
+    if path.endswith(".html"):
+        with open(path, "w") as fh:
+            fh.write(anim.to_jshtml())
+    elif path.endswith(".mp4"):
+        if not animation.writers.is_available("ffmpeg"):
+            raise RuntimeError("saving an .mp4 needs ffmpeg on the PATH; save a .gif instead")
+        anim.save(path, writer=animation.FFMpegWriter(fps=fps))
+    else:
+        anim.save(path, writer=animation.PillowWriter(fps=fps))
+
+
+def animate(system, sol, *, kind=None, t=None, frames=None, fps=20, trail=None, ax=None,
+            lengths=None, path=None):
+    r"""An animation of the motion itself, drawn from a solution.
+
+    What is drawn depends on ``kind`` (by default chosen from the scene's type):
+
+    ``"pendulum"``
+        :class:`~mechpy.scenes.Pendulum` (or any two-state scene with a
+        ``length`` or ``l`` parameter): rod and bob at
+        :math:`(l\sin\theta, -l\cos\theta)`, y up, with a fading trail.
+    ``"double_pendulum"``
+        a four-state scene ``(theta1, theta2, theta1_dot, theta2_dot)``, angles
+        from the downward vertical, e.g. compiled by :func:`mechpy.lagrangian`
+        with parameters ``l1``, ``l2`` (or give ``lengths``): both rods and bobs,
+        :math:`x_2 = l_1\sin\theta_1 + l_2\sin\theta_2`, and the lower bob's trail.
+    ``"foucault"``
+        :class:`~mechpy.scenes.Foucault`: the bob seen from above in the floor
+        plane (x east, y north), tracing its rosette (the whole path by default).
+    ``"top"``
+        :class:`~mechpy.scenes.HeavyTop` (3-D): the symmetry axis
+        :math:`e_3 = (\sin\theta\sin\phi, -\sin\theta\cos\phi, \cos\theta)` on the
+        unit sphere, its tip's path, and the nutation bounds of
+        :func:`mechpy.rigid.nutation_bounds` as two circles of latitude.
+    ``"rigid"``
+        :class:`~mechpy.scenes.RigidBody` (3-D): the three body axes in space,
+        the columns of :math:`R(q)`, with their tips' trails and the fixed
+        direction of the angular momentum (the tennis-racket flip shows as
+        axis 2 turning over).  A state without orientation (``omega`` only) is
+        integrated again with the orientation alongside,
+        ``system.replace(orientation=True)`` from the identity quaternion at the
+        solution's times (rtol 1e-11).
+    ``"chain"``
+        :class:`~mechpy.scenes.SpringChain`: the displacements :math:`x_i`
+        against the mass index (markers), for linear springs the exact
+        normal-mode superposition of :meth:`mechpy.modes.Modes.evolve` from the
+        first sample (dashed), and the masses moving along the chain beneath.
+
+    Parameters
+    ----------
+    system : Scene
+        The scene that made ``sol``.
+    sol : Solution or array_like, shape (n, m)
+        A result of :func:`mechpy.solve` (``sol.t``, ``sol.y``), or states
+        (n, m) as ``Solution.y`` holds them, with ``t``.  Sample at the times
+        to be shown (``t_eval``): frames show samples, not interpolants.
+    kind : str, optional
+        One of ``"pendulum"``, ``"double_pendulum"``, ``"foucault"``, ``"top"``,
+        ``"rigid"``, ``"chain"``.
+    t : array_like, shape (m,), optional
+        The times of an array ``sol`` (s); strictly monotonic.
+    frames : int, optional
+        Frames drawn: frame i shows sample ``anim.samples[i]``, the samples
+        evenly spread over ``sol`` (default ``min(m, 200)``).
+    fps : float
+        Frames per second when played or saved.
+    trail : float, optional
+        Length of the fading trail in time units of ``sol.t`` (s): ``0`` for
+        none, ``np.inf`` for the whole path.  Default: the whole path for the
+        Foucault pendulum and the top, a fifth (a quarter for a rigid body) of
+        the time span otherwise.
+    ax : matplotlib Axes, optional
+        Where to draw (3-D Axes for ``"top"`` and ``"rigid"``); a new figure
+        otherwise.
+    lengths : array_like, shape (1,) or (2,), optional
+        Rod lengths (m) of the pendulum kinds, when the scene's parameters do
+        not name them.
+    path : str or Path, optional
+        Also write the animation there: ``.gif`` (Pillow), ``.mp4`` (needs
+        ffmpeg) or ``.html`` (JavaScript).
+
+    Returns
+    -------
+    matplotlib.animation.FuncAnimation
+        Its attribute ``samples`` (frames,) holds the sample index each frame
+        shows.  In a notebook: ``IPython.display.HTML(anim.to_jshtml())``;
+        ``anim.save("motion.gif", writer="pillow")`` writes a file.
+
+    Raises
+    ------
+    TypeError
+        ``system`` is not a scene, its kind cannot be told, ``kind`` names a
+        scene of another type, or ``sol`` is neither a Solution nor an array.
+    ValueError
+        ``kind`` is unknown; ``sol`` is empty, not finite or does not hold the
+        scene's states (n, m); ``t`` is missing, of another length or not
+        monotonic; ``ax`` is not 3-D for a 3-D kind; bad ``frames``, ``fps``,
+        ``trail`` or ``lengths``.
+
+    Examples
+    --------
+    >>> import numpy as np, mechpy as mp
+    >>> p = mp.scenes.Pendulum()
+    >>> sol = mp.solve(p, (0, 4), [2.0, 0.0], t_eval=np.linspace(0, 4, 81))
+    >>> anim = mp.plot.animate(p, sol, frames=40)
+    >>> anim.samples[:4].tolist()
+    [0, 2, 4, 6]
+    """
+    plt = _plt()
+    from matplotlib import animation
+    kind = _kind_of(system, kind, getattr(system, "dim", 0))
+    tt, y = _samples(system, sol, t)
+    m = tt.size
+    frames = min(m, 200) if frames is None else as_int(frames, "frames", minimum=1)
+    fps = as_scalar(fps, "fps", positive=True)
+    span = abs(tt[-1] - tt[0])
+    trail = (_DEFAULT_TRAIL[kind] * span if trail is None
+             else as_scalar(trail, "trail", nonnegative=True, finite=False))
+    if np.isnan(trail):
+        raise ValueError("trail must be a non-negative time or np.inf, got nan")
+    three_d = kind in ("top", "rigid")
+    if ax is None:
+        # small and at 80 dpi: every frame is a PNG in to_jshtml
+        fig = plt.figure(figsize=(4.5, 4.5) if kind != "chain" else (7, 4), dpi=80)
+        ax = fig.add_subplot(projection="3d" if three_d else None)
+    else:
+        if three_d != (getattr(ax, "name", "") == "3d"):
+            raise ValueError(f"ax must be {'a 3-D' if three_d else 'a 2-D'} Axes for "
+                             f"kind={kind!r}")
+        fig = ax.figure
+    samples = np.unique(np.linspace(0, m - 1, frames).round().astype(np.intp))
+    update = _DRAW[kind](ax, system, tt, y, trail, lengths)
+    clock = (ax.text2D if three_d else ax.text)(0.98, 0.98, "", transform=ax.transAxes,
+                                                ha="right", va="top", gid="time")
+
+    def frame(i):
+        k = samples[i]
+        clock.set_text(f"t = {tt[k]:.2f} s")
+        return (*update(k), clock)
+
+    frame(0)
+    if fig.get_layout_engine() is None:
+        fig.tight_layout()
+    anim = animation.FuncAnimation(fig, frame, frames=samples.size, interval=1000.0 / fps,
+                                   blit=False)
+    anim.samples = samples
+    if path is not None:
+        _save(anim, path, fps)
     return anim

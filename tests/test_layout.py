@@ -226,6 +226,26 @@ def _trajectory3d_case(b):
     return [("drawn path", drawn, (3, 7))]
 
 
+def _animate_case(b):
+    pytest.importorskip("matplotlib")
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    t = np.linspace(0.0, 1.0, 7)
+    y = _r(2, 7)                             # states (n, m), as Solution.y
+    anim = mp.plot.animate(mp.scenes.Pendulum(length=1.0), y, t=t)
+    ax = anim._fig.axes[0]
+    drawn = []
+    for i in range(7):
+        anim._func(i)
+        bob = [a for a in ax.lines if a.get_gid() == "bob"][0]
+        drawn.append(np.ravel(bob.get_data()))
+    plt.close("all")
+    drawn = np.array(drawn).T
+    assert np.allclose(drawn, [np.sin(y[0]), -np.cos(y[0])])   # rows read as states
+    return [("bob positions", drawn, (2, 7))]
+
+
 # clause 2: NumPy stacks (batch first, components last)
 
 def _point_masses_case(b):
@@ -566,6 +586,7 @@ TABLE = {
     "mechpy.variational.Catenary": (SINGLE, _single(_brach)),
     # plot: matplotlib objects; a path is (3, m) as sol.y[:3] gives it
     "mechpy.plot.trajectory3d": (STATE, _trajectory3d_case),
+    "mechpy.plot.animate": (STATE, _animate_case),
     **{f"mechpy.plot.{n}": (NONE, None) for n in (
         "phase_portrait", "work_precision", "modes", "animate_field")},
     # exceptions

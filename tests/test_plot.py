@@ -109,3 +109,191 @@ def test_animate_field_bad_param(kw, exc, match):
     with pytest.raises(TypeError, match="scene"):
         mp.plot.animate_field(lambda t, y: y, param="mu", values=[1.0])
     assert plt.get_fignums() == []
+
+
+# ------------------------------------------------------------------ mp.plot.animate
+
+def _gid(ax, gid):
+    found = [a for a in ax.get_children() if a.get_gid() == gid]
+    assert len(found) == 1, gid
+    return found[0]
+
+
+def test_animate_pendulum_bob_and_rod_follow_the_solution():
+    p = mp.scenes.Pendulum(length=1.7)
+    sol = mp.solve(p, (0, 4), [2.0, 0.0], t_eval=np.linspace(0, 4, 81))
+    anim = mp.plot.animate(p, sol, frames=41)
+    ax = anim._fig.axes[0]
+    np.testing.assert_array_equal(anim.samples, np.arange(0, 81, 2))
+    for i in (0, 7, 40):
+        anim._func(i)
+        k = anim.samples[i]
+        th = sol.y[0, k]
+        bx, by = (np.asarray(v) for v in _gid(ax, "bob").get_data())
+        # closed form of the bob's place; measured difference 0 to 2e-16
+        np.testing.assert_allclose([bx[0], by[0]], [1.7 * np.sin(th), -1.7 * np.cos(th)],
+                                   rtol=0, atol=1e-12)
+        rx, ry = _gid(ax, "rod").get_data()
+        assert rx[0] == ry[0] == 0.0 and rx[-1] == bx[0]
+        assert _gid(ax, "time").get_text() == f"t = {sol.t[k]:.2f} s"
+    plt.close("all")
+
+
+def test_animate_double_pendulum_from_a_compiled_scene():
+    import sympy as sp
+    th1, th2 = mp.coordinates("theta1 theta2")
+    m1, m2, l1, l2, g = sp.symbols("m1 m2 l1 l2 g")
+    w1, w2 = th1.diff(), th2.diff()
+    L = ((m1 + m2) * l1**2 * w1**2 / 2 + m2 * l2**2 * w2**2 / 2
+         + m2 * l1 * l2 * w1 * w2 * sp.cos(th1 - th2)
+         + (m1 + m2) * g * l1 * sp.cos(th1) + m2 * g * l2 * sp.cos(th2))
+    scene = mp.lagrangian(L, [th1, th2], params=dict(m1=1.0, m2=1.0, l1=1.0, l2=0.5, g=9.81))
+    sol = mp.solve(scene, (0, 3), [1.0, 0.5, 0.0, 0.0], t_eval=np.linspace(0, 3, 31))
+    anim = mp.plot.animate(scene, sol, trail=np.inf)
+    ax = anim._fig.axes[0]
+    anim._func(30)
+    a, b = sol.y[0], sol.y[1]
+    x2, y2 = np.sin(a) + 0.5 * np.sin(b), -np.cos(a) - 0.5 * np.cos(b)
+    bx, by = _gid(ax, "bob").get_data()
+    np.testing.assert_allclose([bx[1], by[1]], [x2[-1], y2[-1]], rtol=0, atol=1e-12)
+    np.testing.assert_allclose([bx[0], by[0]], [np.sin(a[-1]), -np.cos(a[-1])], rtol=0, atol=1e-12)
+    segs = _gid(ax, "trail").get_segments()      # the lower bob's whole path
+    pts = np.vstack([segs[0][:1]] + [s[1:] for s in segs])
+    np.testing.assert_allclose(pts, np.column_stack([x2, y2]), rtol=0, atol=1e-12)
+    plt.close("all")
+
+
+def test_animate_foucault_rosette_is_the_state():
+    f = mp.scenes.Foucault(48.857, 1.0, omega=0.25)
+    sol = mp.solve(f, (0, 30), [1.0, 0.0, 0.0, 0.0], t_eval=np.linspace(0, 30, 301),
+                   rtol=1e-10)
+    anim = mp.plot.animate(f, sol, frames=11)
+    ax = anim._fig.axes[0]
+    anim._func(10)
+    segs = np.array(_gid(ax, "trail").get_segments())
+    np.testing.assert_array_equal(segs[:, 0], sol.y[:2, :-1].T)    # every sample, in order
+    np.testing.assert_array_equal(segs[-1, 1], sol.y[:2, -1])
+    bx, by = _gid(ax, "bob").get_data()
+    assert (bx[0], by[0]) == (sol.y[0, -1], sol.y[1, -1])
+    plt.close("all")
+
+
+def test_animate_top_axis_is_the_unit_vector_of_phi_theta():
+    top = mp.scenes.HeavyTop(0.5, 0.2, 1.0, 9.81, 0.1)
+    y0 = [0.0, 0.8, 0.0, 0.0, 0.0, 15.0]
+    sol = mp.solve(top, (0, 2), y0, t_eval=np.linspace(0, 2, 101), rtol=1e-10)
+    anim = mp.plot.animate(top, sol, frames=5)
+    ax = anim._fig.axes[0]
+    for i in range(5):
+        anim._func(i)
+        k = anim.samples[i]
+        ph, th = sol.y[0, k], sol.y[1, k]
+        xs, ys, zs = _gid(ax, "axis").get_data_3d()
+        e3 = [np.sin(th) * np.sin(ph), -np.sin(th) * np.cos(ph), np.cos(th)]
+        np.testing.assert_allclose([xs[1], ys[1], zs[1]], e3, rtol=0, atol=1e-12)  # 1e-16
+    lo, hi = mp.rigid.nutation_bounds(0.5, 0.2, 1.0, 9.81, 0.1, 0.8, 0.0, 0.0, 15.0)
+    heights = sorted(ln.get_data_3d()[2][0] for ln in ax.lines if ln.get_gid() == "bound")
+    np.testing.assert_allclose(heights, sorted([np.cos(lo), np.cos(hi)]), rtol=0, atol=1e-15)
+    # the sampled tip stays between the circles (it reaches cos(theta_max) within 1.3e-5)
+    assert np.cos(hi) - 1e-7 < np.cos(sol.y[1]).min() and np.cos(sol.y[1]).max() < np.cos(lo) + 1e-7
+    plt.close("all")
+
+
+def test_animate_rigid_body_axes_keep_angular_momentum_fixed():
+    from scipy.spatial.transform import Rotation
+    I = np.array([1.0, 2.0, 3.0])
+    w0 = [0.02, 1.0, 0.01]
+    T = mp.rigid.flip_period(I, w0)
+    te = np.linspace(0, T, 61)
+    body = mp.scenes.RigidBody(I)
+    sol = mp.solve(body, (0, T), w0, t_eval=te, rtol=1e-11, atol=1e-12)
+    anim = mp.plot.animate(body, sol, frames=61)         # omega only: orientation integrated
+    ax = anim._fig.axes[0]
+    oriented = mp.scenes.RigidBody(I, orientation=True)
+    ref = mp.solve(oriented, (0, T), oriented.initial_state(w0), t_eval=te, rtol=1e-11,
+                   atol=1e-12)
+    L0 = None
+    for i in (0, 20, 45, 60):
+        anim._func(i)
+        A = np.array([_gid(ax, f"axis{j}").get_data_3d() for j in (1, 2, 3)])[:, :, 1].T
+        R = Rotation.from_quat(ref.y[3:, i]).as_matrix()             # SciPy, scalar last
+        np.testing.assert_allclose(A, R, rtol=0, atol=1e-12)  # measured 4e-16 (same integration)
+        L = A @ (I * sol.y[:, i])                                    # space frame: conserved
+        L0 = L if L0 is None else L0
+        np.testing.assert_allclose(L, L0, rtol=0, atol=5e-10)        # measured 7e-11
+    plt.close("all")
+
+
+def test_animate_chain_masses_and_modes():
+    ch = mp.scenes.SpringChain(np.ones(6), 1.0)
+    y0 = ch.initial_state(np.exp(-0.5 * (np.arange(6) - 1.0) ** 2))
+    te = np.linspace(0, 12, 49)
+    sol = mp.solve(ch, (0, 12), y0, t_eval=te, rtol=1e-12, atol=1e-13)
+    anim = mp.plot.animate(ch, sol, frames=49)
+    ax = anim._fig.axes[0]
+    exact = ch.modes().evolve(y0[:6], y0[6:], te)
+    for i in (0, 30, 48):
+        anim._func(i)
+        xs, ys = _gid(ax, "displacement").get_data()
+        np.testing.assert_array_equal(ys, sol.y[:6, i])
+        np.testing.assert_array_equal(xs, np.arange(1, 7))
+        mx, my = _gid(ax, "modes").get_data()
+        np.testing.assert_allclose(my, exact[i], rtol=0, atol=1e-15)
+        np.testing.assert_allclose(my, sol.y[:6, i], rtol=0, atol=1e-11)  # measured 1.1e-12
+        px, _ = _gid(ax, "masses").get_data()
+        np.testing.assert_allclose(px, np.arange(1, 7) + 0.4 * sol.y[:6, i]
+                                   / np.abs(sol.y[:6]).max(), rtol=0, atol=1e-14)
+    plt.close("all")
+
+
+def test_animate_saves_a_gif_that_pil_opens(tmp_path):
+    from PIL import Image
+    p = mp.scenes.Pendulum()
+    sol = mp.solve(p, (0, 1), [1.0, 0.0], t_eval=np.linspace(0, 1, 3))
+    mp.plot.animate(p, sol, path=tmp_path / "swing.gif", fps=5)
+    with Image.open(tmp_path / "swing.gif") as im:
+        assert im.format == "GIF" and im.n_frames == 3
+    plt.close("all")
+
+
+def test_animate_an_array_with_times():
+    p = mp.scenes.Pendulum(length=2.0)
+    t = np.linspace(0, 1, 5)
+    y = np.vstack([0.3 * np.cos(t), -0.3 * np.sin(t)])
+    anim = mp.plot.animate(p, y, t=t)
+    anim._func(4)
+    bx, by = _gid(anim._fig.axes[0], "bob").get_data()
+    np.testing.assert_allclose([bx[0], by[0]], [2 * np.sin(y[0, 4]), -2 * np.cos(y[0, 4])],
+                               rtol=0, atol=1e-12)
+    plt.close("all")
+
+
+def test_animate_bad_input():
+    p = mp.scenes.Pendulum()
+    sol = mp.solve(p, (0, 1), [1.0, 0.0], t_eval=np.linspace(0, 1, 5))
+    cases = [
+        (lambda: mp.plot.animate(lambda t, y: y, sol), TypeError, "system must be a mechpy scene"),
+        (lambda: mp.plot.animate(mp.scenes.VanDerPol(), sol), TypeError, "give kind"),
+        (lambda: mp.plot.animate(p, sol, kind="spinner"), ValueError, "kind must be one of"),
+        (lambda: mp.plot.animate(p, sol, kind="top"), TypeError, "HeavyTop"),
+        (lambda: mp.plot.animate(p, sol, kind="double_pendulum"), TypeError, "4 states"),
+        (lambda: mp.plot.animate(p, np.zeros((2, 0)), t=[]), ValueError, "empty"),
+        (lambda: mp.plot.animate(p, np.zeros((2, 3))), ValueError, "give its times t"),
+        (lambda: mp.plot.animate(p, np.zeros((3, 3)), t=[0, 1, 2]), ValueError, "2 states"),
+        (lambda: mp.plot.animate(p, np.zeros((2, 3)), t=[0, 1, 1]), ValueError, "monotonic"),
+        (lambda: mp.plot.animate(p, np.zeros((2, 3)), t=[0, 1]), ValueError, "3 samples"),
+        (lambda: mp.plot.animate(p, "sol"), TypeError, "sol must be a Solution"),
+        (lambda: mp.plot.animate(p, sol, frames=0), ValueError, "frames"),
+        (lambda: mp.plot.animate(p, sol, fps=-1), ValueError, "fps"),
+        (lambda: mp.plot.animate(p, sol, trail=-1.0), ValueError, "trail"),
+        (lambda: mp.plot.animate(p, np.full((2, 3), np.nan), t=[0, 1, 2]), ValueError, "finite"),
+    ]
+    for call, exc, match in cases:
+        with pytest.raises(exc, match=match):
+            call()
+    fig = plt.figure()
+    with pytest.raises(ValueError, match="3-D"):
+        top = mp.scenes.HeavyTop(0.5, 0.2, 1.0)
+        mp.plot.animate(top, np.tile([[0.0], [0.8], [0], [0], [0], [15]], 3), t=[0, 1, 2],
+                        ax=fig.add_subplot())
+    plt.close("all")
