@@ -56,6 +56,9 @@ def _scene_case(scene, b, extra=()):
     return out
 
 
+_ROCKET = mp.scenes.Rocket(2500.0, 10.0, 1000.0, 200.0, g=9.81)
+
+
 def _scene_members(b):
     """Scene methods and properties beyond the state functions."""
     if b != ():
@@ -76,7 +79,10 @@ def _scene_members(b):
             ("SpringChain.modes", c.modes().vectors, (3, 3)),
             ("SpringChain.uniform", u.rhs(0.0, _r(8)), (8,)),
             ("SpringChain.ensemble_params", c.ensemble_params(2), (2, 11)),
-            ("replace", S.Pendulum().replace(g=1.0).rhs(0.0, _r(2)), (2,))]
+            ("replace", S.Pendulum().replace(g=1.0).rhs(0.0, _r(2)), (2,)),
+            ("Rocket.initial_state", _ROCKET.initial_state(), (3,)),
+            ("Rocket.burnout_time", _ROCKET.burnout_time, ()),
+            ("Rocket.fly", _ROCKET.fly((0.0, 30.0)).y[:, -1], (3,))]
 
 
 def _scenes(b):
@@ -347,6 +353,35 @@ def _drift_case(b):
             ("drift at times t", F.projectile_drift([10.0, 0.0, 10.0], _t(b), 45.0), b + (3,))]
 
 
+def _logistic_case(b):
+    r = _r(*b, lo=2.5, hi=4.0)
+    return [("logistic", mp.phase.logistic(r, n=5), b + (5,)),
+            ("logistic_bifurcation", mp.phase.logistic_bifurcation([3.2, 3.5, 3.9], n=4),
+             (3, 4))]
+
+
+def _collide_case(b):
+    P = mp.particles
+    m1, m2, e = _r(*b), _r(*b), _r(*b)
+    out = []
+    for k, v in enumerate(P.collide(m1, _r(*b), m2, _r(*b), e)):
+        out.append((f"collide 1D v{k + 1}'", v, b))
+    for k, v in enumerate(P.collide(m1, _r(*b, 3), m2, _r(*b, 3), e, normal=_r(*b, 3))):
+        out.append((f"collide 3D v{k + 1}'", v, b + (3,)))
+    return out
+
+
+def _cm_case(b):
+    P = mp.particles
+    m, v = _r(*b, 4), _r(*b, 4, 3)
+    V, u = P.to_cm(m, v)
+    V1, u1 = P.to_cm(m, v[..., 0])
+    return [("to_cm V", V, b + (3,)), ("to_cm u", u, b + (4, 3)),
+            ("from_cm", P.from_cm(V, u), b + (4, 3)),
+            ("to_cm 1D V", V1, b), ("to_cm 1D u", u1, b + (4,)),
+            ("from_cm 1D", P.from_cm(V1, u1), b + (4,))]
+
+
 def _constraint_forces_case(b):
     lam, f = mp.variational.constraint_forces(1.0, _r(*b, 3), _r(*b, 1, 3), _r(*b, 1))
     return [("lam", lam, b + (1,)), ("f", f, b + (3,))]
@@ -400,6 +435,13 @@ def _flip():
 def _nutation():
     lo, hi = mp.rigid.nutation_bounds(1.0, 2.0, 1.0, 9.81, 1.0, 0.5, 0.0, 0.0, 20.0)
     return [("theta_min", lo, ()), ("theta_max", hi, ())]
+
+
+def _top_rates():
+    slow, fast = mp.rigid.steady_precession(1.0, 2.0, 1.0, 9.81, 0.5, 0.3, 200.0)
+    body, space = mp.rigid.free_precession([1.0, 1.0, 2.0], [0.1, 0.0, 1.0])
+    return [("slow", slow, ()), ("fast", fast, ()), ("body", body, ()), ("space", space, ()),
+            ("sleeping", float(mp.rigid.sleeping_top(1.0, 2.0, 1.0, 9.81, 0.5, 200.0)), ())]
 
 
 def _chain():
@@ -483,7 +525,7 @@ TABLE = {
     # scenes
     **{f"mechpy.scenes.{n}": (STATE, _scenes) for n in (
         "Scene", "Pendulum", "VanDerPol", "Duffing", "Kepler", "RestrictedThreeBody",
-        "Foucault", "RigidBody", "HeavyTop", "SpringChain")},
+        "Foucault", "RigidBody", "HeavyTop", "SpringChain", "Rocket")},
     # compiled scenes
     "mechpy.symbolic.lagrangian": (STATE, _lagrangian_case),
     "mechpy.symbolic.equations": (STATE, _equations_case),
@@ -519,6 +561,9 @@ TABLE = {
     "mechpy.rigid.free_rotation": (STACK, _free_rotation_case),
     "mechpy.rigid.flip_period": (SINGLE, _single(_flip)),
     "mechpy.rigid.nutation_bounds": (SINGLE, _single(_nutation)),
+    "mechpy.rigid.steady_precession": (SINGLE, _single(_top_rates)),
+    "mechpy.rigid.sleeping_top": (SINGLE, _single(_top_rates)),
+    "mechpy.rigid.free_precession": (SINGLE, _single(_top_rates)),
     # modes
     "mechpy.modes.Modes": (STACK, _modes_case),
     "mechpy.modes.normal_modes": (STACK, _modes_case),
@@ -536,6 +581,12 @@ TABLE = {
     "mechpy.phase.limit_cycle": (SINGLE, _single(_limit_cycle)),
     "mechpy.phase.lyapunov": (SINGLE, _single(_lyapunov)),
     "mechpy.phase.LyapunovFloorWarning": (NONE, None),
+    "mechpy.phase.logistic": (STACK, _logistic_case),
+    "mechpy.phase.logistic_bifurcation": (STACK, _logistic_case),
+    # particles
+    "mechpy.particles.collide": (STACK, _collide_case),
+    "mechpy.particles.to_cm": (STACK, _cm_case),
+    "mechpy.particles.from_cm": (STACK, _cm_case),
     # frames
     "mechpy.frames.fictitious": (STACK, _frames_case),
     "mechpy.frames.earth_omega": (STACK, _frames_case),
@@ -583,6 +634,7 @@ METHODS = {
     "Scene.dim": None, "Scene.params": None,
     "Pendulum.period": _SCENE, "Kepler.initial_state": _SCENE,
     "Foucault.precession_rate": _SCENE,
+    **{f"Rocket.{n}": _SCENE for n in ("burnout_time", "fly", "initial_state")},
     **{f"RigidBody.{n}": _RB for n in ("rhs", "jacobian", "moments", "initial_state",
                                       "angular_momentum", "replace")},
     "RigidBody.params": None,
