@@ -81,8 +81,8 @@ def collide(m1, v1, m2, v2, e=1.0, normal=None):
     Equal masses, elastic, in 1D: the velocities are exchanged.
 
     >>> import mechpy as mp
-    >>> mp.particles.collide(1.0, 2.0, 1.0, 0.0)
-    (array(0.), array(2.))
+    >>> [float(v) for v in mp.particles.collide(1.0, 2.0, 1.0, 0.0)]
+    [0.0, 2.0]
     """
     m1, m2 = _masses(m1, "m1"), _masses(m2, "m2")
     v1, v2 = as_array(v1, "v1"), as_array(v2, "v2")

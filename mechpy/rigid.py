@@ -229,8 +229,8 @@ def steady_precession(I1, I3, mass, g, l, theta, omega3):
     --------
     >>> import mechpy as mp
     >>> slow, fast = mp.rigid.steady_precession(1.0, 2.0, 1.0, 9.81, 0.5, 0.3, 200.0)
-    >>> round(slow, 6), round(9.81 * 0.5 / (2.0 * 200.0), 6)     # Mgl / (I3 omega3)
-    (0.012264, 0.012263)
+    >>> round(slow, 8), round(9.81 * 0.5 / (2.0 * 200.0), 8)     # Mgl / (I3 omega3)
+    (0.01226286, 0.0122625)
     """
     I1, I3, mass, g, l = _top_args(I1, I3, mass, g, l)
     th = as_scalar(theta, "theta")
