@@ -173,6 +173,16 @@ def _stationary_path_case(b):
             ("qdot", p3.qdot, (3, 11)), ("t", p3.t, (11,))]
 
 
+def _stationary_paths_case(b):
+    if b != ():        # two coordinates: q (d, n + 1), one row per coordinate
+        paths = mp.variational.stationary_paths(
+            lambda q, v: 0.5 * np.sum(v * v, 0) - 0.5 * np.sum(q * q, 0),
+            [0.1, 0.2], [0.3, -0.1], 1.0, 40, velocities=[[0.0, 0.0], [0.5, 0.5]])
+        return [(f"stationary_paths[{i}].q, d = 2", p.q, (2, 41)) for i, p in enumerate(paths)]
+    paths = mp.variational.stationary_paths(mp.scenes.Pendulum(g=1.0), 0.0, 0.0, 4.5, 40)
+    return [(f"stationary_paths[{i}].q", p.q, (41,)) for i, p in enumerate(paths)]
+
+
 def _variational_integrate_case(b):
     V = mp.variational
     tr = V.variational_integrate(mp.scenes.HeavyTop(1.0, 2.0, 1.0), (0, 0.5), [0, 1, 0],
@@ -600,6 +610,7 @@ TABLE = {
     # variational
     "mechpy.variational.stationary_path": (STATE, _stationary_path_case),
     "mechpy.variational.StationaryPath": (STATE, _stationary_path_case),
+    "mechpy.variational.stationary_paths": (STATE, _stationary_paths_case),
     "mechpy.variational.variational_integrate": (STATE, _variational_integrate_case),
     "mechpy.variational.VariationalTrajectory": (STATE, _variational_integrate_case),
     "mechpy.variational.lagrangian": (STATE, _lagrangian_fn_case),
