@@ -173,3 +173,146 @@ def _bracketed_root(g, x_in, x_out):
     if lo == x_in and g(x_in) == 0.0:
         return hi
     return lo if abs(g(lo)) < abs(g(hi)) else hi
+
+
+def _top_args(I1, I3, mass, g, l):
+    return (as_scalar(I1, "I1", positive=True), as_scalar(I3, "I3", positive=True),
+            as_scalar(mass, "mass", positive=True), as_scalar(g, "g", nonnegative=True),
+            as_scalar(l, "l"))
+
+
+def steady_precession(I1, I3, mass, g, l, theta, omega3):
+    r"""The two steady precession rates of the heavy symmetric top at a
+    constant tilt theta.
+
+    With :math:`\dot\theta = \ddot\theta = 0` the theta equation of
+    :class:`mechpy.scenes.HeavyTop` leaves a quadratic in the precession rate
+    :math:`\Omega = \dot\phi` (Goldstein, section 5.7):
+
+    .. math:: I_1\cos\theta\,\Omega^2 - I_3\omega_3\,\Omega + Mgl = 0,\qquad
+              \Omega_{slow} \to \frac{Mgl}{I_3\omega_3},\quad
+              \Omega_{fast} \to \frac{I_3\omega_3}{I_1\cos\theta}
+              \quad (I_3^2\omega_3^2 \gg 4I_1Mgl\cos\theta).
+
+    The roots are formed without cancellation
+    (:math:`q = (I_3\omega_3 + \mathrm{sgn}(\omega_3)\sqrt D)/2`, roots
+    :math:`Mgl/q` and :math:`q/(I_1\cos\theta)`).
+
+    Parameters
+    ----------
+    I1, I3 : float
+        Moments about a transverse axis through the fixed point and about the
+        symmetry axis (kg m^2).
+    mass, g, l : float
+        Mass (kg), gravity (m/s^2), pivot to centre of mass (m).
+    theta : float
+        Tilt from the upward vertical (rad), in (0, pi).
+    omega3 : float
+        Spin about the symmetry axis, :math:`\omega_3 = \dot\psi + \dot\phi\cos\theta`
+        (rad/s), non-zero.
+
+    Returns
+    -------
+    (slow, fast) : tuple of float
+        Precession rates (rad/s), the smaller in magnitude first; ``fast`` is
+        inf at theta = pi/2 (the quadratic is linear there).  Start a
+        :class:`~mechpy.scenes.HeavyTop` at ``(phi, theta, psi, Omega, 0,
+        omega3 - Omega cos(theta))`` to see it.
+
+    Raises
+    ------
+    ValueError
+        When :math:`I_3^2\omega_3^2 < 4I_1Mgl\cos\theta`: the top spins too
+        slowly to precess steadily at this tilt.
+
+    Examples
+    --------
+    >>> import mechpy as mp
+    >>> slow, fast = mp.rigid.steady_precession(1.0, 2.0, 1.0, 9.81, 0.5, 0.3, 200.0)
+    >>> round(slow, 8), round(9.81 * 0.5 / (2.0 * 200.0), 8)     # Mgl / (I3 omega3)
+    (0.01226286, 0.0122625)
+    """
+    I1, I3, mass, g, l = _top_args(I1, I3, mass, g, l)
+    th = as_scalar(theta, "theta")
+    if not 0 < th < np.pi:
+        raise ValueError(f"theta must be in (0, pi), got {th}")
+    w3 = as_scalar(omega3, "omega3")
+    if w3 == 0.0:
+        raise ValueError("omega3 must be non-zero (a top that does not spin does not precess "
+                         "steadily)")
+    a, b, c = I1 * np.cos(th), I3 * w3, mass * g * l
+    D = b * b - 4.0 * a * c
+    if D < 0:
+        raise ValueError(f"no steady precession at theta = {th}: I3^2 omega3^2 = {b * b:.6g} "
+                         f"< 4 I1 M g l cos(theta) = {4.0 * a * c:.6g} (spin faster)")
+    q = 0.5 * (b + np.copysign(np.sqrt(D), b))
+    slow = c / q
+    fast = q / a if a != 0.0 else np.copysign(np.inf, q)
+    if abs(slow) > abs(fast):
+        slow, fast = fast, slow
+    return float(slow), float(fast)
+
+
+def sleeping_top(I1, I3, mass, g, l, omega3) -> bool:
+    r"""Whether the heavy top spinning upright is stable (a "sleeping" top):
+
+    .. math:: I_3^2\,\omega_3^2 > 4\,I_1\,M g l
+
+    (Goldstein, section 5.7; below it a small tilt grows, the top wobbles and
+    falls).  Arguments as :func:`steady_precession`; ``l > 0`` puts the
+    centre of mass above the pivot (with l <= 0 the upright top hangs and is
+    always stable).
+    """
+    I1, I3, mass, g, l = _top_args(I1, I3, mass, g, l)
+    w3 = as_scalar(omega3, "omega3")
+    return bool((I3 * w3) ** 2 > 4.0 * I1 * mass * g * l)
+
+
+def free_precession(moments, omega):
+    r"""Precession rates of a torque-free symmetric body (I1 = I2).
+
+    In the body frame the angular velocity turns about the symmetry axis at
+    :math:`\Omega = \omega_3 (I_3 - I_1)/I_1` (counter-clockwise about
+    axis 3 when positive); in space the symmetry axis turns about the fixed
+    angular momentum at :math:`\dot\phi = L/I_1 = I_3\omega_3/(I_1\cos\theta)`,
+    theta the angle between the axis and L (Marion & Thornton, section 11.10;
+    Landau & Lifshitz, section 33).
+
+    Parameters
+    ----------
+    moments : array_like (3,)
+        Principal moments (I1, I2, I3) (kg m^2) with I1 = I2 (to 1e-12
+        relative); axis 3 is the symmetry axis.
+    omega : array_like (3,)
+        Body angular velocity (rad/s).
+
+    Returns
+    -------
+    (body, space) : tuple of float
+        Rates (rad/s).
+
+    Examples
+    --------
+    The Earth's free nutation as Euler predicted it, with (I3 - I1)/I1 =
+    1/305 and a spin of one turn per sidereal day: a period of 305 days in
+    the body frame (the Chandler wobble observed is 433 days, the difference
+    due to the Earth's elasticity).
+
+    >>> import numpy as np, mechpy as mp
+    >>> day = 86164.1
+    >>> body, space = mp.rigid.free_precession([1.0, 1.0, 1 + 1 / 305], [1e-9, 0, 2 * np.pi / day])
+    >>> round(2 * np.pi / body / day, 9)
+    305.0
+    """
+    from .scenes import _moments
+    m = _moments(moments)
+    w = as_array(omega, "omega", shape=(3,))
+    if abs(m[0] - m[1]) > 1e-12 * max(m[0], m[1]):
+        raise ValueError(f"moments must be those of a symmetric body, I1 = I2 (axis 3 the "
+                         f"symmetry axis), got {m}")
+    I1, I3 = 0.5 * (m[0] + m[1]), m[2]
+    L = float(np.sqrt((I1 * w[0]) ** 2 + (I1 * w[1]) ** 2 + (I3 * w[2]) ** 2))
+    return float(w[2] * (I3 - I1) / I1), L / I1
+
+
+__all__ += ["steady_precession", "sleeping_top", "free_precession"]

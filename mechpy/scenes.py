@@ -741,3 +741,121 @@ class SpringChain(Scene):
 
 
 __all__ += ["SpringChain"]
+
+
+class Rocket(Scene):
+    r"""A rocket flying straight up (Marion & Thornton, section 9.11).
+
+    .. math:: \dot h = v,\qquad \dot v = \frac{T - k\,v|v|}{m} - g,\qquad
+              \dot m = -b,\quad T = u\,b\qquad (m > m_{dry}),
+
+    and :math:`T = 0`, :math:`\dot m = 0` after burn-out, at
+    :math:`t_b = (m_0 - m_{dry})/b`.  Without gravity and drag the speed
+    follows Tsiolkovsky's :math:`v = u\ln(m_0/m)`; with constant g,
+    :math:`v = u\ln(m_0/m) - g t` while burning.
+
+    State ``(height, speed, mass)`` in m, m/s, kg.  Parameters:
+    ``exhaust_speed`` u (m/s, relative to the rocket), ``burn_rate`` b
+    (kg/s), ``m0`` the launch mass and ``m_dry`` the mass without propellant
+    (kg, 0 < m_dry <= m0), ``g`` (m/s^2), ``drag`` k (kg/m: the drag force is
+    :math:`-k\,v|v|`).  ``energy`` is the vehicle's mechanical energy
+    :math:`m v^2/2 + m g h` (J), not conserved.
+
+    Burn-out is a switch on the mass in the right-hand side, a kink in time:
+    :meth:`fly` breaks the integration at the burn-out time (a ``t_span``
+    break, so that no step straddles the kink) and joins the two pieces; a
+    plain :func:`mechpy.solve` across :attr:`burnout_time` is correct only to
+    the accuracy the step control reaches at a kink.
+
+    Examples
+    --------
+    >>> import numpy as np, mechpy as mp
+    >>> r = mp.scenes.Rocket(exhaust_speed=2500.0, burn_rate=10.0, m0=1000.0, m_dry=200.0)
+    >>> sol = r.fly((0.0, 100.0), rtol=1e-12, atol=1e-12)
+    >>> bool(np.isclose(sol.y[1, -1], 2500.0 * np.log(1000.0 / 200.0)))
+    True
+    """
+
+    _model = "Rocket"
+    _defaults = dict(g=0.0, drag=0.0)
+    _positive = ("m0", "m_dry")
+    _nonnegative = ("exhaust_speed", "burn_rate", "g", "drag")
+
+    def __init__(self, exhaust_speed, burn_rate, m0, m_dry, g=0.0, drag=0.0):
+        if as_scalar(m_dry, "m_dry") > as_scalar(m0, "m0"):
+            raise ValueError(f"m_dry must not exceed m0 (the launch mass), got m_dry={m_dry!r} "
+                             f"> m0={m0!r}")
+        super().__init__(exhaust_speed=exhaust_speed, burn_rate=burn_rate, m0=m0, m_dry=m_dry,
+                         g=g, drag=drag)
+
+    @property
+    def burnout_time(self) -> float:
+        """Time (s) from launch at which the propellant runs out,
+        (m0 - m_dry)/burn_rate (inf when burn_rate is 0)."""
+        p = self._params
+        fuel = p["m0"] - p["m_dry"]
+        return fuel / p["burn_rate"] if p["burn_rate"] > 0 else (0.0 if fuel == 0 else np.inf)
+
+    def initial_state(self, height=0.0, speed=0.0) -> np.ndarray:
+        """The launch state ``(height, speed, m0)``."""
+        return np.array([as_scalar(height, "height"), as_scalar(speed, "speed"),
+                         self._params["m0"]])
+
+    def fly(self, t_span, y0=None, **options):
+        """Integrate with :func:`mechpy.solve`, breaking ``t_span`` at burn-out.
+
+        Parameters
+        ----------
+        t_span : (t0, tf)
+            Forward interval (s).
+        y0 : array_like (3,), optional
+            State at t0 (the launch state at rest by default); burn-out comes
+            when its mass has fallen to ``m_dry``, after (m - m_dry)/burn_rate.
+        **options
+            Passed to :func:`mechpy.solve` (``method``, ``rtol``, ``atol``,
+            ``t_eval``, ``dense_output``, ...; not ``events``).
+
+        Returns
+        -------
+        Solution
+            The two pieces joined: ``t`` (m,), ``y`` (3, m) (the burn-out time
+            appears once, with the mass exactly ``m_dry``), the counters
+            summed, ``sol`` the joined dense output if asked for.
+        """
+        from .integrate import DenseOutput, Solution, solve
+        if "events" in options:
+            raise TypeError("Rocket.fly does not take events (call mechpy.solve on the scene)")
+        if np.shape(t_span) != (2,):
+            raise ValueError(f"t_span must be a pair (t0, tf), got shape {np.shape(t_span)}")
+        t0, tf = (as_scalar(v, "t_span") for v in t_span)
+        if not tf > t0:
+            raise ValueError(f"t_span must be increasing, got ({t0}, {tf})")
+        y = self.initial_state() if y0 is None else as_array(y0, "y0", shape=(3,)).copy()
+        p = self._params
+        tb = t0 + (y[2] - p["m_dry"]) / p["burn_rate"] if (
+            y[2] > p["m_dry"] and p["burn_rate"] > 0) else t0
+        if not t0 < tb < tf:
+            return solve(self, (t0, tf), y, **options)
+        t_eval = options.pop("t_eval", None)
+        te = None if t_eval is None else as_array(t_eval, "t_eval", ndim=1)
+        a = solve(self, (t0, tb), y, t_eval=None if te is None else te[te <= tb], **options)
+        y1 = a.y[:, -1].copy()
+        y1[2] = p["m_dry"]                       # exactly empty: the coast branch from here
+        b = solve(self, (tb, tf), y1, t_eval=None if te is None else te[te > tb], **options)
+        keep = slice(1, None) if te is None else slice(None)
+        out = Solution(b)
+        out.t = np.concatenate([a.t, b.t[keep]])
+        out.y = np.concatenate([a.y, b.y[:, keep]], axis=1)
+        if te is None:
+            out.y[2, a.t.size - 1] = p["m_dry"]
+        for k in ("nfev", "njev", "nlu", "nsteps", "nreject"):
+            out[k] = a[k] + b[k]
+        if a.sol is not None and b.sol is not None:
+            segs = [np.concatenate([sa, sb]) for sa, sb in zip(a.sol._seg, b.sol._seg)]
+            out.sol = DenseOutput(*segs)
+        if a.status < 0:
+            return a
+        return out
+
+
+__all__ += ["Rocket"]

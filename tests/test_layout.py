@@ -56,6 +56,9 @@ def _scene_case(scene, b, extra=()):
     return out
 
 
+_ROCKET = mp.scenes.Rocket(2500.0, 10.0, 1000.0, 200.0, g=9.81)
+
+
 def _scene_members(b):
     """Scene methods and properties beyond the state functions."""
     if b != ():
@@ -76,7 +79,10 @@ def _scene_members(b):
             ("SpringChain.modes", c.modes().vectors, (3, 3)),
             ("SpringChain.uniform", u.rhs(0.0, _r(8)), (8,)),
             ("SpringChain.ensemble_params", c.ensemble_params(2), (2, 11)),
-            ("replace", S.Pendulum().replace(g=1.0).rhs(0.0, _r(2)), (2,))]
+            ("replace", S.Pendulum().replace(g=1.0).rhs(0.0, _r(2)), (2,)),
+            ("Rocket.initial_state", _ROCKET.initial_state(), (3,)),
+            ("Rocket.burnout_time", _ROCKET.burnout_time, ()),
+            ("Rocket.fly", _ROCKET.fly((0.0, 30.0)).y[:, -1], (3,))]
 
 
 def _scenes(b):
@@ -165,6 +171,16 @@ def _stationary_path_case(b):
     p3 = V.stationary_path(mp.scenes.HeavyTop(1.0, 2.0, 1.0), [0, 1, 0], [0.1, 1, 0.2], 0.1, 10)
     return [("q 1-d", p1.q, (11,)), ("q", p3.q, (3, 11)), ("p", p3.p, (3, 11)),
             ("qdot", p3.qdot, (3, 11)), ("t", p3.t, (11,))]
+
+
+def _stationary_paths_case(b):
+    if b != ():        # two coordinates: q (d, n + 1), one row per coordinate
+        paths = mp.variational.stationary_paths(
+            lambda q, v: 0.5 * np.sum(v * v, 0) - 0.5 * np.sum(q * q, 0),
+            [0.1, 0.2], [0.3, -0.1], 1.0, 40, velocities=[[0.0, 0.0], [0.5, 0.5]])
+        return [(f"stationary_paths[{i}].q, d = 2", p.q, (2, 41)) for i, p in enumerate(paths)]
+    paths = mp.variational.stationary_paths(mp.scenes.Pendulum(g=1.0), 0.0, 0.0, 4.5, 40)
+    return [(f"stationary_paths[{i}].q", p.q, (41,)) for i, p in enumerate(paths)]
 
 
 def _variational_integrate_case(b):
@@ -367,6 +383,35 @@ def _drift_case(b):
             ("drift at times t", F.projectile_drift([10.0, 0.0, 10.0], _t(b), 45.0), b + (3,))]
 
 
+def _logistic_case(b):
+    r = _r(*b, lo=2.5, hi=4.0)
+    return [("logistic", mp.phase.logistic(r, n=5), b + (5,)),
+            ("logistic_bifurcation", mp.phase.logistic_bifurcation([3.2, 3.5, 3.9], n=4),
+             (3, 4))]
+
+
+def _collide_case(b):
+    P = mp.particles
+    m1, m2, e = _r(*b), _r(*b), _r(*b)
+    out = []
+    for k, v in enumerate(P.collide(m1, _r(*b), m2, _r(*b), e)):
+        out.append((f"collide 1D v{k + 1}'", v, b))
+    for k, v in enumerate(P.collide(m1, _r(*b, 3), m2, _r(*b, 3), e, normal=_r(*b, 3))):
+        out.append((f"collide 3D v{k + 1}'", v, b + (3,)))
+    return out
+
+
+def _cm_case(b):
+    P = mp.particles
+    m, v = _r(*b, 4), _r(*b, 4, 3)
+    V, u = P.to_cm(m, v)
+    V1, u1 = P.to_cm(m, v[..., 0])
+    return [("to_cm V", V, b + (3,)), ("to_cm u", u, b + (4, 3)),
+            ("from_cm", P.from_cm(V, u), b + (4, 3)),
+            ("to_cm 1D V", V1, b), ("to_cm 1D u", u1, b + (4,)),
+            ("from_cm 1D", P.from_cm(V1, u1), b + (4,))]
+
+
 def _constraint_forces_case(b):
     lam, f = mp.variational.constraint_forces(1.0, _r(*b, 3), _r(*b, 1, 3), _r(*b, 1))
     return [("lam", lam, b + (1,)), ("f", f, b + (3,))]
@@ -420,6 +465,13 @@ def _flip():
 def _nutation():
     lo, hi = mp.rigid.nutation_bounds(1.0, 2.0, 1.0, 9.81, 1.0, 0.5, 0.0, 0.0, 20.0)
     return [("theta_min", lo, ()), ("theta_max", hi, ())]
+
+
+def _top_rates():
+    slow, fast = mp.rigid.steady_precession(1.0, 2.0, 1.0, 9.81, 0.5, 0.3, 200.0)
+    body, space = mp.rigid.free_precession([1.0, 1.0, 2.0], [0.1, 0.0, 1.0])
+    return [("slow", slow, ()), ("fast", fast, ()), ("body", body, ()), ("space", space, ()),
+            ("sleeping", float(mp.rigid.sleeping_top(1.0, 2.0, 1.0, 9.81, 0.5, 200.0)), ())]
 
 
 def _chain():
@@ -503,7 +555,7 @@ TABLE = {
     # scenes
     **{f"mechpy.scenes.{n}": (STATE, _scenes) for n in (
         "Scene", "Pendulum", "VanDerPol", "Duffing", "Kepler", "RestrictedThreeBody",
-        "Foucault", "RigidBody", "HeavyTop", "SpringChain")},
+        "Foucault", "RigidBody", "HeavyTop", "SpringChain", "Rocket")},
     # compiled scenes
     "mechpy.symbolic.lagrangian": (STATE, _lagrangian_case),
     "mechpy.symbolic.equations": (STATE, _equations_case),
@@ -539,6 +591,9 @@ TABLE = {
     "mechpy.rigid.free_rotation": (STACK, _free_rotation_case),
     "mechpy.rigid.flip_period": (SINGLE, _single(_flip)),
     "mechpy.rigid.nutation_bounds": (SINGLE, _single(_nutation)),
+    "mechpy.rigid.steady_precession": (SINGLE, _single(_top_rates)),
+    "mechpy.rigid.sleeping_top": (SINGLE, _single(_top_rates)),
+    "mechpy.rigid.free_precession": (SINGLE, _single(_top_rates)),
     # modes
     "mechpy.modes.Modes": (STACK, _modes_case),
     "mechpy.modes.normal_modes": (STACK, _modes_case),
@@ -556,6 +611,12 @@ TABLE = {
     "mechpy.phase.limit_cycle": (SINGLE, _single(_limit_cycle)),
     "mechpy.phase.lyapunov": (SINGLE, _single(_lyapunov)),
     "mechpy.phase.LyapunovFloorWarning": (NONE, None),
+    "mechpy.phase.logistic": (STACK, _logistic_case),
+    "mechpy.phase.logistic_bifurcation": (STACK, _logistic_case),
+    # particles
+    "mechpy.particles.collide": (STACK, _collide_case),
+    "mechpy.particles.to_cm": (STACK, _cm_case),
+    "mechpy.particles.from_cm": (STACK, _cm_case),
     # frames
     "mechpy.frames.fictitious": (STACK, _frames_case),
     "mechpy.frames.earth_omega": (STACK, _frames_case),
@@ -569,6 +630,7 @@ TABLE = {
     # variational
     "mechpy.variational.stationary_path": (STATE, _stationary_path_case),
     "mechpy.variational.StationaryPath": (STATE, _stationary_path_case),
+    "mechpy.variational.stationary_paths": (STATE, _stationary_paths_case),
     "mechpy.variational.variational_integrate": (STATE, _variational_integrate_case),
     "mechpy.variational.VariationalTrajectory": (STATE, _variational_integrate_case),
     "mechpy.variational.lagrangian": (STATE, _lagrangian_fn_case),
@@ -605,6 +667,7 @@ METHODS = {
     "Solution.raise_for_status": None, "EnsembleSolution.raise_for_status": None,
     "Pendulum.period": _SCENE, "Kepler.initial_state": _SCENE,
     "Foucault.precession_rate": _SCENE,
+    **{f"Rocket.{n}": _SCENE for n in ("burnout_time", "fly", "initial_state")},
     **{f"RigidBody.{n}": _RB for n in ("rhs", "jacobian", "moments", "initial_state",
                                       "angular_momentum", "replace")},
     "RigidBody.params": None,

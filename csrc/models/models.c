@@ -8,11 +8,14 @@
 extern const mp_model mp_model_pendulum, mp_model_vanderpol, mp_model_duffing, mp_model_kepler,
     mp_model_r3b, mp_model_foucault, mp_model_rigid, mp_model_rigid_q, mp_model_heavy_top;
 extern const mp_model mp_model_chain;
+extern const mp_model mp_model_rocket;
 
 const mp_model *const mp_models[] = {
     &mp_model_pendulum, &mp_model_vanderpol, &mp_model_duffing, &mp_model_kepler, &mp_model_r3b,
     &mp_model_foucault, &mp_model_rigid, &mp_model_rigid_q, &mp_model_heavy_top,
-    &mp_model_chain, NULL,
+    &mp_model_chain,
+    &mp_model_rocket,
+    NULL,
 };
 
 const mp_model *mp_model_find(const char *name)

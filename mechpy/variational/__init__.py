@@ -41,7 +41,7 @@ Array shapes follow the layout rule in :mod:`mechpy` (``help(mechpy)``):
 paths and trajectories state first, (d, m); functions of states y (n, ...) return (p, ...).
 """
 from .action import (MAX_STEPS, StationaryPath, VariationalTrajectory, stationary_path,
-                     variational_integrate)
+                     stationary_paths, variational_integrate)
 from .classic import Brachistochrone, Catenary, brachistochrone, catenary
 from .constraints import constraint_forces, pendulum_tension
 from .functionals import Extremal, minimize_functional
@@ -49,7 +49,7 @@ from .lagrangians import (CentralForce, RotatingHoop, cyclic_coordinates, genera
                           lagrangian)
 
 __all__ = ["minimize_functional", "Extremal", "brachistochrone", "Brachistochrone",
-           "catenary", "Catenary", "stationary_path", "StationaryPath",
+           "catenary", "Catenary", "stationary_path", "stationary_paths", "StationaryPath",
            "variational_integrate", "VariationalTrajectory", "MAX_STEPS", "lagrangian",
            "generalized_momenta", "cyclic_coordinates", "constraint_forces",
            "pendulum_tension", "CentralForce", "RotatingHoop"]

@@ -24,7 +24,7 @@ from .functionals import (_MAX_ITER, _SING_TOL_EXACT, _SING_TOL_FD, _TOL, _fd_sp
                           _lagrangian_fn, _n_nodes, _pair)
 from .lagrangians import _scene_spec, _spec_dim
 
-__all__ = ["stationary_path", "StationaryPath", "variational_integrate",
+__all__ = ["stationary_path", "stationary_paths", "StationaryPath", "variational_integrate",
            "VariationalTrajectory", "MAX_STEPS"]
 
 #: Default step budget of :func:`variational_integrate` (about 80 MB per
@@ -148,6 +148,14 @@ def stationary_path(scene_or_lagrangian, q_a, q_b, T: float, n: int = 200, *,
     SingularityError
         :math:`\partial^2L/\partial\dot q^2` is singular along the path (the
         velocities do not follow from the momenta).
+
+    Notes
+    -----
+    A boundary-value problem may have several stationary paths (the
+    pendulum from 0 back to 0 in a time T has 2k + 1 of them once
+    :math:`\omega_0 T > k\pi`: at rest and k pairs of swings); Newton's
+    method returns the one its ``guess`` leads to, and says nothing of the
+    others.  :func:`stationary_paths` looks for them from several starts.
     """
     qa, qb = _coords(q_a, "q_a"), _coords(q_b, "q_b")
     spec, d, _, sing_tol = _system(scene_or_lagrangian, qa)
@@ -173,6 +181,74 @@ def stationary_path(scene_or_lagrangian, q_a, q_b, T: float, n: int = 200, *,
                                         sing_tol)
     return StationaryPath(t, _shape_out(q, scalar), _shape_out(p, scalar),
                           _shape_out(v, scalar), info["J"], info["iterations"])
+
+
+def stationary_paths(scene_or_lagrangian, q_a, q_b, T: float, n: int = 200, *,
+                     velocities=None, t0: float = 0.0, atol: float = 1e-6, tol: float = _TOL,
+                     max_iter: int = _MAX_ITER) -> list:
+    r"""The distinct paths of stationary action between q_a and q_b found by
+    shooting from several initial velocities.
+
+    Each initial velocity v starts :func:`variational_integrate` from q_a
+    over [t0, t0 + T]; that trajectory (its end replaced by q_b) is the
+    guess of one :func:`stationary_path` solve.  Solves that fail
+    (:class:`~mechpy.ConvergenceError`, :class:`~mechpy.SingularityError`)
+    are skipped, and paths within ``atol`` (max norm) of one found before
+    are the same path.
+
+    Parameters
+    ----------
+    scene_or_lagrangian, q_a, q_b, T, n, t0, tol, max_iter
+        As for :func:`stationary_path`.
+    velocities : array_like (k,) or (k, d), optional
+        Initial velocities to shoot with (rad/s or the coordinates' unit per
+        s); by default 17 values :math:`\bar v + j\,\pi/T`, j = -8..8, around
+        the straight line's :math:`\bar v = (q_b - q_a)/T` (along every
+        coordinate at once for d > 1).
+    atol : float
+        Distance below which two paths are the same.
+
+    Returns
+    -------
+    list of StationaryPath
+        The distinct paths, by increasing action (empty if none converged).
+
+    Examples
+    --------
+    The pendulum (g/l = 1) from 0 back to 0 in T = 4.5 s, between pi and
+    2 pi: at rest, and a swing to either side.
+
+    >>> import mechpy as mp
+    >>> paths = mp.variational.stationary_paths(mp.scenes.Pendulum(g=1.0), 0.0, 0.0, 4.5)
+    >>> len(paths)
+    3
+    """
+    from ..errors import ConvergenceError, SingularityError
+    qa, qb = _coords(q_a, "q_a"), _coords(q_b, "q_b")
+    T = as_scalar(T, "T", positive=True)
+    n = _n_nodes(n)
+    atol = as_scalar(atol, "atol", positive=True)
+    vbar = (qb - qa) / T
+    if velocities is None:
+        vs = [vbar + j * np.pi / T for j in range(-8, 9)]
+    else:
+        v = as_array(velocities, "velocities", min_ndim=1)
+        vs = list(v)
+    found = []
+    for v in vs:
+        try:
+            run = variational_integrate(scene_or_lagrangian, (t0, t0 + T), qa, v, T / n)
+            guess = run.q[..., :n + 1]
+            if not np.all(np.isfinite(guess)):
+                continue
+            path = stationary_path(scene_or_lagrangian, qa, qb, T, n, t0=t0, guess=guess,
+                                   tol=tol, max_iter=max_iter)
+        except (ConvergenceError, SingularityError):
+            continue
+        if not all(np.max(np.abs(path.q - other.q)) > atol for other in found):
+            continue
+        found.append(path)
+    return sorted(found, key=lambda p: p.action)
 
 
 class VariationalTrajectory(NamedTuple):

@@ -169,6 +169,30 @@ def _integrand(F: Callable) -> tuple:
     return _fd_spec(f, 1)
 
 
+def _singular_end(F: Callable, a: float, b: float, ya: float, yb: float):
+    """The end ("a" or "b") at which F is singular along the straight line
+    between the end points, or None.
+
+    Singular: F is not finite at the end point itself, or it grows by more
+    than 10x between 1e-6 and 1e-9 of the interval from it (a power law
+    x^-1/3 or steeper, as the brachistochrone's x^-1/2 on the line: 31.6x);
+    a smooth integrand changes by about 1e-6 relative there."""
+    slope = (yb - ya) / (b - a)
+    L = b - a
+    for name, e, ye, sign in (("a", a, ya, 1.0), ("b", b, yb, -1.0)):
+        xs = np.array([e, e + sign * 1e-6 * L, e + sign * 1e-9 * L])
+        ys = ye + slope * (xs - e)
+        try:
+            with np.errstate(all="ignore"):
+                v = np.broadcast_to(np.asarray(F(xs, ys, np.full(3, slope)), dtype=np.float64),
+                                    (3,))
+        except (ZeroDivisionError, FloatingPointError, ValueError):
+            return name
+        if not np.all(np.isfinite(v)) or abs(v[2]) > 10.0 * abs(v[1]) + 1e-300:
+            return name
+    return None
+
+
 def minimize_functional(F: Callable, x_span, y_ends, n: int = 200, *, constraints=(),
                         guess=None, multipliers=None, stationary: bool = False,
                         tol: float = _TOL,
@@ -217,6 +241,16 @@ def minimize_functional(F: Callable, x_span, y_ends, n: int = 200, *, constraint
     ------
     ConvergenceError
         The budget ran out or no step improved the merit function.
+    ValueError
+        F is singular at an end point (not finite there, or growing like a
+        power of the distance to it along the straight line between the
+        ends), as the brachistochrone's :math:`\sqrt{(1 + y'^2)/(2gy)}` is at
+        its start.  The midpoint rule's first cell then dominates the
+        discrete functional: before this check it returned a descent time
+        8.5% below the cycloid's with a residual of 1e-13 and no warning, and
+        for n >= 400 its finite differences stepped to y < 0.  Write the
+        problem in a parameter in which the integrand is finite (as
+        :func:`brachistochrone` does with x = x_e s^3 and u = sqrt(y)).
     """
     if not callable(F):
         raise TypeError("F must be a callable F(x, y, yp)")
@@ -224,6 +258,16 @@ def minimize_functional(F: Callable, x_span, y_ends, n: int = 200, *, constraint
     ya, yb = (as_scalar(v, "y_ends") for v in _pair(y_ends, "y_ends"))
     if not b > a:
         raise ValueError(f"x_span must be increasing, got ({a}, {b})")
+    end = _singular_end(F, a, b, ya, yb)
+    if end is not None:
+        xe, ye = (a, ya) if end == "a" else (b, yb)
+        raise ValueError(
+            f"F is singular at the end point x = {xe}, y = {ye} (not finite there, or growing "
+            "without bound towards it): the midpoint rule cannot resolve an integrable "
+            "singularity and would return a value below the true extremum with a small "
+            "residual. Change variables so that the integrand is finite at the ends (for the "
+            "brachistochrone use mechpy.variational.brachistochrone, which writes it in "
+            "x = x_e s^3, u = sqrt(y))")
     n = _n_nodes(n)
     x = np.linspace(a, b, n + 1)
     if guess is None:

@@ -1,0 +1,82 @@
+/* A rocket flying straight up (Marion & Thornton, section 9.11): exhaust
+ * speed u relative to the rocket, propellant burnt at the constant rate b
+ * while the mass exceeds the dry mass, gravity g and quadratic drag k:
+ *
+ *   h' = v,   v' = T/m - g - (k/m) v|v|,   m' = -b,   T = u b   while m > m_dry,
+ *   h' = v,   v' = -g - (k/m) v|v|,          m' = 0             after burn-out.
+ *
+ * State (height, speed, mass) in m, m/s, kg; parameters exhaust_speed u
+ * (m/s), burn_rate b (kg/s), m0 (kg, the launch mass: the Python face's
+ * initial state), m_dry (kg, 0 < m_dry <= m0), g (m/s^2), drag k (kg/m).
+ * Burn-out is a switch on the mass, a kink in time at (m0 - m_dry)/b: the
+ * Python face breaks t_span there (Rocket.fly), so no step straddles it. */
+#include "models/models.h"
+
+#include <math.h>
+
+enum { RU, RB, RM0, RMD, RG, RK, RN };
+static const char *const rocket_names[] = {"exhaust_speed", "burn_rate", "m0", "m_dry", "g",
+                                           "drag"};
+
+/* MP_EDOM unless all finite, u >= 0, b >= 0, 0 < m_dry <= m0, g >= 0, k >= 0. */
+static int rocket_check(const double *p)
+{
+    for (int i = 0; i < RN; i++)
+        if (!isfinite(p[i])) return MP_EDOM;
+    return (p[RU] >= 0 && p[RB] >= 0 && p[RMD] > 0 && p[RMD] <= p[RM0] && p[RG] >= 0 &&
+            p[RK] >= 0)
+               ? MP_OK
+               : MP_EDOM;
+}
+
+/* 1 while propellant is left in state y (mass above the dry mass). */
+static int rocket_burning(const double *p, const double *y) { return y[2] > p[RMD]; }
+
+/* f = (v, T/m - g - (k/m) v|v|, -b or 0); the state's mass must be > 0
+ * (MP_EDOM otherwise: a state the rocket never reaches). */
+static int rocket_rhs(double t, const double *y, double *f, void *d)
+{
+    const double *p = d;
+    const int burn = rocket_burning(p, y);
+    (void)t;
+    if (!(y[2] > 0)) return MP_EDOM;
+    f[0] = y[1];
+    f[1] = ((burn ? p[RU] * p[RB] : 0.0) - p[RK] * y[1] * fabs(y[1])) / y[2] - p[RG];
+    f[2] = burn ? -p[RB] : 0.0;
+    return MP_OK;
+}
+
+/* df/dy (row-major 3x3) on the branch (burning or coasting) of state y. */
+static int rocket_jac(double t, const double *y, double *J, void *d)
+{
+    const double *p = d;
+    const double thrust = rocket_burning(p, y) ? p[RU] * p[RB] : 0.0;
+    const double m = y[2];
+    (void)t;
+    if (!(m > 0)) return MP_EDOM;
+    for (int i = 0; i < 9; i++) J[i] = 0.0;
+    J[0 * 3 + 1] = 1.0;
+    J[1 * 3 + 1] = -2.0 * p[RK] * fabs(y[1]) / m;
+    J[1 * 3 + 2] = -(thrust - p[RK] * y[1] * fabs(y[1])) / (m * m);
+    return MP_OK;
+}
+
+/* Bind the one right-hand side (terms that are zero cost a multiply). */
+static void rocket_bind(const double *p, mp_ode_problem *prob)
+{
+    prob->n = 3;
+    prob->rhs = rocket_rhs;
+    prob->jac = rocket_jac;
+    prob->data = (void *)p;
+    prob->nq = 0; /* the mass is not a position */
+}
+
+/* the vehicle's mechanical energy m v^2/2 + m g h (J): not conserved (the
+ * thrust does work, the exhaust carries energy away, drag dissipates). */
+static double rocket_energy(const double *p, const double *y)
+{
+    return y[2] * (0.5 * y[1] * y[1] + p[RG] * y[0]);
+}
+
+const mp_model mp_model_rocket = {"Rocket", 3, 6, rocket_names, rocket_check, rocket_bind,
+                                  rocket_energy};
