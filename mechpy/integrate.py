@@ -642,8 +642,9 @@ def solve_many(system, t_span: Sequence[float], y0s, *, params=None, t_eval=None
     ``client=`` for that.
     """
     if client is not None or chunk_size is not None or lazy:
+        given = dict(locals())              # every argument, new ones too
         from .cluster import _solve_many    # dask is imported only here
-        return _solve_many(**locals())
+        return _solve_many(**given)
     import os
     Y0 = as_array(y0s, "y0s", ndim=2, allow_empty=True)
     k, n = Y0.shape
