@@ -663,7 +663,8 @@ def solve_many(system, t_span: Sequence[float], y0s, *, params=None, t_eval=None
                threads: int | None = None, progress: bool = False, args: tuple = (),
                h: float | None = None, first_step: float | None = None,
                max_step: float = np.inf, max_steps: int = 10_000_000,
-               errors: str = "auto") -> EnsembleSolution:
+               errors: str = "auto", client=None, chunk_size: int | None = None,
+               lazy: bool = False) -> EnsembleSolution:
     """Integrate k initial states (an ensemble) in C, on several threads.
 
     Parameters
@@ -688,7 +689,24 @@ def solve_many(system, t_span: Sequence[float], y0s, *, params=None, t_eval=None
         Threads to use (default: all cores).
     progress : bool
         Show progress as trajectories finish: a ``tqdm.auto`` bar when tqdm
-        is installed (a widget in notebooks), else a line on stderr.
+        is installed (a widget in notebooks), else a line on stderr; with a
+        ``client``, ``dask.distributed.progress`` over the chunks.
+    client : dask.distributed.Client, optional
+        Run the ensemble on a Dask cluster (:mod:`mechpy.cluster`): it is
+        cut into chunks of ``chunk_size`` consecutive trajectories (default:
+        4 chunks per worker thread), each solved in C on a worker with
+        ``threads`` threads (default 1), and joined in order; the result
+        equals a local run bit for bit.  A worker lost mid-run costs only its
+        chunks, which Dask runs again elsewhere.  A C callback cannot travel
+        (``TypeError``); a Python callable travels if cloudpickle serialises
+        it.
+    chunk_size : int, optional
+        Trajectories per chunk (with ``client``).
+    lazy : bool
+        With ``client``: return at once, the per-trajectory fields (``y``
+        (k, n, m), ``status``, ...) as ``dask.array`` arrays built from
+        delayed chunk solves, to reduce or store (``.to_zarr``) on the
+        cluster without gathering them.
     errors : {"auto", "raise", "status"}
         As for :func:`solve`, per trajectory: ``"auto"`` reports the step
         budget and step size in ``status`` and raises the first trajectory
@@ -708,8 +726,13 @@ def solve_many(system, t_span: Sequence[float], y0s, *, params=None, t_eval=None
     Each trajectory is an ordinary solve with the same method and tolerances
     as :func:`solve`, so its samples equal ``solve(...).y`` exactly.  The inputs
     pickle (scenes, arrays), so a sweep can be split across processes or a
-    dask cluster, each worker calling ``solve_many`` on its share.
+    dask cluster, each worker calling ``solve_many`` on its share: pass
+    ``client=`` for that.
     """
+    if client is not None or chunk_size is not None or lazy:
+        given = dict(locals())              # every argument, new ones too
+        from .cluster import _solve_many    # dask is imported only here
+        return _solve_many(**given)
     import os
     Y0 = as_array(y0s, "y0s", ndim=2, allow_empty=True)
     k, n = Y0.shape
