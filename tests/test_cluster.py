@@ -92,6 +92,26 @@ def test_failed_trajectories_keep_their_place(client):
                  local)
 
 
+def test_errors_name_the_trajectory_in_the_whole_ensemble(client):
+    """The error rule is applied once on the joined result: a singular HeavyTop state
+    (theta = 0) in row 9 of chunks of 4 raises naming trajectory 9, as a local run does;
+    with errors="status" its status and raise_for_status travel too."""
+    top = mp.scenes.HeavyTop(1.0, 2.0, 1.0)
+    y0s = np.tile([0.0, 0.5, 0.0, 1.0, 1.0, 1.0], (12, 1))
+    y0s[9, 1] = 0.0                                   # theta = 0: singular Euler angles
+    with pytest.raises(mp.SingularityError) as local:
+        mp.solve_many(top, (0, 1), y0s)
+    with pytest.raises(mp.SingularityError) as remote:
+        _run(mp.solve_many, top, (0, 1), y0s, client=client, chunk_size=4)
+    assert "trajectory 9" in str(local.value) and str(remote.value) == str(local.value)
+    st_local = mp.solve_many(top, (0, 1), y0s, errors="status")
+    st_remote = _run(mp.solve_many, top, (0, 1), y0s, errors="status", client=client,
+                     chunk_size=4)
+    _assert_same(st_remote, st_local)
+    with pytest.raises(mp.SingularityError, match="trajectory 9"):
+        st_remote.raise_for_status()
+
+
 def test_compiled_scene_is_rebuilt_on_the_workers(client):
     th, = mp.coordinates("theta")
     m, l, g = sp.symbols("m length g")
