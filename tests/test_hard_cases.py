@@ -1,6 +1,5 @@
 """The hard-case suite: stiff problems, long integrations, separatrices, with
 published reference values (Hairer & Wanner's IVP test set, Arenstorf)."""
-import time
 
 import numpy as np
 import pytest
@@ -67,9 +66,8 @@ def test_robertson_to_1e11(method):
 
 
 def test_explicit_method_on_stiff_problem_fails_fast():
-    t0 = time.perf_counter()
+    # a hang is caught by pytest-timeout (pyproject.toml), not by a wall-clock bound
     s = mp.solve(vdp_stiff, (0, 2), [2.0, 0.0], method="dop853", max_steps=20_000)
-    assert time.perf_counter() - t0 < 30  # a budget, not a benchmark: it must not hang
     assert s.status == -1 and not s.success
     assert "stiff" in s.message and "max_steps=20000" in s.message
 

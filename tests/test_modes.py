@@ -434,14 +434,21 @@ def test_round_off_negative_eigenvalue_is_a_zero_mode_not_nan():
 
 
 # ------------------------------------------------------------- properties
-hypothesis = pytest.importorskip("hypothesis")
-st = hypothesis.strategies
+def test_random_chains_paths_and_scipy_agree():
+    # hypothesis is imported here: without it only this test skips, not the module
+    hypothesis = pytest.importorskip("hypothesis")
+    st = hypothesis.strategies
+
+    @hypothesis.settings(max_examples=40, deadline=None)
+    @hypothesis.given(N=st.integers(1, 12), ends=st.sampled_from(["fixed", "free", "periodic"]),
+                      seed=st.integers(0, 2 ** 32 - 1))
+    def check(N, ends, seed):
+        _random_chain_case(N, ends, seed)
+
+    check()
 
 
-@hypothesis.settings(max_examples=40, deadline=None)
-@hypothesis.given(N=st.integers(1, 12), ends=st.sampled_from(["fixed", "free", "periodic"]),
-                  seed=st.integers(0, 2 ** 32 - 1))
-def test_random_chains_paths_and_scipy_agree(N, ends, seed):
+def _random_chain_case(N, ends, seed):
     rng = np.random.default_rng(seed)
     ns = {"fixed": N + 1, "free": N - 1, "periodic": N}[ends]
     K, M = chain(N, masses=10 ** rng.uniform(-2, 2, N), springs=10 ** rng.uniform(-2, 2, ns),

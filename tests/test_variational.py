@@ -751,13 +751,10 @@ def test_heavy_top_integrator_conserves_cyclic_momenta():
 # ---- regressions ----------------------------------------------------------------------------
 
 def test_step_budget_refused_before_allocating():
-    import time
-    t = time.perf_counter()
     with pytest.raises(ValueError, match="max_steps"):    # was a 15 GiB allocation
         V.variational_integrate(mp.scenes.Pendulum(), (0, 10), 1.0, 0.0, 1e-9)
     with pytest.raises(ValueError, match="max_steps"):
         V.variational_integrate(mp.scenes.Pendulum(), (0, 10), 1.0, 0.0, 0.01, max_steps=999)
-    assert time.perf_counter() - t < 1.0
     r = V.variational_integrate(mp.scenes.Pendulum(), (0, 10), 1.0, 0.0, 0.01, max_steps=1000)
     assert len(r.t) == 1001
 
