@@ -139,12 +139,13 @@ def test_constraint_forces_pendulum_tension_closed_form():
     T = V.pendulum_tension(sc, np.stack([th, w]), mass=m)
     np.testing.assert_allclose(T, m * (g * np.cos(th) + ell * w ** 2), rtol=1e-13, atol=1e-13)
     # constraint_forces directly: bead of mass m on a hoop of radius R at rest at angle
-    # phi from the bottom under gravity; the normal force is -m g cos(phi) along r/R
+    # phi from the bottom under gravity; the hoop cancels the outward radial part of
+    # gravity: f = -m g cos(phi) r/R (g = |x|^2 - R^2 = 0 has J = 2 x; here J = x, b = |v|^2 = 0)
     R, phi = 2.0, 0.6
     pos = R * np.array([np.sin(phi), -np.cos(phi)])
     lam, f = V.constraint_forces(m, [0.0, -m * g], pos[None, :], [0.0])
-    np.testing.assert_allclose(f, -m * g * np.cos(phi) * pos / R * -1, rtol=1e-14, atol=1e-15)
-    np.testing.assert_allclose(lam, [m * g * np.cos(phi) / R], rtol=1e-14)
+    np.testing.assert_allclose(f, -m * g * np.cos(phi) * pos / R, rtol=1e-14, atol=1e-15)
+    np.testing.assert_allclose(lam, [-m * g * np.cos(phi) / R], rtol=1e-14)
 
 
 def test_variational_lagrangian_values():
