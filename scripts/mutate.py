@@ -227,6 +227,9 @@ class Tree:
         if not where.stdout.startswith(str(self.dir)):
             sys.exit(f"mutate: the copy does not import its own build: {where.stdout}"
                      f"{where.stderr}")
+        # setuptools links into build/lib* and copies the result next to the sources
+        self.linked = self.dir / self.link[self.link.index("-o") + 1]
+        self.inplace = Path(where.stdout.strip())
 
     def _obj(self, src):
         args = self.compile[src]
@@ -237,7 +240,10 @@ class Tree:
         r = subprocess.run(self.compile[src], cwd=self.dir, capture_output=True)
         if r.returncode:
             return False
-        return subprocess.run(self.link, cwd=self.dir, capture_output=True).returncode == 0
+        if subprocess.run(self.link, cwd=self.dir, capture_output=True).returncode:
+            return False
+        shutil.copyfile(self.linked, self.inplace)
+        return True
 
     def pytest(self, tests, timeout):
         """(exit code or 'timeout', seconds) of the tests in this copy."""
