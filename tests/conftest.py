@@ -1,5 +1,6 @@
 import ctypes
 import os
+import re
 from pathlib import Path
 
 import numpy as np
@@ -8,6 +9,40 @@ import pytest
 import mechpy
 
 SANITIZED = bool(os.environ.get("MECHPY_SANITIZED"))
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def _test_extra():
+    """Import names of pyproject.toml's `test` extra (``pytest-timeout`` -> ``pytest_timeout``)."""
+    try:
+        import tomllib
+    except ImportError:  # Python 3.10: the names are read from the text
+        text = (ROOT / "pyproject.toml").read_text()
+        block = re.search(r"^test = \[(.*?)\]", text, re.S | re.M)
+        reqs = re.findall(r'"([^"]+)"', block.group(1)) if block else []
+    else:
+        with open(ROOT / "pyproject.toml", "rb") as f:
+            reqs = tomllib.load(f)["project"]["optional-dependencies"]["test"]
+    return {re.split(r"[<>=!~\[; ]", r)[0].lower().replace("-", "_") for r in reqs}
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_makereport(item, call):
+    """In CI (``CI`` set): a skip for a missing module of the `test` extra is a failure.
+
+    pytest.importorskip skips with "could not import 'name'"; an incomplete test
+    environment must not pass quietly where the extra is meant to be installed.
+    """
+    outcome = yield
+    rep = outcome.get_result()
+    if not rep.skipped or os.environ.get("CI", "").lower() not in ("1", "true", "yes"):
+        return
+    reason = str(rep.longrepr[-1]) if isinstance(rep.longrepr, tuple) else str(rep.longrepr)
+    m = re.search(r"could not import '([\w.]+)'", reason)
+    if m and m.group(1).split(".")[0].lower() in _test_extra():
+        rep.outcome = "failed"
+        rep.longrepr = (f"CI: skipped because {m.group(1)!r} (pyproject's `test` extra) is "
+                        f"missing: {reason}")
 
 
 @pytest.fixture

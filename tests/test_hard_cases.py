@@ -1,6 +1,5 @@
 """The hard-case suite: stiff problems, long integrations, separatrices, with
 published reference values (Hairer & Wanner's IVP test set, Arenstorf)."""
-import time
 
 import numpy as np
 import pytest
@@ -39,7 +38,9 @@ def test_stiff_van_der_pol(method, with_jac):
                  jac=vdp_stiff_jac if with_jac else None)
     assert s.success
     err = np.max(np.abs(s.y[:, -1] - VDP_REF))
-    assert err < (5e-6 if method == "gsl:msbdf" else 2e-7), err
+    # measured (with / without jac): radau 2.7e-11, auto 1.8e-11, bsimp 3.1e-8 / 9.6e-8,
+    # msbdf 8.8e-7 / 7.7e-7
+    assert err < {"radau": 2e-10, "auto": 2e-10, "gsl:bsimp": 5e-7, "gsl:msbdf": 5e-6}[method], err
     assert s.njev > 0
     if method in ("radau", "auto"):
         assert s.nlu > 0
@@ -67,9 +68,8 @@ def test_robertson_to_1e11(method):
 
 
 def test_explicit_method_on_stiff_problem_fails_fast():
-    t0 = time.perf_counter()
+    # a hang is caught by pytest-timeout (pyproject.toml), not by a wall-clock bound
     s = mp.solve(vdp_stiff, (0, 2), [2.0, 0.0], method="dop853", max_steps=20_000)
-    assert time.perf_counter() - t0 < 30  # a budget, not a benchmark: it must not hang
     assert s.status == -1 and not s.success
     assert "stiff" in s.message and "max_steps=20000" in s.message
 
@@ -91,10 +91,12 @@ def test_arenstorf_orbit_closes(method):
     s = mp.solve(mp.scenes.RestrictedThreeBody(), (0, ARENSTORF_T), ARENSTORF_Y0,
                  method=method, rtol=1e-12, atol=1e-12)
     assert s.success
-    assert np.max(np.abs(s.y[:, -1] - ARENSTORF_Y0)) < 1e-6
-    # the Jacobi integral is conserved along the orbit
+    # closure measured: dop853 7.4e-10, dopri5 3.4e-8, radau 9.8e-10, rk8pd 2.1e-9
+    closure = {"dop853": 5e-9, "dopri5": 2e-7, "radau": 5e-9, "gsl:rk8pd": 1e-8}[method]
+    assert np.max(np.abs(s.y[:, -1] - ARENSTORF_Y0)) < closure
+    # the Jacobi integral is conserved along the orbit (measured 3e-13 .. 5.8e-12)
     E = mp.scenes.RestrictedThreeBody().energy(s.y)
-    assert np.max(np.abs(E - E[0])) < 1e-8
+    assert np.max(np.abs(E - E[0])) < 5e-11
 
 
 @pytest.mark.parametrize("method,rtol,bound", [("dop853", 1e-13, 1e-10), ("dopri5", 1e-12, 1e-9),

@@ -1,0 +1,365 @@
+#!/usr/bin/env python3
+"""Mutation testing for mechpy: do the tests notice a small wrong change?
+
+    python scripts/mutate.py                      # every module, 12 mutants each
+    python scripts/mutate.py -m ode -m modes.c -n 20 --seed 3
+    python scripts/mutate.py --list               # the modules and their tests
+    python scripts/mutate.py --only ode:7 --only modes.py:2   # rerun chosen mutants
+
+A mutant is one small edit of one source line: a sign flip (``a + b`` ->
+``a - b``), a constant's last digit (``0.5`` -> ``0.6``), an off-by-one
+(``i < n`` -> ``i <= n``, ``k + 1`` -> ``k + 2``) or a dropped term
+(``a + b * c`` -> ``a``).  The candidates of a module are listed in a fixed
+order and drawn at random with a fixed seed, so a run is repeatable and a
+mutant has a stable name (``module:index``).
+
+The working tree is never touched: the tracked files are copied to a
+temporary directory, the C extension is built there once
+(``setup.py build_ext --inplace``) and, for a C mutant, only the mutated
+file is recompiled and the extension relinked.  Each mutant runs the tests
+that cover its module (``-x``: the first failure kills it; a timeout kills
+it too).  A mutant that does not compile (or whose Python does not parse)
+is not counted and another is drawn.
+
+The interpreter is the one running this script (it needs numpy, setuptools
+and the test extra): ``.venv/bin/python scripts/mutate.py``.  The report is
+printed as a table and written as JSON (``--out``).
+"""
+from __future__ import annotations
+
+import argparse
+import ast
+import json
+import os
+import random
+import re
+import shlex
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+
+FAST = "not ctrl_c and not interrupt"   # the Ctrl-C cases wait seconds on purpose
+# module -> (source files, the tests that cover them; extra pytest arguments allowed)
+MODULES = {
+    "ode": (["csrc/ode/driver.c", "csrc/ode/rk.c", "csrc/ode/radau.c", "csrc/ode/gsl.c",
+             "csrc/ode/geometric.c", "csrc/ode/ensemble.c", "csrc/ode/rigid_split.c"],
+            ["tests/test_integrate.py", "tests/test_ensemble.py", "tests/test_detest.py",
+             "tests/test_rigid.py"]),
+    "models": (["csrc/models/oscillators.c", "csrc/models/orbits.c", "csrc/models/chain.c",
+                "csrc/models/foucault.c", "csrc/models/rigid.c"],
+               ["tests/test_scenes.py", "tests/test_integrate.py", "tests/test_frames.py",
+                "tests/test_chain.py", "tests/test_rigid.py"]),
+    "inertia.c": (["csrc/inertia.c"], ["tests/test_inertia.py"]),
+    "rotation.c": (["csrc/rotation.c"], ["tests/test_rotation.py", "tests/test_rigid.py"]),
+    "modes.c": (["csrc/modes.c"], ["tests/test_modes.py", "tests/test_chain.py", "-k", FAST]),
+    "variational.c": (["csrc/variational.c"], ["tests/test_variational.py"]),
+    "inertia.py": (["mechpy/inertia.py"], ["tests/test_inertia.py"]),
+    "rotation.py": (["mechpy/rotation.py"], ["tests/test_rotation.py", "tests/test_rigid.py"]),
+    "modes.py": (["mechpy/modes.py"], ["tests/test_modes.py", "tests/test_chain.py", "-k", FAST]),
+    "variational.py": (["mechpy/variational/action.py", "mechpy/variational/classic.py",
+                        "mechpy/variational/constraints.py",
+                        "mechpy/variational/functionals.py",
+                        "mechpy/variational/lagrangians.py"],
+                       ["tests/test_variational.py"]),
+}
+
+NUM = r"(?<![\w.])(\d+\.\d*(?:[eE][+-]?\d+)?|\d*\.\d+(?:[eE][+-]?\d+)?|\d+[eE][+-]?\d+)(?![\w.])"
+INT = r"(?<![\w.])(\d+)(?![\w.])"
+
+
+def _string_spans(line):
+    """Character ranges of string and char literals in one line (never mutated)."""
+    return [m.span() for m in re.finditer(r'"(?:\\.|[^"\\])*"|\'(?:\\.|[^\'\\])*\'', line)]
+
+
+def _code_lines(path, text):
+    """(line number, code part) of the lines worth mutating: statements inside
+    function bodies, with comments, preprocessor lines and docstrings left out."""
+    out = []
+    c = path.endswith(".c")
+    in_block = False   # inside /* */ (C) or a triple-quoted string (Python)
+    for no, line in enumerate(text.splitlines()):
+        if c:
+            code = line
+            if in_block:
+                if "*/" not in code:
+                    continue
+                code = " " * (code.index("*/") + 2) + code[code.index("*/") + 2:]
+                in_block = False
+            code = re.sub(r"/\*.*?\*/", lambda m: " " * len(m.group()), code)
+            if "/*" in code:
+                code = code[:code.index("/*")]
+                in_block = True
+            code = code.split("//")[0]
+            if code.lstrip().startswith("#") or not code.startswith((" ", "\t")):
+                continue
+        else:
+            n3 = line.count('"""') + line.count("'''")
+            if in_block or n3:
+                if n3 % 2 == 1:
+                    in_block = not in_block
+                continue
+            code = line.split("#")[0] if "#" in line and "'" not in line and '"' not in line \
+                else line
+            s = code.lstrip()
+            if not code.startswith((" ", "\t")) or s.startswith(("raise ", "def ", "class ",
+                                                                  "@", "import ", "from ",
+                                                                  "assert ")):
+                continue
+        if code.strip():
+            out.append((no, code))
+    return out
+
+
+def _candidates(path, text):
+    """Every mutant of one file, in a fixed order: (line, start, end, new, kind)."""
+    c = path.endswith(".c")
+    cands = []
+    for no, code in _code_lines(path, text):
+        spans = _string_spans(code)
+
+        def add(start, end, new, kind):
+            if not any(a <= start < b for a, b in spans):
+                cands.append((no, start, end, new, kind))
+
+        for m in re.finditer(r"(?<=[\w)\]]) ([+-]) (?=[\w(.])", code):
+            add(m.start(1), m.end(1), "-" if m.group(1) == "+" else "+", "sign")
+        for m in re.finditer(NUM, code):
+            s = m.group(1)
+            mant = re.match(r"[\d.]+", s).group()
+            i = max(k for k, ch in enumerate(mant) if ch.isdigit())
+            new = s[:i] + str((int(s[i]) + 1) % 10) + s[i + 1:]
+            add(m.start(1), m.end(1), new, "constant")
+        for m in re.finditer(r"(?<![<>=!-])(<=|>=|<|>)(?![<>=])", code):
+            op = m.group(1)
+            if op in ("<", ">") and not re.search(r"\s$", code[:m.start()]):
+                continue  # template-like or arrow tokens; relational ops are spaced here
+            add(m.start(1), m.end(1), {"<": "<=", "<=": "<", ">": ">=", ">=": ">"}[op],
+                "off-by-one")
+        for m in re.finditer(r"(?<=[+-] )" + INT, code):
+            add(m.start(1), m.end(1), str(int(m.group(1)) + 1), "off-by-one")
+        for m in re.finditer(r"\[" + INT + r"\]", code):
+            k = int(m.group(1))
+            add(m.start(1), m.end(1), str(k + 1 if k == 0 else k - 1), "off-by-one")
+        # a dropped term: " + X" or " - X" up to the next +/- at depth 0, ')' or ';'
+        for m in re.finditer(r"(?<=[\w)\]]) [+-] (?=[\w(.])", code):
+            depth, j = 0, m.end()
+            while j < len(code):
+                ch = code[j]
+                if ch in "([":
+                    depth += 1
+                elif ch in ")]":
+                    if depth == 0:
+                        break
+                    depth -= 1
+                elif depth == 0 and (ch in ";,:" or (ch in "+-" and code[j - 1] == " "
+                                                     and code[j + 1:j + 2] == " ")):
+                    break
+                j += 1
+            end = j
+            while end > m.end() and code[end - 1] == " ":
+                end -= 1
+            if end > m.end():
+                add(m.start(), end, "", "dropped term")
+    if not c:  # a Python mutant must parse and change the tree
+        tree0 = ast.dump(ast.parse(text))
+        lines = text.splitlines(keepends=True)
+        keep = []
+        for cand in cands:
+            no, a, b, new, _ = cand
+            mutated = lines[:no] + [lines[no][:a] + new + lines[no][b:]] + lines[no + 1:]
+            try:
+                if ast.dump(ast.parse("".join(mutated))) != tree0:
+                    keep.append(cand)
+            except SyntaxError:
+                pass
+        cands = keep
+    return cands
+
+
+def _apply(text, cand):
+    no, a, b, new, _ = cand
+    lines = text.splitlines(keepends=True)
+    lines[no] = lines[no][:a] + new + lines[no][b:]
+    return "".join(lines)
+
+
+class Tree:
+    """A copy of the tracked files with the extension built in place."""
+
+    def __init__(self, py, keep=False):
+        self.py = py
+        self.dir = Path(tempfile.mkdtemp(prefix="mechpy-mutate-"))
+        self.keep = keep
+        files = subprocess.run(["git", "ls-files", "-z"], cwd=ROOT, check=True,
+                               capture_output=True).stdout.decode().split("\0")
+        for f in filter(None, files):
+            src, dst = ROOT / f, self.dir / f
+            if src.is_file():
+                dst.parent.mkdir(parents=True, exist_ok=True)
+                shutil.copy2(src, dst)
+        r = subprocess.run([py, "setup.py", "build_ext", "--inplace", "-v",
+                            "--build-temp", "build/mut"], cwd=self.dir,
+                           capture_output=True, text=True)
+        if r.returncode:
+            sys.exit(f"mutate: the unmutated build failed\n{r.stdout[-3000:]}{r.stderr[-3000:]}")
+        # the compiler lines, to recompile one file and relink
+        self.compile, self.link = {}, None
+        for line in (r.stdout + r.stderr).splitlines():
+            if not re.match(r"^\S*(gcc|cc|clang)\S*\s", line):
+                continue
+            args = shlex.split(line)
+            if "-c" in args:
+                self.compile[args[args.index("-c") + 1]] = args
+            elif "-shared" in args:
+                self.link = args
+        if not self.compile or self.link is None:
+            sys.exit("mutate: could not read the compiler commands from the build log")
+        self.env = dict(os.environ, PYTHONPATH=str(self.dir), PYTHONDONTWRITEBYTECODE="1")
+        self.env.pop("MECHPY_SANITIZED", None)
+        where = subprocess.run([py, "-c", "import mechpy._core as c; print(c.__file__)"],
+                               cwd=self.dir, env=self.env, capture_output=True, text=True)
+        if not where.stdout.startswith(str(self.dir)):
+            sys.exit(f"mutate: the copy does not import its own build: {where.stdout}"
+                     f"{where.stderr}")
+        # setuptools links into build/lib* and copies the result next to the sources
+        self.linked = self.dir / self.link[self.link.index("-o") + 1]
+        self.inplace = Path(where.stdout.strip())
+
+    def _obj(self, src):
+        args = self.compile[src]
+        return self.dir / args[args.index("-o") + 1]
+
+    def build(self, src):
+        """Recompile one C file and relink; True when it compiled."""
+        r = subprocess.run(self.compile[src], cwd=self.dir, capture_output=True)
+        if r.returncode:
+            return False
+        if subprocess.run(self.link, cwd=self.dir, capture_output=True).returncode:
+            return False
+        shutil.copyfile(self.linked, self.inplace)
+        return True
+
+    def pytest(self, tests, timeout):
+        """(exit code or 'timeout', seconds) of the tests in this copy."""
+        t0 = time.monotonic()
+        try:
+            r = subprocess.run([self.py, "-m", "pytest", "-x", "-q", "-p", "no:cacheprovider",
+                                "-o", "addopts=", "--no-header", *tests],
+                               cwd=self.dir, env=self.env, capture_output=True, text=True,
+                               timeout=timeout)
+            rc = r.returncode
+        except subprocess.TimeoutExpired:
+            rc = "timeout"
+        return rc, time.monotonic() - t0
+
+    def close(self):
+        if not self.keep:
+            shutil.rmtree(self.dir, ignore_errors=True)
+
+
+def _run_module(tree, name, n, seed, only, log):
+    files, tests = MODULES[name]
+    tests = [t for t in tests if not t.startswith("tests/") or (tree.dir / t).exists()]
+    pool = []
+    for f in files:
+        text = (tree.dir / f).read_text()
+        pool += [(f, cand) for cand in _candidates(f, text)]
+    order = list(range(len(pool)))
+    random.Random(f"{seed}:{name}").shuffle(order)
+    rc, base = tree.pytest(tests, timeout=1800)
+    if rc != 0:
+        sys.exit(f"mutate: {name}: the tests fail on the unmutated copy (exit {rc})")
+    timeout = 3 * base + 60
+    log(f"== {name}: {len(pool)} candidates in {len(files)} file(s); tests {base:.0f} s")
+    results = []
+    for index, k in enumerate(order):
+        tag = f"{name}:{index}"
+        if only is not None and tag not in only:
+            continue
+        if only is None and len(results) >= n:
+            break
+        f, cand = pool[k]
+        path = tree.dir / f
+        text = path.read_text()
+        path.write_text(_apply(text, cand))
+        try:
+            if f.endswith(".c"):
+                obj = tree._obj(f)
+                saved = obj.read_bytes()
+                ok = tree.build(f)
+            else:
+                ok = True
+            if not ok:
+                log(f"   {tag} does not compile, drawn again")
+                continue
+            rc, secs = tree.pytest(tests, timeout)
+        finally:
+            path.write_text(text)
+            if f.endswith(".c"):
+                obj.write_bytes(saved)
+        no, a, b, new, kind = cand
+        line = text.splitlines()[no]
+        status = "survived" if rc == 0 else "killed"
+        row = {"id": tag, "file": f, "line": no + 1, "kind": kind, "status": status,
+               "exit": rc, "seconds": round(secs, 1), "before": line.strip(),
+               "after": (line[:a] + new + line[b:]).strip()}
+        results.append(row)
+        log(f"   {tag:18s} {status:8s} {f}:{no + 1} {kind}: {row['after']}")
+    if any(f.endswith(".c") for f in files):
+        tree.build(files[0])  # relink the unmutated objects
+    return results
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("-m", "--module", action="append", choices=sorted(MODULES),
+                    help="a module to mutate (repeatable; default: all)")
+    ap.add_argument("-n", type=int, default=12, help="mutants per module (default 12)")
+    ap.add_argument("--seed", type=int, default=20241123)
+    ap.add_argument("--only", action="append", help="run only these mutants (module:index)")
+    ap.add_argument("--out", default="mutate-report.json", help="the JSON report")
+    ap.add_argument("--keep", action="store_true", help="keep the temporary copy")
+    ap.add_argument("--list", action="store_true", help="list the modules and their tests")
+    a = ap.parse_args(argv)
+    if a.list:
+        for name, (files, tests) in MODULES.items():
+            print(f"{name:15s} {' '.join(files)}\n{'':15s} -> {' '.join(tests)}")
+        return 0
+    names = a.module or list(MODULES)
+    only = set(a.only) if a.only else None
+    if only:
+        names = [nm for nm in names if any(o.split(":")[0] == nm for o in only)]
+
+    def log(msg):
+        print(msg, flush=True)
+
+    tree = Tree(sys.executable, keep=a.keep)
+    log(f"mutate: copy in {tree.dir}")
+    report = {}
+    try:
+        for name in names:
+            report[name] = _run_module(tree, name, a.n, a.seed, only, log)
+    finally:
+        tree.close()
+        Path(a.out).write_text(json.dumps(report, indent=1))
+    print(f"\n{'module':16s} {'mutants':>7s} {'killed':>7s} {'survived':>8s} {'rate':>6s}")
+    for name, rows in report.items():
+        k = sum(r["status"] == "killed" for r in rows)
+        print(f"{name:16s} {len(rows):7d} {k:7d} {len(rows) - k:8d} "
+              f"{(100 * k / len(rows) if rows else 0):5.0f}%")
+    for name, rows in report.items():
+        for r in rows:
+            if r["status"] == "survived":
+                print(f"survived {r['id']}: {r['file']}:{r['line']} {r['kind']}\n"
+                      f"    - {r['before']}\n    + {r['after']}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
