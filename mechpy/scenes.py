@@ -590,7 +590,7 @@ class SpringChain(Scene):
     _model = "SpringChain"
 
     def __init__(self, masses, springs=1.0, ends: str = "fixed",
-                 alpha: float = _row_defaults("SpringChain", 3)[2],
+                 alpha: float = _row_defaults("SpringChain", 4)[2],
                  beta: float = _row_defaults("SpringChain", 4)[3]):
         if not isinstance(ends, str) or ends not in _CHAIN_ENDS:
             raise ValueError(f"ends must be one of {tuple(_CHAIN_ENDS)}, got {ends!r}")

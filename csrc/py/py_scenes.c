@@ -64,7 +64,7 @@ fail:
 
 /* scene_check(name, params) -> dim: the row's check of a parameter vector
  * (p,) or of rows (k, p) (each must describe the same dim); ValueError
- * "name: <why>" (with the row's index for k rows) otherwise. */
+ * "name: <why>" (params[i]: for row i of k) otherwise. */
 static PyObject *py_scene_check(PyObject *self, PyObject *args)
 {
     (void)self;
@@ -97,7 +97,7 @@ static PyObject *py_scene_check(PyObject *self, PyObject *args)
     }
     Py_DECREF(p);
     if (bad >= 0) {
-        if (nd == 2) PyErr_Format(PyExc_ValueError, "%s: params row %zd: %s", m->name,
+        if (nd == 2) PyErr_Format(PyExc_ValueError, "%s: params[%zd]: %s", m->name,
                                   (Py_ssize_t)bad, why);
         else PyErr_Format(PyExc_ValueError, "%s: %s", m->name, why);
         return NULL;
