@@ -28,9 +28,6 @@ static const struct {
     {"brachistochrone", MP_VAR_BRACHISTOCHRONE, 2, 1},
     {"potential", MP_VAR_POTENTIAL, 1, 1},
     {"arclength", MP_VAR_ARCLENGTH, 0, 1},
-    {"pendulum", MP_VAR_PENDULUM, 5, 1},
-    {"duffing", MP_VAR_DUFFING, 5, 1},
-    {"heavytop", MP_VAR_HEAVYTOP, 3, 3},
 };
 
 /* Look up a built-in by name: its kind, parameter count and dimension. */
@@ -47,25 +44,13 @@ int mp_variational_builtin_find(const char *name, int *kind, size_t *nparams, si
     return MP_EDOM;
 }
 
-/* Store the six values of a one-coordinate integrand at o[0..5]. */
-static void var_put(double *o, double F, double Fy, double Fp, double Fyy, double Fyp,
-                    double Fpp)
-{
-    o[0] = F;
-    o[1] = Fy;
-    o[2] = Fp;
-    o[3] = Fyy;
-    o[4] = Fyp;
-    o[5] = Fpp;
-}
-
 /* Brachistochrone in the variables s (x = X s^3) and u = sqrt(y): both x(s)
  * and u(s) are smooth at the start, where y' is infinite.  o: 6 values. */
 static void var_brachistochrone(const double *prm, double s, double u, double p, double *o)
 {
     double X = prm[0], c = 1.0 / sqrt(2.0 * prm[1]);
     if (!(u > 0)) {
-        var_put(o, NAN, NAN, NAN, NAN, NAN, NAN);
+        mp_var_put1(o, NAN, NAN, NAN, NAN, NAN, NAN);
         return;
     }
     double xs = 3.0 * X * s * s, A = xs * xs, up = u * p;
@@ -74,31 +59,9 @@ static void var_brachistochrone(const double *prm, double s, double u, double p,
     double Ruu = 4.0 * p * p * A / R3, Rpp = 4.0 * u * u * A / R3;
     double Rup = 8.0 * up * (A + 2.0 * up * up) / R3;
     double iu = 1.0 / u;
-    var_put(o, c * R * iu, c * (Ru - R * iu) * iu, c * Rp * iu,
-            c * (Ruu - 2.0 * Ru * iu + 2.0 * R * iu * iu) * iu, c * (Rup - Rp * iu) * iu,
-            c * Rpp * iu);
-}
-
-/* The heavy symmetric top, q = (phi, theta, psi): o receives 34 values. */
-static void var_heavytop(const double *k, const double *q, const double *v, double *o)
-{
-    double I1 = k[0], I3 = k[1], Mgl = k[2];
-    double s = sin(q[1]), c = cos(q[1]), ph = v[0], th = v[1], ps = v[2];
-    double w = ps + ph * c; /* the spin omega_3 */
-    memset(o, 0, 34 * sizeof(double));
-    o[0] = 0.5 * I1 * (th * th + ph * ph * s * s) + 0.5 * I3 * w * w - Mgl * c;
-    o[2] = I1 * ph * ph * s * c - I3 * w * ph * s + Mgl * s;           /* dL/dtheta */
-    o[4] = I1 * ph * s * s + I3 * w * c;                               /* p_phi */
-    o[5] = I1 * th;                                                    /* p_theta */
-    o[6] = I3 * w;                                                     /* p_psi */
-    double *Lqq = o + 7, *Lqv = o + 16, *Lvv = o + 25;
-    Lqq[4] = I1 * ph * ph * (c * c - s * s) + I3 * (ph * ph * s * s - w * ph * c) + Mgl * c;
-    Lqv[3] = 2.0 * I1 * ph * s * c - I3 * s * (ph * c + w); /* d2L/dtheta dphi' */
-    Lqv[5] = -I3 * ph * s;                                  /* d2L/dtheta dpsi' */
-    Lvv[0] = I1 * s * s + I3 * c * c;
-    Lvv[2] = Lvv[6] = I3 * c;
-    Lvv[4] = I1;
-    Lvv[8] = I3;
+    mp_var_put1(o, c * R * iu, c * (Ru - R * iu) * iu, c * Rp * iu,
+                c * (Ruu - 2.0 * Ru * iu + 2.0 * R * iu * iu) * iu, c * (Rup - Rp * iu) * iu,
+                c * Rpp * iu);
 }
 
 /* Evaluate a built-in at m points (the mp_var_eval_fn of every built-in). */
@@ -107,10 +70,6 @@ static int var_builtin_eval(size_t m, const double *x, const double *y, const do
 {
     const mp_var_builtin *b = ctx;
     const double *k = b->params;
-    if (b->kind == MP_VAR_HEAVYTOP) {
-        for (size_t i = 0; i < m; i++) var_heavytop(k, y + 3 * i, p + 3 * i, out + 34 * i);
-        return MP_OK;
-    }
     for (size_t i = 0; i < m; i++) {
         double xi = x[i], yi = y[i], pi = p[i], *o = out + 6 * i;
         switch (b->kind) {
@@ -119,28 +78,13 @@ static int var_builtin_eval(size_t m, const double *x, const double *y, const do
             break;
         case MP_VAR_POTENTIAL: {
             double S = sqrt(1.0 + pi * pi), w = k[0];
-            var_put(o, w * yi * S, w * S, w * yi * pi / S, 0.0, w * pi / S,
-                    w * yi / (S * S * S));
+            mp_var_put1(o, w * yi * S, w * S, w * yi * pi / S, 0.0, w * pi / S,
+                        w * yi / (S * S * S));
             break;
         }
         case MP_VAR_ARCLENGTH: {
             double S = sqrt(1.0 + pi * pi);
-            var_put(o, S, 0.0, pi / S, 0.0, 0.0, 1.0 / (S * S * S));
-            break;
-        }
-        case MP_VAR_PENDULUM: {
-            double g = k[0], L = k[1], e = exp(k[2] * xi), drive = L * L * k[3] * cos(k[4] * xi);
-            var_put(o, e * (0.5 * L * L * pi * pi + g * L * cos(yi) + drive * yi),
-                    e * (-g * L * sin(yi) + drive), e * L * L * pi, -e * g * L * cos(yi), 0.0,
-                    e * L * L);
-            break;
-        }
-        case MP_VAR_DUFFING: {
-            double al = k[0], be = k[1], e = exp(k[2] * xi), drive = k[3] * cos(k[4] * xi);
-            double y2 = yi * yi;
-            var_put(o, e * (0.5 * pi * pi - 0.5 * al * y2 - 0.25 * be * y2 * y2 + drive * yi),
-                    e * (-al * yi - be * y2 * yi + drive), e * pi, e * (-al - 3.0 * be * y2), 0.0,
-                    e);
+            mp_var_put1(o, S, 0.0, pi / S, 0.0, 0.0, 1.0 / (S * S * S));
             break;
         }
         default:

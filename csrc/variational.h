@@ -39,24 +39,30 @@ typedef struct {
 /* Values per point of an evaluation with d coordinates. */
 static inline size_t mp_var_nvalues(size_t d) { return 1 + 2 * d + 3 * d * d; }
 
-/* The integrands built into the C core (ctx is a mp_var_builtin). */
+/* Store the six values of a one-coordinate integrand at o[0..5]:
+ * F, F_y, F_p, F_yy, F_yp, F_pp. */
+static inline void mp_var_put1(double *o, double F, double Fy, double Fp, double Fyy, double Fyp,
+                               double Fpp)
+{
+    o[0] = F;
+    o[1] = Fy;
+    o[2] = Fp;
+    o[3] = Fyy;
+    o[4] = Fyp;
+    o[5] = Fpp;
+}
+
+/* The functionals built into the C core (ctx is a mp_var_builtin).  The
+ * Lagrangians of the scenes are in their rows (models/models.h). */
 enum mp_var_kind {
     MP_VAR_BRACHISTOCHRONE, /* d = 1, params X, g: unknown u = sqrt(y) of s in [0, 1],
                                x = X s^3: F = sqrt(x'(s)^2 + 4 u^2 u'^2) / (sqrt(2 g) u) */
     MP_VAR_POTENTIAL,       /* d = 1, params w: F = w y sqrt(1 + y'^2) (a hanging chain) */
     MP_VAR_ARCLENGTH,       /* d = 1, no params: F = sqrt(1 + y'^2) */
-    MP_VAR_PENDULUM,        /* d = 1, params g, L, b, A, Omega, x = t, y = theta (per unit mass):
-                               F = e^{b t} (L^2 p^2 / 2 + g L cos y + L^2 A cos(Omega t) y) */
-    MP_VAR_DUFFING,         /* d = 1, params alpha, beta, delta, gamma, omega:
-                               F = e^{delta t} (p^2/2 - alpha y^2/2 - beta y^4/4
-                                                + gamma cos(omega t) y) */
-    MP_VAR_HEAVYTOP,        /* d = 3, params I1, I3, Mgl, y = (phi, theta, psi):
-                               F = I1/2 (th'^2 + ph'^2 sin^2 th) + I3/2 (ps' + ph' cos th)^2
-                                   - Mgl cos th */
     MP_VAR_NKINDS
 };
 
-#define MP_VAR_MAXPARAMS 5
+#define MP_VAR_MAXPARAMS 2
 
 typedef struct {
     int kind;
@@ -64,8 +70,7 @@ typedef struct {
 } mp_var_builtin;
 
 /* Look up a built-in integrand by name ("brachistochrone", "potential",
- * "arclength", "pendulum", "duffing", "heavytop"); sets *kind, *nparams and
- * *d.  MP_EDOM if unknown. */
+ * "arclength"); sets *kind, *nparams and *d.  MP_EDOM if unknown. */
 int mp_variational_builtin_find(const char *name, int *kind, size_t *nparams, size_t *d);
 
 /* Fill an integrand that evaluates the built-in b (b must outlive it). */

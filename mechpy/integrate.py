@@ -14,14 +14,18 @@ from __future__ import annotations
 import contextlib
 import ctypes
 import math
+import os
 import sys
 import threading
+import warnings
 from typing import Any, Callable, Sequence
 
 import numpy as np
 
 from . import _core
+from ._callbacks import c_address as _c_address
 from ._validate import as_array, as_int, as_scalar
+from .scenes import RigidBody, Scene
 
 __all__ = ["solve", "solve_many", "methods", "Solution", "EnsembleSolution", "DenseOutput",
            "SecondOrder"]
@@ -263,47 +267,7 @@ def _watch_list(system):
     return [] if _python_backed(obj) else None
 
 
-def _c_address(obj):
-    """(address, user_data) of a low-level C callback, or None if obj is not one."""
-    # scipy.LowLevelCallable: a tuple (capsule, function, user_data); the
-    # capsule's pointer is the function, its context the user data
-    if type(obj).__name__ == "LowLevelCallable" and isinstance(obj, tuple):
-        cap = tuple.__getitem__(obj, 0)
-        api = ctypes.pythonapi
-        api.PyCapsule_GetName.restype = ctypes.c_char_p
-        api.PyCapsule_GetName.argtypes = [ctypes.py_object]
-        api.PyCapsule_GetPointer.restype = ctypes.c_void_p
-        api.PyCapsule_GetPointer.argtypes = [ctypes.py_object, ctypes.c_char_p]
-        api.PyCapsule_GetContext.restype = ctypes.c_void_p
-        api.PyCapsule_GetContext.argtypes = [ctypes.py_object]
-        sig = api.PyCapsule_GetName(cap)
-        _check_signature(sig.decode() if sig else "")
-        return api.PyCapsule_GetPointer(cap, sig), api.PyCapsule_GetContext(cap)
-    # numba cfunc
-    if type(obj).__name__ == "CFunc" and hasattr(obj, "address"):
-        return obj.address, None
-    # ctypes function pointer
-    if isinstance(obj, ctypes._CFuncPtr):
-        if obj.argtypes is not None and len(obj.argtypes) != 4:
-            raise TypeError("a C callback must have the signature "
-                            "void f(double t, const double *y, double *dydt, void *user_data)")
-        addr = ctypes.cast(obj, ctypes.c_void_p).value
-        if not addr:
-            raise ValueError("the C callback is a NULL function pointer")
-        return addr, None
-    return None
-
-
-def _check_signature(sig: str):
-    s = sig.replace(" ", "")
-    ok = s.startswith("void(double,") and s.count(",") == 3 and "double*" in s
-    if not ok:
-        raise TypeError(f"LowLevelCallable signature {sig!r} does not match "
-                        "'void (double, double const *, double *, void *)'")
-
-
 def _system_spec(system, args, method):
-    from .scenes import Scene
     if isinstance(system, SecondOrder):
         c = _c_address(system.accel)
         if c is not None:
@@ -428,7 +392,6 @@ def _t_eval(t_eval, t0, tf):
 def _rigid_split_check(method, system):
     """The rigid-body splitting methods run on RigidBody scenes only."""
     if method.startswith("rigid:"):
-        from .scenes import RigidBody
         if not isinstance(system, RigidBody):
             raise ValueError(f"method {method!r} integrates a RigidBody scene (torque-free or "
                              f"a constant torque), not {type(system).__name__}")
@@ -613,7 +576,6 @@ def _raise_first(codes, messages, errors: str) -> None:
 
 
 def _ensemble_params(system, params, k):
-    from .scenes import Scene
     if params is None:
         return None
     if isinstance(params, dict):
@@ -639,7 +601,6 @@ class _TqdmProgress:
         try:
             self.bar.update(done - self.bar.n)
         except Exception as exc:
-            import warnings
             warnings.warn(f"solve_many: progress bar failed ({exc!r}); continuing without it",
                           RuntimeWarning, stacklevel=2)
             self.bar = None
@@ -733,7 +694,6 @@ def solve_many(system, t_span: Sequence[float], y0s, *, params=None, t_eval=None
         given = dict(locals())              # every argument, new ones too
         from .cluster import _solve_many    # dask is imported only here
         return _solve_many(**given)
-    import os
     Y0 = as_array(y0s, "y0s", ndim=2, allow_empty=True)
     k, n = Y0.shape
     if n == 0:

@@ -21,8 +21,14 @@ __all__ = ["free_rotation", "flip_period", "nutation_bounds"]
 
 
 def _moments_omega(moments, omega0):
-    from .scenes import _moments
-    return _moments(moments), as_array(omega0, "omega0", shape=(3,))
+    """The moments, checked by the RigidBody scene's row (positive, the
+    triangle inequality), and omega0."""
+    m = as_array(moments, "moments", shape=(3,))
+    try:
+        _core.scene_check("RigidBody", np.concatenate([m, np.zeros(3)]))
+    except ValueError as exc:
+        raise ValueError(f"moments: {exc}") from None
+    return m, as_array(omega0, "omega0", shape=(3,))
 
 
 def free_rotation(moments, omega0, t) -> np.ndarray:

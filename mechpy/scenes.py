@@ -13,42 +13,109 @@ functions of states take y (dim, ...) and return (dim, ...), (dim, dim, ...) or 
 """
 from __future__ import annotations
 
+import ctypes
+import functools
+import inspect
+import re
+
 import numpy as np
 
 from . import _core
-from ._validate import as_array, as_scalar
+from ._callbacks import c_address
+from ._validate import as_array, as_int, as_scalar
+from .modes import chain, normal_modes
 
 __all__ = ["Scene", "Pendulum", "VanDerPol", "Duffing", "Kepler", "RestrictedThreeBody", "Foucault",
-           "RigidBody", "HeavyTop"]
+           "RigidBody", "HeavyTop", "SpringChain", "Rocket"]
+
+
+@functools.lru_cache(maxsize=None)
+def _row(model: str) -> dict:
+    """The C row of a scene (``_core.scene_info``): dim, parameter names,
+    defaults and bounds, separability, whether it has a Lagrangian."""
+    return _core.scene_info(model)
+
+
+def _domain(p: dict) -> str:
+    """A parameter's domain from its row entry, as the docs print it."""
+    lo, hi = p["lo"], p["hi"]
+    if np.isinf(lo) and np.isinf(hi):
+        return "finite"
+    if lo == 0.0 and np.isinf(hi):
+        return "> 0" if p["lo_open"] else ">= 0"
+    return (f"{'(' if p['lo_open'] else '['}{lo:g}, {hi:g}{')' if p['hi_open'] else ']'}")
+
+
+def _row_doc(model: str) -> str:
+    """The paragraph on parameters, defaults and domains that a scene's
+    docstring gets from its row."""
+    row = _row(model)
+    items = []
+    for p in row["param_info"]:
+        d = "required" if p["default"] is None else f"default {p['default']!r}"
+        items.append(f"``{p['name']}`` ({d}, {_domain(p)})")
+    sep = row["separable"]
+    sep = ("never separable" if sep is None else "separable" if sep == "always"
+           else f"separable when {sep}")
+    return ("Parameters from the scene's C row: " + ", ".join(items) + f"; {sep} "
+            "(the symplectic methods need it).")
+
+
+def _add_row_doc(cls) -> None:
+    """Put the row's paragraph into cls's docstring, before its first numpydoc
+    section (or at its end)."""
+    doc = inspect.cleandoc(cls.__doc__ or "")
+    para = _row_doc(cls._model)
+    m = re.search(r"^\w[\w ]*\n-{3,}$", doc, flags=re.M)
+    cls.__doc__ = (doc[:m.start()] + para + "\n\n" + doc[m.start():] if m
+                   else doc + "\n\n" + para + "\n")
 
 
 class Scene:
-    """Base class of the C scenes (see the module docstring)."""
+    """Base class of the C scenes (see the module docstring).
+
+    A subclass names its C row (``_model``).  When the row's scalar
+    parameters are the scene's own, the subclass needs nothing more: its
+    signature, defaults and checks come from the row.  A scene whose
+    parameters are packed into the row's vector (``RigidBody``,
+    ``SpringChain``) writes ``__init__`` and calls :meth:`_set` with its
+    public parameters and the packed vector.
+    """
 
     _model: str = ""
-    _defaults: dict = {}
-    _positive: tuple = ()
-    _nonnegative: tuple = ()
 
-    def __init__(self, **params):
-        info = _core.scene_info(self._model)
-        names = info["params"]
-        unknown = set(params) - set(names)
-        if unknown:
-            raise TypeError(f"{type(self).__name__} got unknown parameter(s) "
-                            f"{sorted(unknown)}; parameters are {list(names)}")
-        values = {}
-        for name in names:
-            if name in params:
-                v = params[name]
-            elif name in self._defaults:
-                v = self._defaults[name]
-            else:
-                raise TypeError(f"{type(self).__name__} needs parameter {name!r}")
-            values[name] = as_scalar(v, name, positive=name in self._positive,
-                                     nonnegative=name in self._nonnegative)
-        self._params = values
-        self._dim = int(info["dim"])
+    def __init_subclass__(cls, **kwargs):
+        super().__init_subclass__(**kwargs)
+        if not cls.__dict__.get("_model"):
+            return
+        _add_row_doc(cls)
+        if "__init__" in cls.__dict__:
+            return
+        row = _row(cls._model)
+        params = [inspect.Parameter(p["name"], inspect.Parameter.POSITIONAL_OR_KEYWORD,
+                                    default=(inspect.Parameter.empty if p["default"] is None
+                                             else p["default"]))
+                  for p in row["param_info"]]
+        sig = inspect.Signature(params)
+
+        def __init__(self, *args, **kwargs):
+            bound = sig.bind(*args, **kwargs)
+            bound.apply_defaults()
+            values = {k: as_scalar(v, k) for k, v in bound.arguments.items()}
+            self._set(values, np.array(list(values.values()), dtype=np.float64))
+
+        __init__.__signature__ = inspect.Signature(
+            [inspect.Parameter("self", inspect.Parameter.POSITIONAL_OR_KEYWORD)] + params)
+        __init__.__doc__ = f"A {cls.__name__} (parameters as in the class docstring)."
+        __init__.__qualname__ = f"{cls.__qualname__}.__init__"
+        cls.__init__ = __init__
+
+    def _set(self, params: dict, vector: np.ndarray) -> None:
+        """Keep the public parameters and the row's vector, checked by the row
+        (ValueError naming the parameter); the row gives the dimension."""
+        self._vec = np.ascontiguousarray(vector, dtype=np.float64)
+        self._dim = int(_core.scene_check(self._model, self._vec))
+        self._params = params
 
     # -- the common interface ------------------------------------------------
     @property
@@ -59,25 +126,38 @@ class Scene:
     @property
     def params(self) -> dict:
         """The parameters (a copy)."""
-        return dict(self._params)
+        return {k: v.copy() if isinstance(v, np.ndarray) else v for k, v in self._params.items()}
 
     def replace(self, **changes) -> "Scene":
         """A copy with some parameters changed."""
         p = self.params
+        unknown = set(changes) - set(p)
+        if unknown:
+            raise TypeError(f"{type(self).__name__} got unknown parameter(s) {sorted(unknown)}; "
+                            f"parameters are {list(p)}")
         p.update(changes)
         return type(self)(**p)
 
     def _vector(self) -> np.ndarray:
-        return np.array(list(self._params.values()), dtype=np.float64)
+        return self._vec
+
+    def _columns(self) -> dict:
+        """The scalar parameters that rows of :meth:`ensemble_params` vary, by
+        name, in the order of the vector: the row's own for a C scene."""
+        if self._model:
+            return dict(zip(_row(self._model)["params"], self._vec.tolist()))
+        return dict(self._params)
 
     def ensemble_params(self, k: int, **columns) -> np.ndarray:
         """Rows of parameters for :func:`mechpy.solve_many`, one per trajectory.
 
         Each keyword names a parameter and gives one value per row (shape
         (k,)) or one for all; the others keep this scene's values.  This is
-        what ``solve_many(scene, ..., params={name: values})`` uses.
+        what ``solve_many(scene, ..., params={name: values})`` uses.  The
+        names are the scene's C row's (``RigidBody``: I1, I2, I3, tau1,
+        tau2, tau3); each row is checked as the scene's parameters are.
         """
-        base = self.params
+        base = self._columns()
         unknown = set(columns) - set(base)
         if unknown:
             raise ValueError(f"unknown parameter(s) {sorted(unknown)}; the scene has "
@@ -89,15 +169,23 @@ class Scene:
         for name, c in zip(base, cols):
             if c.shape != (k,):
                 raise ValueError(f"params[{name!r}] must have shape ({k},), got {c.shape}")
-        return np.ascontiguousarray(np.stack(cols, axis=1))
+        out = np.ascontiguousarray(np.stack(cols, axis=1))
+        if self._model and k:
+            _core.scene_check(self._model, out)
+        return out
 
     def _state_rows(self, t, y):
         """Check (t, y) with y of shape (dim, ...); -> (t, rows (m, dim), y)."""
+        y = self._states(y)
+        return as_scalar(t, "t"), np.ascontiguousarray(y.reshape(self._dim, -1).T), y
+
+    def _states(self, y) -> np.ndarray:
+        """States y of shape (dim, ...), checked."""
         y = as_array(y, "y", min_ndim=1)
         if y.shape[0] != self._dim:
             raise ValueError(f"y must have {self._dim} components along its first axis, "
                              f"got shape {y.shape}")
-        return as_scalar(t, "t"), np.ascontiguousarray(y.reshape(self._dim, -1).T), y
+        return y
 
     def _eval(self, what, t, y):
         t, flat, y = self._state_rows(t, y)
@@ -124,18 +212,32 @@ class Scene:
         """The scene's energy for states y of shape (dim, ...) -> shape (...)."""
         return self._eval("energy", 0.0, y)
 
+    def _lagrangian_spec(self):
+        """The C spec of the scene's Lagrangian for :mod:`mechpy.variational`
+        (from its row), or None when the row has none."""
+        if self._model and _row(self._model)["lagrangian"]:
+            return ("scene", self._model, self._vector())
+        return None
+
+    def _identity(self) -> tuple:
+        """What, besides the type and the vector, tells two scenes apart."""
+        return ()
+
     def __repr__(self):
         args = ", ".join(f"{k}={v!r}" for k, v in self._params.items())
         return f"{type(self).__name__}({args})"
 
     def __eq__(self, other):
-        return type(self) is type(other) and self._params == other._params
+        return (type(self) is type(other) and self._model == other._model
+                and np.array_equal(self._vector(), other._vector())
+                and self._identity() == other._identity())
 
     def __hash__(self):
-        return hash((type(self).__name__, tuple(self._params.items())))
+        return hash((type(self).__name__, self._model, tuple(self._vector().tolist()),
+                     self._identity()))
 
     def __reduce__(self):
-        return (_rebuild, (type(self), self._params))
+        return (_rebuild, (type(self), self.params))
 
 
 def _rebuild(cls, params):
@@ -154,14 +256,6 @@ class Pendulum(Scene):
     """
 
     _model = "Pendulum"
-    _defaults = dict(g=9.81, length=1.0, damping=0.0, drive_amplitude=0.0, drive_frequency=0.0)
-    _positive = ("g", "length")
-    _nonnegative = ("damping", "drive_frequency")
-
-    def __init__(self, g=9.81, length=1.0, damping=0.0, drive_amplitude=0.0,
-                 drive_frequency=0.0):
-        super().__init__(g=g, length=length, damping=damping, drive_amplitude=drive_amplitude,
-                         drive_frequency=drive_frequency)
 
     def period(self, amplitude) -> float:
         r"""Exact period of the free, undamped pendulum released from rest at
@@ -181,11 +275,6 @@ class VanDerPol(Scene):
     """
 
     _model = "VanDerPol"
-    _defaults = dict(mu=1.0)
-    _nonnegative = ("mu",)
-
-    def __init__(self, mu=1.0):
-        super().__init__(mu=mu)
 
 
 class Duffing(Scene):
@@ -197,11 +286,6 @@ class Duffing(Scene):
     """
 
     _model = "Duffing"
-    _defaults = dict(delta=0.0, gamma=0.0, omega=1.0)
-    _nonnegative = ("delta",)
-
-    def __init__(self, alpha, beta, delta=0.0, gamma=0.0, omega=1.0):
-        super().__init__(alpha=alpha, beta=beta, delta=delta, gamma=gamma, omega=omega)
 
 
 class Kepler(Scene):
@@ -213,11 +297,6 @@ class Kepler(Scene):
     """
 
     _model = "Kepler"
-    _defaults = dict(mu=1.0)
-    _positive = ("mu",)
-
-    def __init__(self, mu=1.0):
-        super().__init__(mu=mu)
 
     def initial_state(self, eccentricity, a=1.0):
         """State at pericentre of the orbit with semi-major axis ``a`` and the
@@ -241,10 +320,6 @@ class RestrictedThreeBody(Scene):
     """
 
     _model = "RestrictedThreeBody"
-    _defaults = dict(mu=0.012277471)
-
-    def __init__(self, mu=0.012277471):
-        super().__init__(mu=mu)
 
 
 class Foucault(Scene):
@@ -264,14 +339,6 @@ class Foucault(Scene):
     """
 
     _model = "Foucault"
-    _defaults = dict(g=9.81, omega=7.2921159e-5)
-    _positive = ("length", "g")
-
-    def __init__(self, latitude, length, g=9.81, omega=7.2921159e-5):
-        lat = as_scalar(latitude, "latitude")
-        if not -90.0 <= lat <= 90.0:
-            raise ValueError(f"latitude must lie in [-90, 90] degrees, got {latitude!r}")
-        super().__init__(latitude=lat, length=length, g=g, omega=omega)
 
     @property
     def precession_rate(self) -> float:
@@ -280,15 +347,9 @@ class Foucault(Scene):
         p = self._params
         return p["omega"] * float(np.sin(np.radians(p["latitude"])))
 
-def _moments(moments) -> np.ndarray:
-    m = as_array(moments, "moments", shape=(3,))
-    if not np.all(m > 0):
-        raise ValueError(f"moments must be positive, got {m}")
-    for i in range(3):
-        if m[i] > (m[(i + 1) % 3] + m[(i + 2) % 3]) * (1 + 1e-14):
-            raise ValueError(f"moments {m} violate the triangle inequality I_i <= I_j + I_k "
-                             "of a real body")
-    return m
+def _row_defaults(model: str, n: int) -> tuple:
+    """The defaults of the first n parameters of a row."""
+    return tuple(p["default"] for p in _row(model)["param_info"][:n])
 
 
 class RigidBody(Scene):
@@ -317,13 +378,12 @@ class RigidBody(Scene):
 
     _model = "RigidBody"
 
-    def __init__(self, moments=(1.0, 2.0, 3.0), torque=None, orientation=False):
-        from .integrate import _c_address
-        m = _moments(moments)
+    def __init__(self, moments=_row_defaults("RigidBody", 3), torque=None, orientation=False):
+        m = as_array(moments, "moments", shape=(3,))
         self._torque_fn = self._torque_c = None
         if torque is None:
             tau = np.zeros(3)
-        elif (c := _c_address(torque)) is not None:
+        elif (c := c_address(torque)) is not None:
             self._torque_fn, self._torque_c, tau = torque, c, np.zeros(3)
         elif callable(torque):
             raise TypeError("torque must be a constant body-frame vector (3,) or a C function "
@@ -334,10 +394,11 @@ class RigidBody(Scene):
             tau = as_array(torque, "torque", shape=(3,))
         if not isinstance(orientation, (bool, np.bool_)):
             raise TypeError("orientation must be True or False")
-        self._orientation = bool(orientation)
-        self._has_torque = torque is not None
         self._model = "RigidBodyOriented" if orientation else "RigidBody"
-        super().__init__(I1=m[0], I2=m[1], I3=m[2], tau1=tau[0], tau2=tau[1], tau3=tau[2])
+        if self._torque_fn is None and torque is not None:
+            torque = tuple(tau.tolist())
+        self._set(dict(moments=tuple(m.tolist()), torque=torque, orientation=bool(orientation)),
+                  np.concatenate([m, tau]))
 
     def _spec(self, method: str) -> tuple:
         """The system spec for _core: the scene, with the torque callback if any."""
@@ -352,7 +413,6 @@ class RigidBody(Scene):
 
     def _callback_torque(self, t, y):
         """The callback's torque at (t, y) for states y of shape (dim, m) -> (3, m)."""
-        import ctypes
         dp = ctypes.POINTER(ctypes.c_double)
         fn = ctypes.CFUNCTYPE(None, ctypes.c_double, dp, dp, ctypes.c_void_p)(self._torque_c[0])
         out = np.zeros((y.shape[1], 3))
@@ -390,18 +450,11 @@ class RigidBody(Scene):
     @property
     def moments(self) -> np.ndarray:
         """The principal moments (I1, I2, I3)."""
-        p = self._params
-        return np.array([p["I1"], p["I2"], p["I3"]])
+        return self._vec[:3].copy()
 
     @property
-    def params(self) -> dict:
-        p = self._params
-        if self._torque_fn is not None:
-            tau = self._torque_fn
-        else:
-            tau = (p["tau1"], p["tau2"], p["tau3"]) if self._has_torque else None
-        return dict(moments=tuple(float(x) for x in self.moments), torque=tau,
-                    orientation=self._orientation)
+    def _orientation(self) -> bool:
+        return self._params["orientation"]
 
     def initial_state(self, omega, quat=None, *, atol: float = 1e-12) -> np.ndarray:
         """The state for body angular velocity ``omega`` (and, with
@@ -421,28 +474,14 @@ class RigidBody(Scene):
         y = as_array(y, "y", min_ndim=1)
         return self.moments.reshape((3,) + (1,) * (y.ndim - 1)) * y[:3]
 
-    def replace(self, **changes) -> "RigidBody":
-        p = self.params
-        p.update(changes)
-        return RigidBody(**p)
-
-    def __repr__(self):
-        p = self.params
-        return (f"RigidBody(moments={p['moments']!r}, torque={p['torque']!r}, "
-                f"orientation={p['orientation']!r})")
-
-    def __eq__(self, other):
-        return type(self) is type(other) and self.params == other.params
-
-    def __hash__(self):
-        p = self.params
-        tau = p["torque"] if self._torque_fn is None else id(self._torque_fn)
-        return hash(("RigidBody", p["moments"], tau, p["orientation"]))
+    def _identity(self) -> tuple:
+        p = self._params
+        return (p["torque"] is None, None if self._torque_fn is None else id(self._torque_fn))
 
     def __reduce__(self):
         if self._torque_fn is not None:
             raise TypeError("a RigidBody with a C torque callback cannot be pickled")
-        return (_rebuild, (type(self), self.params))
+        return super().__reduce__()
 
 
 class HeavyTop(Scene):
@@ -461,12 +500,6 @@ class HeavyTop(Scene):
     """
 
     _model = "HeavyTop"
-    _defaults = dict(g=9.81)
-    _positive = ("I1", "I3", "mass")
-    _nonnegative = ("g",)
-
-    def __init__(self, I1, I3, mass, g=9.81, l=1.0):
-        super().__init__(I1=I1, I3=I3, mass=mass, g=g, l=l)
 
     def p_psi(self, y):
         """p_psi = I3 (psi_dot + phi_dot cos theta) for states (6, ...)."""
@@ -481,20 +514,20 @@ class HeavyTop(Scene):
 
 
 _CHAIN_ENDS = {"fixed": 0, "free": 1, "periodic": 2}
+_CHAIN_NSPRINGS = {"fixed": 1, "free": -1, "periodic": 0}   # springs = N + this
 
 
 def _chain_springs(springs, N: int, ends: str) -> np.ndarray:
-    ns = {"fixed": N + 1, "free": N - 1, "periodic": N}[ends]
+    """One spring constant for all, or N + 1, N - 1 or N of them (fixed,
+    free, periodic); their domain is the row's check."""
+    ns = N + _CHAIN_NSPRINGS[ends]
     if np.ndim(springs) == 0 and not isinstance(springs, (str, bytes)) and springs is not None:
-        k = np.full(ns, as_scalar(springs, "springs", nonnegative=True))
-    else:
-        k = as_array(springs, "springs", allow_empty=(ns == 0))
-        if k.shape != (ns,):
-            raise ValueError(f"springs must be a scalar or have {ns} values for a {ends} chain "
-                             f"of {N} masses (N + 1 fixed, N - 1 free, N periodic), got shape "
-                             f"{k.shape}")
-        if not np.all(k >= 0):
-            raise ValueError(f"springs must be non-negative, got min {k.min()!r}")
+        return np.full(ns, as_scalar(springs, "springs"))
+    k = as_array(springs, "springs", allow_empty=(ns == 0))
+    if k.shape != (ns,):
+        raise ValueError(f"springs must be a scalar or have {ns} values for a {ends} chain "
+                         f"of {N} masses (N + 1 fixed, N - 1 free, N periodic), got shape "
+                         f"{k.shape}")
     return k
 
 
@@ -556,8 +589,9 @@ class SpringChain(Scene):
 
     _model = "SpringChain"
 
-    def __init__(self, masses, springs=1.0, ends: str = "fixed", alpha: float = 0.0,
-                 beta: float = 0.0):
+    def __init__(self, masses, springs=1.0, ends: str = "fixed",
+                 alpha: float = _row_defaults("SpringChain", 4)[2],
+                 beta: float = _row_defaults("SpringChain", 4)[3]):
         if not isinstance(ends, str) or ends not in _CHAIN_ENDS:
             raise ValueError(f"ends must be one of {tuple(_CHAIN_ENDS)}, got {ends!r}")
         m = as_array(masses, "masses", allow_empty=True)
@@ -565,25 +599,19 @@ class SpringChain(Scene):
             raise ValueError(f"masses must be a 1-D array (one mass per site), got shape {m.shape}")
         if m.size < 1:
             raise ValueError("a SpringChain needs at least one mass (N >= 1)")
-        if not np.all(m > 0):
-            raise ValueError(f"masses must be positive, got min {m.min()!r}")
         N = m.size
         k = _chain_springs(springs, N, ends)
-        self._params = dict(masses=m, springs=k, ends=ends,
-                            alpha=as_scalar(alpha, "alpha"), beta=as_scalar(beta, "beta"))
-        self._dim = 2 * N
-        self._vec = np.concatenate([[N, _CHAIN_ENDS[ends], self._params["alpha"],
-                                     self._params["beta"]], m, k])
+        a, b = as_scalar(alpha, "alpha"), as_scalar(beta, "beta")
+        self._set(dict(masses=m, springs=k, ends=ends, alpha=a, beta=b),
+                  np.concatenate([[N, _CHAIN_ENDS[ends], a, b], m, k]))
         self._modes = None
 
     @classmethod
     def uniform(cls, N: int, mass: float = 1.0, spring: float = 1.0, ends: str = "fixed",
                 alpha: float = 0.0, beta: float = 0.0) -> "SpringChain":
         """A chain of N equal masses (kg) and equal springs (N/m)."""
-        from ._validate import as_int
         N = as_int(N, "N", minimum=1)
-        m = as_scalar(mass, "mass", positive=True)
-        return cls(np.full(N, m), spring, ends, alpha, beta)
+        return cls(np.full(N, as_scalar(mass, "mass")), spring, ends, alpha, beta)
 
     # -- parameters ----------------------------------------------------------
     @property
@@ -595,28 +623,6 @@ class SpringChain(Scene):
     def nonlinear(self) -> bool:
         """Whether the FPUT terms are on (alpha or beta non-zero)."""
         return self._params["alpha"] != 0.0 or self._params["beta"] != 0.0
-
-    @property
-    def params(self) -> dict:
-        """``masses``, ``springs`` (copies), ``ends``, ``alpha``, ``beta``."""
-        p = dict(self._params)
-        p["masses"] = p["masses"].copy()
-        p["springs"] = p["springs"].copy()
-        return p
-
-    def _vector(self) -> np.ndarray:
-        return self._vec
-
-    def replace(self, **changes) -> "SpringChain":
-        """A copy with some parameters changed (``masses``, ``springs``,
-        ``ends``, ``alpha``, ``beta``)."""
-        p = self.params
-        unknown = set(changes) - set(p)
-        if unknown:
-            raise TypeError(f"SpringChain got unknown parameter(s) {sorted(unknown)}; "
-                            f"parameters are {list(p)}")
-        p.update(changes)
-        return SpringChain(**p)
 
     def ensemble_params(self, k: int | None = None, **columns) -> np.ndarray:
         """Rows of parameters for :func:`mechpy.solve_many`, one per trajectory.
@@ -631,7 +637,6 @@ class SpringChain(Scene):
         ndarray (k, 4 + N + n_springs)
             Pass as ``params=`` with this chain as the system.
         """
-        from ._validate import as_int
         allowed = ("masses", "springs", "alpha", "beta")
         unknown = set(columns) - set(allowed)
         if unknown:
@@ -672,10 +677,7 @@ class SpringChain(Scene):
         out[:, 3:4] = blocks["beta"]
         out[:, 4:4 + N] = blocks["masses"]
         out[:, 4 + N:] = blocks["springs"]
-        if not np.all(out[:, 4:4 + N] > 0):
-            raise ValueError("masses must be positive")
-        if not np.all(out[:, 4 + N:] >= 0):
-            raise ValueError("springs must be non-negative")
+        _core.scene_check(self._model, out)
         return out
 
     # -- states and the linear theory ------------------------------------------
@@ -688,7 +690,6 @@ class SpringChain(Scene):
 
     def matrices(self):
         """The linearisation ``(K, M)``, as :func:`mechpy.modes.chain` gives it."""
-        from .modes import chain
         p = self._params
         return chain(self.N, ends=p["ends"], masses=p["masses"], springs=p["springs"])
 
@@ -697,7 +698,6 @@ class SpringChain(Scene):
         ``mp.modes.normal_modes(*self.matrices())`` (exact motion by
         ``Modes.evolve``; the FPUT terms are left out)."""
         if self._modes is None:
-            from .modes import normal_modes
             self._modes = normal_modes(*self.matrices())
         return self._modes
 
@@ -717,30 +717,11 @@ class SpringChain(Scene):
         m = self._params["masses"].reshape((self.N,) + (1,) * (y.ndim - 1))
         return np.sum(m * y[self.N:], axis=0)
 
-    def _states(self, y) -> np.ndarray:
-        y = as_array(y, "y", min_ndim=1)
-        if y.shape[0] != self._dim:
-            raise ValueError(f"y must have {self._dim} components along its first axis, "
-                             f"got shape {y.shape}")
-        return y
-
     # -- identity ------------------------------------------------------------
     def __repr__(self):
         p = self._params
         extra = f", alpha={p['alpha']!r}, beta={p['beta']!r}" if self.nonlinear else ""
         return f"SpringChain(N={self.N}, ends={p['ends']!r}{extra})"
-
-    def __eq__(self, other):
-        return type(self) is type(other) and np.array_equal(self._vec, other._vec)
-
-    def __hash__(self):
-        return hash(("SpringChain", self._vec.tobytes()))
-
-    def __reduce__(self):
-        return (_rebuild, (type(self), self.params))
-
-
-__all__ += ["SpringChain"]
 
 
 class Rocket(Scene):
@@ -777,16 +758,6 @@ class Rocket(Scene):
     """
 
     _model = "Rocket"
-    _defaults = dict(g=0.0, drag=0.0)
-    _positive = ("m0", "m_dry")
-    _nonnegative = ("exhaust_speed", "burn_rate", "g", "drag")
-
-    def __init__(self, exhaust_speed, burn_rate, m0, m_dry, g=0.0, drag=0.0):
-        if as_scalar(m_dry, "m_dry") > as_scalar(m0, "m0"):
-            raise ValueError(f"m_dry must not exceed m0 (the launch mass), got m_dry={m_dry!r} "
-                             f"> m0={m0!r}")
-        super().__init__(exhaust_speed=exhaust_speed, burn_rate=burn_rate, m0=m0, m_dry=m_dry,
-                         g=g, drag=drag)
 
     @property
     def burnout_time(self) -> float:
@@ -858,4 +829,3 @@ class Rocket(Scene):
         return out
 
 
-__all__ += ["Rocket"]

@@ -1,160 +1,206 @@
-"""Scenes checked by value: Jacobians, right-hand sides, initial states and the
-closed forms of the variational module, against formulas written here."""
-import os
+"""The scenes' C rows as the one description: signatures, defaults, checks,
+separability and Lagrangians, each checked against what the scenes do."""
+from __future__ import annotations
+
+import inspect
 
 import numpy as np
 import pytest
-from scipy.optimize import brentq
 
 import mechpy as mp
-from mechpy import variational as V
+from mechpy import _core
+
+S = mp.scenes
+#: the scenes whose public parameters are their row's scalars
+PLAIN = [S.Pendulum, S.VanDerPol, S.Duffing, S.Kepler, S.RestrictedThreeBody, S.Foucault,
+         S.HeavyTop]
+#: one valid instance of every scene, and its row
+SCENES = [S.Pendulum(), S.Pendulum(damping=0.1), S.VanDerPol(), S.Duffing(1.0, 0.5),
+          S.Duffing(1.0, 0.5, delta=0.2), S.Kepler(), S.RestrictedThreeBody(),
+          S.Foucault(45.0, 10.0), S.HeavyTop(1.0, 0.5, 1.0, l=0.3), S.RigidBody(),
+          S.RigidBody(orientation=True), S.SpringChain(np.ones(3))]
 
 
-def _compiled_double_pendulum(tmp_path_factory):
-    import sympy as sp
-    old = os.environ.get("MECHPY_CACHE_DIR")
-    os.environ["MECHPY_CACHE_DIR"] = str(tmp_path_factory.mktemp("mechpy_cache"))
-    try:
-        t = sp.Symbol("t")
-        a, b = mp.coordinates("a b")
-        m, g = sp.symbols("m g")
-        ad, bd = a.diff(t), b.diff(t)
-        # two unit rods, unit bobs: a coupled, nonlinear mass matrix
-        T = m * ad ** 2 + m * ad * bd * sp.cos(a - b) + m * bd ** 2 / 2
-        U = -2 * m * g * sp.cos(a) - m * g * sp.cos(b)
-        return mp.lagrangian(T - U, [a, b], params={"m": 1.3, "g": 9.81})
-    finally:
-        if old is None:
-            os.environ.pop("MECHPY_CACHE_DIR", None)
-        else:
-            os.environ["MECHPY_CACHE_DIR"] = old
+@pytest.mark.parametrize("cls", PLAIN, ids=lambda c: c.__name__)
+def test_signature_and_docs_come_from_the_row(cls):
+    row = _core.scene_info(cls._model)
+    sig = inspect.signature(cls)
+    assert list(sig.parameters) == list(row["params"])
+    for p in row["param_info"]:
+        want = inspect.Parameter.empty if p["default"] is None else p["default"]
+        assert sig.parameters[p["name"]].default == want
+    assert "Parameters from the scene's C row" in cls.__doc__
+    # the defaults are what an instance gets
+    required = {p["name"]: 0.5 for p in row["param_info"] if p["default"] is None}
+    scene = cls(**required)
+    for p in row["param_info"]:
+        assert scene.params[p["name"]] == (0.5 if p["default"] is None else p["default"])
 
 
-def _scenes(rng, tmp_path_factory):
-    u = rng.uniform
-    return [
-        mp.scenes.Pendulum(g=u(5, 15), length=u(0.5, 2), damping=u(0, 1),
-                           drive_amplitude=u(0, 2), drive_frequency=u(0.5, 3)),
-        mp.scenes.Duffing(u(-1, 1), u(0.1, 2), delta=u(0, 1), gamma=u(0, 1), omega=u(0.5, 2)),
-        mp.scenes.VanDerPol(mu=u(0.5, 5)),
-        mp.scenes.Kepler(mu=u(0.5, 2)),
-        mp.scenes.RestrictedThreeBody(mu=u(0.01, 0.3)),
-        mp.scenes.Foucault(u(-80, 80), u(1, 20)),
-        mp.scenes.HeavyTop(u(1, 2), u(0.5, 3), u(0.5, 2), l=u(0.2, 1)),
-        mp.scenes.RigidBody(moments=tuple(u(1, 3, 3))),
-        mp.scenes.RigidBody(moments=tuple(u(1, 3, 3)), orientation=True),
-        mp.scenes.SpringChain(u(0.5, 2, 4), springs=u(0.5, 2, 5), alpha=u(0, 0.3),
-                              beta=u(0, 0.5)),
-        mp.scenes.SpringChain(u(0.5, 2, 3), springs=u(0.5, 2, 3), ends="periodic",
-                              beta=u(0, 0.5)),
-        _compiled_double_pendulum(tmp_path_factory),
-    ]
+def test_heavy_top_default_l_from_the_row():
+    """The Python table that had drifted left l out: now HeavyTop(I1, I3,
+    mass) has the row's l = 1.0, and positional arguments follow the row."""
+    assert S.HeavyTop(1.0, 0.5, 2.0).params == dict(I1=1.0, I3=0.5, mass=2.0, g=9.81, l=1.0)
+    assert S.HeavyTop(1.0, 0.5, 2.0, 9.0, 0.3) == S.HeavyTop(1.0, 0.5, 2.0, g=9.0, l=0.3)
+    with pytest.raises(TypeError):
+        S.HeavyTop(1.0, 0.5)                       # mass is required
+    with pytest.raises(TypeError):
+        S.Pendulum(lenght=1.0)                     # a misspelt name
 
 
-def test_every_scene_jacobian_matches_central_differences(rng, tmp_path_factory):
-    # central differences, h = 1e-6 * max(1, |y_j|): truncation h^2 f''' ~ 1e-12 and
-    # round-off eps |f| / h ~ 1e-10; measured max relative error 1.2e-9 over all scenes
-    # and states (a sign error in one entry is an O(1) error)
-    worst = 0.0
-    for sc in _scenes(rng, tmp_path_factory):
-        for _ in range(4):
-            y = rng.uniform(-1.5, 1.5, sc.dim)
-            if isinstance(sc, mp.scenes.Kepler):
-                y[:2] += np.sign(y[:2]) * 0.5          # away from the singular origin
-            t = rng.uniform(0, 5)
-            J = np.asarray(sc.jacobian(t, y))
-            assert J.shape == (sc.dim, sc.dim)
-            fd = np.empty_like(J)
-            for j in range(sc.dim):
-                h = 1e-6 * max(1.0, abs(y[j]))
-                e = np.zeros(sc.dim)
-                e[j] = h
-                fd[:, j] = (np.asarray(sc.rhs(t, y + e)) - np.asarray(sc.rhs(t, y - e))) / (2 * h)
-            err = np.max(np.abs(J - fd)) / max(1.0, np.max(np.abs(fd)))
-            worst = max(worst, err)
-            assert err < 1e-7, (type(sc).__name__, y, J, fd)
+@pytest.mark.parametrize("cls", PLAIN, ids=lambda c: c.__name__)
+def test_each_bound_of_the_row_is_checked_with_the_name(cls):
+    """Every finite bound of every parameter: a value just outside it is a
+    ValueError naming the scene and the parameter, one inside is accepted."""
+    row = _core.scene_info(cls._model)
+    base = {p["name"]: (0.5 if p["default"] is None else p["default"])
+            for p in row["param_info"]}
+    checked = 0
+    for p in row["param_info"]:
+        for edge, is_open, out in ((p["lo"], p["lo_open"], -1), (p["hi"], p["hi_open"], 1)):
+            if np.isinf(edge):
+                continue
+            bad = edge if is_open else edge + out * 1e-3
+            with pytest.raises(ValueError, match=f"{cls.__name__}: {p['name']} must be"):
+                cls(**{**base, p["name"]: bad})
+            cls(**{**base, p["name"]: edge - out * 1e-3})
+            checked += 1
+        with pytest.raises(ValueError, match=p["name"]):
+            cls(**{**base, p["name"]: np.nan})
+    assert checked >= (0 if cls in (S.Duffing,) else 1)
 
 
-def test_duffing_rhs_is_the_written_equation():
-    # x'' + delta x' + alpha x + beta x^3 = gamma cos(omega t): the drive enters with +
-    a, b, d, g, w = -0.7, 1.3, 0.25, 0.8, 1.7
-    sc = mp.scenes.Duffing(a, b, delta=d, gamma=g, omega=w)
-    for t, x, v in [(0.0, 0.3, -0.2), (0.9, -1.1, 0.7), (2.4, 0.5, 1.5)]:
-        ref = [v, -d * v - a * x - b * x ** 3 + g * np.cos(w * t)]
-        np.testing.assert_allclose(sc.rhs(t, [x, v]), ref, rtol=1e-15, atol=1e-15)
-    # at t = 0, x = v = 0 only the drive acts: acceleration +gamma
-    assert sc.rhs(0.0, [0.0, 0.0])[1] == pytest.approx(g, rel=1e-15)
+def test_restricted_three_body_mass_ratio_is_checked_at_construction():
+    """Before, mu = 2 made a scene that failed only in mp.solve, with a
+    message naming no parameter."""
+    with pytest.raises(ValueError, match=r"RestrictedThreeBody: mu must be in \(0, 1\)"):
+        S.RestrictedThreeBody(mu=2.0)
 
 
-@pytest.mark.parametrize("e, a, mu", [(0.0, 1.0, 1.0), (0.5, 3.0, 2.0), (0.9, 0.7, 0.3)])
-def test_kepler_initial_state_is_pericentre_with_vis_viva(e, a, mu):
-    y = mp.scenes.Kepler(mu=mu).initial_state(e, a=a)
-    rp = a * (1 - e)                                    # pericentre distance
-    vp = np.sqrt(mu * (2 / rp - 1 / a))                 # vis-viva
-    np.testing.assert_allclose(y, [rp, 0.0, 0.0, vp], rtol=1e-15, atol=1e-15)
-    # the specific energy is -mu / (2 a)
-    assert mp.scenes.Kepler(mu=mu).energy(y) == pytest.approx(-mu / (2 * a), rel=1e-14)
+def test_rigid_checks_come_from_the_row():
+    with pytest.raises(ValueError, match="triangle inequality"):
+        S.RigidBody((1.0, 1.0, 3.0))
+    with pytest.raises(ValueError, match="I2 must be positive"):
+        S.RigidBody((1.0, -2.0, 3.0))
+    with pytest.raises(ValueError, match="moments: .*triangle"):
+        mp.rigid.flip_period((1.0, 1.0, 3.0), [0.1, 1.0, 0.1])
+    with pytest.raises(ValueError, match="masses must be positive"):
+        S.SpringChain([1.0, -1.0])
+    with pytest.raises(ValueError, match="springs must be non-negative"):
+        S.SpringChain([1.0, 1.0], [1.0, -1.0, 1.0])
 
 
-def test_earth_omega_is_the_sidereal_rate():
-    # one sidereal day is 86164.0905 s (IERS Conventions 2010, ch. 1; the IERS value
-    # of Omega is 7.292115e-5 rad/s); mechpy's 7.2921159e-5 agrees to 7 digits
-    sidereal = 2 * np.pi / 86164.0905
-    assert mp.frames.OMEGA_EARTH == pytest.approx(sidereal, rel=1e-7)
-    for lat in (0.0, 45.0, -30.0, 90.0):
-        w = mp.frames.earth_omega(lat)
-        lam = np.radians(lat)
-        np.testing.assert_allclose(w, mp.frames.OMEGA_EARTH * np.array([0, np.cos(lam),
-                                                                        np.sin(lam)]),
-                                   rtol=0, atol=1e-20)
+@pytest.mark.parametrize("scene", SCENES, ids=repr)
+def test_separable_flag_is_what_the_symplectic_methods_find(scene):
+    """verlet runs exactly on the scenes (and parameters) the row calls
+    separable, and refuses the others with the row's reason."""
+    sep = _core.scene_info(scene._model)["separable"]
+    p = scene.params
+    if sep is not None and sep != "always":
+        name, value = (x.strip() for x in sep.split("="))
+        ok = p[name] == float(value)
+    else:
+        ok = sep == "always"
+    y0 = np.full(scene.dim, 0.1)
+    if isinstance(scene, S.HeavyTop):
+        y0[1] = 0.5
+    if ok:
+        sol = mp.solve(scene, (0, 0.1), y0, method="verlet", h=0.01)
+        assert sol.success
+    else:
+        with pytest.raises(ValueError, match=f"{scene._model} is"):
+            mp.solve(scene, (0, 0.1), y0, method="verlet", h=0.01)
 
 
-def _cycloid(x_end, y_end, g, x):
-    """The cycloid through (0, 0) and (x_end, y_end), found here by root finding."""
-    ratio = x_end / y_end
-    th_e = brentq(lambda th: (th - np.sin(th)) - ratio * (1 - np.cos(th)), 1e-3, 2 * np.pi)
-    a = y_end / (1 - np.cos(th_e))
-    th = np.array([brentq(lambda s: a * (s - np.sin(s)) - xi, 0, th_e) if xi > 0 else 0.0
-                   for xi in x])
-    return a * (1 - np.cos(th)), a, th_e * np.sqrt(a / g)
+def test_not_separable_message_lists_the_rows():
+    """A Python system: the message lists the scenes whose rows are separable
+    (SpringChain was missing from the list written by hand)."""
+    with pytest.raises(ValueError, match="Kepler, SpringChain"):
+        mp.solve(lambda t, y: -y, (0, 1), [1.0, 0.0], method="verlet", h=0.1)
 
 
-@pytest.mark.parametrize("x_end, y_end", [(2.0, 1.0), (1.0, 2.0), (3.0, 0.5), (0.5, 1.5)])
-def test_brachistochrone_exact_fields_are_the_cycloid(x_end, y_end):
-    # x_end > y_end: the cycloid dips below the end point (theta_e > pi);
-    # x_end < y_end: it reaches it on the way down (theta_e < pi)
-    r = V.brachistochrone(x_end, y_end, g=9.81, n=60)
-    y_ref, a, T = _cycloid(x_end, y_end, 9.81, r.x)
-    assert r.radius == pytest.approx(a, rel=1e-12)       # measured ~1e-15
-    assert r.time_exact == pytest.approx(T, rel=1e-12)
-    np.testing.assert_allclose(r.y_exact, y_ref, rtol=1e-10, atol=1e-12)
+def test_rigid_body_ensemble_params_by_row_names():
+    """RigidBody's rows vary its row's parameters (I1 .. tau3): it failed
+    before (its public parameters are not the row's)."""
+    rb = S.RigidBody((1.0, 2.0, 3.0))
+    P = rb.ensemble_params(2, I1=[1.0, 1.5])
+    assert P.shape == (2, 6)
+    w0 = np.array([0.1, 1.0, 0.1])
+    ens = mp.solve_many(rb, (0, 5), np.tile(w0, (2, 1)), params={"I1": [1.0, 1.5]},
+                        t_eval=[5.0], rtol=1e-10, atol=1e-12)
+    for i, I1 in enumerate((1.0, 1.5)):
+        exact = mp.rigid.free_rotation((I1, 2.0, 3.0), w0, [5.0])[0]
+        assert np.max(np.abs(ens.y[i, :, -1] - exact)) < 3e-10  # 2.7e-11 measured
+    with pytest.raises(ValueError, match=r"params\[1\]: .*triangle"):
+        rb.ensemble_params(2, I1=[1.0, 9.0])
+    with pytest.raises(ValueError, match=r"params\[0\]: g must be positive"):
+        S.Pendulum().ensemble_params(2, g=[-1.0, 2.0])
 
 
-def test_constraint_forces_pendulum_tension_closed_form():
-    # bob on a rod: T = m (g cos(theta) + l theta_dot^2)
-    m, g, ell = 0.7, 9.81, 1.6
-    sc = mp.scenes.Pendulum(g=g, length=ell)
-    th = np.array([0.0, 0.4, 1.2, 2.9, -2.0])
-    w = np.array([0.0, 1.1, -0.5, 2.0, 0.3])
-    T = V.pendulum_tension(sc, np.stack([th, w]), mass=m)
-    np.testing.assert_allclose(T, m * (g * np.cos(th) + ell * w ** 2), rtol=1e-13, atol=1e-13)
-    # constraint_forces directly: bead of mass m on a hoop of radius R at rest at angle
-    # phi from the bottom under gravity; the hoop cancels the outward radial part of
-    # gravity: f = -m g cos(phi) r/R (g = |x|^2 - R^2 = 0 has J = 2 x; here J = x, b = |v|^2 = 0)
-    R, phi = 2.0, 0.6
-    pos = R * np.array([np.sin(phi), -np.cos(phi)])
-    lam, f = V.constraint_forces(m, [0.0, -m * g], pos[None, :], [0.0])
-    np.testing.assert_allclose(f, -m * g * np.cos(phi) * pos / R, rtol=1e-14, atol=1e-15)
-    np.testing.assert_allclose(lam, [-m * g * np.cos(phi) / R], rtol=1e-14)
+# ---------------------------------------------------------------- Lagrangians
+
+def _closed_form(scene, t, q, v):
+    """L of the scene written out (per unit mass for the pendulum)."""
+    p = scene.params
+    if isinstance(scene, S.Pendulum):
+        L, g, b, A, W = p["length"], p["g"], p["damping"], p["drive_amplitude"], \
+            p["drive_frequency"]
+        return np.exp(b * t) * (0.5 * L * L * v * v + g * L * np.cos(q)
+                                + L * L * A * np.cos(W * t) * q)
+    a, bb, d, gam, w = p["alpha"], p["beta"], p["delta"], p["gamma"], p["omega"]
+    return np.exp(d * t) * (0.5 * v * v - 0.5 * a * q * q - 0.25 * bb * q ** 4
+                            + gam * np.cos(w * t) * q)
 
 
-def test_variational_lagrangian_values():
-    p = mp.scenes.Pendulum(g=9.81, length=1.5)
-    L = V.lagrangian(p)
-    th, w = 0.7, -1.2
-    assert L(th, w) == pytest.approx(0.5 * 1.5 ** 2 * w ** 2 + 9.81 * 1.5 * np.cos(th),
-                                     rel=1e-14)
-    d = mp.scenes.Duffing(0.5, 2.0)
-    Ld = V.lagrangian(d)
-    x, v = 0.8, 0.3
-    assert Ld(x, v) == pytest.approx(v ** 2 / 2 - 0.5 * x ** 2 / 2 - 2.0 * x ** 4 / 4, rel=1e-14)
+LAGRANGIAN_SCENES = [S.Pendulum(length=1.3, damping=0.2, drive_amplitude=0.7,
+                                drive_frequency=1.1),
+                     S.Duffing(-1.0, 1.0, delta=0.3, gamma=0.5, omega=1.2),
+                     S.HeavyTop(0.5, 0.2, 1.0, g=9.81, l=0.3)]
+
+
+@pytest.mark.parametrize("scene", LAGRANGIAN_SCENES[:2], ids=repr)
+def test_row_lagrangian_is_the_closed_form(scene):
+    rng = np.random.default_rng(3)
+    t, q, v = rng.uniform(-1, 1, (3, 50))
+    c = _core.variational_eval(scene._lagrangian_spec(), t, q, v)
+    np.testing.assert_allclose(c[:, 0], _closed_form(scene, t, q, v), rtol=2e-15, atol=1e-15)  # 1.6e-16
+
+
+@pytest.mark.parametrize("scene", LAGRANGIAN_SCENES, ids=repr)
+def test_row_lagrangian_gives_the_row_rhs(scene):
+    """Euler-Lagrange with the row's derivatives of L, with d/dt L_v's
+    explicit time part by central differences, gives the acceleration of the
+    scene's own right-hand side: L_vv a = L_q - L_vq v - dL_v/dt."""
+    d = scene.dim // 2
+    rng = np.random.default_rng(5)
+    m = 20
+    q = rng.uniform(0.3, 1.2, (m, d))
+    v = rng.uniform(-1, 1, (m, d))
+    t = rng.uniform(0, 2, m)
+    spec = scene._lagrangian_spec()
+    c = _core.variational_eval(spec, t, q, v)
+    h = 1e-5
+    cp = _core.variational_eval(spec, t + h, q, v)
+    cm = _core.variational_eval(spec, t - h, q, v)
+    Lq = c[:, 1:1 + d]
+    Lqv = c[:, 1 + 2 * d + d * d:1 + 2 * d + 2 * d * d].reshape(m, d, d)  # [a][b] = d2L/dq_a dv_b
+    Lvv = c[:, 1 + 2 * d + 2 * d * d:].reshape(m, d, d)
+    Lv_t = (cp[:, 1 + d:1 + 2 * d] - cm[:, 1 + d:1 + 2 * d]) / (2 * h)
+    rhs_el = Lq - np.einsum("mab,ma->mb", Lqv, v) - Lv_t
+    a = np.linalg.solve(Lvv, rhs_el[..., None])[..., 0]
+    f = np.stack([scene.rhs(ti, np.concatenate([qi, vi])) for ti, qi, vi in zip(t, q, v)])
+    err = np.max(np.abs(a - f[:, d:])) / np.max(np.abs(f[:, d:]))
+    assert err < 1e-10       # 1.1e-11 relative measured (the central difference in t)
+
+
+def test_variational_tools_take_any_scene_with_a_row_lagrangian():
+    """stationary_path takes the Lagrangian from the row: the pendulum's
+    small-swing path between two angles matches the linear closed form."""
+    sc = S.Pendulum(g=9.81, length=1.0)
+    T, a, b = 0.5, 1e-4, 2e-4
+    r = mp.variational.stationary_path(sc, a, b, T, 400)
+    w = np.sqrt(9.81)
+    exact = (a * np.sin(w * (T - r.t)) + b * np.sin(w * r.t)) / np.sin(w * T)
+    assert np.max(np.abs(r.q - exact)) < 1e-5 * b   # 1.1e-6 relative measured (O(h^2))
+    with pytest.raises(TypeError, match="no Lagrangian"):
+        mp.variational.stationary_path(S.VanDerPol(), 0, 1, 1.0, 50)

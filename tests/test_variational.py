@@ -244,7 +244,7 @@ def test_variational_integrator_energy_bounded_and_symplectic():
     # symplectic: the (q, p) map over 200 steps has unit Jacobian determinant
     def flow(q0, p0):
         from mechpy import _core
-        q, pp = _core.variational_integrate(("pendulum", [G, 1.0, 0, 0, 0]), 0.0, h, 200,
+        q, pp = _core.variational_integrate(("scene", "Pendulum", [G, 1.0, 0, 0, 0]), 0.0, h, 200,
                                             [[q0]], [[p0]], [[0.0]], 1e-12)
         return np.array([q[-1, 0], pp[-1, 0]])
     z = np.array([1.0, 0.5])
@@ -724,6 +724,17 @@ def test_double_pendulum_integrator_order_and_bounded_energy(clib):
     assert dE[-k:].max() < 1.5 * dE[:k].max()      # 7.742e-4 J vs 7.737e-4 J
 
 
+def _top_lagrangian(I1, I3, Mgl):
+    """The heavy top's L(q, qdot), q = (phi, theta, psi) of shape (3, ...)
+    (Goldstein eq. 5.61), in NumPy."""
+    def L(q, qdot, t=0.0):
+        th = np.asarray(q, dtype=float)[1]
+        phd, thd, psd = np.asarray(qdot, dtype=float)[:3]
+        return (0.5 * I1 * (thd ** 2 + (phd * np.sin(th)) ** 2)
+                + 0.5 * I3 * (psd + phd * np.cos(th)) ** 2 - Mgl * np.cos(th))
+    return L
+
+
 def test_heavy_top_integrator_conserves_cyclic_momenta():
     """phi and psi are cyclic: the variational integrator keeps p_phi and p_psi
     exactly (discrete Noether), up to round-off, and follows mp.solve."""
@@ -739,11 +750,14 @@ def test_heavy_top_integrator_conserves_cyclic_momenta():
     assert np.ptp(r.energy) < 3e-9 * abs(r.energy[0])  # O(h^2): 3.2e-10 relative measured
     s = mp.solve(top, (0, 20), y0, rtol=1e-12, atol=1e-12, t_eval=r.t[::1000])
     assert np.max(np.abs(r.q[:, ::1000] - s.y[:3])) < 2e-4   # 2.1e-5 rad measured
-    # the built-in's derivatives against finite differences of the closed form
+    # the row's Lagrangian and its derivatives against the closed form and its
+    # finite differences
     from mechpy.variational.functionals import _fd_spec, _lagrangian_fn
-    fd = _fd_spec(_lagrangian_fn(V.lagrangian(top), 3, False), 3)
+    fd = _fd_spec(_lagrangian_fn(_top_lagrangian(0.5, 0.2, 9.81 * 0.3), 3, False), 3)
     Q, Vq = y[:3, ::4000].T.copy(), y[3:, ::4000].T.copy()
-    c = mp._core.variational_eval(("heavytop", [0.5, 0.2, 9.81 * 0.3]), r.t[::4000], Q, Vq)
+    c = mp._core.variational_eval(("scene", "HeavyTop", [0.5, 0.2, 1.0, 9.81, 0.3]),
+                                  r.t[::4000], Q, Vq)
+    np.testing.assert_allclose(V.lagrangian(top)(Q.T, Vq.T), c[:, 0], rtol=1e-15)
     f = fd[1](r.t[::4000], Q, Vq)
     assert np.max(np.abs(c[:, :7] - f[:, :7])) < 2e-12 * np.max(np.abs(c[:, :7]))  # 1.3e-13
     assert np.max(np.abs(c - f)) < 2e-7 * np.max(np.abs(c))    # mixed, 2nd order: 1.6e-8

@@ -19,12 +19,17 @@
 #include "models/models.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <string.h>
 
 enum { CN, CENDS, CALPHA, CBETA, CHEAD };
 enum { ENDS_FIXED = 0, ENDS_FREE = 1, ENDS_PERIODIC = 2 };
 
-static const char *const chain_names[] = {"N", "ends", "alpha", "beta"};
+/* The head; the masses (N) and springs (ns) follow it. */
+static const mp_model_param chain_params[] = {
+    MP_PARAM_RANGE("N", MP_REQUIRED, 1.0, INFINITY), MP_PARAM_RANGE("ends", 0.0, 0.0, 2.0),
+    MP_PARAM("alpha", 0.0), MP_PARAM("beta", 0.0),
+};
 
 static size_t chain_nsprings(size_t n, int ends)
 {
@@ -43,16 +48,24 @@ static size_t chain_dim_of(const double *p, size_t np)
     return 2 * n;
 }
 
-/* Called after chain_dim_of accepted the layout. */
-static int chain_check(const double *p)
+/* The masses positive, the springs non-negative (called after the bounds
+ * and chain_dim_of accepted the head and the layout). */
+static int chain_check(const double *p, char *why, size_t len)
 {
     size_t n = (size_t)p[CN], ns = chain_nsprings(n, (int)p[CENDS]);
-    if (!isfinite(p[CALPHA]) || !isfinite(p[CBETA])) return MP_EDOM;
     const double *m = p + CHEAD, *k = m + n;
     for (size_t i = 0; i < n; i++)
-        if (!(isfinite(m[i]) && m[i] > 0)) return MP_EDOM;
+        if (!(isfinite(m[i]) && m[i] > 0)) {
+            if (why) snprintf(why, len, "masses must be positive and finite, got masses[%zu] = %g",
+                              i, m[i]);
+            return MP_EDOM;
+        }
     for (size_t j = 0; j < ns; j++)
-        if (!(isfinite(k[j]) && k[j] >= 0)) return MP_EDOM;
+        if (!(isfinite(k[j]) && k[j] >= 0)) {
+            if (why) snprintf(why, len, "springs must be non-negative and finite, got "
+                              "springs[%zu] = %g", j, k[j]);
+            return MP_EDOM;
+        }
     return MP_OK;
 }
 
@@ -170,11 +183,9 @@ static int chain_jac(double t, const double *y, double *J, void *d)
 static void chain_bind(const double *p, mp_ode_problem *prob)
 {
     size_t n = (size_t)p[CN];
-    prob->n = 2 * n;
-    prob->rhs = (p[CALPHA] != 0.0 || p[CBETA] != 0.0) ? chain_rhs_fput : chain_rhs_linear;
-    prob->jac = chain_jac;
-    prob->data = (void *)p;
-    prob->nq = n; /* q' = v, v' = a(q): always separable */
+    mp_model_set(prob, 2 * n,
+                 (p[CALPHA] != 0.0 || p[CBETA] != 0.0) ? chain_rhs_fput : chain_rhs_linear,
+                 chain_jac, p, n); /* q' = v, v' = a(q): always separable */
 }
 
 static inline double chain_potential(double k, double r, double a, double b)
@@ -204,5 +215,8 @@ static double chain_energy(const double *p, const double *y)
     return 0.5 * t + u;
 }
 
-const mp_model mp_model_chain = {"SpringChain", 0, 4, chain_names, chain_check, chain_bind,
-                                 chain_energy, chain_dim_of};
+const mp_model mp_model_chain = {
+    .name = "SpringChain", .dim = 0, .nparams = CHEAD, .params = chain_params,
+    .separable = MP_SEPARABLE_ALWAYS, .check = chain_check, .bind = chain_bind,
+    .energy = chain_energy, .dim_of = chain_dim_of,
+};

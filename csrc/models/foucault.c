@@ -11,14 +11,10 @@
 #include <math.h>
 
 enum { FLAT, FLEN, FG, FOM, FN };
-static const char *const foucault_names[] = {"latitude", "length", "g", "omega"};
-
-static int foucault_check(const double *p)
-{
-    for (int i = 0; i < FN; i++)
-        if (!isfinite(p[i])) return MP_EDOM;
-    return (p[FLAT] >= -90.0 && p[FLAT] <= 90.0 && p[FLEN] > 0 && p[FG] > 0) ? MP_OK : MP_EDOM;
-}
+static const mp_model_param foucault_params[] = {
+    MP_PARAM_RANGE("latitude", MP_REQUIRED, -90.0, 90.0), MP_PARAM_POSITIVE("length", MP_REQUIRED),
+    MP_PARAM_POSITIVE("g", 9.81), MP_PARAM("omega", 7.2921159e-5),
+};
 
 /* the vertical component of the Earth's rotation [rad/s] */
 static double foucault_omega_z(const double *p)
@@ -56,11 +52,7 @@ static int foucault_jac(double t, const double *y, double *J, void *d)
 
 static void foucault_bind(const double *p, mp_ode_problem *prob)
 {
-    prob->n = 4;
-    prob->rhs = foucault_rhs;
-    prob->jac = foucault_jac;
-    prob->data = (void *)p;
-    prob->nq = 0; /* the Coriolis term depends on the velocity */
+    mp_model_set(prob, 4, foucault_rhs, foucault_jac, p, 0); /* Coriolis depends on velocity */
 }
 
 /* per unit mass: (vx^2 + vy^2)/2 + (g/L)(x^2 + y^2)/2 [J/kg]; the Coriolis
@@ -70,5 +62,7 @@ static double foucault_energy(const double *p, const double *y)
     return 0.5 * (y[2] * y[2] + y[3] * y[3]) + 0.5 * (p[FG] / p[FLEN]) * (y[0] * y[0] + y[1] * y[1]);
 }
 
-const mp_model mp_model_foucault = {"Foucault", 4, 4, foucault_names, foucault_check,
-                                    foucault_bind, foucault_energy};
+const mp_model mp_model_foucault = {
+    .name = "Foucault", .dim = 4, .nparams = FN, .params = foucault_params,
+    .bind = foucault_bind, .energy = foucault_energy,
+};

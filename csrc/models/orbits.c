@@ -5,9 +5,7 @@
 #include <math.h>
 
 /* ---- Kepler: r'' = -mu r / |r|^3, state (x, y, vx, vy) ----------------------- */
-static const char *const kepler_names[] = {"mu"};
-
-static int kepler_check(const double *p) { return isfinite(p[0]) && p[0] > 0 ? MP_OK : MP_EDOM; }
+static const mp_model_param kepler_params[] = {MP_PARAM_POSITIVE("mu", 1.0)};
 
 static int kepler_rhs(double t, const double *y, double *f, void *d)
 {
@@ -40,11 +38,7 @@ static int kepler_jac(double t, const double *y, double *J, void *d)
 
 static void kepler_bind(const double *p, mp_ode_problem *prob)
 {
-    prob->n = 4;
-    prob->rhs = kepler_rhs;
-    prob->jac = kepler_jac;
-    prob->data = (void *)p;
-    prob->nq = 2;
+    mp_model_set(prob, 4, kepler_rhs, kepler_jac, p, 2);
 }
 
 /* specific energy |v|^2/2 - mu/r */
@@ -53,18 +47,15 @@ static double kepler_energy(const double *p, const double *y)
     return 0.5 * (y[2] * y[2] + y[3] * y[3]) - p[0] / hypot(y[0], y[1]);
 }
 
-const mp_model mp_model_kepler = {"Kepler", 4, 1, kepler_names, kepler_check, kepler_bind,
-                                  kepler_energy};
+const mp_model mp_model_kepler = {
+    .name = "Kepler", .dim = 4, .nparams = 1, .params = kepler_params,
+    .separable = MP_SEPARABLE_ALWAYS, .bind = kepler_bind, .energy = kepler_energy,
+};
 
 /* ---- restricted three-body problem, rotating frame -------------------------
  * x'' = x + 2 y' - mu' (x + mu)/r1^3 - mu (x - mu')/r2^3
  * y'' = y - 2 x' - mu' y / r1^3 - mu y / r2^3,   mu' = 1 - mu */
-static const char *const r3b_names[] = {"mu"};
-
-static int r3b_check(const double *p)
-{
-    return isfinite(p[0]) && p[0] > 0 && p[0] < 1 ? MP_OK : MP_EDOM;
-}
+static const mp_model_param r3b_params[] = {MP_PARAM_OPEN("mu", 0.012277471, 0.0, 1.0)};
 
 static int r3b_rhs(double t, const double *y, double *f, void *d)
 {
@@ -102,11 +93,7 @@ static int r3b_jac(double t, const double *y, double *J, void *d)
 
 static void r3b_bind(const double *p, mp_ode_problem *prob)
 {
-    prob->n = 4;
-    prob->rhs = r3b_rhs;
-    prob->jac = r3b_jac;
-    prob->data = (void *)p;
-    prob->nq = 0; /* Coriolis terms depend on the velocity */
+    mp_model_set(prob, 4, r3b_rhs, r3b_jac, p, 0); /* Coriolis terms depend on the velocity */
 }
 
 /* the Jacobi integral in energy form: |v|^2/2 - (x^2 + y^2)/2 - mu'/r1 - mu/r2 */
@@ -118,5 +105,7 @@ static double r3b_energy(const double *p, const double *y)
            mu / r2;
 }
 
-const mp_model mp_model_r3b = {"RestrictedThreeBody", 4, 1, r3b_names, r3b_check, r3b_bind,
-                               r3b_energy};
+const mp_model mp_model_r3b = {
+    .name = "RestrictedThreeBody", .dim = 4, .nparams = 1, .params = r3b_params,
+    .bind = r3b_bind, .energy = r3b_energy,
+};

@@ -7,15 +7,11 @@
 
 /* ---- Pendulum: theta'' = -(g/L) sin(theta) - b theta' + A cos(w t) ---------- */
 enum { PG, PL, PB, PA, PW };
-static const char *const pendulum_names[] = {"g", "length", "damping", "drive_amplitude",
-                                             "drive_frequency"};
-
-static int pendulum_check(const double *p)
-{
-    for (int i = 0; i < 5; i++)
-        if (!isfinite(p[i])) return MP_EDOM;
-    return (p[PG] > 0 && p[PL] > 0 && p[PB] >= 0 && p[PW] >= 0) ? MP_OK : MP_EDOM;
-}
+static const mp_model_param pendulum_params[] = {
+    MP_PARAM_POSITIVE("g", 9.81),           MP_PARAM_POSITIVE("length", 1.0),
+    MP_PARAM_NONNEGATIVE("damping", 0.0),   MP_PARAM("drive_amplitude", 0.0),
+    MP_PARAM_NONNEGATIVE("drive_frequency", 0.0),
+};
 
 static int pendulum_free(double t, const double *y, double *f, void *d)
 {
@@ -56,11 +52,9 @@ static int pendulum_jac(double t, const double *y, double *J, void *d)
 
 static void pendulum_bind(const double *p, mp_ode_problem *prob)
 {
-    prob->n = 2;
-    prob->rhs = p[PA] != 0.0 ? pendulum_driven : p[PB] != 0.0 ? pendulum_damped : pendulum_free;
-    prob->jac = pendulum_jac;
-    prob->data = (void *)p;
-    prob->nq = p[PB] == 0.0 ? 1 : 0; /* separable unless damped */
+    mp_model_set(prob, 2,
+                 p[PA] != 0.0 ? pendulum_driven : p[PB] != 0.0 ? pendulum_damped : pendulum_free,
+                 pendulum_jac, p, p[PB] == 0.0 ? 1 : 0); /* separable unless damped */
 }
 
 /* energy per unit mass: L^2 theta'^2 / 2 + g L (1 - cos theta)  [J/kg] */
@@ -70,13 +64,31 @@ static double pendulum_energy(const double *p, const double *y)
     return 0.5 * L * L * y[1] * y[1] + p[PG] * L * 2.0 * pow(sin(0.5 * y[0]), 2);
 }
 
-const mp_model mp_model_pendulum = {"Pendulum", 2, 5, pendulum_names, pendulum_check,
-                                    pendulum_bind, pendulum_energy};
+/* Per unit mass, with the Caldirola-Kanai factor that makes the damped
+ * equation an Euler-Lagrange one (x = t, y = theta, p = theta'):
+ * L = e^{b t} (L^2 p^2 / 2 + g L cos y + L^2 A cos(Omega t) y)  [J/kg] */
+static int pendulum_lagrangian(size_t m, const double *x, const double *y, const double *v,
+                               double *out, void *ctx)
+{
+    const double *k = ctx;
+    for (size_t i = 0; i < m; i++) {
+        double g = k[PG], L = k[PL], e = exp(k[PB] * x[i]);
+        double drive = L * L * k[PA] * cos(k[PW] * x[i]), yi = y[i], vi = v[i];
+        mp_var_put1(out + 6 * i, e * (0.5 * L * L * vi * vi + g * L * cos(yi) + drive * yi),
+                    e * (-g * L * sin(yi) + drive), e * L * L * vi, -e * g * L * cos(yi), 0.0,
+                    e * L * L);
+    }
+    return MP_OK;
+}
+
+const mp_model mp_model_pendulum = {
+    .name = "Pendulum", .dim = 2, .nparams = 5, .params = pendulum_params,
+    .separable = "damping = 0", .bind = pendulum_bind, .energy = pendulum_energy,
+    .lagrangian = pendulum_lagrangian,
+};
 
 /* ---- Van der Pol: x'' - mu (1 - x^2) x' + x = 0 ------------------------------ */
-static const char *const vdp_names[] = {"mu"};
-
-static int vdp_check(const double *p) { return isfinite(p[0]) && p[0] >= 0 ? MP_OK : MP_EDOM; }
+static const mp_model_param vdp_params[] = {MP_PARAM_NONNEGATIVE("mu", 1.0)};
 
 static int vdp_rhs(double t, const double *y, double *f, void *d)
 {
@@ -100,11 +112,7 @@ static int vdp_jac(double t, const double *y, double *J, void *d)
 
 static void vdp_bind(const double *p, mp_ode_problem *prob)
 {
-    prob->n = 2;
-    prob->rhs = vdp_rhs;
-    prob->jac = vdp_jac;
-    prob->data = (void *)p;
-    prob->nq = 0; /* the friction term depends on x' */
+    mp_model_set(prob, 2, vdp_rhs, vdp_jac, p, 0); /* the friction term depends on x' */
 }
 
 /* the harmonic part's energy (x^2 + x'^2) / 2 */
@@ -114,19 +122,17 @@ static double vdp_energy(const double *p, const double *y)
     return 0.5 * (y[0] * y[0] + y[1] * y[1]);
 }
 
-const mp_model mp_model_vanderpol = {"VanDerPol", 2, 1, vdp_names, vdp_check, vdp_bind,
-                                     vdp_energy};
+const mp_model mp_model_vanderpol = {
+    .name = "VanDerPol", .dim = 2, .nparams = 1, .params = vdp_params, .bind = vdp_bind,
+    .energy = vdp_energy,
+};
 
 /* ---- Duffing: x'' + delta x' + alpha x + beta x^3 = gamma cos(omega t) ------- */
 enum { DA, DB, DD, DG, DW };
-static const char *const duffing_names[] = {"alpha", "beta", "delta", "gamma", "omega"};
-
-static int duffing_check(const double *p)
-{
-    for (int i = 0; i < 5; i++)
-        if (!isfinite(p[i])) return MP_EDOM;
-    return p[DD] >= 0 ? MP_OK : MP_EDOM;
-}
+static const mp_model_param duffing_params[] = {
+    MP_PARAM("alpha", MP_REQUIRED), MP_PARAM("beta", MP_REQUIRED),
+    MP_PARAM_NONNEGATIVE("delta", 0.0), MP_PARAM("gamma", 0.0), MP_PARAM("omega", 1.0),
+};
 
 static int duffing_free(double t, const double *y, double *f, void *d)
 {
@@ -158,11 +164,8 @@ static int duffing_jac(double t, const double *y, double *J, void *d)
 
 static void duffing_bind(const double *p, mp_ode_problem *prob)
 {
-    prob->n = 2;
-    prob->rhs = p[DG] != 0.0 ? duffing_driven : duffing_free;
-    prob->jac = duffing_jac;
-    prob->data = (void *)p;
-    prob->nq = p[DD] == 0.0 ? 1 : 0;
+    mp_model_set(prob, 2, p[DG] != 0.0 ? duffing_driven : duffing_free, duffing_jac, p,
+                 p[DD] == 0.0 ? 1 : 0);
 }
 
 /* x'^2/2 + alpha x^2/2 + beta x^4/4 */
@@ -172,5 +175,24 @@ static double duffing_energy(const double *p, const double *y)
     return 0.5 * y[1] * y[1] + 0.5 * p[DA] * x2 + 0.25 * p[DB] * x2 * x2;
 }
 
-const mp_model mp_model_duffing = {"Duffing", 2, 5, duffing_names, duffing_check, duffing_bind,
-                                   duffing_energy};
+/* L = e^{delta t} (p^2/2 - alpha y^2/2 - beta y^4/4 + gamma cos(omega t) y) */
+static int duffing_lagrangian(size_t m, const double *x, const double *y, const double *v,
+                              double *out, void *ctx)
+{
+    const double *k = ctx;
+    for (size_t i = 0; i < m; i++) {
+        double e = exp(k[DD] * x[i]), drive = k[DG] * cos(k[DW] * x[i]);
+        double yi = y[i], vi = v[i], y2 = yi * yi;
+        mp_var_put1(out + 6 * i,
+                    e * (0.5 * vi * vi - 0.5 * k[DA] * y2 - 0.25 * k[DB] * y2 * y2 + drive * yi),
+                    e * (-k[DA] * yi - k[DB] * y2 * yi + drive), e * vi,
+                    e * (-k[DA] - 3.0 * k[DB] * y2), 0.0, e);
+    }
+    return MP_OK;
+}
+
+const mp_model mp_model_duffing = {
+    .name = "Duffing", .dim = 2, .nparams = 5, .params = duffing_params,
+    .separable = "delta = 0", .bind = duffing_bind, .energy = duffing_energy,
+    .lagrangian = duffing_lagrangian,
+};

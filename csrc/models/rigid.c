@@ -5,6 +5,7 @@
 #include "models/rigid.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <string.h>
 
 #include <gsl/gsl_errno.h>
@@ -15,7 +16,10 @@
 /* ---- Euler's equations ------------------------------------------------------
  * I1 w1' = (I2 - I3) w2 w3 + tau1 (cyclic); q' = q (x) (w, 0) / 2.
  * Parameters (I1, I2, I3, tau1, tau2, tau3). */
-static const char *const rigid_names[] = {"I1", "I2", "I3", "tau1", "tau2", "tau3"};
+static const mp_model_param rigid_params[] = {
+    MP_PARAM_POSITIVE("I1", 1.0), MP_PARAM_POSITIVE("I2", 2.0), MP_PARAM_POSITIVE("I3", 3.0),
+    MP_PARAM("tau1", 0.0),        MP_PARAM("tau2", 0.0),        MP_PARAM("tau3", 0.0),
+};
 
 int mp_rigid_check_moments(const double *I)
 {
@@ -27,12 +31,14 @@ int mp_rigid_check_moments(const double *I)
     return MP_OK;
 }
 
-static int rigid_check(const double *p)
+/* The row's check: the moments of a real body (the bounds made them positive). */
+static int rigid_check(const double *p, char *why, size_t len)
 {
-    if (mp_rigid_check_moments(p) != MP_OK) return MP_EDOM;
-    for (int i = 3; i < 6; i++)
-        if (!isfinite(p[i])) return MP_EDOM;
-    return MP_OK;
+    if (mp_rigid_check_moments(p) == MP_OK) return MP_OK;
+    if (why)
+        snprintf(why, len, "moments (%g, %g, %g) violate the triangle inequality "
+                 "I_i <= I_j + I_k of a real body", p[0], p[1], p[2]);
+    return MP_EDOM;
 }
 
 static inline void euler_free(const double *p, const double *w, double *f)
@@ -122,20 +128,14 @@ static int has_torque(const double *p) { return p[3] != 0.0 || p[4] != 0.0 || p[
 
 static void rigid_bind(const double *p, mp_ode_problem *prob)
 {
-    prob->n = 3;
-    prob->rhs = has_torque(p) ? mp_rigid_rhs_torque : mp_rigid_rhs_free;
-    prob->jac = rigid_jac;
-    prob->data = (void *)p;
-    prob->nq = 0;
+    mp_model_set(prob, 3, has_torque(p) ? mp_rigid_rhs_torque : mp_rigid_rhs_free, rigid_jac, p,
+                 0);
 }
 
 static void rigid_bind_q(const double *p, mp_ode_problem *prob)
 {
-    prob->n = 7;
-    prob->rhs = has_torque(p) ? mp_rigid_rhs_torque_q : mp_rigid_rhs_free_q;
-    prob->jac = rigid_jac_q;
-    prob->data = (void *)p;
-    prob->nq = 0;
+    mp_model_set(prob, 7, has_torque(p) ? mp_rigid_rhs_torque_q : mp_rigid_rhs_free_q,
+                 rigid_jac_q, p, 0);
 }
 
 /* rotational kinetic energy (I1 w1^2 + I2 w2^2 + I3 w3^2) / 2 */
@@ -144,10 +144,14 @@ static double rigid_energy(const double *p, const double *y)
     return 0.5 * (p[0] * y[0] * y[0] + p[1] * y[1] * y[1] + p[2] * y[2] * y[2]);
 }
 
-const mp_model mp_model_rigid = {"RigidBody", 3, 6, rigid_names, rigid_check, rigid_bind,
-                                 rigid_energy};
-const mp_model mp_model_rigid_q = {"RigidBodyOriented", 7, 6, rigid_names, rigid_check,
-                                   rigid_bind_q, rigid_energy};
+const mp_model mp_model_rigid = {
+    .name = "RigidBody", .dim = 3, .nparams = 6, .params = rigid_params, .check = rigid_check,
+    .bind = rigid_bind, .energy = rigid_energy,
+};
+const mp_model mp_model_rigid_q = {
+    .name = "RigidBodyOriented", .dim = 7, .nparams = 6, .params = rigid_params,
+    .check = rigid_check, .bind = rigid_bind_q, .energy = rigid_energy,
+};
 
 /* a torque callback: the free part, then tau / I (tau is NaN before the call, so
  * that a component the callback leaves unwritten is a NonFiniteError) */
@@ -192,15 +196,10 @@ int mp_rigid_is_body(const mp_ode_problem *p)
  *   theta'' = phi'^2 s c - r w3 phi' s + (A/I1) s
  *   phi''   = theta' (r w3 - 2 phi' c) / s
  *   psi''   = -phi'' c + phi' theta' s                                     */
-static const char *const top_names[] = {"I1", "I3", "mass", "g", "l"};
-
-static int top_check(const double *p)
-{
-    for (int i = 0; i < 5; i++)
-        if (!isfinite(p[i])) return MP_EDOM;
-    if (!(p[0] > 0) || !(p[1] > 0) || !(p[2] > 0) || p[3] < 0) return MP_EDOM;
-    return MP_OK;
-}
+static const mp_model_param top_params[] = {
+    MP_PARAM_POSITIVE("I1", MP_REQUIRED), MP_PARAM_POSITIVE("I3", MP_REQUIRED),
+    MP_PARAM_POSITIVE("mass", MP_REQUIRED), MP_PARAM_NONNEGATIVE("g", 9.81), MP_PARAM("l", 1.0),
+};
 
 /* The quantities the top's rhs and Jacobian share: sin and cos of theta,
  * r = I3/I1, A = m g l / I1, the rates and the spin w3 = psi' + phi' cos(theta). */
@@ -265,11 +264,7 @@ static int top_jac(double t, const double *y, double *J, void *d)
 
 static void top_bind(const double *p, mp_ode_problem *prob)
 {
-    prob->n = 6;
-    prob->rhs = top_rhs;
-    prob->jac = top_jac;
-    prob->data = (void *)p;
-    prob->nq = 0;
+    mp_model_set(prob, 6, top_rhs, top_jac, p, 0);
 }
 
 /* E = I1 (theta'^2 + phi'^2 sin^2 theta)/2 + I3 w3^2/2 + m g l cos(theta) */
@@ -280,8 +275,40 @@ static double top_energy(const double *p, const double *y)
            p[2] * p[3] * p[4] * c;
 }
 
-const mp_model mp_model_heavy_top = {"HeavyTop", 6, 5, top_names, top_check, top_bind,
-                                     top_energy};
+/* The top's Lagrangian at m points, q = (phi, theta, psi), 34 values each
+ * (variational.h's layout, d = 3):
+ * L = I1/2 (th'^2 + ph'^2 sin^2 th) + I3/2 (ps' + ph' cos th)^2 - M g l cos th  [J] */
+static int top_lagrangian(size_t m, const double *x, const double *y, const double *v,
+                          double *out, void *ctx)
+{
+    const double *k = ctx;
+    double I1 = k[0], I3 = k[1], Mgl = k[2] * k[3] * k[4];
+    (void)x;
+    for (size_t i = 0; i < m; i++, y += 3, v += 3, out += 34) {
+        double s = sin(y[1]), c = cos(y[1]), ph = v[0], th = v[1], ps = v[2];
+        double w = ps + ph * c; /* the spin omega_3 */
+        memset(out, 0, 34 * sizeof(double));
+        out[0] = 0.5 * I1 * (th * th + ph * ph * s * s) + 0.5 * I3 * w * w - Mgl * c;
+        out[2] = I1 * ph * ph * s * c - I3 * w * ph * s + Mgl * s; /* dL/dtheta */
+        out[4] = I1 * ph * s * s + I3 * w * c;                     /* p_phi */
+        out[5] = I1 * th;                                          /* p_theta */
+        out[6] = I3 * w;                                           /* p_psi */
+        double *Lqq = out + 7, *Lqv = out + 16, *Lvv = out + 25;
+        Lqq[4] = I1 * ph * ph * (c * c - s * s) + I3 * (ph * ph * s * s - w * ph * c) + Mgl * c;
+        Lqv[3] = 2.0 * I1 * ph * s * c - I3 * s * (ph * c + w); /* d2L/dtheta dphi' */
+        Lqv[5] = -I3 * ph * s;                                  /* d2L/dtheta dpsi' */
+        Lvv[0] = I1 * s * s + I3 * c * c;
+        Lvv[2] = Lvv[6] = I3 * c;
+        Lvv[4] = I1;
+        Lvv[8] = I3;
+    }
+    return MP_OK;
+}
+
+const mp_model mp_model_heavy_top = {
+    .name = "HeavyTop", .dim = 6, .nparams = 5, .params = top_params, .bind = top_bind,
+    .energy = top_energy, .lagrangian = top_lagrangian,
+};
 
 /* ---- the exact torque-free motion ------------------------------------------
  * Axes relabelled (a, b, c) so that b is the intermediate one and c the axis

@@ -14,19 +14,23 @@
 
 #include <math.h>
 
-enum { RU, RB, RM0, RMD, RG, RK, RN };
-static const char *const rocket_names[] = {"exhaust_speed", "burn_rate", "m0", "m_dry", "g",
-                                           "drag"};
+#include <stdio.h>
 
-/* MP_EDOM unless all finite, u >= 0, b >= 0, 0 < m_dry <= m0, g >= 0, k >= 0. */
-static int rocket_check(const double *p)
+enum { RU, RB, RM0, RMD, RG, RK, RN };
+static const mp_model_param rocket_params[] = {
+    MP_PARAM_NONNEGATIVE("exhaust_speed", MP_REQUIRED), MP_PARAM_NONNEGATIVE("burn_rate", MP_REQUIRED),
+    MP_PARAM_POSITIVE("m0", MP_REQUIRED),               MP_PARAM_POSITIVE("m_dry", MP_REQUIRED),
+    MP_PARAM_NONNEGATIVE("g", 0.0),                     MP_PARAM_NONNEGATIVE("drag", 0.0),
+};
+
+/* What the bounds cannot say: the dry mass does not exceed the launch mass. */
+static int rocket_check(const double *p, char *why, size_t len)
 {
-    for (int i = 0; i < RN; i++)
-        if (!isfinite(p[i])) return MP_EDOM;
-    return (p[RU] >= 0 && p[RB] >= 0 && p[RMD] > 0 && p[RMD] <= p[RM0] && p[RG] >= 0 &&
-            p[RK] >= 0)
-               ? MP_OK
-               : MP_EDOM;
+    if (p[RMD] <= p[RM0]) return MP_OK;
+    if (why)
+        snprintf(why, len, "m_dry must not exceed m0 (the launch mass), got m_dry=%g > m0=%g",
+                 p[RMD], p[RM0]);
+    return MP_EDOM;
 }
 
 /* 1 while propellant is left in state y (mass above the dry mass). */
@@ -61,14 +65,11 @@ static int rocket_jac(double t, const double *y, double *J, void *d)
     return MP_OK;
 }
 
-/* Bind the one right-hand side (terms that are zero cost a multiply). */
+/* Bind the one right-hand side (terms that are zero cost a multiply); not
+ * separable: the mass is not a position. */
 static void rocket_bind(const double *p, mp_ode_problem *prob)
 {
-    prob->n = 3;
-    prob->rhs = rocket_rhs;
-    prob->jac = rocket_jac;
-    prob->data = (void *)p;
-    prob->nq = 0; /* the mass is not a position */
+    mp_model_set(prob, 3, rocket_rhs, rocket_jac, p, 0);
 }
 
 /* the vehicle's mechanical energy m v^2/2 + m g h (J): not conserved (the
@@ -78,5 +79,7 @@ static double rocket_energy(const double *p, const double *y)
     return y[2] * (0.5 * y[1] * y[1] + p[RG] * y[0]);
 }
 
-const mp_model mp_model_rocket = {"Rocket", 3, 6, rocket_names, rocket_check, rocket_bind,
-                                  rocket_energy};
+const mp_model mp_model_rocket = {
+    .name = "Rocket", .dim = 3, .nparams = RN, .params = rocket_params, .check = rocket_check,
+    .bind = rocket_bind, .energy = rocket_energy,
+};

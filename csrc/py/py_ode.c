@@ -581,11 +581,15 @@ static PyObject *py_ode_solve(PyObject *self, PyObject *args, PyObject *kw)
     if (py_system_parse(spec, n, &sys) < 0) goto out;
     mp_ode_problem prob = sys.prob;
     int holds_python = sys.holds_python;
-    if (m->symplectic && !m->implicit && prob.nq == 0) {
+    if (m->symplectic && !m->implicit && prob.nq == 0) { /* the scene rows say which are */
+        char why[256];
+        const char *kind = PyUnicode_AsUTF8(PyTuple_GET_ITEM(spec, 0));
+        mp_model_separable_hint(kind && strcmp(kind, "scene") == 0
+                                    ? PyUnicode_AsUTF8(PyTuple_GET_ITEM(spec, 1)) : NULL,
+                                why, sizeof why);
         PyErr_Format(PyExc_ValueError,
-                     "method %s needs a separable system q'' = a(t, q) with y = (q, v): an "
-                     "undamped scene (Pendulum, Duffing, Kepler) or mp.SecondOrder(accel)",
-                     m->name);
+                     "method %s needs a separable system q'' = a(t, q) with y = (q, v): %s",
+                     m->name, why);
         goto out;
     }
     if (watch != Py_None) { /* a ctypes callback that runs Python: hold the GIL, check */

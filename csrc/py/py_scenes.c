@@ -18,6 +18,21 @@ static const mp_model *find_model(const char *name)
     return m;
 }
 
+/* One parameter of a row as a dict: name, default (None: required), lo, hi,
+ * lo_open, hi_open. */
+static PyObject *scene_param(const mp_model_param *p)
+{
+    if (isnan(p->def)) Py_INCREF(Py_None);
+    PyObject *def = isnan(p->def) ? Py_None : PyFloat_FromDouble(p->def);
+    if (!def) return NULL;
+    return Py_BuildValue("{s:s,s:N,s:d,s:d,s:O,s:O}", "name", p->name, "default", def, "lo",
+                         p->lo, "hi", p->hi, "lo_open", p->lo_open ? Py_True : Py_False,
+                         "hi_open", p->hi_open ? Py_True : Py_False);
+}
+
+/* scene_info(name) -> the row: {"dim" (0: variable), "params" (names),
+ * "param_info" (one dict each, see scene_param), "separable" (None: never,
+ * "always" or a condition), "lagrangian" (bool)}. */
 static PyObject *py_scene_info(PyObject *self, PyObject *args)
 {
     (void)self;
@@ -26,16 +41,68 @@ static PyObject *py_scene_info(PyObject *self, PyObject *args)
     const mp_model *m = find_model(name);
     if (!m) return NULL;
     PyObject *names = PyTuple_New((Py_ssize_t)m->nparams);
-    if (!names) return NULL;
+    PyObject *info = PyTuple_New((Py_ssize_t)m->nparams);
+    if (!names || !info) goto fail;
     for (size_t i = 0; i < m->nparams; i++) {
-        PyObject *s = PyUnicode_FromString(m->param_names[i]);
-        if (!s) {
-            Py_DECREF(names);
-            return NULL;
+        PyObject *s = PyUnicode_FromString(m->params[i].name);
+        PyObject *d = s ? scene_param(&m->params[i]) : NULL;
+        if (!d) {
+            Py_XDECREF(s);
+            goto fail;
         }
         PyTuple_SET_ITEM(names, (Py_ssize_t)i, s);
+        PyTuple_SET_ITEM(info, (Py_ssize_t)i, d);
     }
-    return Py_BuildValue("{s:n,s:N}", "dim", (Py_ssize_t)m->dim, "params", names);
+    return Py_BuildValue("{s:n,s:N,s:N,s:z,s:O}", "dim", (Py_ssize_t)m->dim, "params", names,
+                         "param_info", info, "separable", m->separable, "lagrangian",
+                         m->lagrangian ? Py_True : Py_False);
+fail:
+    Py_XDECREF(names);
+    Py_XDECREF(info);
+    return NULL;
+}
+
+/* scene_check(name, params) -> dim: the row's check of a parameter vector
+ * (p,) or of rows (k, p) (each must describe the same dim); ValueError
+ * "name: <why>" (params[i]: for row i of k) otherwise. */
+static PyObject *py_scene_check(PyObject *self, PyObject *args)
+{
+    (void)self;
+    const char *name;
+    PyObject *po;
+    if (!PyArg_ParseTuple(args, "sO", &name, &po)) return NULL;
+    const mp_model *m = find_model(name);
+    if (!m) return NULL;
+    PyArrayObject *p = mp_py_array(po, "params", -1);
+    if (!p) return NULL;
+    int nd = PyArray_NDIM(p);
+    if (nd != 1 && nd != 2) {
+        PyErr_Format(PyExc_ValueError, "%s: params must have shape (p,) or (k, p)", m->name);
+        Py_DECREF(p);
+        return NULL;
+    }
+    npy_intp rows = nd == 2 ? PyArray_DIM(p, 0) : 1, np = PyArray_DIM(p, nd - 1);
+    const double *pp = PyArray_DATA(p);
+    size_t dim = 0, first = 0;
+    char why[200] = "";
+    npy_intp bad = -1;
+    for (npy_intp r = 0; r < rows && bad < 0; r++) {
+        if (mp_model_check(m, pp + r * np, (size_t)np, &dim, why, sizeof why) != MP_OK ||
+            (r > 0 && dim != first)) {
+            if (r > 0 && dim != first) snprintf(why, sizeof why, "every row must describe "
+                                                "the same state dimension");
+            bad = r;
+        }
+        if (r == 0) first = dim;
+    }
+    Py_DECREF(p);
+    if (bad >= 0) {
+        if (nd == 2) PyErr_Format(PyExc_ValueError, "%s: params[%zd]: %s", m->name,
+                                  (Py_ssize_t)bad, why);
+        else PyErr_Format(PyExc_ValueError, "%s: %s", m->name, why);
+        return NULL;
+    }
+    return PyLong_FromSize_t(first);
 }
 
 /* scene_eval(name, params, what, t, Y) with Y of shape (m, dim):
@@ -132,7 +199,10 @@ static PyObject *py_ellipk_complement(PyObject *self, PyObject *args)
 }
 
 PyMethodDef mp_py_scene_methods[] = {
-    {"scene_info", py_scene_info, METH_VARARGS, "Dimension and parameter names of a scene."},
+    {"scene_info", py_scene_info, METH_VARARGS,
+     "A scene's row: dimension, parameters (names, defaults, bounds), separability."},
+    {"scene_check", py_scene_check, METH_VARARGS,
+     "Check a scene's parameter vector (or rows of them) against its row; -> dim."},
     {"scene_eval", py_scene_eval, METH_VARARGS, "Evaluate a scene over many states (internal)."},
     {"ellipk_complement", py_ellipk_complement, METH_VARARGS,
      "Complete elliptic integral K for the complementary modulus kc (GSL)."},

@@ -1,5 +1,7 @@
 /* Binding for the variational solvers of the C core.  An integrand spec is
- *   (name, params)              a built-in (its dimension d from the table),
+ *   (name, params)              a built-in functional (its dimension d from the table),
+ *   ("scene", name, params)     the Lagrangian of a scene's row (models/models.h),
+ *                               d = dim / 2, params checked by the row,
  *   ("python", f, d)            a Python callable f(x (m,), y (m, d), p (m, d))
  *                               returning the (m, K) values, K = 1 + 2d + 3d^2,
  *   ("c", capsule, params, d)   a compiled mp_gen_lagrangian (the capsule from
@@ -11,6 +13,7 @@
 #include <stdint.h>
 #include <string.h>
 
+#include "models/models.h"
 #include "variational.h"
 
 #define MP_VAR_MAXCON 16
@@ -87,6 +90,34 @@ static int py_var_dim(PyObject *o, size_t *d, const char *what)
     return 0;
 }
 
+/* Parse ("scene", name, params) into s: the row's Lagrangian on the row's
+ * checked parameters; -1 with an exception set. */
+static int py_var_parse_scene(PyObject *obj, py_var_spec *s, const char *what)
+{
+    const char *scene = PyTuple_GET_SIZE(obj) == 3 && PyUnicode_Check(PyTuple_GET_ITEM(obj, 1))
+                            ? PyUnicode_AsUTF8(PyTuple_GET_ITEM(obj, 1)) : NULL;
+    const mp_model *m = scene ? mp_model_find(scene) : NULL;
+    if (!m || !m->lagrangian) {
+        if (!PyErr_Occurred())
+            PyErr_Format(PyExc_TypeError, "%s: (\"scene\", name, params) needs a scene with a "
+                         "Lagrangian", what);
+        return -1;
+    }
+    s->params = mp_py_array(PyTuple_GET_ITEM(obj, 2), "params", 1);
+    if (!s->params) return -1;
+    size_t dim;
+    char why[200];
+    if (mp_model_check(m, PyArray_DATA(s->params), (size_t)PyArray_SIZE(s->params), &dim, why,
+                       sizeof why) != MP_OK) {
+        PyErr_Format(PyExc_ValueError, "%s: %s: %s", what, m->name, why);
+        return -1;
+    }
+    s->F.eval = m->lagrangian;
+    s->F.ctx = PyArray_DATA(s->params);
+    s->F.d = dim / 2;
+    return 0;
+}
+
 /* Parse a spec (see the file comment) into s; -1 with an exception set. */
 static int py_var_parse(PyObject *obj, py_var_spec *s, const char *what)
 {
@@ -95,8 +126,8 @@ static int py_var_parse(PyObject *obj, py_var_spec *s, const char *what)
     PyObject *tag = len >= 2 ? PyTuple_GET_ITEM(obj, 0) : NULL;
     if (!tag || !PyUnicode_Check(tag)) {
         PyErr_Format(PyExc_TypeError,
-                     "%s must be a tuple (name, params), (\"python\", f, d) or "
-                     "(\"c\", capsule, params, d)", what);
+                     "%s must be a tuple (name, params), (\"scene\", name, params), "
+                     "(\"python\", f, d) or (\"c\", capsule, params, d)", what);
         return -1;
     }
     const char *name = PyUnicode_AsUTF8(tag);
@@ -128,6 +159,7 @@ static int py_var_parse(PyObject *obj, py_var_spec *s, const char *what)
         s->F.ctx = PyArray_DATA(s->params);
         return 0;
     }
+    if (strcmp(name, "scene") == 0) return py_var_parse_scene(obj, s, what);
     if (len != 2) {
         PyErr_Format(PyExc_TypeError, "%s: a built-in is a pair (name, params)", what);
         return -1;
@@ -160,23 +192,17 @@ static int py_var_parse(PyObject *obj, py_var_spec *s, const char *what)
 static PyArrayObject *py_var_points(PyObject *o, const char *name, size_t d, npy_intp want,
                                     npy_intp *m)
 {
-    PyArrayObject *a = mp_py_array(o, name, -1);
+    PyArrayObject *a = mp_py_array_finite(o, name, -1, -1);
     if (!a) return NULL;
     int nd = PyArray_NDIM(a);
     int ok = (nd == 2 && PyArray_DIM(a, 1) == (npy_intp)d) || (nd == 1 && d == 1);
     if (ok) *m = PyArray_DIM(a, 0);
-    if (!ok || (want >= 0 && *m != want)) {
-        PyErr_Format(PyExc_ValueError, "%s must have shape (%zd, %zd)%s", name,
-                     (Py_ssize_t)(want >= 0 ? want : (ok ? *m : 0)), (Py_ssize_t)d,
-                     d == 1 ? " or (m,)" : "");
-        Py_DECREF(a);
-        return NULL;
-    }
-    if (mp_py_require_finite(a, name) < 0) {
-        Py_DECREF(a);
-        return NULL;
-    }
-    return a;
+    if (ok && (want < 0 || *m == want)) return a;
+    PyErr_Format(PyExc_ValueError, "%s must have shape (%zd, %zd)%s", name,
+                 (Py_ssize_t)(want >= 0 ? want : (ok ? *m : 0)), (Py_ssize_t)d,
+                 d == 1 ? " or (m,)" : "");
+    Py_DECREF(a);
+    return NULL;
 }
 
 /* A copy of a (C order) as a new array; steals nothing. */

@@ -20,6 +20,7 @@ import numpy as np
 
 from .. import _core
 from .._validate import as_array, as_int, as_scalar
+from ..scenes import Scene
 from .functionals import (_MAX_ITER, _SING_TOL_EXACT, _SING_TOL_FD, _TOL, _fd_spec,
                           _lagrangian_fn, _n_nodes, _pair)
 from .lagrangians import _scene_spec, _spec_dim
@@ -35,10 +36,9 @@ MAX_STEPS = 10_000_000
 def _system(system, q_like: np.ndarray):
     """(spec, d, scene energy or None, singularity tolerance) of a scene or a
     Python Lagrangian; a callable's d comes from the coordinates q_like."""
-    from ..scenes import Duffing, HeavyTop, Pendulum, Scene
     if isinstance(system, Scene) or getattr(system, "_lagrangian_c", None) is not None:
         spec = _scene_spec(system)
-        energy = system.energy if isinstance(system, (Pendulum, Duffing, HeavyTop)) else None
+        energy = system.energy if spec[0] == "scene" else None  # a row's own energy
         return spec, _spec_dim(spec), energy, _SING_TOL_EXACT
     if callable(system):
         scalar = q_like.ndim == 0

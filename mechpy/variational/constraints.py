@@ -4,6 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._validate import as_array, as_scalar
+from ..scenes import Pendulum
 
 __all__ = ["constraint_forces", "pendulum_tension"]
 
@@ -65,7 +66,6 @@ def pendulum_tension(scene, y, mass: float = 1.0) -> np.ndarray:
     mass : float
         Bob mass (kg).
     """
-    from ..scenes import Pendulum
     if not isinstance(scene, Pendulum):
         raise TypeError("scene must be a mechpy.scenes.Pendulum")
     m = as_scalar(mass, "mass", positive=True)

