@@ -113,8 +113,10 @@ case "$job" in
     bench) exec "$vpy" -m mechpy bench "$@" ;;
     test)  # the suite; the suite against the installed sdist; the suite against
            # the ASan+UBSan build (scripts/sanitize.sh)
+           t0=$SECONDS
            "$vpy" -m pytest -q "$@"
-           [ -n "${MECHPY_SDIST_SKIP:-}" ] || sdist_pass "$@"
+           say "the suite took $((SECONDS - t0)) s"; t0=$SECONDS
+           [ -n "${MECHPY_SDIST_SKIP:-}" ] || { sdist_pass "$@"; say "the sdist pass took $((SECONDS - t0)) s"; }
            [ -n "${MECHPY_SANITIZE_SKIP:-}" ] && exit 0
            say "the test suite again, under AddressSanitizer and UndefinedBehaviorSanitizer"
            PYTHON="$vpy" exec bash scripts/sanitize.sh "$@" ;;
