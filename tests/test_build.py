@@ -16,10 +16,11 @@ def _copy_sources(dest):
 
 
 def _import_in(folder):
-    # -S: no site-packages, so no installed (or editable) mechpy can be found and
-    # the copy in folder (sys.path[0] is the folder with -c and cwd) is the one imported
-    return subprocess.run([sys.executable, "-S", "-c", "import mechpy"], cwd=folder,
-                          capture_output=True, text=True, timeout=60)
+    # -S: no site-packages, so no installed (or editable) mechpy can be found; -E: no
+    # PYTHONPATH; the copy in folder is the one imported
+    return subprocess.run([sys.executable, "-S", "-E", "-c",
+                           "import sys; sys.path.insert(0, sys.argv[1]); import mechpy",
+                           str(folder)], capture_output=True, text=True, timeout=60)
 
 
 def test_import_from_unbuilt_source_tree_says_so(tmp_path):
