@@ -32,7 +32,7 @@ if [ ! -f "$out/meson/build.ninja" ]; then
 fi
 "$meson" compile -C "$out/meson" >"$out/compile.log" 2>&1 ||
     { cat "$out/compile.log"; say "the ASan+UBSan build failed"; exit 1; }
-grep -E 'warning|error' "$out/compile.log" || true
+grep -E 'warning:|error:' "$out/compile.log" || true
 # the package: Python sources copied every run (cheap), next to the sanitized .so
 rm -rf "$out/mechpy"
 (cd mechpy && find . -type f -not -path '*/__pycache__/*' -not -name '*.so' -print0 |
