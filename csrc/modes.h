@@ -5,7 +5,7 @@
  * solved densely with LAPACK's dsygvd, or, for a chain (diagonal M,
  * tridiagonal K), by scaling to the symmetric tridiagonal matrix
  * M^{-1/2} K M^{-1/2} and calling LAPACK's dstemr (MRRR, O(n^2) for all
- * vectors).
+ * vectors) on chunks of eigenvalue indices.
  *
  * Output convention shared by both solvers: `w` (n) ascending eigenvalues
  * omega^2; `z` (n*n) holds mode k in z[k*n .. k*n + n - 1] (that is, the
@@ -31,9 +31,13 @@ int mp_modes_dense(int n, double *k, double *m, double zero_rtol, double *w, dou
 
 /* Chain problem: K tridiagonal with diagonal `kd` (n) and off-diagonal `ke`
  * (n-1), M = diag(`md`) (n).  Inputs are not modified.  Same outputs and
- * statuses as mp_modes_dense; MP_ENOTSPD when some md[i] <= 0. */
+ * statuses as mp_modes_dense; MP_ENOTSPD when some md[i] <= 0.  The pairs are
+ * computed in chunks of max(256, n/16) indices (dstemr, RANGE = 'I');
+ * `interrupt` (NULL: none) is asked between chunks and a non-OK status from
+ * it (MP_EINTR) is returned at once, w and z then undefined, nothing leaked. */
 int mp_modes_tridiag(int n, const double *kd, const double *ke, const double *md,
-                     double zero_rtol, double *w, double *z, double *w_bad);
+                     double zero_rtol, double *w, double *z, double *w_bad,
+                     int (*interrupt)(void *), void *ctx);
 
 /* The relative round-off bound 16 n eps used for zero modes and stability. */
 double mp_modes_roundoff(int n);

@@ -10,7 +10,7 @@ class                      raised when                            also an instan
 DomainError                an argument is outside its domain      ValueError
 NonFiniteError             a NaN or inf was produced              ValueError
 SingularityError           gimbal lock, a singular matrix         ValueError
-MeshError                  an open / inside-out / degenerate mesh ValueError
+MeshError                  an open, inverted or degenerate mesh   ValueError
 UnstableSystemError        a negative stiffness eigenvalue        ValueError
 NotPositiveDefiniteError   a matrix is not SPD                    numpy.linalg.LinAlgError
 StepBudgetError            max_steps ran out                      RuntimeError

@@ -15,6 +15,9 @@ Local Earth frame used by :func:`drop`, :func:`projectile` and
 points along -z.
 
 Units: SI (m, s, rad/s); latitudes in degrees.
+
+Array shapes follow the layout rule in :mod:`mechpy` (``help(mechpy)``):
+NumPy stacks: vectors (..., 3), a series at times t (len(t), 3).
 """
 from __future__ import annotations
 

@@ -10,12 +10,15 @@ centre of mass and inertia tensor about the centre of mass,
 
 and from it the inertia about any point (Steiner), principal moments and axes,
 the type of top, angular momentum ``L = I omega`` and rotational energy
-``T = omega . I omega / 2``.  Units are those of the input: mass [M], lengths
+``T = omega^T I omega / 2``.  Units are those of the input: mass [M], lengths
 [L], inertia [M L^2], angular velocity [1/T], energy [M L^2 / T^2].
 
 The numerical work (point-mass sums, Steiner's theorem with exact products,
 the symmetric 3x3 eigen-solver, mesh validation and integration, grids) runs
 in mechpy's C core.
+
+Array shapes follow the layout rule in :mod:`mechpy` (``help(mechpy)``):
+NumPy stacks: vectors (..., 3), tensors (..., 3, 3).
 """
 from __future__ import annotations
 
@@ -264,7 +267,7 @@ def angular_momentum(I, omega) -> np.ndarray:
 
 
 def kinetic_energy(I, omega) -> np.ndarray | float:
-    """Rotational kinetic energy ``T = omega . I omega / 2`` [M L^2 / T^2].
+    """Rotational kinetic energy ``T = omega^T I omega / 2`` [M L^2 / T^2].
 
     Parameters
     ----------
@@ -488,7 +491,7 @@ def solid(shape: str, mass, **dims) -> Body:
     ==============  ===========================  ===========================================
     ``sphere``      radius R                     2/5 M R^2 (all axes)
     ``shell``       radius R (thin)              2/3 M R^2 (all axes)
-    ``box``         a, b, c (full edges x, y, z) I_xx = M (b^2 + c^2)/12, cyclic
+    ``box``         edges a, b, c along x, y, z  I_xx = M (b^2 + c^2)/12, cyclic
     ``cube``        side s                       M s^2 / 6 (all axes)
     ``cylinder``    radius R, height h           I_zz = M R^2/2, I_xx = I_yy = M (3R^2 + h^2)/12
     ``tube``        radius R, inner_radius r, h  I_zz = M (R^2 + r^2)/2,
@@ -521,7 +524,7 @@ def solid(shape: str, mass, **dims) -> Body:
     --------
     >>> import mechpy as mp
     >>> cone = mp.inertia.solid("cone", 2.0, radius=1.0, height=4.0)
-    >>> cone.inertia_about([0, 0, 3.0])[0, 0]     # about the apex: 3/5 M (R^2/4 + h^2)
+    >>> float(cone.inertia_about([0, 0, 3.0])[0, 0])   # about the apex: 3/5 M (R^2/4 + h^2)
     19.5
     """
     if not isinstance(shape, str) or shape not in SHAPES:

@@ -5,11 +5,17 @@ side runs in C), a Python callable with SciPy's signature ``f(t, y, *args)``,
 or a low-level C callback ``void f(double t, const double *y, double *dydt,
 void *user_data)`` given as a ctypes function pointer, a
 ``scipy.LowLevelCallable`` or a numba ``cfunc``.
+
+Array shapes follow the layout rule in :mod:`mechpy` (``help(mechpy)``):
+states first, as SciPy's: ``Solution.y`` (n, m), ``EnsembleSolution.y`` (k, n, m).
 """
 from __future__ import annotations
 
+import contextlib
 import ctypes
 import math
+import sys
+import threading
 from typing import Any, Callable, Sequence
 
 import numpy as np
@@ -100,26 +106,28 @@ class DenseOutput:
     """Continuous solution: ``sol(t)`` gives y at any t in ``[t_min, t_max]``.
 
     Like SciPy's ``OdeSolution``: a scalar t gives shape (n,), an array of
-    times shape (n, len(t)).  Each step's interpolant is the method's own
-    (4th order for dopri5, 7th for dop853, cubic Hermite otherwise); it is
-    evaluated in C.
+    times shape (n, len(t)), times of any shape (...) shape (n, ...).  Each
+    step's interpolant is the method's own (4th order for dopri5, 7th for
+    dop853, cubic Hermite otherwise); it is evaluated in C.
     """
 
-    def __init__(self, seg_t, seg_h, seg_c):
+    def __init__(self, seg_t, seg_h, seg_c, backward=False):
+        # a backward solve keeps its segments in s = -t
         self._seg = (np.ascontiguousarray(seg_t), np.ascontiguousarray(seg_h),
                      np.ascontiguousarray(seg_c))
-        self.t_min = float(seg_t[0])
-        self.t_max = float(seg_t[-1] + seg_h[-1])
+        self._sign = -1.0 if backward else 1.0
+        ends = (self._sign * float(seg_t[0]), self._sign * float(seg_t[-1] + seg_h[-1]))
+        self.t_min, self.t_max = min(ends), max(ends)
         self.n_segments = len(seg_t)
 
     def __call__(self, t):
         t = np.asarray(t, dtype=np.float64)
         scalar = t.ndim == 0
-        tq = np.ascontiguousarray(t.reshape(-1))
+        tq = np.ascontiguousarray(t.reshape(-1) * self._sign)
         if not np.all(np.isfinite(tq)):
             raise ValueError("t must be finite")
         out = _core.ode_dense_eval(*self._seg, tq)
-        return out[0] if scalar else out.T
+        return out[0] if scalar else out.T.reshape(out.shape[1:] + t.shape)
 
     def __repr__(self):
         return f"DenseOutput(t_min={self.t_min}, t_max={self.t_max}, segments={self.n_segments})"
@@ -127,9 +135,31 @@ class DenseOutput:
 
 def methods() -> list[dict]:
     """Every integration method: name, order, adaptive, implicit, symplectic,
-    needs_jacobian, dense_output (the order of its interpolant)."""
+    needs_jacobian, dense_output (the order of its interpolant).
+
+    GSL's steppers have no interpolant of their own: the one-step rows of
+    order >= 4 use a quintic Hermite interpolant (the midpoint from a half
+    step, built only on steps that need output; their steps are then kept to
+    the length at which it meets the tolerance), the others the cubic Hermite
+    interpolant.  SciPy's method names are accepted as aliases (see
+    :data:`SCIPY_METHODS`).
+
+    Known limitations: ``"gsl:bsimp"`` (GSL's Bader-Deuflhard stepper)
+    underestimates its error on components that sit a few tens of atol above
+    zero in a stiff system: on the test set's E5 it ends 150% off at rtol 1e-6
+    with status 0 (6e-2 at 1e-8); it needs rtol <= 1e-10 there (1.1e-3, the
+    atol-limited error of every method), or use ``"radau"``.  ``"gsl:msbdf"``
+    (and ``"BDF"``) is the least accurate stiff row per rtol: 2-10x SciPy's
+    BDF error at the same tolerances."""
     return _core.ode_methods()
 
+
+#: SciPy's ``solve_ivp`` method names and the mechpy method each one runs.
+#: RK23 has no counterpart (use ``"dopri5"``); ``"BDF"`` runs GSL's
+#: variable-order BDF, ``"LSODA"`` the stiffness-switching ``"auto"``
+#: (dop853 and radau rather than Adams and BDF).
+SCIPY_METHODS = {"RK45": "dopri5", "DOP853": "dop853", "Radau": "radau", "BDF": "gsl:msbdf",
+                 "LSODA": "auto"}
 
 _METHOD_NAMES = None
 
@@ -139,6 +169,54 @@ def _method_names():
     if _METHOD_NAMES is None:
         _METHOD_NAMES = {m["name"]: m for m in methods()}
     return _METHOD_NAMES
+
+
+def _python_backed(obj) -> bool:
+    """True for a ctypes callback made from a Python function (directly or
+    inside a scipy.LowLevelCallable): ctypes swallows its exceptions."""
+    if isinstance(obj, tuple) and type(obj).__name__ == "LowLevelCallable":
+        obj = tuple.__getitem__(obj, 1)
+    if not isinstance(obj, ctypes._CFuncPtr):
+        return False
+    objs = getattr(obj, "_objects", None)
+    return isinstance(objs, dict) and any(type(v).__name__ == "CThunkObject"
+                                          for v in objs.values())
+
+
+@contextlib.contextmanager
+def _catch_unraisable(caught: list):
+    """Collect into ``caught`` the exceptions ctypes would print and drop
+    (sys.unraisablehook) in this thread while the solve runs; the C core
+    checks the list after every call of the system and raises the first one
+    again."""
+    me = threading.get_ident()
+    prev = sys.unraisablehook
+
+    def hook(u):
+        if threading.get_ident() == me:
+            if not caught:
+                exc = u.exc_value if u.exc_value is not None else u.exc_type()
+                if u.exc_traceback is not None and exc.__traceback__ is None:
+                    exc = exc.with_traceback(u.exc_traceback)
+                caught.append(exc)
+        else:
+            prev(u)
+
+    sys.unraisablehook = hook
+    try:
+        yield caught
+    finally:
+        sys.unraisablehook = prev
+
+
+def _watch_list(system):
+    """An empty list to collect a ctypes callback's swallowed exceptions in,
+    or None when the system has no callback written in Python."""
+    if isinstance(system, SecondOrder):
+        obj = system.accel
+    else:  # a scene carries its torque callback (RigidBody) as _torque_fn
+        obj = getattr(system, "_torque_fn", system)
+    return [] if _python_backed(obj) else None
 
 
 def _c_address(obj):
@@ -165,7 +243,10 @@ def _c_address(obj):
         if obj.argtypes is not None and len(obj.argtypes) != 4:
             raise TypeError("a C callback must have the signature "
                             "void f(double t, const double *y, double *dydt, void *user_data)")
-        return ctypes.cast(obj, ctypes.c_void_p).value, None
+        addr = ctypes.cast(obj, ctypes.c_void_p).value
+        if not addr:
+            raise ValueError("the C callback is a NULL function pointer")
+        return addr, None
     return None
 
 
@@ -212,6 +293,8 @@ def _events_spec(events):
         if not callable(e):
             raise TypeError(f"events[{i}] must be callable")
         t = getattr(e, "terminal", False)
+        if t is None:  # SciPy treats None as False
+            t = False
         if isinstance(t, (bool, np.bool_)):
             term.append(1 if t else 0)
         else:
@@ -233,15 +316,20 @@ def _common(method, t_span, rtol, atol, n, h, first_step, max_step, max_steps):
     if not isinstance(method, str):
         raise TypeError(f"method must be a string, got {type(method).__name__}")
     names = _method_names()
+    method = SCIPY_METHODS.get(method, method)
     if method not in names:
-        raise ValueError(f"unknown method {method!r}; choose one of {sorted(names)}")
+        raise ValueError(f"unknown method {method!r}; choose one of {sorted(names)} "
+                         f"or SciPy's {sorted(SCIPY_METHODS)}")
     info = names[method]
     if isinstance(t_span, (str, bytes)) or not hasattr(t_span, "__len__") or len(t_span) != 2:
         raise ValueError("t_span must be a pair (t0, tf)")
     t0 = as_scalar(t_span[0], "t_span[0]")
     tf = as_scalar(t_span[1], "t_span[1]")
-    if not tf > t0:
-        raise ValueError(f"t_span must be increasing with t0 < tf, got ({t0}, {tf})")
+    if t0 == tf:
+        raise ValueError(f"t_span must have t0 != tf, got ({t0}, {tf})")
+    if tf < t0 and ((info["symplectic"] and not info["implicit"]) or method.startswith("rigid:")):
+        raise ValueError(f"method {method!r} integrates forwards in time only (t0 < tf); "
+                         "for a backward solve use dop853, radau, gauss4, ...")
     rtol = as_scalar(rtol, "rtol")
     if not rtol > 0:
         raise ValueError(f"rtol must be positive, got {rtol}")
@@ -258,9 +346,15 @@ def _common(method, t_span, rtol, atol, n, h, first_step, max_step, max_steps):
         if h is None:
             raise ValueError(f"method {method!r} has a fixed step: give h")
         hh = as_scalar(h, "h", positive=True)
+        tm = max(abs(t0), abs(tf))
+        if tm + hh == tm:
+            raise ValueError(f"h = {hh!r} is below the spacing of floats near t = {tm!r}: "
+                             "t would never advance")
     elif h is not None:
         raise ValueError(f"method {method!r} is adaptive: use first_step/max_step, not h")
     fs = 0.0 if first_step is None else as_scalar(first_step, "first_step", positive=True)
+    if fs > abs(tf - t0):
+        raise ValueError("`first_step` exceeds bounds.")  # SciPy's message
     ms = as_scalar(max_step, "max_step", finite=False)
     if not ms > 0 or math.isnan(ms):
         raise ValueError(f"max_step must be positive, got {ms}")
@@ -270,11 +364,24 @@ def _common(method, t_span, rtol, atol, n, h, first_step, max_step, max_steps):
 
 def _t_eval(t_eval, t0, tf):
     tev = as_array(t_eval, "t_eval", ndim=1, allow_empty=True)
-    if tev.size and (tev[0] < t0 or tev[-1] > tf):
+    lo, hi = min(t0, tf), max(t0, tf)
+    if tev.size and (tev.min() < lo or tev.max() > hi):
         raise ValueError("t_eval must lie within t_span")
-    if np.any(np.diff(tev) <= 0):
+    d = np.diff(tev)
+    if tf > t0 and np.any(d <= 0):
         raise ValueError("t_eval must be strictly increasing")
+    if tf < t0 and np.any(d >= 0):
+        raise ValueError("t_eval must be strictly decreasing (t_span is decreasing)")
     return tev
+
+
+def _rigid_split_check(method, system):
+    """The rigid-body splitting methods run on RigidBody scenes only."""
+    if method.startswith("rigid:"):
+        from .scenes import RigidBody
+        if not isinstance(system, RigidBody):
+            raise ValueError(f"method {method!r} integrates a RigidBody scene (torque-free or "
+                             f"a constant torque), not {type(system).__name__}")
 
 
 def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
@@ -293,7 +400,11 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
         void *user_data)`` as a ctypes function pointer, a
         ``scipy.LowLevelCallable`` or a numba ``cfunc``.
     t_span : (t0, tf)
-        Interval of integration, ``t0 < tf``.
+        Interval of integration; ``tf < t0`` integrates backwards (as in
+        SciPy: ``t``, ``t_eval`` and ``t_events`` then decrease).  The
+        right-hand side is never evaluated outside the interval, except by
+        ``yoshida4``/``yoshida6``, whose negative sub-steps sample it up to
+        0.35 h (0.16 h) beyond a step's ends.
     y0 : array_like, shape (n,)
         Initial state.
     method : str
@@ -304,12 +415,15 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
         (symplectic, for q'' = a(t, q): an undamped scene or
         :class:`SecondOrder`) and ``"gauss4"`` (implicit, symplectic), which
         need ``h``; GSL's steppers ``"gsl:rkf45"``, ``"gsl:rk8pd"``,
-        ``"gsl:msadams"``, ``"gsl:msbdf"``, ``"gsl:bsimp"``, ...
+        ``"gsl:msadams"``, ``"gsl:msbdf"``, ``"gsl:bsimp"``, ...  SciPy's
+        names run their nearest counterparts: ``"RK45"`` dopri5, ``"DOP853"``
+        dop853, ``"Radau"`` radau, ``"BDF"`` gsl:msbdf (GSL's variable-order
+        BDF), ``"LSODA"`` auto (see :data:`SCIPY_METHODS`).
     rtol, atol : float or array_like
         Relative and absolute tolerances: the local error estimate e of each
         step satisfies ``rms(e / (atol + rtol |y|)) <= 1``.
     t_eval : array_like, optional
-        Increasing times in ``t_span`` at which to store the solution, filled
+        Times in ``t_span``, ordered along the integration, at which to store the solution, filled
         from each step's interpolant (the steps are never forced onto them).
     dense_output : bool
         Return a continuous solution in ``sol``.
@@ -322,13 +436,14 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
     h : float
         Step of fixed-step methods.
     first_step, max_step : float
-        Initial step (default: Hairer's estimate) and largest step.
+        Initial step (default: Hairer's estimate; at most ``|tf - t0|``) and
+        largest step.
     max_steps : int
         Budget of attempted steps; when it runs out the solve ends with
         ``status = -1``.
-    jac : callable, optional
-        ``jac(t, y, *args)`` -> (n, n) Jacobian for methods that use one
-        (scenes bring their own analytic Jacobian).
+    jac : callable or array_like (n, n), optional
+        ``jac(t, y, *args)`` -> (n, n) Jacobian, or a constant matrix, for
+        methods that use one (scenes bring their own analytic Jacobian).
 
     Returns
     -------
@@ -340,9 +455,12 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
     Notes
     -----
     Units are those of the system: t in the unit its rates are given in.
-    An exception raised by a Python callable propagates with its traceback;
-    a NaN or inf from the right-hand side raises ``NonFiniteError``; Ctrl-C
-    raises ``KeyboardInterrupt``.  Integration failures (budget exhausted,
+    An exception raised by a Python callable (or a ctypes callback written in
+    Python) propagates with its traceback; Ctrl-C raises
+    ``KeyboardInterrupt``.  A NaN or inf in a trial stage rejects the step
+    (h shrinks tenfold); at an accepted state, or when no step avoids it, it
+    raises ``NonFiniteError`` naming the component; a C callback's outputs
+    are NaN until it writes them.  Integration failures (budget exhausted,
     step below round-off) are reported in ``status``/``message`` as SciPy does.
     """
     y0a = as_array(y0, "y0", ndim=1)
@@ -354,7 +472,11 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
         raise TypeError("dense_output must be a bool")
     args = _as_args(args)
     if jac is not None and not callable(jac):
-        raise TypeError("jac must be callable")
+        if isinstance(jac, (str, bytes)):
+            raise TypeError("jac must be callable or a constant (n, n) array")
+        jac = as_array(jac, "jac", shape=(n, n))
+    if method[0] == "r" and method.startswith("rigid:"):
+        _rigid_split_check(method, system)
     spec, dim = _system_spec(system, args, method)
     if dim is not None and dim != n:
         raise ValueError(f"y0 must have {dim} values for {type(system).__name__}, got {n}")
@@ -363,8 +485,15 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
         check(t0, y0a)
     evs, term, dirs = _events_spec(events)
 
-    r = _core.ode_solve(method, spec, t0, tf, y0a, rtol, atol_a, tev, bool(dense_output), evs,
-                        term, dirs, args, jac, hh, fs, ms, budget)
+    watch = _watch_list(system)
+    if watch is None:
+        r = _core.ode_solve(method, spec, t0, tf, y0a, rtol, atol_a, tev, bool(dense_output),
+                            evs, term, dirs, args, jac, hh, fs, ms, budget)
+    else:
+        with _catch_unraisable(watch):
+            r = _core.ode_solve(method, spec, t0, tf, y0a, rtol, atol_a, tev,
+                                bool(dense_output), evs, term, dirs, args, jac, hh, fs, ms,
+                                budget, watch)
     st = r["status"]
     if st == 0:
         status = 1 if r["terminated"] else 0
@@ -381,7 +510,7 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
                         "'gsl:msbdf'.")
     sol = None
     if dense_output and r["dense"] is not None:
-        sol = DenseOutput(*r["dense"])
+        sol = DenseOutput(*r["dense"], backward=bool(r["backward"]))
     t_events = y_events = None
     if evs is not None:
         t_events = [te for te, _ in r["events"]]
@@ -417,6 +546,38 @@ def _ensemble_params(system, params, k):
     return p
 
 
+class _TqdmProgress:
+    """A ``tqdm.auto`` bar fed by the C ensemble's (done, total) reports."""
+
+    def __init__(self, tqdm, total: int):
+        self.bar = tqdm(total=total, desc="solve_many", unit="traj")
+
+    def report(self, done: int, total: int) -> None:
+        # a broken display never costs the results: warn once, stop drawing
+        if self.bar is None:
+            return
+        try:
+            self.bar.update(done - self.bar.n)
+        except Exception as exc:
+            import warnings
+            warnings.warn(f"solve_many: progress bar failed ({exc!r}); continuing without it",
+                          RuntimeWarning, stacklevel=2)
+            self.bar = None
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+
+
+def _progress_bar(k: int):
+    """A tqdm progress bar for k trajectories, or None when tqdm is not installed."""
+    try:
+        from tqdm.auto import tqdm
+    except ImportError:
+        return None
+    return _TqdmProgress(tqdm, k)
+
+
 def solve_many(system, t_span: Sequence[float], y0s, *, params=None, t_eval=None,
                method: str = "dop853", rtol: float = 1e-8, atol=1e-10,
                threads: int | None = None, progress: bool = False, args: tuple = (),
@@ -428,8 +589,10 @@ def solve_many(system, t_span: Sequence[float], y0s, *, params=None, t_eval=None
     ----------
     system : Scene, callable or C callback
         As for :func:`solve`.  Scenes and C callbacks run with the GIL released
-        on ``threads`` threads; a Python callable runs on one thread.
+        on ``threads`` threads; a Python callable (or a ctypes callback
+        written in Python) runs on one thread.
     t_span : (t0, tf)
+        ``tf < t0`` integrates backwards, as in :func:`solve`.
     y0s : array_like, shape (k, n)
         Initial states.
     params : array_like (k, p) or dict, optional
@@ -443,7 +606,8 @@ def solve_many(system, t_span: Sequence[float], y0s, *, params=None, t_eval=None
     threads : int, optional
         Threads to use (default: all cores).
     progress : bool
-        Print a progress line to stderr.
+        Show progress as trajectories finish: a ``tqdm.auto`` bar when tqdm
+        is installed (a widget in notebooks), else a line on stderr.
 
     Returns
     -------
@@ -467,6 +631,8 @@ def solve_many(system, t_span: Sequence[float], y0s, *, params=None, t_eval=None
         method, t_span, rtol, atol, n, h, first_step, max_step, max_steps)
     tev = np.array([tf]) if t_eval is None else _t_eval(t_eval, t0, tf)
     args = _as_args(args)
+    if method[0] == "r" and method.startswith("rigid:"):
+        _rigid_split_check(method, system)
     spec, dim = _system_spec(system, args, method)
     if dim is not None and dim != n:
         raise ValueError(f"y0s must have {dim} columns for {type(system).__name__}, got {n}")
@@ -480,7 +646,17 @@ def solve_many(system, t_span: Sequence[float], y0s, *, params=None, t_eval=None
         nthreads = as_int(threads, "threads", minimum=1)
     if not isinstance(progress, (bool, np.bool_)):
         raise TypeError("progress must be a bool")
-    yout, st, nfev = _core.ode_solve_many(method, spec, t0, tf, Y0, rtol, atol_a, tev, par, args,
-                                          hh, fs, ms, budget, int(nthreads), bool(progress))
+    watch = _watch_list(system)
+    bar = _progress_bar(k) if progress else None
+    try:
+        with _catch_unraisable(watch) if watch is not None else contextlib.nullcontext():
+            yout, st, nfev = _core.ode_solve_many(
+                method, spec, t0, tf, Y0, rtol, atol_a, tev, par, args, hh, fs, ms, budget,
+                int(nthreads), bool(progress) if bar is None else bar.report, watch)
+        if bar is not None:
+            bar.report(k, k)    # the C side reports from one thread: it may miss the last
+    finally:
+        if bar is not None:
+            bar.close()
     status = np.where(st == 0, 0, np.where(st == _core.STATUS_ENONFINITE, -2, -1))
     return EnsembleSolution(t=tev, y=yout, success=status == 0, status=status, nfev=nfev)

@@ -8,6 +8,9 @@ systems and estimates the largest Lyapunov exponent.
 
 ``system`` is a scene from :mod:`mechpy.scenes` (evaluated in C) or a Python
 callable ``f(t, y)``.  Units are those of the system.
+
+Array shapes follow the layout rule in :mod:`mechpy` (``help(mechpy)``):
+section points (n, dim), a bifurcation diagram (len(values), n, dim).
 """
 from __future__ import annotations
 

@@ -1,4 +1,8 @@
-"""Plots (matplotlib, an optional dependency: ``pip install mechpy[plot]``)."""
+"""Plots (matplotlib, an optional dependency: ``pip install mechpy[plot]``).
+
+Array shapes follow the layout rule in :mod:`mechpy` (``help(mechpy)``):
+a path in space as ``Solution.y`` gives it, (3, m).
+"""
 from __future__ import annotations
 
 import numpy as np

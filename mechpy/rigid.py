@@ -4,8 +4,11 @@ The scenes are :class:`mechpy.scenes.RigidBody` (Euler's equations, an
 optional torque, constant in the body frame or a C callback, and quaternion
 orientation) and :class:`mechpy.scenes.HeavyTop`; the geometric methods
 ``"rigid:split"`` and ``"rigid:split4"`` of :func:`mechpy.solve` integrate a
-torque-free or constant-torque ``RigidBody`` keeping |L| and |q| to round-off
+torque-free or constant-torque ``RigidBody`` keeping ``|L|`` and ``|q|`` to round-off
 (about 1e-15 relative after 10^6 steps).
+
+Array shapes follow the layout rule in :mod:`mechpy` (``help(mechpy)``):
+a series at times t is (len(t), 3).
 """
 from __future__ import annotations
 

@@ -22,6 +22,9 @@ stands for the matrix that :func:`matrix_from_quat` makes of it.
 Every function is vectorised over leading batch axes and runs its loop in C
 with the GIL released.  Angles are in radians, rates and angular velocities
 in rad/s (any consistent time unit).
+
+Array shapes follow the layout rule in :mod:`mechpy` (``help(mechpy)``):
+NumPy stacks: angles (..., 3), matrices (..., 3, 3), quaternions (..., 4).
 """
 from __future__ import annotations
 
@@ -38,7 +41,7 @@ __all__ = [
     "euler_matrix", "euler_angles", "angular_velocity", "euler_rates",
     "quat_from_matrix", "matrix_from_quat", "quat_multiply", "quat_normalize",
     "quat_from_euler", "euler_from_quat", "GimbalLockWarning", "SEQUENCES",
-    "ORTH_TOL", "LOCK_TOL", "RATES_LOCK_TOL",
+    "ORTH_TOL", "LOCK_TOL", "RATES_LOCK_TOL", "to_scipy", "from_scipy",
 ]
 
 #: Every accepted sequence: 12 intrinsic (upper case), then 12 extrinsic.
@@ -54,7 +57,7 @@ ORTH_TOL = 1e-6
 #: 0, lock only where the first and third angles are indeterminate in float64
 #: (the sine of that distance below the smallest normal number, 2.2e-308).
 LOCK_TOL = 0.0
-#: Default bound on |det J| below which :func:`euler_rates` raises
+#: Default bound on ``|det J|`` below which :func:`euler_rates` raises
 #: :class:`mechpy.SingularityError` (the rates grow as 1 / det J).
 RATES_LOCK_TOL = 1e-12
 
@@ -504,3 +507,108 @@ def euler_rates(angles, omega, seq: str = "ZXZ", frame: str = "body", *,
     a, w, shape = _pair(angles, omega, "omega")
     out = _core.rotation_euler_rates(a, w, seq, space, _tol(lock_tol, "lock_tol"))
     return out.reshape(shape + (3,))
+
+
+def _scipy_rotation():
+    """SciPy's ``Rotation`` class, or an ImportError that says what to install."""
+    try:
+        from scipy.spatial.transform import Rotation
+    except ImportError as exc:  # pragma: no cover - SciPy is a test dependency
+        raise ImportError("to_scipy and from_scipy need SciPy (pip install scipy)") from exc
+    return Rotation
+
+
+def to_scipy(R, *, passive: bool = False, orth_tol: float = ORTH_TOL):
+    r"""A :class:`scipy.spatial.transform.Rotation` of rotation matrices.
+
+    Parameters
+    ----------
+    R : array_like, shape (..., 3, 3)
+        Rotation matrices (more than one batch axis needs SciPy >= 1.17): active ones (``passive=False``, as
+        :func:`matrix_from_quat` and ``euler_matrix(..., passive=False)`` give
+        them and as SciPy's ``as_matrix`` reads them), or coordinate
+        transformations :math:`\lambda = R^T` (``passive=True``, as the default
+        ``euler_matrix`` gives them).  ``max|R R^T - I| <= orth_tol`` and
+        ``det R > 0`` are required (:class:`mechpy.DomainError` otherwise):
+        the matrix is checked, never silently orthogonalised.
+    passive : bool
+        Whether ``R`` is the passive matrix (default False).
+    orth_tol : float
+        Default :data:`ORTH_TOL`.
+
+    Returns
+    -------
+    scipy.spatial.transform.Rotation
+        Single for ``R`` of shape (3, 3), of shape ``R.shape[:-2]`` otherwise; built from
+        :func:`quat_from_matrix`, so ``to_scipy(R).as_matrix()`` is ``R`` (or
+        ``R.T`` when ``passive``) to round-off.
+
+    See Also
+    --------
+    from_scipy : the way back.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import mechpy as mp
+    >>> lam = mp.rotation.euler_matrix(0.3, 0.2, 0.1)          # textbook ZXZ, passive
+    >>> rot = mp.rotation.to_scipy(lam, passive=True)
+    >>> np.allclose(rot.as_euler("ZXZ"), [0.3, 0.2, 0.1])
+    True
+    """
+    Rotation = _scipy_rotation()
+    passive = _flag(passive, "passive")
+    R = _matrices(R)
+    q = quat_from_matrix(R, orth_tol=orth_tol)
+    if passive:
+        q = q * np.array([-1.0, -1.0, -1.0, 1.0])   # the inverse rotation: lambda^T
+    try:
+        return Rotation.from_quat(q)
+    except ValueError as exc:
+        if q.ndim > 2:   # SciPy before 1.17: one batch axis at most
+            raise ValueError(f"R of shape {R.shape}: this SciPy's Rotation takes (3, 3) or "
+                             f"(k, 3, 3) only") from exc
+        raise
+
+
+def from_scipy(rot, *, passive: bool = False) -> np.ndarray:
+    r"""Rotation matrices of a :class:`scipy.spatial.transform.Rotation`.
+
+    Parameters
+    ----------
+    rot : scipy.spatial.transform.Rotation
+        A single rotation or a stack of them.
+    passive : bool
+        False (default): the active matrices ``rot.as_matrix()``; True: their
+        transposes, the coordinate transformations :math:`\lambda` that the
+        default :func:`euler_matrix` uses.
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+        Rotation matrices (dimensionless), float64, C-contiguous; the batch
+        axes are ``rot``'s shape.
+
+    See Also
+    --------
+    to_scipy : the way there.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import mechpy as mp
+    >>> from scipy.spatial.transform import Rotation
+    >>> rot = Rotation.from_euler("ZXZ", [0.3, 0.2, 0.1])
+    >>> np.allclose(mp.rotation.from_scipy(rot, passive=True),
+    ...             mp.rotation.euler_matrix(0.3, 0.2, 0.1))
+    True
+    """
+    Rotation = _scipy_rotation()
+    if not isinstance(rot, Rotation):
+        raise TypeError(f"rot must be a scipy.spatial.transform.Rotation, got "
+                        f"{type(rot).__name__}")
+    passive = _flag(passive, "passive")
+    m = np.asarray(rot.as_matrix(), dtype=np.float64)
+    if passive:
+        m = np.swapaxes(m, -1, -2)
+    return np.ascontiguousarray(m)

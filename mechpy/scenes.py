@@ -7,6 +7,9 @@ binds the cheapest right-hand side for the parameters given.
 Every scene has ``dim``, ``params`` (a dict), ``rhs(t, y)``,
 ``jacobian(t, y)``, ``energy(y)`` (vectorised over trailing axes: ``y`` of
 shape (dim, ...) as in ``Solution.y``), ``replace(**changes)``, and pickles.
+
+Array shapes follow the layout rule in :mod:`mechpy` (``help(mechpy)``):
+functions of states take y (dim, ...) and return (dim, ...), (dim, dim, ...) or (...).
 """
 from __future__ import annotations
 
@@ -88,13 +91,16 @@ class Scene:
                 raise ValueError(f"params[{name!r}] must have shape ({k},), got {c.shape}")
         return np.ascontiguousarray(np.stack(cols, axis=1))
 
-    def _eval(self, what, t, y):
+    def _state_rows(self, t, y):
+        """Check (t, y) with y of shape (dim, ...); -> (t, rows (m, dim), y)."""
         y = as_array(y, "y", min_ndim=1)
         if y.shape[0] != self._dim:
             raise ValueError(f"y must have {self._dim} components along its first axis, "
                              f"got shape {y.shape}")
-        t = as_scalar(t, "t")
-        flat = np.ascontiguousarray(y.reshape(self._dim, -1).T)
+        return as_scalar(t, "t"), np.ascontiguousarray(y.reshape(self._dim, -1).T), y
+
+    def _eval(self, what, t, y):
+        t, flat, y = self._state_rows(t, y)
         out = _core.scene_eval(self._model, self._vector(), what, t, flat)
         rest = y.shape[1:]
         if what == "energy":
@@ -136,17 +142,6 @@ def _rebuild(cls, params):
     return cls(**params)
 
 
-def _ellipk_from_complement(kc):
-    """Complete elliptic integral K for complementary modulus kc = sqrt(1 - k^2),
-    by the arithmetic-geometric mean (accurate near k = 1, where 1 - k^2 cancels)."""
-    a, b = 1.0, abs(kc)
-    for _ in range(60):
-        if abs(a - b) <= 1e-16 * a:
-            break
-        a, b = 0.5 * (a + b), np.sqrt(a * b)
-    return np.pi / (2.0 * a)
-
-
 class Pendulum(Scene):
     r"""The plane pendulum, optionally damped and driven.
 
@@ -175,7 +170,7 @@ class Pendulum(Scene):
         if not 0 < abs(a) < np.pi:
             raise ValueError("amplitude must be in (0, pi) in magnitude")
         p = self._params
-        return 4.0 * np.sqrt(p["length"] / p["g"]) * _ellipk_from_complement(np.cos(0.5 * a))
+        return 4.0 * np.sqrt(p["length"] / p["g"]) * _core.ellipk_complement(np.cos(0.5 * a))
 
 
 class VanDerPol(Scene):
@@ -316,7 +311,7 @@ class RigidBody(Scene):
     :func:`mechpy.solve_many`).  ``energy`` is the rotational kinetic energy
     :math:`T = \tfrac12\sum_i I_i\omega_i^2` (J).  The geometric methods
     ``"rigid:split"`` (order 2) and ``"rigid:split4"`` (order 4) of
-    :func:`mechpy.solve` keep |L| and |q| to round-off; they take a constant
+    :func:`mechpy.solve` keep ``|L|`` and ``|q|`` to round-off; they take a constant
     torque, not a callback.
     """
 

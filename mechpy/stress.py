@@ -4,6 +4,9 @@
 (..., 3, 3); a non-symmetric input is an error.  Units are those of the input
 (Pa = N/m^2 in SI).  The principal stresses come from the same symmetric 3x3
 eigen-solver (cyclic Jacobi, in C) as the principal axes of inertia.
+
+Array shapes follow the layout rule in :mod:`mechpy` (``help(mechpy)``):
+NumPy stacks: tensors (..., 3, 3), vectors (..., 3).
 """
 from __future__ import annotations
 

@@ -107,6 +107,31 @@ sdist_pass() {
         --rootdir=. "$@")
 }
 
+# 3b. The docs job ------------------------------------------------------------
+#   bash scripts/dev.sh docs     # set up (with the docs extra), then: the site, built with
+#                                #   warnings as errors, into docs/_build/html (index.html)
+if [ "$job" = docs ]; then
+    # formulas render offline with Debian's MathJax, when it can be installed
+    if command -v dpkg-query >/dev/null 2>&1 &&
+       ! dpkg-query -W -f='${Status}' libjs-mathjax 2>/dev/null | grep -q 'install ok installed'; then
+        if [ "$(id -u)" = 0 ]; then sudo=""; else sudo="sudo"; fi
+        say "installing Debian's libjs-mathjax (formulas without a network)"
+        DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq libjs-mathjax >/dev/null 2>&1 ||
+            say "libjs-mathjax not installed: the site loads MathJax from its CDN"
+    fi
+    reqs=$(sed -n '/^docs = \[/,/^\]/p' pyproject.toml | grep -o '"[^"]*"' | tr -d '"')
+    dstamp=$(printf '%s\n' "$reqs" | sha256sum | cut -c1-16)
+    if [ "$(cat .venv/.mechpy-docs-stamp 2>/dev/null)" != "$dstamp" ]; then
+        say "installing the docs extra into .venv"
+        # shellcheck disable=SC2086  # one requirement a word
+        "$vpy" -m pip install -q $reqs
+        echo "$dstamp" > .venv/.mechpy-docs-stamp
+    fi
+    "$vpy" -m sphinx -W --keep-going -b html docs docs/_build/html "$@"
+    say "the site is in docs/_build/html/index.html"
+    exit 0
+fi
+
 # 4. The job -----------------------------------------------------------------
 case "$job" in
     tour)  exec "$vpy" -m mechpy tour "$@" ;;

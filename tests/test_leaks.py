@@ -104,6 +104,8 @@ def _cases():
         "solve_many compiled params": lambda: mp.solve_many(
             CP, (0, 0.5), np.ones((3, 2)), params={"m": [1.0, 2.0, 3.0]}, threads=2),
         "methods": mp.methods,
+        "pendulum period": lambda: P.period(2.0),
+        "elliptic K out of its domain": lambda: mp._core.ellipk_complement(-1.0),
         "scene": lambda: (P.rhs(0.0, [1.0, 0.0]), P.jacobian(0.0, [1.0, 0.0]),
                           P.energy([1.0, 0.0]), mp.scenes.VanDerPol(mu=2.0)),
         "point masses": lambda: mp.inertia.point_masses([1.0, 2.0], [[1, 0, 0], [0, 1, 0]]),

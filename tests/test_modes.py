@@ -461,20 +461,62 @@ def test_random_chains_paths_and_scipy_agree(N, ends, seed):
      "md = np.linspace(1.0, 2.0, n)", "[c.modes_tridiag(kd, ke, md) for _ in range(5)]"),
     ("K, M = mp.modes.chain(6000, sparse=True)",
      "[mp.modes.normal_modes(K, M) for _ in range(5)]"),
-    ("rng = np.random.default_rng(0)\nA = rng.normal(size=(1500, 1500))\nK = A @ A.T\n"
-     "M = np.eye(1500) + 0.1 * np.diag(rng.uniform(size=1500))",
-     "[mp.modes.normal_modes(K, M, method='dense') for _ in range(5)]"),
+    # the dense solve (dsygvd) runs in the calling thread: see test_dense_interrupt_exits
 ])
 def test_ctrl_c_in_the_eigensolvers_is_prompt(setup, call):
-    # was 35 s late for a long chain: the LAPACK call runs in a worker thread and the
-    # caller answers SIGINT within 50 ms; the worker finishes and frees in the background
+    # was 35 s late for a long chain: dstemr now runs in chunks of indices in the
+    # calling thread and Ctrl-C is asked for between chunks
     from sigint import interrupt_delay
     dt = interrupt_delay(setup, call, delay=0.5)
     assert dt < 1.0, f"KeyboardInterrupt {dt} s after SIGINT"     # measured < 0.06 s
 
 
+def test_dense_interrupt_exits():
+    """Regression: the dense solve ran in an abandoned worker thread after Ctrl-C and
+    OpenBLAS's exit-time shutdown then waited forever for its pool (4 hangs in 6 runs).
+    It now runs in the calling thread: Ctrl-C arrives when the current solve ends
+    (one n = 1500 solve: about 1 s here) and the interpreter exits."""
+    from sigint import interrupt_delay
+    setup = ("rng = np.random.default_rng(0)\nA = rng.normal(size=(1500, 1500))\n"
+             "K = A @ A.T\nM = np.eye(1500) + 0.1 * np.diag(rng.uniform(size=1500))")
+    dt = interrupt_delay(setup, "[mp.modes.normal_modes(K, M, method='dense') for _ in "
+                         "range(50)]", delay=0.3, timeout=60.0)
+    assert dt < 20.0, f"KeyboardInterrupt {dt} s after SIGINT"   # one solve: ~1-3 s
+
+
+def test_chain_interrupt_exits():
+    """Regression: the chain solve ran in a worker thread abandoned on Ctrl-C, and the
+    process crashed (exit -11) when it exited with the worker still in dstemr.  The
+    chunks now run in the calling thread: the child prints and exits with status 0."""
+    from sigint import interrupt_delay
+    setup = "K, M = mp.modes.chain(6000, masses=np.linspace(1.0, 2.0, 6000), sparse=True)"
+    dt = interrupt_delay(setup, "[mp.modes.normal_modes(K, M) for _ in range(5)]",
+                         delay=0.5, timeout=120.0)
+    assert dt < 1.0, f"KeyboardInterrupt {dt} s after SIGINT"
+
+
+def test_chunked_chain_solve_equals_one_call():
+    # n = 1500 runs dstemr in 6 chunks of 256 indices (RANGE = 'I'); SciPy's
+    # eigh_tridiagonal calls dstemr once for the whole spectrum
+    rng = np.random.default_rng(7)
+    n = 1500
+    md = rng.uniform(0.5, 2.0, n)
+    kk = rng.uniform(0.5, 2.0, n + 1)
+    kd, ke = kk[:-1] + kk[1:], -kk[1:-1]
+    w, Z = mp._core.modes_tridiag(kd, ke, md)
+    s = 1.0 / np.sqrt(md)
+    w1, U = sl.eigh_tridiagonal(kd * s * s, ke * s[:-1] * s[1:], lapack_driver="stemr")
+    V = (U * s[:, None]).T
+    assert np.max(np.abs(w - w1)) <= 1e-12 * np.max(w1)          # measured 3e-14 (n = 6000)
+    sg = np.sign(np.sum(V * Z, axis=1))
+    assert np.max(np.abs(Z - sg[:, None] * V)) < 1e-9             # measured 4e-11 (n = 6000)
+    G = (Z * md) @ Z.T
+    assert np.max(np.abs(G - np.eye(n))) < 1e-10                   # measured 2e-12 (n = 6000)
+    check_sign_rule(Z.T)
+
+
 def test_results_after_an_interrupted_solve_are_unchanged():
-    # the same call in one process after an abandoned solve gives the fresh result
+    # the same call in one process after an interrupted solve gives the fresh result
     import subprocess
     import sys
     code = """

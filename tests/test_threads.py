@@ -6,6 +6,7 @@ Free-threaded CPython (no GIL) is not tested and not declared supported.
 from __future__ import annotations
 
 import random
+import sys
 import threading
 import time
 from concurrent.futures import ThreadPoolExecutor
@@ -61,7 +62,7 @@ LONG = {
     "ode_solve": lambda: mp.solve(mp.scenes.Kepler(), (0, 4000.0),
                                   mp.scenes.Kepler().initial_state(0.6), rtol=1e-12),
     "ode_solve_many": lambda: mp.solve_many(mp.scenes.Pendulum(), (0, 50.0),
-                                            np.c_[np.linspace(0.1, 3, 100), np.zeros(100)],
+                                            np.c_[np.linspace(0.1, 3, 400), np.zeros(400)],
                                             threads=1, rtol=1e-10),
     "rotation_euler_matrix": lambda: mp.rotation.euler_matrix(np.ones((1_000_000, 3))),
     "modes_dense": lambda: mp.modes.normal_modes(np.diag(np.arange(1.0, 401.0)) + 0.01,
@@ -69,30 +70,71 @@ LONG = {
 }
 
 
-@pytest.mark.parametrize("entry", list(LONG))
-def test_long_c_call_releases_the_gil(entry, monkeypatch):
-    """While the C call runs in one thread, the main thread keeps executing Python:
-    it records loop iterations strictly between the call's start and end."""
-    inner = getattr(_core, entry)
+SWITCH = 0.001        # the switch interval during the check (s)
+EDGE = 3 * SWITCH     # how close to the call's ends the main thread may run with the GIL held
+
+
+def _python_ran_during(call):
+    """Run ``call(record)`` in a worker thread while the main thread loops; ``call`` runs
+    the C function between ``record("start")`` and ``record("end")``.  Return the call's
+    length and whether the main thread ran farther than EDGE from both ends of it.
+
+    With the GIL held through the C call, the main thread can run only around its start
+    and end (at most one switch interval after the worker reads the start and one before
+    it reads the end).  Any tick beyond EDGE from both ends shows that Python ran while
+    the C code did.  (Not "in the middle fifth": on a loaded machine the OS may leave
+    the main thread unscheduled for any given tenth of the call.)"""
     window = {}
 
+    def record(key):
+        window[key] = time.perf_counter()
+
+    worker = threading.Thread(target=call, args=(record,))
+    ticks = []
+    interval = sys.getswitchinterval()
+    sys.setswitchinterval(SWITCH)
+    try:
+        worker.start()
+        while worker.is_alive():
+            ticks.append(time.perf_counter())
+        worker.join()
+    finally:
+        sys.setswitchinterval(interval)
+    t0, t1 = window["start"], window["end"]
+    return t1 - t0, any(t0 + EDGE < t < t1 - EDGE for t in ticks)
+
+
+@pytest.mark.parametrize("entry", list(LONG))
+def test_long_c_call_releases_the_gil(entry, monkeypatch):
+    """While the C call runs in one thread, the main thread keeps executing Python."""
+    inner = getattr(_core, entry)
+    box = {}
+
     def timed(*a, **kw):
-        window["start"] = time.perf_counter()
+        box["record"]("start")
         try:
             return inner(*a, **kw)
         finally:
-            window["end"] = time.perf_counter()
+            box["record"]("end")
+
+    def call(record):
+        box["record"] = record
+        LONG[entry]()
 
     monkeypatch.setattr(_core, entry, timed)
-    worker = threading.Thread(target=LONG[entry])
-    ticks = []
-    worker.start()
-    while worker.is_alive():
-        ticks.append(time.perf_counter())
-    worker.join()
-    t0, t1 = window["start"], window["end"]
-    # With the GIL held through the C call, the main thread could run only around its
-    # start and end (one switch interval, 5 ms, each); ticks in the middle fifth of
-    # the call show that Python ran while the C code did.
-    mid = [t for t in ticks if t0 + 0.4 * (t1 - t0) < t < t0 + 0.6 * (t1 - t0)]
-    assert mid, f"{entry}: the main thread did not run during the C call"
+    length, ran = _python_ran_during(call)
+    assert length > 4 * EDGE, f"{entry}: the call ({length:.3f} s) is too short to tell"
+    assert ran, f"{entry}: the main thread did not run during the C call"
+
+
+def test_the_check_sees_a_call_that_holds_the_gil():
+    """The check above can fail: a builtin that never releases the GIL (sum over a
+    range, one C call) is reported as such."""
+    def call(record):
+        record("start")
+        sum(range(20_000_000))
+        record("end")
+
+    length, ran = _python_ran_during(call)
+    assert length > 4 * EDGE
+    assert not ran

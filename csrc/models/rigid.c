@@ -149,11 +149,12 @@ const mp_model mp_model_rigid = {"RigidBody", 3, 6, rigid_names, rigid_check, ri
 const mp_model mp_model_rigid_q = {"RigidBodyOriented", 7, 6, rigid_names, rigid_check,
                                    rigid_bind_q, rigid_energy};
 
-/* a torque callback: the free part, then tau / I (tau zeroed before the call) */
+/* a torque callback: the free part, then tau / I (tau is NaN before the call, so
+ * that a component the callback leaves unwritten is a NonFiniteError) */
 static int rigid_rhs_cb(double t, const double *y, double *f, void *d)
 {
     const mp_rigid_torque *tq = d;
-    double tau[3] = {0.0, 0.0, 0.0};
+    double tau[3] = {NAN, NAN, NAN}; /* unwritten by the callback: NonFiniteError */
     tq->fn(t, y, tau, tq->user_data);
     euler_free(tq->params, y, f);
     for (int i = 0; i < 3; i++) f[i] += tau[i] / tq->params[i];

@@ -12,13 +12,21 @@
 
 /* ---- small helpers ------------------------------------------------------ */
 
+/* Contract: dydt = f(t, y), counted in nfev; MP_ENONFINITE (with the first
+ * offending component in w->bad_index) when a value is NaN or inf.  The one
+ * pass over dydt is the only check of a stage: the driver decides whether a
+ * non-finite value rejects a trial step or ends the solve. */
 int mp_ode_ws_rhs(mp_ode_ws *w, double t, const double *y, double *dydt)
 {
     int rc = w->p->rhs(t, y, dydt, w->p->data);
     w->nfev++;
     if (rc != MP_OK) return rc;
     for (size_t i = 0; i < w->n; i++)
-        if (!isfinite(dydt[i])) return MP_ENONFINITE;
+        if (!isfinite(dydt[i])) {
+            w->bad_what = MP_ODE_BAD_RHS;
+            w->bad_index = i;
+            return MP_ENONFINITE;
+        }
     return MP_OK;
 }
 
@@ -26,12 +34,16 @@ int mp_ode_ws_jac(mp_ode_ws *w, double t, const double *y, const double *f0, dou
                   double *scratch_y, double *scratch_f)
 {
     size_t n = w->n;
-    w->njev++;
+    if (!w->p->jac_const) w->njev++;
     if (w->p->jac) {
         int rc = w->p->jac(t, y, jac, w->p->data);
         if (rc != MP_OK) return rc;
         for (size_t i = 0; i < n * n; i++)
-            if (!isfinite(jac[i])) return MP_ENONFINITE;
+            if (!isfinite(jac[i])) {
+                w->bad_what = MP_ODE_BAD_JAC;
+                w->bad_index = i;
+                return MP_ENONFINITE;
+            }
         return MP_OK;
     }
     memcpy(scratch_y, y, n * sizeof(double));
@@ -189,7 +201,10 @@ static int ev_at(ev_ctx *c, double s, size_t k, double *gk)
     int rc = c->o->events(c->t + s * c->h, c->ytmp, c->gtmp, c->o->events_data);
     if (rc != MP_OK) return rc;
     *gk = c->gtmp[k];
-    return isfinite(*gk) ? MP_OK : MP_ENONFINITE;
+    if (isfinite(*gk)) return MP_OK;
+    c->w->bad_what = MP_ODE_BAD_EVENT;
+    c->w->bad_index = k;
+    return MP_ENONFINITE;
 }
 
 /* Root of g_k on [a, b] in step-fraction s, g(a) and g(b) of opposite signs
@@ -254,7 +269,11 @@ static int ev_step(mp_ode_ws *w, mp_ode_result *r, const mp_ode_options *o, doub
         }
         if (rc != MP_OK) return rc;
         for (size_t k = 0; k < ne; k++) {
-            if (!isfinite(g_sub[k])) return MP_ENONFINITE;
+            if (!isfinite(g_sub[k])) {
+                w->bad_what = MP_ODE_BAD_EVENT;
+                w->bad_index = k;
+                return MP_ENONFINITE;
+            }
             if (crosses(g_old[k], g_sub[k], o->direction[k])) {
                 double root;
                 rc = ev_root(&c, k, s0, g_old[k], s1, g_sub[k], &root);
@@ -298,8 +317,14 @@ static int first_step(mp_ode_ws *w, double t0, double tf, double hmax, double *h
     double h = (dnf <= 1e-10 || dny <= 1e-10) ? 1e-6 : sqrt(dny / dnf) * 0.01;
     h = fmin(h, fmin(hmax, tf - t0));
     double *y1 = w->ynew, *f1 = w->fnew;
-    for (size_t i = 0; i < n; i++) y1[i] = w->y[i] + h * w->f[i];
-    int rc = mp_ode_ws_rhs(w, t0 + h, y1, f1);
+    int rc;
+    for (int tries = 0;; tries++) { /* an explicit Euler trial that overflows: shorter */
+        while (t0 + h > tf) h = nextafter(h, 0.0);
+        for (size_t i = 0; i < n; i++) y1[i] = w->y[i] + h * w->f[i];
+        rc = mp_ode_ws_rhs(w, t0 + h, y1, f1);
+        if (rc != MP_ENONFINITE || tries == 20) break;
+        h *= 0.1;
+    }
     if (rc != MP_OK) return rc;
     double der2 = 0;
     for (size_t i = 0; i < n; i++) {
@@ -317,8 +342,15 @@ static int first_step(mp_ode_ws *w, double t0, double tf, double hmax, double *h
 
 /* ---- the driver --------------------------------------------------------- */
 
-int mp_ode_solve(const mp_ode_method *m, const mp_ode_problem *p, double t0, double tf,
-                 const double *y0, const mp_ode_options *o, mp_ode_result *r)
+/* A switching row counts an explicit step as stiff from this fraction of the
+ * explicit method's stability boundary h |lambda| on. */
+#ifndef MP_ODE_SWITCH_FRAC
+#define MP_ODE_SWITCH_FRAC 0.8
+#endif
+
+/* Contract: the forward solve (t0 < tf) of mp_ode_solve. */
+static int solve_forward(const mp_ode_method *m, const mp_ode_problem *p, double t0, double tf,
+                         const double *y0, const mp_ode_options *o, mp_ode_result *r)
 {
     size_t n = p->n, ne = o->n_events;
     int need_dense = o->n_eval > 0 || o->dense || ne > 0;
@@ -332,9 +364,13 @@ int mp_ode_solve(const mp_ode_method *m, const mp_ode_problem *p, double t0, dou
     r->n = n;
     r->ncoef = m->ncoef;
     r->n_events = ne;
+    r->t_fail = t0;
     if (n == 0 || !(tf > t0) || !isfinite(t0) || !isfinite(tf) || !(o->rtol > 0) ||
         !(o->max_steps > 0) || (!m->adaptive && !(o->h > 0)) || !(o->max_step > 0))
         return r->status = MP_EDOM;
+    /* a fixed step below the spacing of floats at t would never advance t */
+    double tmax = fmax(fabs(t0), fabs(tf));
+    if (!m->adaptive && !(tmax + o->h > tmax)) return r->status = MP_EDOM;
     for (size_t i = 0; i < n; i++)
         if (!isfinite(y0[i]) || !(o->atol[i] >= 0)) return r->status = MP_EDOM;
 
@@ -357,7 +393,7 @@ int mp_ode_solve(const mp_ode_method *m, const mp_ode_problem *p, double t0, dou
     size_t nvec = 5 + m->nscratch + m->ncoef;
     buf = malloc(nvec * n * sizeof(double));
     if (!buf) { rc = MP_ENOMEM; goto done; }
-    w.p = p; w.m = cur; w.o = o; w.n = n; w.ncoef = m->ncoef; w.t_end = tf;
+    w.p = p; w.m = cur; w.o = o; w.n = n; w.ncoef = m->ncoef; w.t_start = t0; w.t_end = tf;
     w.y = buf; w.ynew = buf + n; w.f = buf + 2 * n; w.fnew = buf + 3 * n; ytmp = buf + 4 * n;
     w.k = buf + 5 * n;
     w.coef = w.k + m->nscratch * n;
@@ -388,7 +424,16 @@ int mp_ode_solve(const mp_ode_method *m, const mp_ode_problem *p, double t0, dou
             ie++;
         }
     }
-    if (ne && (rc = o->events(t, w.y, g_old, o->events_data)) != MP_OK) goto done;
+    if (ne) {
+        if ((rc = o->events(t, w.y, g_old, o->events_data)) != MP_OK) goto done;
+        for (size_t k = 0; k < ne; k++)
+            if (!isfinite(g_old[k])) {
+                w.bad_what = MP_ODE_BAD_EVENT;
+                w.bad_index = k;
+                rc = MP_ENONFINITE;
+                goto done;
+            }
+    }
 
     double hmax = fmin(o->max_step, tf - t0);
     double h;
@@ -399,6 +444,7 @@ int mp_ode_solve(const mp_ode_method *m, const mp_ode_problem *p, double t0, dou
 
     double facold = 1e-4;
     int rejected = 0, stiff_count = 0, calm_count = 0;
+    int nonfinite = 0; /* the last rejection was a non-finite trial stage */
     long attempts = 0;
     while (t < tf) {
         if (attempts >= o->max_steps) { rc = MP_EMAXSTEPS; break; }
@@ -409,17 +455,26 @@ int mp_ode_solve(const mp_ode_method *m, const mp_ode_problem *p, double t0, dou
         int last = 0;
         if (cur->adaptive ? t + 1.01 * h >= tf : t + h * (1.0 + 1e-9) >= tf) {
             h = tf - t;
+            while (t + h > tf) h = nextafter(h, 0.0); /* no stage beyond tf */
             last = 1;
         }
         if (cur->adaptive && !cur->self_controlled &&
             h <= 16.0 * DBL_EPSILON * fmax(fabs(t), 1e-300)) {
-            rc = MP_ESTEP;
+            rc = nonfinite ? MP_ENONFINITE : MP_ESTEP;
             break;
         }
         double err = 0.0, hnew = h;
         w.fnew_valid = 0;
         w.rho = 0.0;
         rc = cur->step(&w, t, h, &err);
+        if (rc == MP_ENONFINITE && cur->adaptive && !cur->self_controlled) {
+            /* a trial stage overflowed: reject and shrink as Hairer's codes do */
+            h /= 10.0;
+            rejected = nonfinite = 1;
+            r->nreject++;
+            rc = MP_OK;
+            continue;
+        }
         if (rc != MP_OK) break;
         if (cur->self_controlled) {
             last = last && w.h_taken >= h;
@@ -427,6 +482,7 @@ int mp_ode_solve(const mp_ode_method *m, const mp_ode_problem *p, double t0, dou
             hnew = w.h_next;
         } else if (cur->adaptive) {
             if (!(err <= 1.0)) { /* rejected (also when err is NaN) */
+                nonfinite = !isfinite(err);
                 double fac = isfinite(err) ? fmin(1.0 / cur->fac_min,
                                                   pow(err, cur->expo) / cur->safety)
                                            : 10.0;
@@ -442,7 +498,7 @@ int mp_ode_solve(const mp_ode_method *m, const mp_ode_problem *p, double t0, dou
             hnew = h / fac;
             facold = fmax(err, 1e-4);
             if (rejected) hnew = fmin(hnew, h);
-            rejected = 0;
+            rejected = nonfinite = 0;
         }
         double tnew = last ? tf : t + h;
         /* the interpolant is built only for a step that needs it: one holding a
@@ -451,9 +507,13 @@ int mp_ode_solve(const mp_ode_method *m, const mp_ode_problem *p, double t0, dou
                                        (ie < o->n_eval && o->t_eval[ie] < tnew));
         if ((rc = cur->finish(&w, t, h, dense_now)) != MP_OK) break;
         /* Hairer's stiffness test on explicit steps: h |lambda| near the
-         * stability boundary for 15 of the recent steps */
+         * stability boundary for 15 of the recent steps.  A switching row tests
+         * against a fraction of the boundary: the step-size controller of a
+         * stiff problem holds h |lambda| just inside it (dop853 on ROBER: ~5.3
+         * against 6.1), where the test at the boundary itself rarely fires. */
         if (w.rho > 0.0) {
-            if (w.rho > cur->stiff_rho) {
+            double rho_stiff = m->nonstiff ? MP_ODE_SWITCH_FRAC * cur->stiff_rho : cur->stiff_rho;
+            if (w.rho > rho_stiff) {
                 calm_count = 0;
                 if (++stiff_count >= 15) r->stiff = 1;
             } else if (++calm_count >= 6) {
@@ -504,6 +564,8 @@ int mp_ode_solve(const mp_ode_method *m, const mp_ode_problem *p, double t0, dou
                 void *sw2 = w.state; w.state = w.state2; w.state2 = sw2;
                 cur = next;
                 w.m = cur;
+                /* the new method may write fewer interpolant slots: the rest are zero */
+                memset(w.coef, 0, m->ncoef * n * sizeof(double));
                 if (cur->restart) cur->restart(&w);
                 if (!w.fnew_valid && (rc = mp_ode_ws_rhs(&w, t, w.y, w.f)) != MP_OK) break;
                 stiff_count = calm_count = 0;
@@ -522,6 +584,8 @@ done:
         w.state = w.state2;
         if (other->free) other->free(&w);
     }
+    r->bad_what = w.bad_what;
+    r->bad_index = w.bad_index;
     r->nfev = w.nfev;
     r->njev = w.njev;
     r->nlu = w.nlu;
@@ -530,5 +594,74 @@ done:
     free(buf);
     free(g_old);
     free(hits);
+    return rc;
+}
+
+/* ---- backwards in time: s = -t ---------------------------------------------- */
+
+typedef struct {
+    const mp_ode_problem *p;
+    const mp_ode_options *o;
+} neg_ctx;
+
+/* dy/ds = -f(-s, y) */
+static int neg_rhs(double s, const double *y, double *dyds, void *data)
+{
+    const neg_ctx *c = data;
+    int rc = c->p->rhs(-s, y, dyds, c->p->data);
+    for (size_t i = 0; i < c->p->n; i++) dyds[i] = -dyds[i];
+    return rc;
+}
+
+/* d(-f)/dy at (-s, y) */
+static int neg_jac(double s, const double *y, double *jac, void *data)
+{
+    const neg_ctx *c = data;
+    int rc = c->p->jac(-s, y, jac, c->p->data);
+    for (size_t i = 0; i < c->p->n * c->p->n; i++) jac[i] = -jac[i];
+    return rc;
+}
+
+/* g(-s, y): a crossing's direction is along the integration, as in SciPy */
+static int neg_events(double s, const double *y, double *g, void *data)
+{
+    const neg_ctx *c = data;
+    return c->o->events(-s, y, g, c->o->events_data);
+}
+
+int mp_ode_solve(const mp_ode_method *m, const mp_ode_problem *p, double t0, double tf,
+                 const double *y0, const mp_ode_options *o, mp_ode_result *r)
+{
+    if (!(tf < t0)) return solve_forward(m, p, t0, tf, y0, o, r);
+    /* Contract: integrate backwards by the substitution s = -t; the result's
+     * times are t (decreasing), its dense segments in s (r->backward). */
+    neg_ctx c = {p, o};
+    mp_ode_problem pn = *p;
+    pn.rhs = neg_rhs;
+    pn.jac = p->jac ? neg_jac : NULL;
+    pn.data = &c;
+    pn.nq = 0; /* y' = -f is not of the form q' = v */
+    mp_ode_options on = *o;
+    double *sev = NULL;
+    if (o->n_eval) {
+        sev = malloc(o->n_eval * sizeof(double));
+        if (!sev) {
+            memset(r, 0, sizeof *r);
+            return r->status = MP_ENOMEM;
+        }
+        for (size_t i = 0; i < o->n_eval; i++) sev[i] = -o->t_eval[i];
+        on.t_eval = sev;
+    }
+    if (o->n_events) {
+        on.events = neg_events;
+        on.events_data = &c;
+    }
+    int rc = solve_forward(m, &pn, -t0, -tf, y0, &on, r);
+    free(sev);
+    r->backward = 1;
+    for (size_t i = 0; i < r->m; i++) r->t[i] = -r->t[i];
+    for (size_t k = 0; k < r->n_events; k++)
+        for (size_t i = 0; r->ev_count && i < r->ev_count[k]; i++) r->ev_t[k][i] = -r->ev_t[k][i];
+    r->t_fail = -r->t_fail;
     return rc;
 }

@@ -6,6 +6,7 @@
 
 #include <float.h>
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 /* ---- Verlet and its compositions ---------------------------------------- */
@@ -112,35 +113,116 @@ static int gl_stage(mp_ode_ws *w, double t, const double *Y, double *K)
     return MP_OK;
 }
 
-/* Stages by fixed-point iteration, to round-off (a non-stiff, Hamiltonian
- * setting; a step too large for it to contract is MP_ENOCONV). */
-static int gauss4_step(mp_ode_ws *w, double t, double h, double *err)
+/* LAPACK (Fortran calling convention) */
+extern void dgetrf_(const int *m, const int *n, double *a, const int *lda, int *ipiv, int *info);
+extern void dgetrs_(const char *trans, const int *n, const int *nrhs, const double *a,
+                    const int *lda, const int *ipiv, double *b, const int *ldb, int *info);
+
+typedef struct {
+    int n2;            /* 2n: the size of the Newton system */
+    double *J;         /* n x n, row-major: df/dy at the start of a step */
+    double *M;         /* 2n x 2n, column-major: LU factors of I - h (A kron J) */
+    int *piv;
+    double *Z, *dZ, *F; /* 2n each: stage increments Y_i - y, their update, f at the stages */
+    double *Y, *tmp, *tmp2; /* n each */
+    int have_J, have_LU;
+    double lu_h;
+} gl_state;
+
+/* Contract: the Newton workspace of a solve; MP_ENOMEM, or MP_EDOM when 2n
+ * does not fit LAPACK's int. */
+static int gauss4_alloc(mp_ode_ws *w)
 {
     size_t n = w->n;
-    double *K1 = w->k, *K2 = K1 + n, *N1 = K2 + n, *N2 = N1 + n, *Y = N2 + n;
-    double prev = INFINITY;
-    *err = 0.0;
-    memcpy(K1, w->f, n * sizeof(double));
-    memcpy(K2, w->f, n * sizeof(double));
-    for (int it = 0; it < 100; it++) {
+    if (n > 20000) return MP_EDOM; /* (2n)^2 must fit an int index */
+    gl_state *st = calloc(1, sizeof *st);
+    if (!st) return MP_ENOMEM;
+    w->state = st;
+    st->n2 = (int)(2 * n);
+    st->J = malloc((n * n + 4 * n * n + 9 * n) * sizeof(double));
+    st->piv = malloc(2 * n * sizeof(int));
+    if (!st->J || !st->piv) return MP_ENOMEM;
+    st->M = st->J + n * n;
+    st->Z = st->M + 4 * n * n;
+    st->dZ = st->Z + 2 * n;
+    st->F = st->dZ + 2 * n;
+    st->Y = st->F + 2 * n;
+    st->tmp = st->Y + n;
+    st->tmp2 = st->tmp + n;
+    return MP_OK;
+}
+
+static void gauss4_free(mp_ode_ws *w)
+{
+    gl_state *st = w->state;
+    if (!st) return;
+    free(st->J);
+    free(st->piv);
+    free(st);
+    w->state = NULL;
+}
+
+/* Contract: factorise I - h (A kron J) into st->M; MP_ENOCONV when singular. */
+static int gauss4_lu(mp_ode_ws *w, double h)
+{
+    gl_state *st = w->state;
+    size_t n = w->n, n2 = (size_t)st->n2;
+    for (size_t bi = 0; bi < 2; bi++)
+        for (size_t bj = 0; bj < 2; bj++)
+            for (size_t k = 0; k < n; k++)
+                for (size_t l = 0; l < n; l++) {
+                    size_t row = bi * n + k, col = bj * n + l;
+                    st->M[col * n2 + row] = (row == col ? 1.0 : 0.0) -
+                                            h * gl_a[bi][bj] * st->J[k * n + l];
+                }
+    int info = 0;
+    dgetrf_(&st->n2, &st->n2, st->M, &st->n2, st->piv, &info);
+    w->nlu++;
+    st->have_LU = info == 0;
+    st->lu_h = h;
+    if (info < 0) return MP_EDOM;
+    return info == 0 ? MP_OK : MP_ENOCONV;
+}
+
+/* Contract: solve the stage equations Z_i = h sum_j a_ij f(t + c_j h, y + Z_j)
+ * by simplified Newton iterations with the factors in st->M, to round-off;
+ * ynew = y + h (F_1 + F_2) / 2.  MP_ENOCONV when the iteration does not
+ * contract (the step is too large, or the Jacobian is stale). */
+static int gauss4_newton(mp_ode_ws *w, double t, double h)
+{
+    gl_state *st = w->state;
+    size_t n = w->n;
+    double prev = INFINITY, ynorm = DBL_MIN;
+    for (size_t i = 0; i < n; i++) {
+        ynorm = fmax(ynorm, fabs(w->y[i]));
+        st->Z[i] = h * gl_c[0] * w->f[i]; /* sum_j a_ij = c_i */
+        st->Z[n + i] = h * gl_c[1] * w->f[i];
+    }
+    for (int it = 0; it < 50; it++) {
         int rc;
-        for (size_t i = 0; i < n; i++) Y[i] = w->y[i] + h * (gl_a[0][0] * K1[i] + gl_a[0][1] * K2[i]);
-        if ((rc = gl_stage(w, t + gl_c[0] * h, Y, N1)) != MP_OK) return rc;
-        for (size_t i = 0; i < n; i++) Y[i] = w->y[i] + h * (gl_a[1][0] * K1[i] + gl_a[1][1] * K2[i]);
-        if ((rc = gl_stage(w, t + gl_c[1] * h, Y, N2)) != MP_OK) return rc;
+        for (size_t s = 0; s < 2; s++) {
+            for (size_t i = 0; i < n; i++) st->Y[i] = w->y[i] + st->Z[s * n + i];
+            if ((rc = gl_stage(w, t + gl_c[s] * h, st->Y, st->F + s * n)) != MP_OK) return rc;
+        }
+        for (size_t s = 0; s < 2; s++)
+            for (size_t i = 0; i < n; i++)
+                st->dZ[s * n + i] = h * (gl_a[s][0] * st->F[i] + gl_a[s][1] * st->F[n + i]) -
+                                    st->Z[s * n + i];
+        int one = 1, info = 0;
+        dgetrs_("N", &st->n2, &one, st->M, &st->n2, st->piv, st->dZ, &st->n2, &info);
         /* the change of the stages against the size of the state as a whole:
          * a component passing through zero must not demand relative round-off */
-        double d = 0.0, ynorm = DBL_MIN;
-        for (size_t i = 0; i < n; i++) {
-            ynorm = fmax(ynorm, fabs(w->y[i]));
-            d = fmax(d, fabs(h) * (fabs(N1[i] - K1[i]) + fabs(N2[i] - K2[i])));
+        double d = 0.0;
+        for (size_t i = 0; i < 2 * n; i++) {
+            st->Z[i] += st->dZ[i];
+            d = fmax(d, fabs(st->dZ[i]));
         }
         d /= ynorm;
-        memcpy(K1, N1, n * sizeof(double));
-        memcpy(K2, N2, n * sizeof(double));
-        /* converged to round-off, or stagnating at it */
+        /* converged to round-off, or stagnating at it: F was taken at Z before
+         * this last update, which moves ynew by h |J| d, below round-off */
         if (d <= 2.0 * DBL_EPSILON || (d >= prev && d < 1e-13)) {
-            for (size_t i = 0; i < n; i++) w->ynew[i] = w->y[i] + 0.5 * h * (K1[i] + K2[i]);
+            for (size_t i = 0; i < n; i++)
+                w->ynew[i] = w->y[i] + 0.5 * h * (st->F[i] + st->F[n + i]);
             return MP_OK;
         }
         if (!isfinite(d) || (it > 3 && d > prev)) return MP_ENOCONV; /* not contracting */
@@ -149,8 +231,37 @@ static int gauss4_step(mp_ode_ws *w, double t, double h, double *err)
     return MP_ENOCONV;
 }
 
+/* Stages by simplified Newton iterations with the Jacobian df/dy (analytic or
+ * finite differences), as radau solves its own: the Jacobian and factors of
+ * the last step are kept while the iteration contracts with them, and taken
+ * afresh at (t, y) once when it does not.  A step too large for a fresh
+ * Jacobian to converge is MP_ENOCONV. */
+static int gauss4_step(mp_ode_ws *w, double t, double h, double *err)
+{
+    gl_state *st = w->state;
+    *err = 0.0;
+    for (int attempt = 0; attempt < 2; attempt++) {
+        int rc;
+        if (!st->have_J || attempt == 1) {
+            if ((rc = mp_ode_ws_jac(w, t, w->y, w->f, st->J, st->tmp, st->tmp2)) != MP_OK)
+                return rc;
+            st->have_J = 1;
+            st->have_LU = 0;
+        }
+        if (!st->have_LU || st->lu_h != h) {
+            rc = gauss4_lu(w, h);
+            if (rc == MP_ENOCONV && attempt == 0) continue;
+            if (rc != MP_OK) return rc;
+        }
+        rc = gauss4_newton(w, t, h);
+        if (rc != MP_ENOCONV) return rc;
+    }
+    return MP_ENOCONV;
+}
+
 const mp_ode_method mp_ode_gauss4 = {
     .name = "gauss4", .order = 4, .adaptive = 0, .implicit = 1, .symplectic = 1,
-    .dense_order = 3, .ncoef = 4, .nscratch = 5, .step = gauss4_step,
+    .needs_jacobian = 1, .dense_order = 3, .ncoef = 4, .nscratch = 0,
+    .alloc = gauss4_alloc, .free = gauss4_free, .step = gauss4_step,
     .finish = mp_ode_finish_fnew_hermite,
 };

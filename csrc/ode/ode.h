@@ -30,6 +30,9 @@ typedef struct mp_ode_problem {
      * (q[nq], v[nq]) with q' = v and v' = a(t, q) independent of v, so the
      * second half of rhs(t, (q, v)) is the acceleration.  0: not separable. */
     size_t nq;
+    /* jac returns the same matrix everywhere (SciPy's array jac): it is not
+     * counted as an evaluation (njev), as SciPy counts none. */
+    int jac_const;
 } mp_ode_problem;
 
 typedef struct mp_ode_options {
@@ -39,7 +42,7 @@ typedef struct mp_ode_options {
     double max_step;          /* may be inf */
     double h;                 /* step of fixed-step methods */
     long max_steps;           /* budget of attempted steps */
-    const double *t_eval;     /* increasing, inside [t0, tf], or NULL */
+    const double *t_eval;     /* ordered along the integration, inside the interval, or NULL */
     size_t n_eval;
     int dense;                /* keep every step's interpolant */
     size_t n_events;
@@ -51,6 +54,9 @@ typedef struct mp_ode_options {
     void *interrupt_ctx;
 } mp_ode_options;
 
+/* What produced a non-finite value (mp_ode_result.bad_what). */
+enum { MP_ODE_BAD_RHS = 0, MP_ODE_BAD_EVENT = 1, MP_ODE_BAD_JAC = 2 };
+
 /* Growable output storage of one solve.  Freed by mp_ode_result_free. */
 typedef struct mp_ode_result {
     int status;               /* MP_OK or the failure */
@@ -59,6 +65,9 @@ typedef struct mp_ode_result {
     int stiff;                /* Hairer's stiffness test fired on an explicit method */
     long nswitch;             /* method switches of a switching row */
     double t_fail;            /* where a failure happened */
+    int bad_what;             /* MP_ENONFINITE: MP_ODE_BAD_RHS, _EVENT or _JAC */
+    size_t bad_index;         /* ... and the component (or event) that was not finite */
+    int backward;             /* t0 > tf: times are t, dense segments are in s = -t */
     size_t n;
     /* samples: rows of (t, y[n]); with t_eval these are the t_eval points reached */
     size_t m, mcap;
@@ -114,18 +123,25 @@ struct mp_ode_ws {
     double *y, *ynew, *f, *fnew; /* f = f(t, y); fnew = f(t + h, ynew) after finish */
     int fnew_valid;              /* finish computed fnew */
     double *k;                   /* nscratch * n */
-    double *coef;                /* ncoef * n: the last accepted step's interpolant */
-    double t_end;                /* the end of the integration interval */
+    double *coef;                /* ncoef * n: the last accepted step's interpolant; slots a
+                                    method does not write are zero (the driver clears them
+                                    whenever the running method changes) */
+    double t_start, t_end;       /* the integration interval: f is never called outside it */
     double h_taken, h_next;      /* self-controlled methods */
     double rho;                  /* explicit methods: h |lambda| estimate of the last step */
     double jnorm;                /* implicit methods: ||J||_inf of their last Jacobian */
     size_t ncoef;                /* vectors in coef (the row's, padded with zeros) */
     long nfev, njev, nlu, nreject_inner;
+    int bad_what;                /* the last non-finite value found (see mp_ode_result) */
+    size_t bad_index;
     void *state;                 /* method's own state (alloc/free) */
     void *state2;                /* a switching row's idle method's state */
 };
 
-/* f(t, y) with counting; checks the result is finite. */
+/* f(t, y) with counting; checks the result is finite (MP_ENONFINITE, recording
+ * the component in w->bad_index).  Every evaluation of f goes through here.  A
+ * non-finite value in a trial stage makes the driver reject the step; at an
+ * accepted state it ends the solve. */
 int mp_ode_ws_rhs(mp_ode_ws *w, double t, const double *y, double *dydt);
 
 /* Jacobian df/dy (row-major) at (t, y): the problem's own when it has one,
@@ -153,9 +169,12 @@ int mp_ode_finish_fnew_hermite(mp_ode_ws *w, double t, double h, int need_dense)
 extern const mp_ode_method *const mp_ode_methods[];
 const mp_ode_method *mp_ode_method_find(const char *name);
 
-/* Integrate from t0 to tf (> t0).  The result is initialised here; free it
- * with mp_ode_result_free whatever the status.  Returns r->status for
- * integration failures (EMAXSTEPS, ESTEP, ...) as well. */
+/* Integrate from t0 to tf (tf < t0 integrates backwards: the driver solves
+ * dy/ds = -f(-s, y) for s = -t from -t0 to -tf, maps t_eval, events and the
+ * Jacobian, and returns times t; dense segments stay in s, r->backward = 1).
+ * t_eval must be ordered along the integration.  The result is initialised
+ * here; free it with mp_ode_result_free whatever the status.  Returns
+ * r->status for integration failures (EMAXSTEPS, ESTEP, ...) as well. */
 int mp_ode_solve(const mp_ode_method *m, const mp_ode_problem *p, double t0, double tf,
                  const double *y0, const mp_ode_options *o, mp_ode_result *r);
 void mp_ode_result_free(mp_ode_result *r);

@@ -173,9 +173,11 @@ static void solve_complex(radau_state *st, double complex *b)
     zgetrs_("N", &n, &one, st->LUc, &n, st->piv_c, b, &n, &info);
 }
 
-/* Newton iterations on the collocation system; returns 1 when converged. */
+/* Newton iterations on the collocation system; returns 1 when converged,
+ * 0 when not (*nonfinite = 1 when a stage value was NaN or inf: too large a
+ * step); *rc is a fatal status from the right-hand side. */
 static int radau_newton(mp_ode_ws *w, double t, double h, double tol, int *iters, double *rate,
-                        int *rc)
+                        int *rc, int *nonfinite)
 {
     radau_state *st = w->state;
     size_t n = (size_t)st->n;
@@ -194,11 +196,9 @@ static int radau_newton(mp_ode_ws *w, double t, double h, double tol, int *iters
         *iters = k + 1;
         for (int a = 0; a < 3; a++) {
             for (size_t i = 0; i < n; i++) st->tmp[i] = w->y[i] + Z[a * n + i];
-            int r = w->p->rhs(t + rc_c[a] * h, st->tmp, F + a * n, w->p->data);
-            w->nfev++;
+            int r = mp_ode_ws_rhs(w, t + rc_c[a] * h, st->tmp, F + a * n);
+            if (r == MP_ENONFINITE) { *nonfinite = 1; return 0; } /* too large a step: shrink */
             if (r != MP_OK) { *rc = r; return 0; }
-            for (size_t i = 0; i < n; i++)
-                if (!isfinite(F[a * n + i])) return 0; /* too large a step: shrink */
         }
         for (size_t i = 0; i < n; i++) {
             double fr = rc_TI[0][0] * F[i] + rc_TI[0][1] * F[n + i] + rc_TI[0][2] * F[2 * n + i];
@@ -251,13 +251,13 @@ static int radau_step(mp_ode_ws *w, double t, double h_req, double *err_out)
     double tol = fmax(10.0 * DBL_EPSILON / rtol, fmin(0.03, sqrt(rtol)));
     double t_end = t + h_req; /* never step past what the driver asked for */
     double h = h_req;
-    int rejected = 0, rc, iters = 0;
+    int rejected = 0, rc, iters = 0, nonfinite = 0;
     double rate = -1.0, err = 0.0;
     *err_out = 0.0;
     if (!st->have_J && (rc = radau_jac(w, t)) != MP_OK) return rc;
     for (int attempt = 0;; attempt++) {
         double hmin = 10.0 * fabs(nextafter(t, INFINITY) - t);
-        if (h < hmin || attempt > 1000) return MP_ESTEP;
+        if (h < hmin || attempt > 1000) return nonfinite ? MP_ENONFINITE : MP_ESTEP;
         double tn = (t + h > t_end) ? t_end : t + h;
         h = tn - t;
         /* starting guess: the previous collocation polynomial extrapolated,
@@ -282,13 +282,15 @@ static int radau_step(mp_ode_ws *w, double t, double h_req, double *err_out)
                 if (rc == MP_ESINGULAR) break;
                 if (rc != MP_OK) return rc;
             }
-            converged = radau_newton(w, t, h, tol, &iters, &rate, &rc);
+            nonfinite = 0;
+            converged = radau_newton(w, t, h, tol, &iters, &rate, &rc, &nonfinite);
+            if (nonfinite) break; /* a non-finite stage: shrink, do not refresh J */
             if (rc != MP_OK) return rc;
             if (converged || st->current_J) break;
             if ((rc = radau_jac(w, t)) != MP_OK) return rc;
         }
         if (!converged) {
-            h *= 0.5;
+            h *= nonfinite ? 0.1 : 0.5;
             st->have_LU = 0;
             w->nreject_inner++;
             continue;
@@ -307,12 +309,19 @@ static int radau_step(mp_ode_ws *w, double t, double h_req, double *err_out)
         double safety = 0.9 * (2 * NEWTON_MAXITER + 1) / (2 * NEWTON_MAXITER + iters);
         if (rejected && err > 1.0) { /* Hairer's improved estimate after a rejection */
             for (size_t i = 0; i < n; i++) st->tmp[i] = w->y[i] + e[i];
-            if ((rc = mp_ode_ws_rhs(w, t, st->tmp, e)) != MP_OK) return rc;
-            for (size_t i = 0; i < n; i++) e[i] += ZE[i];
-            solve_real(st, e);
-            err = rms(n, e, st->scale);
+            rc = mp_ode_ws_rhs(w, t, st->tmp, e);
+            if (rc == MP_OK) {
+                for (size_t i = 0; i < n; i++) e[i] += ZE[i];
+                solve_real(st, e);
+                err = rms(n, e, st->scale);
+            } else if (rc == MP_ENONFINITE) {
+                err = NAN; /* a trial value: reject */
+            } else {
+                return rc;
+            }
         }
         if (!(err <= 1.0)) {
+            nonfinite = !isfinite(err);
             double fac = isfinite(err) ? predict_factor(st, h, err) : MIN_FACTOR;
             h *= fmax(MIN_FACTOR, safety * fac);
             st->have_LU = 0;

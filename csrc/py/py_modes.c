@@ -4,32 +4,26 @@
 
 #include <errno.h>
 #include <limits.h>
-#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
 #include "modes.h"
 
-/* ---------------------------------------------------------------- interruptible LAPACK
+/* ---------------------------------------------------------------- solve jobs
  *
- * LAPACK's eigensolvers cannot be stopped part-way (dstemr took 29 s for a
- * 10^4-mass chain, dsygvd as long for n = 2000 on a loaded machine).  The
- * solve runs in a worker thread on buffers the job owns; the calling thread
- * waits with the GIL released and polls for Ctrl-C every 50 ms.  On Ctrl-C
- * the call returns at once (KeyboardInterrupt); the worker, which cannot be
- * cancelled, finishes in the background and frees the job itself.  Whichever
- * side sees the other's flag last frees the job (under the mutex). */
+ * A job owns its buffers and runs in the calling thread with the GIL
+ * released.  The chain solve (dstemr in chunks of indices) asks for Ctrl-C
+ * between chunks and stops with MP_EINTR; the dense solve (one dsygvd call)
+ * cannot be stopped part-way and answers Ctrl-C when it returns.  No thread
+ * outlives the call. */
 struct mp_modes_job {
     int dense, n;
     double zero_rtol, w_bad;
     double *k, *m;          /* dense: K (becomes the vectors) and M, n*n each */
     double *kd, *ke, *md;   /* chain: bands, n, n-1 (at least 1), n */
     double *w, *z;          /* results: n, n*n (chain) */
-    int status, done, abandoned;
-    pthread_mutex_t mu;
-    pthread_cond_t cv;
+    int status;
 };
 
 /* Free a job and every buffer it still owns (NULL-safe). */
@@ -37,12 +31,10 @@ static void mp_modes_job_free(struct mp_modes_job *j)
 {
     if (!j) return;
     free(j->k); free(j->m); free(j->kd); free(j->ke); free(j->md); free(j->w); free(j->z);
-    pthread_mutex_destroy(&j->mu);
-    pthread_cond_destroy(&j->cv);
     free(j);
 }
 
-/* A job with zeroed buffers pointers and its lock, or NULL. */
+/* A job with zeroed buffer pointers, or NULL. */
 static struct mp_modes_job *mp_modes_job_new(int dense, int n, double zero_rtol)
 {
     struct mp_modes_job *j = calloc(1, sizeof *j);
@@ -50,74 +42,20 @@ static struct mp_modes_job *mp_modes_job_new(int dense, int n, double zero_rtol)
     j->dense = dense;
     j->n = n;
     j->zero_rtol = zero_rtol;
-    if (pthread_mutex_init(&j->mu, NULL) != 0) { free(j); return NULL; }
-    if (pthread_cond_init(&j->cv, NULL) != 0) {
-        pthread_mutex_destroy(&j->mu);
-        free(j);
-        return NULL;
-    }
     return j;
 }
 
-/* The solve itself: pure C on the job's buffers. */
-static void mp_modes_job_compute(struct mp_modes_job *j)
+/* Run the job in the calling thread with the GIL released; its status lands
+ * in j->status (MP_EINTR with KeyboardInterrupt set after Ctrl-C). */
+static void mp_modes_run(struct mp_modes_job *j)
 {
+    Py_BEGIN_ALLOW_THREADS
     if (j->dense)
         j->status = mp_modes_dense(j->n, j->k, j->m, j->zero_rtol, j->w, &j->w_bad);
     else
         j->status = mp_modes_tridiag(j->n, j->kd, j->ke, j->md, j->zero_rtol, j->w, j->z,
-                                     &j->w_bad);
-}
-
-/* Worker thread: compute, then hand the job back or, if abandoned, free it. */
-static void *mp_modes_worker(void *arg)
-{
-    struct mp_modes_job *j = arg;
-    mp_modes_job_compute(j);
-    pthread_mutex_lock(&j->mu);
-    j->done = 1;
-    int abandoned = j->abandoned;
-    pthread_cond_signal(&j->cv);
-    pthread_mutex_unlock(&j->mu);
-    if (abandoned) mp_modes_job_free(j);
-    return NULL;
-}
-
-/* Run the job with the GIL released, answering Ctrl-C within about 50 ms.
- * Returns MP_OK (the job done, the caller owns it) or MP_EINTR (the job now
- * belongs to the worker; KeyboardInterrupt is set).  Without a thread the
- * job runs inline. */
-static int mp_modes_run(struct mp_modes_job *j)
-{
-    int rc = MP_OK;
-    Py_BEGIN_ALLOW_THREADS
-    pthread_t tid;
-    if (pthread_create(&tid, NULL, mp_modes_worker, j) != 0) {
-        mp_modes_job_compute(j);
-    } else {
-        pthread_mutex_lock(&j->mu);
-        while (!j->done) {
-            struct timespec ts;
-            clock_gettime(CLOCK_REALTIME, &ts);
-            ts.tv_nsec += 50000000L;
-            if (ts.tv_nsec >= 1000000000L) { ts.tv_sec += 1; ts.tv_nsec -= 1000000000L; }
-            pthread_cond_timedwait(&j->cv, &j->mu, &ts);
-            if (j->done) break;
-            pthread_mutex_unlock(&j->mu);
-            int irc = mp_py_check_interrupt(NULL);
-            pthread_mutex_lock(&j->mu);
-            if (irc != MP_OK && !j->done) {
-                j->abandoned = 1;
-                rc = MP_EINTR;
-                break;
-            }
-        }
-        pthread_mutex_unlock(&j->mu);
-        if (rc == MP_EINTR) pthread_detach(tid);
-        else pthread_join(tid, NULL);
-    }
+                                     &j->w_bad, mp_py_check_interrupt, NULL);
     Py_END_ALLOW_THREADS
-    return rc;
 }
 
 /* Free a malloc'd buffer that a NumPy array took over (capsule destructor). */
@@ -198,7 +136,7 @@ PyDoc_STRVAR(modes_dense_doc,
 "modes_dense(K, M, zero_rtol) -> (w, Z)\n\n"
 "Dense K v = w M v by LAPACK dsygvd: w ascending, Z[k] is mode k\n"
 "(M-normalised, sign rule applied).  K and M must be symmetric.\n"
-"Ctrl-C returns at once (the solve finishes in the background).");
+"Ctrl-C is answered when dsygvd returns.");
 
 static PyObject *modes_dense(PyObject *self, PyObject *args)
 {
@@ -235,7 +173,7 @@ static PyObject *modes_dense(PyObject *self, PyObject *args)
         mp_modes_job_free(j);
         return PyErr_NoMemory();
     }
-    if (mp_modes_run(j) != MP_OK) return NULL;    /* Ctrl-C: the worker owns j */
+    mp_modes_run(j);
     return mp_py_modes_result(j, &j->k, "normal_modes(K, M)");
 }
 
@@ -243,7 +181,7 @@ PyDoc_STRVAR(modes_tridiag_doc,
 "modes_tridiag(kd, ke, md, zero_rtol) -> (w, Z)\n\n"
 "Chain K v = w M v with K tridiagonal (diagonal kd, off-diagonal ke) and\n"
 "M = diag(md), by LAPACK dstemr on M^-1/2 K M^-1/2: O(n^2).\n"
-"Ctrl-C returns at once (the solve finishes in the background).");
+"Ctrl-C is answered between chunks of eigenpairs.");
 
 static PyObject *modes_tridiag(PyObject *self, PyObject *args)
 {
@@ -280,8 +218,8 @@ static PyObject *modes_tridiag(PyObject *self, PyObject *args)
         PyErr_NoMemory();
         goto done;
     }
-    if (mp_modes_run(j) == MP_OK)      /* else Ctrl-C: the worker owns j */
-        res = mp_py_modes_result(j, &j->z, "normal_modes(K, M) (chain)");
+    mp_modes_run(j);
+    res = mp_py_modes_result(j, &j->z, "normal_modes(K, M) (chain)");
 done:
     Py_XDECREF(kd);
     Py_XDECREF(ke);

@@ -123,11 +123,16 @@ typedef void (*mp_c_rhs_fn)(double, const double *, double *, void *);
 typedef struct {
     mp_c_rhs_fn f;
     void *user_data;
+    size_t n;        /* outputs the callback must write (set by the caller) */
 } c_fn;
 
+/* Contract: dydt = f(t, y) by the user's C function.  dydt is filled with NaN
+ * first, so that an output the callback leaves unwritten is a NonFiniteError
+ * naming it, never uninitialised memory. */
 static int c_rhs(double t, const double *y, double *dydt, void *data)
 {
     const c_fn *c = data;
+    for (size_t i = 0; i < c->n; i++) dydt[i] = NAN;
     c->f(t, y, dydt, c->user_data);
     return MP_OK;
 }
@@ -142,7 +147,85 @@ static int c_rhs2(double t, const double *y, double *dydt, void *data)
 {
     const c_fn2 *c = data;
     memcpy(dydt, y + c->nq, c->nq * sizeof(double));
+    for (size_t i = 0; i < c->nq; i++) dydt[c->nq + i] = NAN; /* unwritten: NonFiniteError */
     c->fn.f(t, y, dydt + c->nq, c->fn.user_data);
+    return MP_OK;
+}
+
+/* ---- a C callback that is Python underneath (ctypes) --------------------------
+ * ctypes prints and swallows an exception raised in a Python callback (Ctrl-C
+ * included) and returns with the outputs unwritten.  The Python layer catches
+ * those through sys.unraisablehook into the list `caught`; the solve then runs
+ * with the GIL held, and after every call of the system the list is checked:
+ * the first exception caught stops the solve and is raised again. */
+
+typedef struct {
+    mp_ode_problem inner;
+    PyObject *caught;  /* a list (borrowed: alive for the whole call) */
+} py_watched;
+
+/* Contract: MP_ECALLBACK with the caught exception set when the call left one. */
+static int watch_check(const py_watched *w)
+{
+    if (PyList_GET_SIZE(w->caught) == 0) return MP_OK;
+    PyObject *e = PyList_GET_ITEM(w->caught, 0);
+    if (PyExceptionInstance_Check(e)) {
+        PyErr_SetObject((PyObject *)Py_TYPE(e), e);
+        PyObject *tb = PyException_GetTraceback(e);
+        if (tb) {
+            PyObject *tp, *v, *otb;
+            PyErr_Fetch(&tp, &v, &otb);
+            Py_XDECREF(otb);
+            PyErr_Restore(tp, v, tb);
+        }
+    } else {
+        PyErr_SetString(PyExc_RuntimeError, "a ctypes callback raised an exception");
+    }
+    return MP_ECALLBACK;
+}
+
+static int watched_rhs(double t, const double *y, double *dydt, void *data)
+{
+    const py_watched *w = data;
+    int rc = w->inner.rhs(t, y, dydt, w->inner.data);
+    return rc != MP_OK ? rc : watch_check(w);
+}
+
+static int watched_jac(double t, const double *y, double *jac, void *data)
+{
+    const py_watched *w = data;
+    int rc = w->inner.jac(t, y, jac, w->inner.data);
+    return rc != MP_OK ? rc : watch_check(w);
+}
+
+/* Contract: p becomes the watched version of itself (wd holds the original). */
+static void watch_problem(mp_ode_problem *p, py_watched *wd, PyObject *caught)
+{
+    wd->inner = *p;
+    wd->caught = caught;
+    p->rhs = watched_rhs;
+    p->jac = p->jac ? watched_jac : NULL;
+    p->data = wd;
+}
+
+/* A Jacobian given as a constant matrix (SciPy accepts an array for jac). */
+typedef struct {
+    mp_ode_problem inner;
+    const double *J;   /* n x n, row-major */
+} const_jac;
+
+static int const_jac_rhs(double t, const double *y, double *dydt, void *data)
+{
+    const const_jac *c = data;
+    return c->inner.rhs(t, y, dydt, c->inner.data);
+}
+
+static int const_jac_jac(double t, const double *y, double *jac, void *data)
+{
+    (void)t;
+    (void)y;
+    const const_jac *c = data;
+    memcpy(jac, c->J, c->inner.n * c->inner.n * sizeof(double));
     return MP_OK;
 }
 
@@ -168,13 +251,14 @@ static int c_address(PyObject *a, PyObject *b, c_fn *out)
     void *ud = b == Py_None ? NULL : PyLong_AsVoidPtr(b);
     if (PyErr_Occurred()) return -1;
     if (!addr) {
-        PyErr_SetString(PyExc_ValueError, "C callback address is NULL");
+        PyErr_SetString(PyExc_ValueError, "the C callback is a NULL function pointer");
         return -1;
     }
     /* A data pointer converted to a function pointer: the one place this is
      * done, for callbacks handed over as addresses. */
     *(void **)&out->f = addr;
     out->user_data = ud;
+    out->n = 0;
     return 0;
 }
 
@@ -256,7 +340,7 @@ static int py_system_parse(PyObject *spec, size_t n, py_system *s)
         PyObject *ra, *ja;
         Py_ssize_t nq;
         if (!PyArg_ParseTuple(a, "OOn", &ra, &ja, &nq)) return -1;
-        c_fn rf, jf = {NULL, NULL};
+        c_fn rf, jf = {0};
         if (c_address(ra, Py_None, &rf) < 0) return -1;
         if (ja != Py_None && c_address(ja, Py_None, &jf) < 0) return -1;
         if (nq < 0 || (size_t)nq * 2 > n) {
@@ -273,7 +357,38 @@ static int py_system_parse(PyObject *spec, size_t n, py_system *s)
         PyErr_Format(PyExc_ValueError, "unknown system kind %s", kind);
         return -1;
     }
+    s->cfn.fn.n = n; /* the outputs a first-order C callback must write */
     return 0;
+}
+
+/* Contract: raise NonFiniteError for a solve that ended with MP_ENONFINITE,
+ * naming what produced the value: a C callback's unwritten output, the torque
+ * callback, an event function, the Jacobian or the right-hand side. */
+static void raise_nonfinite(const py_system *sys, const mp_ode_result *r)
+{
+    char detail[160];
+    const char *what = "solve";
+    size_t i = r->bad_index;
+    if (r->bad_what == MP_ODE_BAD_EVENT) {
+        snprintf(detail, sizeof detail, "events[%zu] returned NaN or inf at t = %.17g", i,
+                 r->t_fail);
+    } else if (r->bad_what == MP_ODE_BAD_JAC) {
+        snprintf(detail, sizeof detail, "jac[%zu, %zu] is NaN or inf near t = %.17g",
+                 i / sys->prob.n, i % sys->prob.n, r->t_fail);
+    } else if (sys->prob.rhs == c_rhs) {
+        snprintf(detail, sizeof detail, "the C callback left dydt[%zu] unwritten or NaN "
+                 "(or returned inf) near t = %.17g", i, r->t_fail);
+    } else if (sys->prob.rhs == c_rhs2 && i >= sys->prob.nq) {
+        snprintf(detail, sizeof detail, "the C callback left acc[%zu] unwritten or NaN "
+                 "(or returned inf) near t = %.17g", i - sys->prob.nq, r->t_fail);
+    } else if (sys->torque.fn && i < 3) {
+        snprintf(detail, sizeof detail, "the torque callback left tau[%zu] unwritten or NaN "
+                 "(or the right-hand side overflowed) near t = %.17g", i, r->t_fail);
+    } else {
+        snprintf(detail, sizeof detail, "the right-hand side gave dydt[%zu] = NaN or inf "
+                 "near t = %.17g", i, r->t_fail);
+    }
+    mp_py_raise_detail(MP_ENONFINITE, what, detail);
 }
 
 /* ---- results ---------------------------------------------------------------- */
@@ -322,8 +437,9 @@ static PyObject *result_to_python(const mp_ode_result *r, int dense)
         }
         PyList_SET_ITEM(ev, (Py_ssize_t)k, pair);
     }
-    out = Py_BuildValue("{s:i,s:i,s:i,s:l,s:d,s:N,s:N,s:l,s:l,s:l,s:l,s:l,s:N,s:N}", "status",
-                        r->status, "terminated", r->terminated, "stiff", r->stiff, "nswitch",
+    out = Py_BuildValue("{s:i,s:i,s:i,s:i,s:l,s:d,s:N,s:N,s:l,s:l,s:l,s:l,s:l,s:N,s:N}", "status",
+                        r->status, "terminated", r->terminated, "backward", r->backward, "stiff",
+                        r->stiff, "nswitch",
                         r->nswitch, "t_fail", r->t_fail, "t", t, "y", y,
                         "nfev", r->nfev, "njev", r->njev, "nlu", r->nlu, "nsteps", r->nsteps,
                         "nreject", r->nreject, "dense", den, "events", ev);
@@ -359,25 +475,32 @@ static PyObject *py_ode_solve(PyObject *self, PyObject *args, PyObject *kw)
     (void)self;
     static char *kwlist[] = {"method", "system", "t0", "tf", "y0", "rtol", "atol", "t_eval",
                              "dense", "events", "terminal", "direction", "args", "jac", "h",
-                             "first_step", "max_step", "max_steps", NULL};
+                             "first_step", "max_step", "max_steps", "watch", NULL};
     const char *mname;
-    PyObject *spec, *y0o, *atolo, *tevo, *evo, *termo, *diro, *eargs, *jaco;
+    PyObject *spec, *y0o, *atolo, *tevo, *evo, *termo, *diro, *eargs, *jaco, *watch = Py_None;
     double t0, tf, rtol, h, first_step, max_step;
     int dense;
     long max_steps;
-    if (!PyArg_ParseTupleAndKeywords(args, kw, "sOddOdOOpOOOOOdddl", kwlist, &mname, &spec, &t0,
-                                     &tf, &y0o, &rtol, &atolo, &tevo, &dense, &evo, &termo, &diro,
-                                     &eargs, &jaco, &h, &first_step, &max_step, &max_steps))
+    if (!PyArg_ParseTupleAndKeywords(args, kw, "sOddOdOOpOOOOOdddl|O", kwlist, &mname, &spec,
+                                     &t0, &tf, &y0o, &rtol, &atolo, &tevo, &dense, &evo, &termo,
+                                     &diro, &eargs, &jaco, &h, &first_step, &max_step, &max_steps,
+                                     &watch))
         return NULL;
+    if (watch != Py_None && !PyList_Check(watch)) {
+        PyErr_SetString(PyExc_TypeError, "watch must be a list");
+        return NULL;
+    }
     const mp_ode_method *m = mp_ode_method_find(mname);
     if (!m) {
         PyErr_Format(PyExc_ValueError, "unknown method %s", mname);
         return NULL;
     }
-    PyArrayObject *y0 = NULL, *atol = NULL, *tev = NULL, *term = NULL, *dir = NULL;
+    PyArrayObject *y0 = NULL, *atol = NULL, *tev = NULL, *term = NULL, *dir = NULL, *jm = NULL;
     PyObject *result = NULL;
     py_system sys;
     py_with_jac wj;
+    py_watched wd;
+    const_jac cj;
     py_events pe = {NULL, 0};
     int *iterm = NULL, *idir = NULL;
     memset(&sys, 0, sizeof sys);
@@ -402,8 +525,25 @@ static PyObject *py_ode_solve(PyObject *self, PyObject *args, PyObject *kw)
                      m->name);
         goto out;
     }
-    if (jaco != Py_None) {
-        wj.inner = sys.prob;
+    if (watch != Py_None) { /* a ctypes callback that runs Python: hold the GIL, check */
+        watch_problem(&prob, &wd, watch);
+        holds_python = 1;
+    }
+    if (jaco != Py_None && !PyCallable_Check(jaco)) { /* a constant Jacobian */
+        if (!(jm = mp_py_array(jaco, "jac", 2))) goto out;
+        if ((size_t)PyArray_DIM(jm, 0) != n || (size_t)PyArray_DIM(jm, 1) != n) {
+            PyErr_Format(PyExc_ValueError, "jac must have shape (%zu, %zu)", n, n);
+            goto out;
+        }
+        if (mp_py_require_finite(jm, "jac") < 0) goto out;
+        cj.inner = prob;
+        cj.J = PyArray_DATA(jm);
+        prob.rhs = const_jac_rhs;
+        prob.jac = const_jac_jac;
+        prob.jac_const = 1;
+        prob.data = &cj;
+    } else if (jaco != Py_None) {
+        wj.inner = prob;
         wj.jac = (py_fn){jaco, eargs, n, n * n, "jac"};
         prob.rhs = py_jac_rhs;
         prob.jac = py_jac;
@@ -454,9 +594,7 @@ static PyObject *py_ode_solve(PyObject *self, PyObject *args, PyObject *kw)
     if (rc == MP_OK || rc == MP_EMAXSTEPS || rc == MP_ESTEP) {
         result = result_to_python(&r, dense);
     } else if (rc == MP_ENONFINITE) {
-        char detail[64];
-        snprintf(detail, sizeof detail, "near t = %.17g", r.t_fail);
-        mp_py_raise_detail(rc, "solve: the right-hand side or an event function", detail);
+        raise_nonfinite(&sys, &r);
     } else {
         mp_py_raise(rc, "solve");
     }
@@ -469,18 +607,37 @@ out:
     Py_XDECREF(tev);
     Py_XDECREF(term);
     Py_XDECREF(dir);
+    Py_XDECREF(jm);
     return result;
 }
 
 /* ---- ode_solve_many ----------------------------------------------------- */
 
+/* Progress of an ensemble: what the callback below is handed as ctx. */
+typedef struct {
+    size_t last;       /* trajectories done at the last report */
+    PyObject *report;  /* Python callable report(done, total), or NULL for a stderr line */
+} many_progress_ctx;
+
+/* Called by mp_ode_solve_many (from any worker thread, GIL not held) as
+ * trajectories finish; reports at most once per percent and at the end, to
+ * ctx->report(done, total) or as a line on stderr.  An exception raised by
+ * the callable is printed as unraisable and ignored: progress never stops a
+ * solve. */
 static void many_progress(size_t done, size_t total, void *ctx)
 {
-    size_t *last = ctx;
-    if (done != total && done * 100 / total == *last * 100 / total) return;
-    *last = done;
+    many_progress_ctx *c = ctx;
+    if (done != total && done * 100 / total == c->last * 100 / total) return;
+    c->last = done;
     PyGILState_STATE g = PyGILState_Ensure();
-    PySys_WriteStderr("\rsolve_many: %zu/%zu trajectories%s", done, total, done == total ? "\n" : "");
+    if (c->report) {
+        PyObject *r = PyObject_CallFunction(c->report, "nn", (Py_ssize_t)done, (Py_ssize_t)total);
+        if (r) Py_DECREF(r);
+        else PyErr_WriteUnraisable(c->report);
+    } else {
+        PySys_WriteStderr("\rsolve_many: %zu/%zu trajectories%s", done, total,
+                          done == total ? "\n" : "");
+    }
     PyGILState_Release(g);
 }
 
@@ -489,16 +646,22 @@ static PyObject *py_ode_solve_many(PyObject *self, PyObject *args, PyObject *kw)
     (void)self;
     static char *kwlist[] = {"method", "system", "t0", "tf", "y0s", "rtol", "atol", "t_eval",
                              "params", "args", "h", "first_step", "max_step", "max_steps",
-                             "threads", "progress", NULL};
+                             "threads", "progress", "watch", NULL};
     const char *mname;
-    PyObject *spec, *y0o, *atolo, *tevo, *paro, *eargs;
+    PyObject *spec, *y0o, *atolo, *tevo, *paro, *eargs, *watch = Py_None;
     double t0, tf, rtol, h, first_step, max_step;
     long max_steps;
-    int threads, progress;
-    if (!PyArg_ParseTupleAndKeywords(args, kw, "sOddOdOOOOdddlip", kwlist, &mname, &spec, &t0,
+    int threads;
+    PyObject *progress;  /* False, True (a stderr line) or a callable report(done, total) */
+    if (!PyArg_ParseTupleAndKeywords(args, kw, "sOddOdOOOOdddliO|O", kwlist, &mname, &spec, &t0,
                                      &tf, &y0o, &rtol, &atolo, &tevo, &paro, &eargs, &h,
-                                     &first_step, &max_step, &max_steps, &threads, &progress))
+                                     &first_step, &max_step, &max_steps, &threads, &progress,
+                                     &watch))
         return NULL;
+    if (watch != Py_None && !PyList_Check(watch)) {
+        PyErr_SetString(PyExc_TypeError, "watch must be a list");
+        return NULL;
+    }
     const mp_ode_method *m = mp_ode_method_find(mname);
     if (!m) return PyErr_Format(PyExc_ValueError, "unknown method %s", mname);
     PyArrayObject *y0s = NULL, *atol = NULL, *tev = NULL, *par = NULL, *yout = NULL,
@@ -508,6 +671,7 @@ static PyObject *py_ode_solve_many(PyObject *self, PyObject *args, PyObject *kw)
     py_fn *fns = NULL;
     c_fn *cfns = NULL;
     mp_rigid_torque *torques = NULL;
+    py_watched *watched = NULL;
     int *status = NULL;
     long *nfev = NULL;
     py_system sys;
@@ -622,20 +786,30 @@ static PyObject *py_ode_solve_many(PyObject *self, PyObject *args, PyObject *kw)
             probs[i].data = &cfns[i];
         }
     }
+    int holds_python = sys.holds_python;
+    if (watch != Py_None && k > 0) { /* a ctypes callback that runs Python: see py_watched */
+        if (!(watched = PyMem_Calloc(k, sizeof *watched))) {
+            PyErr_NoMemory();
+            goto out;
+        }
+        for (size_t i = 0; i < k; i++) watch_problem(&probs[i], &watched[i], watch);
+        holds_python = 1;
+    }
     mp_ode_options o;
     fill_options(&o, rtol, atol, first_step, max_step, h, max_steps, tev);
     npy_intp shape[3] = {(npy_intp)k, (npy_intp)n, (npy_intp)nt};
     if (!(yout = mp_py_empty(3, shape))) goto out;
-    size_t last = 0;
+    many_progress_ctx pctx = {0, PyCallable_Check(progress) ? progress : NULL};
+    int want_progress = pctx.report || PyObject_IsTrue(progress) == 1;
     int rc;
-    if (sys.holds_python) {
+    if (holds_python) {
         rc = mp_ode_solve_many(m, probs, k, t0, tf, PyArray_DATA(y0s), &o, 1, PyArray_DATA(yout),
-                               status, nfev, progress ? many_progress : NULL, &last);
+                               status, nfev, want_progress ? many_progress : NULL, &pctx);
     } else {
         Py_BEGIN_ALLOW_THREADS
         rc = mp_ode_solve_many(m, probs, k, t0, tf, PyArray_DATA(y0s), &o, threads,
                                PyArray_DATA(yout), status, nfev,
-                               progress ? many_progress : NULL, &last);
+                               want_progress ? many_progress : NULL, &pctx);
         Py_END_ALLOW_THREADS
     }
     if (rc != MP_OK) {
@@ -658,6 +832,7 @@ out:
     PyMem_Free(fns);
     PyMem_Free(cfns);
     PyMem_Free(torques);
+    PyMem_Free(watched);
     PyMem_Free(probs);
     PyMem_Free(status);
     PyMem_Free(nfev);

@@ -6,6 +6,9 @@
 #include <stdio.h>
 #include <string.h>
 
+#include <gsl/gsl_errno.h>
+#include <gsl/gsl_sf_ellint.h>
+
 #include "models/models.h"
 
 static const mp_model *find_model(const char *name)
@@ -107,8 +110,31 @@ done:
     return (PyObject *)out;
 }
 
+/* ellipk_complement(kc): the complete elliptic integral of the first kind
+ * K(k) for the complementary modulus kc = sqrt(1 - k^2), 0 < kc <= 1, as
+ * Carlson's R_F(0, kc^2, 1) from GSL.  Taking kc (not k) keeps full precision
+ * near k = 1, where 1 - k^2 would cancel.  ValueError outside (0, 1]. */
+static PyObject *py_ellipk_complement(PyObject *self, PyObject *args)
+{
+    (void)self;
+    double kc;
+    if (!PyArg_ParseTuple(args, "d", &kc)) return NULL;
+    if (!(kc > 0.0 && kc <= 1.0)) {
+        PyErr_Format(PyExc_ValueError, "kc must be in (0, 1], got %g", kc);
+        return NULL;
+    }
+    gsl_sf_result r;
+    if (gsl_sf_ellint_RF_e(0.0, kc * kc, 1.0, GSL_PREC_DOUBLE, &r) != GSL_SUCCESS) {
+        mp_py_raise(MP_EGSL, "ellipk_complement");
+        return NULL;
+    }
+    return PyFloat_FromDouble(r.val);
+}
+
 PyMethodDef mp_py_scene_methods[] = {
     {"scene_info", py_scene_info, METH_VARARGS, "Dimension and parameter names of a scene."},
     {"scene_eval", py_scene_eval, METH_VARARGS, "Evaluate a scene over many states (internal)."},
+    {"ellipk_complement", py_ellipk_complement, METH_VARARGS,
+     "Complete elliptic integral K for the complementary modulus kc (GSL)."},
     {NULL, NULL, 0, NULL},
 };

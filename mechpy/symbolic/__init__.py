@@ -54,8 +54,13 @@ def coordinates(names):
 
     Examples
     --------
+    >>> import sympy
+    >>> import mechpy as mp
     >>> th, = mp.coordinates("theta")
+    >>> m, g, l = sympy.symbols("m g l", positive=True)
     >>> L = m * l**2 * th.diff()**2 / 2 + m * g * l * sympy.cos(th)
+    >>> th.diff()
+    Derivative(theta(t), t)
     """
     from .derive import coordinates as _coordinates
     return _coordinates(names)
@@ -83,7 +88,7 @@ def _key(kind, parts, param_names) -> str:
     h.update(kind.encode())
     for p in parts:
         h.update(b"\0")
-        h.update(sp.srepr(p).encode() if not isinstance(p, str) else p.encode())
+        h.update(sp.srepr(p, order="none").encode() if not isinstance(p, str) else p.encode())
     h.update(b"\0" + "\0".join(param_names).encode())
     h.update(b"\0" + _generator_hash().encode())
     return h.hexdigest()[:40]
@@ -94,11 +99,11 @@ def _meta(ir, source, constraints=(), numpy_blocks=False):
     meta = dict(kind=ir.kind, n=ir.n, nc=ir.nc, k=ir.k, nq=ir.nq, names=ir.names,
                 param_names=ir.param_names, cyclic=ir.cyclic,
                 has_energy="energy" in ir.blocks, source=source,
-                equations=sp.srepr(ir.equations),
+                equations=sp.srepr(ir.equations, order="none"),
                 constraints=[str(g) for g in constraints])
     if numpy_blocks:
         sub = {p: sp.Symbol(f"mp_p{i}") for i, p in enumerate(ir.P)}
-        meta["blocks"] = {k: sp.srepr([sp.sympify(e).xreplace(sub) for e in v])
+        meta["blocks"] = {k: sp.srepr([sp.sympify(e).xreplace(sub) for e in v], order="none")
                           for k, v in ir.blocks.items()}
     return meta
 

@@ -9,11 +9,18 @@ signatures are the ABI that ``mechpy._core`` binds (see :data:`ABI_VERSION`).
 """
 from __future__ import annotations
 
+import re
+
 import sympy as sp
 from sympy.printing.c import C99CodePrinter
 from sympy.printing.codeprinter import PrintMethodNotImplementedError
 
+from . import build
 from .build import ABI_VERSION
+
+#: Generated blocks (characters) from which a Lagrangian system's Jacobian
+#: compiles as a translation unit of its own, beside the rest.
+SPLIT = 60_000
 
 #: The dense solver, written once.  NA is the size of the linear system.
 RUNTIME = r"""
@@ -91,40 +98,197 @@ class _Printer(C99CodePrinter):
         return super()._print_Pow(expr)
 
 
-def _block(name, exprs, ir, args, what):
-    """A static function ``name`` writing the expressions to out[]."""
-    sub = {ir.T: sp.Symbol("t")}
+#: C names of the one-argument functions printed directly.
+_FUNCS1 = {"sin": "sin", "cos": "cos", "tan": "tan", "exp": "exp", "log": "log",
+           "asin": "asin", "acos": "acos", "atan": "atan", "sinh": "sinh", "cosh": "cosh",
+           "tanh": "tanh", "asinh": "asinh", "acosh": "acosh", "atanh": "atanh",
+           "Abs": "fabs"}
+
+
+class _Emitter:
+    """Common subexpressions and C printing in one pass over an expression DAG.
+
+    Every non-atomic sub-expression met more than once (SymPy expressions are
+    hashable and compare structurally) becomes a ``const double`` temporary,
+    emitted before its first use; sums, products, powers, numbers and the
+    elementary functions are printed here without rebuilding or sorting any
+    expression, anything else by SymPy's C99 printer (``_Printer``).  ``names``
+    maps symbols to their C names.
+    """
+
+    def __init__(self, names, coef=()):
+        self.names = names
+        self.coef = frozenset(coef)
+        self.count = {}
+        self.temps = {}
+        self.lines = []
+        self.pr = None
+
+    def scan(self, e):
+        """Count the references to each sub-expression of e (iteratively)."""
+        count = self.count
+        stack = [e]
+        while stack:
+            x = stack.pop()
+            if not x.args:
+                continue
+            c = count.get(x)
+            count[x] = 1 if c is None else c + 1
+            if c is None and (x.is_Add or x.is_Mul or x.is_Pow or x.is_Function):
+                stack.extend(x.args)
+
+    def _num(self, x):
+        if x.is_Integer:
+            return f"{int(x)}.0" if abs(int(x)) < 2 ** 53 else repr(float(x))
+        if x.is_Rational:
+            return f"({x.p}.0/{x.q}.0)"
+        if x.is_Float:
+            return repr(float(x))
+        return None
+
+    def _fallback(self, x):
+        if self.pr is None:
+            self.pr = _Printer()
+        return self.pr.doprint(x.xreplace({s: sp.Symbol(c) for s, c in self.names.items()
+                                           if s in x.free_symbols}))
+
+    def expr(self, x):
+        """C text of x; temporaries it needs are appended to ``lines``."""
+        if x.is_Symbol:
+            return self.names.get(x, x.name)
+        if x.is_Number:
+            r = self._num(x)
+            return r if r is not None else self._fallback(x)
+        t = self.temps.get(x)
+        if t is not None:
+            return t
+        text = self._render(x)
+        if self.count.get(x, 0) > 1:
+            t = f"mp_c{len(self.temps)}"
+            self.temps[x] = t
+            self.lines.append(f"    const double {t} = {text};")
+            return t
+        return text
+
+    def _pow(self, b, e):
+        """C text of b**e for a numeric e (None: not a simple case)."""
+        if e.is_Integer:
+            k = int(e)
+            if 1 <= k <= 4:
+                bt = self.expr(b)
+                return "(" + "*".join([bt] * k) + ")"
+            if -4 <= k <= -1:
+                bt = self.expr(b)
+                return "(1.0/(" + "*".join([bt] * -k) + "))"
+            return None
+        if e == sp.S.Half:
+            return f"sqrt({self.expr(b)})"
+        if e == -sp.S.Half:
+            return f"(1.0/sqrt({self.expr(b)}))"
+        return None
+
+    def _terms(self, args):
+        """C texts of the terms of a sum, terms that differ only by a factor of
+        numbers and parameters gathered: c1 X + c2 X -> (c1 + c2) X, the sum
+        of coefficients a temporary shared by every sum that has it."""
+        groups = {}
+        for a in args:
+            if a.is_Mul:
+                co = [f for f in a.args if f.is_Number or f in self.coef]
+                core = [f for f in a.args if not (f.is_Number or f in self.coef)]
+                co, core = (_product(co), _product(core)) if co else (sp.S.One, a)
+            elif a.is_Number or a in self.coef:
+                co, core = a, sp.S.One
+            else:
+                co, core = sp.S.One, a
+            groups.setdefault(core, []).append((co, a))
+        out = []
+        for core, terms in groups.items():
+            if len(terms) == 1 or core is sp.S.One:
+                out.extend(self.expr(a) for _, a in terms)
+                continue
+            c = sp.Add(*[co for co, _ in terms])
+            ct = self.expr(c)
+            if c not in self.temps:
+                text, ct = ct, f"mp_c{len(self.temps)}"
+                self.temps[c] = ct
+                self.lines.append(f"    const double {ct} = {text};")
+            out.append(f"{ct}*{self.expr(core)}")
+        return out
+
+    def _render(self, x):
+        if x.is_Add:
+            return "(" + " + ".join(self._terms(x.args)) + ")"
+        if x.is_Mul:
+            num, den = [], []
+            for a in x.args:
+                if a.is_Pow and a.exp.is_Rational and a.exp.is_negative:
+                    d = self._pow(a.base, -a.exp)
+                    den.append(d if d is not None else self.expr(a.base ** -a.exp))
+                elif a is sp.S.NegativeOne:
+                    num.append("-1.0")
+                else:
+                    num.append(self.expr(a))
+            top = "*".join(num) if num else "1.0"
+            return f"({top})" if not den else f"(({top})/({'*'.join(den)}))"
+        if x.is_Pow:
+            b, e = x.args
+            if e.is_Number:
+                r = self._pow(b, e)
+                if r is not None:
+                    return r
+                return f"pow({self.expr(b)}, {self._num(e) or self._fallback(e)})"
+            return f"pow({self.expr(b)}, {self.expr(e)})"
+        if x.is_Function:
+            f = _FUNCS1.get(type(x).__name__)
+            if f is not None and len(x.args) == 1:
+                return f"{f}({self.expr(x.args[0])})"
+            if type(x).__name__ == "atan2":
+                return f"atan2({self.expr(x.args[0])}, {self.expr(x.args[1])})"
+        return self._fallback(x)
+
+
+def _product(factors):
+    """The product of already canonical factors, without re-evaluating it."""
+    if not factors:
+        return sp.S.One
+    return factors[0] if len(factors) == 1 else sp.Mul._from_args(factors)
+
+
+def _block(name, exprs, ir, args, what, static=True):
+    """A function ``name`` (static unless ``static`` is False) writing the
+    expressions to out[]."""
+    names = {ir.T: "t"}
     for i, p in enumerate(ir.P):
-        sub[p] = sp.Symbol(f"mp_p{i}")
-    exprs = [sp.sympify(e).xreplace(sub) for e in exprs]
-    reps, red = sp.cse(exprs, symbols=sp.numbered_symbols("mp_c"))
-    pr = _Printer()
-    used = set()
-    for e in red:
-        used |= e.free_symbols
-    for _, e in reps:
-        used |= e.free_symbols
-    lines = [f"/* out[0..{len(exprs) - 1}] = {what} at (t, y), parameters p"
-             + (", unknowns z" if "const double *z" in args else "") + ". */",
-             f"static void {name}({args})", "{"]
-    for i in range(ir.n):
-        if sp.Symbol(f"mp_y{i}") in used:
-            lines.append(f"    const double mp_y{i} = y[{i}];")
-    for i in range(len(ir.P)):
-        if sp.Symbol(f"mp_p{i}") in used:
-            lines.append(f"    const double mp_p{i} = p[{i}];")
-    for i in range(len(ir.Z)):
-        if sp.Symbol(f"mp_z{i}") in used:
-            lines.append(f"    const double mp_z{i} = z[{i}];")
+        names[p] = f"mp_p{i}"
+    exprs = [sp.sympify(e) for e in exprs]
+    em = _Emitter(names, ir.P)
+    for e in exprs:
+        em.scan(e)
+    outs = []
     try:
-        for s, e in reps:
-            lines.append(f"    const double {s} = {pr.doprint(e)};")
-        for i, e in enumerate(red):
-            lines.append(f"    out[{i}] = {pr.doprint(e)};")
+        for i, e in enumerate(exprs):
+            outs.append(f"    out[{i}] = {em.expr(e)};")
     except PrintMethodNotImplementedError as exc:
         bad = str(exc).split(":")[1].split("\n")[0].strip() if ":" in str(exc) else str(exc)
         raise ValueError(f"{what}: SymPy cannot print {bad} as C; rewrite it with elementary "
                          "functions (sin, exp, sqrt, ...) or use backend='numpy'") from None
+    body = "\n".join(em.lines + outs)
+    lines = [f"/* out[0..{len(exprs) - 1}] = {what} at (t, y), parameters p"
+             + (", unknowns z" if "const double *z" in args else "") + ". */",
+             f"{'static ' if static else ''}void {name}({args})", "{"]
+    # the inputs the body reads, as locals (no reload after each store to out)
+    used = set(re.findall(r"\bmp_[ypz]\d+\b", body))
+    for i in range(ir.n):
+        if f"mp_y{i}" in used:
+            lines.append(f"    const double mp_y{i} = y[{i}];")
+    for i in range(len(ir.P)):
+        if f"mp_p{i}" in used:
+            lines.append(f"    const double mp_p{i} = p[{i}];")
+    for i in range(len(ir.Z)):
+        if f"mp_z{i}" in used:
+            lines.append(f"    const double mp_z{i} = z[{i}];")
+    lines.append(body)
     lines.append("    (void)t; (void)y; (void)p; (void)out;")
     lines.append("}")
     return "\n".join(lines)
@@ -148,9 +312,12 @@ def _header(ir, status):
 #define NC {nc}   /* coordinates */
 #define NK {k}   /* constraints */
 #define NA {na}   /* size of the linear system */
-
-const long mp_gen_dims[5] = {{{n}, {ir.nq}, {len(ir.P)}, {k}, {ABI_VERSION}}};
 """
+
+
+def _dims(ir):
+    return (f"const long mp_gen_dims[5] = {{{ir.n}, {ir.nq}, {len(ir.P)}, {ir.k}, "
+            f"{ABI_VERSION}}};\n")
 
 
 _ARGS = "double t, const double *y, const double *p, double *out"
@@ -160,13 +327,24 @@ _ARGS_Z = "double t, const double *y, const double *p, const double *z, double *
 def _lagrangian_source(ir, status):
     B = ir.blocks
     n, k = ir.nc, ir.k
-    parts = [_header(ir, status), RUNTIME,
-             _block("gen_A", B["A"], ir, _ARGS, "the mass matrix"),
-             _block("gen_b", B["b"], ir, _ARGS, "the equations of motion (right-hand side)"),
-             _block("gen_D", B["D"], ir, _ARGS_Z, "the Jacobian"),
-             _block("gen_energy", B["energy"], ir, _ARGS, "the energy"),
-             _block("gen_momenta", B["momenta"], ir, _ARGS, "the momenta"),
-             _block("gen_lag", B["lag"], ir, _ARGS, "L")]
+    blocks = [_block("gen_A", B["A"], ir, _ARGS, "the mass matrix"),
+              _block("gen_b", B["b"], ir, _ARGS, "the equations of motion (right-hand side)"),
+              _block("gen_energy", B["energy"], ir, _ARGS, "the energy"),
+              _block("gen_momenta", B["momenta"], ir, _ARGS, "the momenta"),
+              _block("gen_lag", B["lag"], ir, _ARGS, "L")]
+    jac = _block("gen_D", B["D"], ir, _ARGS_Z, "the Jacobian", static=False)
+    if len(jac) + sum(map(len, blocks)) > SPLIT:
+        # the Jacobian's block compiles beside the rest (see build.units)
+        parts = [_header(ir, status), "#if defined(__GNUC__)\n#define MP_HIDDEN "
+                 "__attribute__((visibility(\"hidden\")))\n#else\n#define MP_HIDDEN\n#endif\n"
+                 f"MP_HIDDEN void gen_D({_ARGS_Z});", build.UNIT, _dims(ir),
+                 RUNTIME] + blocks
+        tail = [build.UNIT, jac]
+    else:
+        parts = [_header(ir, status), _dims(ir), RUNTIME, jac.replace("\nvoid gen_D(",
+                                                                        "\nstatic void gen_D(")]
+        parts += blocks
+        tail = []
     parts.append(r"""
 /* Solve A z = b at (t, y): z = (q'', -lambda).  A0 receives A before the
  * factorisation, LU its factors.  Returns MP_ESINGULAR for a singular mass
@@ -298,7 +476,7 @@ int mp_gen_constraint_forces(double t, const double *y, double *out, void *param
 """)
     else:
         parts.append(_absent("mp_gen_multipliers") + _absent("mp_gen_constraint_forces"))
-    return "\n".join(parts)
+    return "\n".join(parts + tail)
 
 
 def _absent(name, sig="double t, const double *y, double *out, void *params"):
@@ -314,7 +492,7 @@ int {name}({sig})
 
 def _equations_source(ir, status):
     B = ir.blocks
-    parts = [_header(ir, status),
+    parts = [_header(ir, status), _dims(ir),
              _block("gen_f", B["f"], ir, _ARGS, "rhs"),
              _block("gen_J", B["J"], ir, _ARGS, "the Jacobian")]
     parts.append(r"""

@@ -148,6 +148,86 @@ def _check_functions(e, what):
                          "coordinates or their first derivatives")
 
 
+class _Diff:
+    """Partial derivatives of expressions in plain symbols, memoised.
+
+    SymPy's ``diff`` builds a ``Derivative`` object per call and per
+    sub-expression and asks assumptions of every intermediate; here the
+    elementary rules (sums, products, powers, the trigonometric, hyperbolic,
+    exponential and logarithmic functions of one argument) are applied
+    directly, each sub-expression's derivative and free symbols are computed
+    once per variable, and anything else falls back to ``sympy.diff``.  The
+    results are equal (``==`` after SymPy's automatic evaluation) to
+    ``sympy.diff``'s up to the order of factors and terms.
+    """
+
+    def __init__(self):
+        self._memo = {}
+        self._free = {}
+        t = sp.functions
+        d1 = {
+            t.sin: lambda a: t.cos(a),
+            t.cos: lambda a: -t.sin(a),
+            t.tan: lambda a: 1 + t.tan(a) ** 2,
+            t.exp: lambda a: t.exp(a),
+            t.log: lambda a: 1 / a,
+            t.sinh: lambda a: t.cosh(a),
+            t.cosh: lambda a: t.sinh(a),
+            t.tanh: lambda a: 1 - t.tanh(a) ** 2,
+            t.asin: lambda a: 1 / sp.sqrt(1 - a ** 2),
+            t.acos: lambda a: -1 / sp.sqrt(1 - a ** 2),
+            t.atan: lambda a: 1 / (1 + a ** 2),
+        }
+        self._d1 = d1
+
+    def free(self, e):
+        """The free symbols of ``e`` (memoised)."""
+        f = self._free.get(e)
+        if f is None:
+            if e.is_Symbol:
+                f = frozenset((e,))
+            elif not e.args:
+                f = frozenset()
+            elif e.is_Add or e.is_Mul or e.is_Pow or e.is_Function:
+                f = frozenset().union(*(self.free(a) for a in e.args))
+            else:
+                f = frozenset(e.free_symbols)
+            self._free[e] = f
+        return f
+
+    def __call__(self, e, v):
+        """d e / d v for a plain symbol ``v``."""
+        if v not in self.free(e):
+            return sp.S.Zero
+        if e is v:
+            return sp.S.One
+        key = (e, v)
+        r = self._memo.get(key)
+        if r is not None:
+            return r
+        if e.is_Add:
+            r = sp.Add(*[self(a, v) for a in e.args])
+        elif e.is_Mul:
+            args = e.args
+            terms = []
+            for i, a in enumerate(args):
+                if v in self.free(a):
+                    da = self(a, v)
+                    if da != 0:
+                        terms.append(sp.Mul(*args[:i], da, *args[i + 1:]))
+            r = sp.Add(*terms)
+        elif e.is_Pow and v not in self.free(e.exp):
+            b, x = e.args
+            r = x * b ** (x - 1) * self(b, v)
+        elif e.is_Function and len(e.args) == 1 and type(e) in self._d1:
+            a = e.args[0]
+            r = self._d1[type(e)](a) * self(a, v)
+        else:
+            r = sp.diff(e, v)
+        self._memo[key] = r
+        return r
+
+
 def lagrangian_ir(L, q, params=None, constraints=(), forces=None, baumgarte=None) -> IR:
     """The blocks of a Lagrangian system (see the module docstring)."""
     t = dynamicsymbols._t
@@ -209,19 +289,20 @@ def lagrangian_ir(L, q, params=None, constraints=(), forces=None, baumgarte=None
     # than linearly with an expression's size): F and its Jacobian are
     # assembled from dL/dq, dp/dq, dp/dt and their own derivatives.
     V = Q + U
-    p = [sp.diff(Lx, Ui) for Ui in U]
-    dLdq = [sp.diff(Lx, Qi) for Qi in Q]
-    M = sp.Matrix(n, n, lambda i, j: sp.diff(p[i], U[j]))
-    Pq = [[sp.diff(p[i], Q[j]) for j in range(n)] for i in range(n)]
-    Pt = [sp.diff(p[i], T) for i in range(n)]
-    rest = [sum(Pq[i][j] * U[j] for j in range(n)) + Pt[i] - Fx[i] for i in range(n)]
+    d = _Diff()
+    p = [d(Lx, Ui) for Ui in U]
+    dLdq = [d(Lx, Qi) for Qi in Q]
+    M = sp.Matrix(n, n, lambda i, j: d(p[i], U[j]))
+    Pq = [[d(p[i], Q[j]) for j in range(n)] for i in range(n)]
+    Pt = [d(p[i], T) for i in range(n)]
+    rest = [sp.Add(*[Pq[i][j] * U[j] for j in range(n)], Pt[i], -Fx[i]) for i in range(n)]
     F = [dLdq[i] - rest[i] for i in range(n)]
     # d2L/dq_i dq_c (symmetric: the upper triangle is taken) and
     # d2L/dq_i dq'_c = dp_c/dq_i (already in Pq)
     Lqq = [[None] * n for _ in range(n)]
     for i in range(n):
         for c in range(i, n):
-            Lqq[i][c] = Lqq[c][i] = sp.diff(dLdq[i], Q[c])
+            Lqq[i][c] = Lqq[c][i] = d(dLdq[i], Q[c])
     Lqv = [Lqq[i] + [Pq[c][i] for c in range(n)] for i in range(n)]
     NA = n + k
     A = sp.zeros(NA, NA)
@@ -229,24 +310,24 @@ def lagrangian_ir(L, q, params=None, constraints=(), forces=None, baumgarte=None
     b = list(F)
     gdots = []
     for c, g in enumerate(cx):
-        Crow = [sp.diff(g, Qj) for Qj in Q]
+        Crow = [d(g, Qj) for Qj in Q]
         for j in range(n):
             A[n + c, j] = Crow[j]
             A[j, n + c] = Crow[j]
-        gd = sum(Crow[j] * U[j] for j in range(n)) + sp.diff(g, T)
+        gd = sum(Crow[j] * U[j] for j in range(n)) + d(g, T)
         gdots.append(gd)
-        gdd = sum(sp.diff(gd, Q[j]) * U[j] for j in range(n)) + sp.diff(gd, T)
+        gdd = sum(d(gd, Q[j]) * U[j] for j in range(n)) + d(gd, T)
         b.append(-gdd - 2 * alpha * gd - beta ** 2 * g)
     Z = [sp.Symbol(f"mp_z{i}") for i in range(NA)]
     D = sp.zeros(NA, 2 * n)
-    AZ = [sum(A[i, j] * Z[j] for j in range(NA)) for i in range(NA)]   # (A z)_i
+    AZ = [sp.Add(*[A[i, j] * Z[j] for j in range(NA)]) for i in range(NA)]   # (A z)_i
     for i in range(NA):
         for c, v in enumerate(V):
             if i < n:   # d/dv of dL/dq_i - (sum_j Pq_ij U_j + Pt_i - Q_i)
-                db = Lqv[i][c] - sp.diff(rest[i], v)
+                db = Lqv[i][c] - d(rest[i], v)
             else:
-                db = sp.diff(b[i], v)
-            D[i, c] = db - sp.diff(AZ[i], v)
+                db = d(b[i], v)
+            D[i, c] = db - d(AZ[i], v)
     lag = ([Lx] + dLdq + p + [Lqv[a][c] for a in range(n) for c in range(n)]
            + [Lqv[a][n + c] for a in range(n) for c in range(n)] + list(M))
     energy = sum(U[i] * p[i] for i in range(n)) - Lx
@@ -273,8 +354,8 @@ def lagrangian_ir(L, q, params=None, constraints=(), forces=None, baumgarte=None
     for i in range(n):
         lhs = sum(M[i, j].xreplace(back) * acc[j] for j in range(n))
         rhs = F[i].xreplace(back) + sum(lam[c] * A[n + c, i].xreplace(back) for c in range(k))
-        eqs.append(sp.Eq(lhs, rhs))
-    eqs += [sp.Eq(g.xreplace(back), 0) for g in cx]
+        eqs.append(sp.Eq(lhs, rhs, evaluate=False))
+    eqs += [sp.Eq(g.xreplace(back), 0, evaluate=False) for g in cx]
     ir.equations = eqs
     return ir
 
@@ -305,7 +386,8 @@ def equations_ir(rhs, y, params=None, energy=None) -> IR:
     fx = [plain(f, f"rhs[{i}]") for i, f in enumerate(fs)]
     ex = [] if energy is None else [plain(sp.sympify(energy), "energy")]
     names, P = _params(params, fx + ex, T, allowed_extra=Y)
-    J = [sp.diff(fx[i], Y[j]) for i in range(n) for j in range(n)]
+    d = _Diff()
+    J = [d(fx[i], Y[j]) for i in range(n) for j in range(n)]
     ir = IR("equations", n, n, 0, 0, T, Y, P, [], [_name(x) for x in ys], names)
     ir.blocks = dict(f=fx, J=J)
     if ex:

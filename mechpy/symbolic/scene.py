@@ -162,12 +162,7 @@ class CompiledScene(Scene):
 
     def _eval(self, what, t, y, *, flat=False):
         """Function ``what`` at (t, y) for y of shape (dim, ...) -> (m, nout)."""
-        y = as_array(y, "y", min_ndim=1)
-        if y.shape[0] != self._dim:
-            raise ValueError(f"y must have {self._dim} components along its first axis, "
-                             f"got shape {y.shape}")
-        t = as_scalar(t, "t")
-        Y = np.ascontiguousarray(y.reshape(self._dim, -1).T)
+        t, Y, y = self._state_rows(t, y)
         return self._raw(what, t, Y), y.shape[1:]
 
     def _raw(self, what, t, Y, vec=None):

@@ -36,6 +36,9 @@ lagrangians
 constraints
     :func:`constraint_forces`, :func:`pendulum_tension`: forces of
     constraint from Lagrange multipliers.
+
+Array shapes follow the layout rule in :mod:`mechpy` (``help(mechpy)``):
+paths and trajectories state first, (d, m); functions of states y (n, ...) return (p, ...).
 """
 from .action import (MAX_STEPS, StationaryPath, VariationalTrajectory, stationary_path,
                      variational_integrate)

@@ -134,8 +134,9 @@ def brachistochrone(x_end: float, y_end: float, g: float = 9.81, n: int = 200, *
 
     Examples
     --------
+    >>> import mechpy as mp
     >>> r = mp.variational.brachistochrone(2.0, 1.0)
-    >>> round(r.time_exact, 10), round(r.time_line, 5)
+    >>> round(float(r.time_exact), 10), round(float(r.time_line), 5)
     (0.8055638295, 1.00964)
     """
     X = as_scalar(x_end, "x_end")

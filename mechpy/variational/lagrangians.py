@@ -245,7 +245,8 @@ class CentralForce:
     def rhs(self, t, y):
         """d/dt of the state (r, phi, r_dot, phi_dot), for :func:`mechpy.solve`."""
         r, _, rd, phid = y
-        return [rd, phid, r * phid * phid - self.k / (self.m * r * r), -2 * rd * phid / r]
+        return np.array([rd, phid, r * phid * phid - self.k / (self.m * r * r),
+                         -2 * rd * phid / r], dtype=np.float64)
 
     def momenta(self, y):
         """(p_r, p_phi) = (m r_dot, m r^2 phi_dot) for states (4, ...)."""
@@ -278,7 +279,8 @@ class RotatingHoop:
     def rhs(self, t, y):
         """d/dt (theta, theta_dot), for :func:`mechpy.solve`."""
         th, thd = y
-        return [thd, np.sin(th) * (self.omega ** 2 * np.cos(th) - self.g / self.R)]
+        return np.array([thd, np.sin(th) * (self.omega ** 2 * np.cos(th) - self.g / self.R)],
+                        dtype=np.float64)
 
     def jacobi_integral(self, y):
         """h(theta, theta_dot) (J) for states (2, ...)."""
@@ -298,24 +300,42 @@ class RotatingHoop:
         :math:`-mR(\dot\theta^2 + \omega^2\sin^2\theta) - mg\cos\theta`, the
         azimuthal one :math:`2mR\omega\dot\theta\cos\theta` (the Coriolis
         push), the tangential one 0.
+
+        Parameters
+        ----------
+        t : float or array_like
+            Time(s) (s), broadcast against the states' trailing axes.
+        y : array_like, shape (2, ...)
+            States (theta, theta_dot), e.g. ``Solution.y``.
+
+        Returns
+        -------
+        ndarray, shape (3, ...)
+            A function of states: the component axis first, then the states'
+            axes broadcast with t (the layout rule in :mod:`mechpy`).
         """
-        t = np.asarray(t, dtype=float)
-        th, thd = np.asarray(y, dtype=float)
+        y = as_array(y, "y", min_ndim=1)
+        if y.shape[0] != 2:
+            raise ValueError(f"y must have 2 components (theta, theta_dot) along its first "
+                             f"axis, got shape {y.shape}")
+        t = as_array(t, "t")
+        try:
+            t, th, thd = np.broadcast_arrays(t, y[0], y[1])
+        except ValueError:
+            raise ValueError(f"t of shape {t.shape} does not broadcast against the states' "
+                             f"axes {y.shape[1:]}") from None
         R, w, m, g = self.R, self.omega, self.m, self.g
         c, s = np.cos(w * t), np.sin(w * t)
         st, ct = np.sin(th), np.cos(th)
-        pos = R * np.stack([st * c, st * s, -ct])
-        vel = R * thd * np.stack([ct * c, ct * s, st]) + R * w * st * np.stack([-s, c, 0 * c])
-        J = np.stack([np.moveaxis(pos, 0, -1),
-                      np.moveaxis(np.stack([-s, c, 0 * c]), 0, -1)], axis=-2)   # (..., 2, 3)
-        bias = np.stack([np.sum(vel * vel, axis=0),
-                         -2 * w * (c * vel[0] + s * vel[1])], axis=-1)
-        F = np.moveaxis(np.stack([0 * c + 0 * th, 0 * th, -m * g + 0 * th]), 0, -1)
+        zero = np.zeros_like(th)
+        # Cartesian vectors as stacks (..., 3) for constraint_forces
+        rhat = np.stack([st * c, st * s, -ct], axis=-1)
+        phat = np.stack([-s, c, zero], axis=-1)
+        that = np.stack([ct * c, ct * s, st], axis=-1)
+        vel = R * thd[..., None] * that + R * w * st[..., None] * phat
+        J = np.stack([R * rhat, phat], axis=-2)                                  # (..., 2, 3)
+        bias = np.stack([np.sum(vel * vel, axis=-1),
+                         -2 * w * (c * vel[..., 0] + s * vel[..., 1])], axis=-1)
+        F = np.stack([zero, zero, np.full_like(th, -m * g)], axis=-1)
         _, N = constraint_forces(m, F, J, bias)
-        N = np.moveaxis(N, -1, 0)
-        rhat = pos / R
-        phat = np.stack([-s, c, 0 * c]) + 0 * pos
-        that = np.stack([ct * c, ct * s, st])
-        return np.stack([np.sum(N * rhat, 0), np.sum(N * phat, 0), np.sum(N * that, 0)])
-
-
+        return np.stack([np.sum(N * rhat, -1), np.sum(N * phat, -1), np.sum(N * that, -1)])

@@ -1,0 +1,749 @@
+"""The array-layout rule (mechpy's package docstring, README "Conventions"),
+checked on every public callable of every public module.
+
+1. States follow SciPy: state axis first, batch/time axes after it; a function
+   of states y (n, ...) returns (p, ...) or (...), t scalar or broadcast.
+2. Everything else is a NumPy stack: batch axes first, component axes last; a
+   series at times t is (len(t), n), a set of points (n_points, dim).
+
+Every public callable is in TABLE with its clause and a case that calls it
+on a scalar (batch ``()``) and on a batch (``(2, 3)``, two axes so that a
+flattening or transposing mistake shows), and returns (label, result,
+expected shape) triples.  A public name missing from TABLE fails the test:
+a new function cannot be added without being classified here.
+"""
+from __future__ import annotations
+
+import functools
+import inspect
+import types
+
+import numpy as np
+import pytest
+
+import mechpy as mp
+
+BATCHES = [(), (2, 3)]
+RNG = np.random.default_rng(7)
+
+
+def _r(*shape, lo=0.2, hi=0.9):
+    return RNG.uniform(lo, hi, shape)
+
+
+def _spd(b):
+    """A stack of diagonal-dominant symmetric 3x3 matrices, shape b + (3, 3)."""
+    a = _r(*b, 3, 3, lo=-0.2, hi=0.2)
+    return a + np.swapaxes(a, -1, -2) + np.diag([1.0, 2.0, 3.5])
+
+
+def _t(b):
+    """A time, scalar or of shape b."""
+    return 0.4 if b == () else _r(*b)
+
+
+# ------------------------------------------------------------------ cases
+# clause 1: functions of states (state axis first)
+
+def _scene_case(scene, b, extra=()):
+    n = scene.dim
+    y = _r(n, *b)
+    out = [("rhs", scene.rhs(0.3, y), (n,) + b),
+           ("jacobian", scene.jacobian(0.3, y), (n, n) + b),
+           ("energy", scene.energy(y), b)]
+    for name, p in extra:
+        out.append((name, getattr(scene, name)(y), (p,) + b if p else b))
+    return out
+
+
+def _scene_members(b):
+    """Scene methods and properties beyond the state functions."""
+    if b != ():
+        return [("ensemble_params", mp.scenes.Pendulum().ensemble_params(3, g=_r(3)), (3, 5))]
+    S = mp.scenes
+    c = S.SpringChain([1.0, 2.0, 1.5], [1.0, 2.0, 1.0, 3.0])
+    K, M = c.matrices()
+    u = S.SpringChain.uniform(4)
+    return [("Pendulum.period", S.Pendulum().period(0.5), ()),
+            ("Kepler.initial_state", S.Kepler().initial_state(0.5), (4,)),
+            ("Foucault.precession_rate", S.Foucault(45.0, 10.0).precession_rate, ()),
+            ("RigidBody.initial_state", S.RigidBody().initial_state([1.0, 2.0, 3.0]), (3,)),
+            ("RigidBody.initial_state, orientation",
+             S.RigidBody(orientation=True).initial_state([1.0, 2.0, 3.0]), (7,)),
+            ("RigidBody.moments", S.RigidBody().moments, (3,)),
+            ("SpringChain.initial_state", c.initial_state(_r(3)), (6,)),
+            ("SpringChain.matrices K", K, (3, 3)), ("M", M, (3, 3)),
+            ("SpringChain.modes", c.modes().vectors, (3, 3)),
+            ("SpringChain.uniform", u.rhs(0.0, _r(8)), (8,)),
+            ("SpringChain.ensemble_params", c.ensemble_params(2), (2, 11)),
+            ("replace", S.Pendulum().replace(g=1.0).rhs(0.0, _r(2)), (2,))]
+
+
+def _scenes(b):
+    S = mp.scenes
+    return _scene_members(b) + (_scene_case(S.Pendulum(), b) + _scene_case(S.VanDerPol(), b)
+            + _scene_case(S.Duffing(-1.0, 1.0, 0.2, 0.3, 1.2), b)
+            + _scene_case(S.Kepler(), b) + _scene_case(S.RestrictedThreeBody(), b)
+            + _scene_case(S.Foucault(45.0, 10.0), b)
+            + _scene_case(S.RigidBody((1.0, 2.0, 3.0)), b, [("angular_momentum", 3)])
+            + _scene_case(S.RigidBody((1.0, 2.0, 3.0), orientation=True), b,
+                          [("angular_momentum", 3)])
+            + _scene_case(S.HeavyTop(1.0, 2.0, 1.0), b, [("p_psi", 0), ("p_phi", 0)])
+            + _scene_case(S.SpringChain([1.0, 2.0, 1.5], [1.0, 2.0, 1.0, 3.0]), b,
+                          [("mode_energies", 3), ("momentum", 0)]))
+
+
+@functools.lru_cache(maxsize=None)
+def _compiled():
+    """A bead on a vertical circle in Cartesian coordinates: 2 coordinates,
+    one constraint (so momenta, constraint_forces and multipliers exist)."""
+    import sympy as sp
+    q = mp.coordinates("x z")
+    t = sp.Symbol("t")
+    x, z = q
+    m, g = sp.symbols("m g")
+    L = m / 2 * (x.diff(t) ** 2 + z.diff(t) ** 2) - m * g * z
+    return mp.lagrangian(L, q, params={"m": 1.0, "g": 9.81}, constraints=[x ** 2 + z ** 2 - 1])
+
+
+@functools.lru_cache(maxsize=None)
+def _compiled_free():
+    """A pendulum in its angle: 1 coordinate, no constraint."""
+    import sympy as sp
+    (th,) = mp.coordinates("th")
+    t = sp.Symbol("t")
+    g = sp.Symbol("g")
+    return mp.lagrangian(th.diff(t) ** 2 / 2 + g * sp.cos(th), [th], params={"g": 9.81})
+
+
+def _lagrangian_case(b):
+    sc = _compiled()
+    y = _r(4, *b)
+    free = _compiled_free()
+    extra = [] if b != () else [
+        ("small_oscillations", free.small_oscillations([0.0]).vectors, (1, 1)),
+        ("cyclic", np.array(free.cyclic, dtype=object), (0,)),
+        ("replace", free.replace(g=1.0).rhs(0.0, _r(2)), (2,))]
+    return extra + _scene_case(sc, b, [("momenta", 2)]) + [
+        ("constraint_forces", sc.constraint_forces(0.3, y), (2,) + b),
+        ("multipliers", sc.multipliers(0.3, y), (1,) + b)]
+
+
+def _equations_case(b):
+    import sympy as sp
+    y = mp.coordinates("u w")
+    mu = sp.Symbol("mu")
+    sc = mp.equations([y[1], -y[0] + mu * y[1]], y, params={"mu": 0.1},
+                      energy=(y[0] ** 2 + y[1] ** 2) / 2)
+    return _scene_case(sc, b)
+
+
+def _solve_case(b):
+    s = mp.solve(mp.scenes.Pendulum(), (0, 1), [0.3, 0.0], t_eval=np.linspace(0, 1, 5),
+                 dense_output=True)
+    tt = 0.5 if b == () else _r(*b)          # times of any shape: (n, *t.shape)
+    return [("Solution.t", s.t, (5,)), ("Solution.y", s.y, (2, 5)),
+            ("Solution.sol", s.sol(tt), (2,) + np.shape(tt))]
+
+
+def _solve_many_case(b):
+    e = mp.solve_many(mp.scenes.Pendulum(), (0, 1), _r(3, 2), t_eval=np.linspace(0, 1, 5),
+                      threads=1)
+    return [("t", e.t, (5,)), ("y", e.y, (3, 2, 5)), ("success", e.success, (3,)),
+            ("status", e.status, (3,)), ("nfev", e.nfev, (3,))]
+
+
+def _second_order_case(b):
+    so = mp.SecondOrder(lambda t, q: -q)
+    s = mp.solve(so, (0, 1), [1.0, 0.5, 0.0, 0.0], method="verlet", h=0.1)
+    return [("y", s.y, (4, s.t.size))]
+
+
+def _stationary_path_case(b):
+    V = mp.variational
+    p1 = V.stationary_path(mp.scenes.Pendulum(), 0.1, 0.2, 1.0, 10)
+    p3 = V.stationary_path(mp.scenes.HeavyTop(1.0, 2.0, 1.0), [0, 1, 0], [0.1, 1, 0.2], 0.1, 10)
+    return [("q 1-d", p1.q, (11,)), ("q", p3.q, (3, 11)), ("p", p3.p, (3, 11)),
+            ("qdot", p3.qdot, (3, 11)), ("t", p3.t, (11,))]
+
+
+def _variational_integrate_case(b):
+    V = mp.variational
+    tr = V.variational_integrate(mp.scenes.HeavyTop(1.0, 2.0, 1.0), (0, 0.5), [0, 1, 0],
+                                 [0, 0, 20.0], 0.1)
+    m = tr.t.size
+    return [("q", tr.q, (3, m)), ("p", tr.p, (3, m)), ("qdot", tr.qdot, (3, m)),
+            ("energy", tr.energy, (m,))]
+
+
+def _lagrangian_fn_case(b):
+    V = mp.variational
+    L1 = V.lagrangian(mp.scenes.Pendulum())
+    L3 = V.lagrangian(mp.scenes.HeavyTop(1.0, 2.0, 1.0))
+    return [("L 1-d", L1(_r(*b), _r(*b)), b),
+            ("L 3-d", L3(_r(3, *b), _r(3, *b)), b),
+            ("L compiled", V.lagrangian(_compiled())(_r(2, *b), _r(2, *b)), b)]
+
+
+def _momenta_case(b):
+    V = mp.variational
+    return [("pendulum", V.generalized_momenta(mp.scenes.Pendulum(), _r(*b), _r(*b)), b),
+            ("top", V.generalized_momenta(mp.scenes.HeavyTop(1.0, 2.0, 1.0),
+                                          _r(3, *b), _r(3, *b)), (3,) + b),
+            ("callable", V.generalized_momenta(V.CentralForce(), _r(2, *b), _r(2, *b)),
+             (2,) + b)]
+
+
+def _tension_case(b):
+    return [("T", mp.variational.pendulum_tension(mp.scenes.Pendulum(), _r(2, *b)), b)]
+
+
+def _central_force_case(b):
+    c = mp.variational.CentralForce()
+    return [("L", c(_r(2, *b), _r(2, *b)), b), ("rhs", c.rhs(0.0, _r(4, *b)), (4,) + b),
+            ("momenta", c.momenta(_r(4, *b)), (2,) + b)]
+
+
+def _hoop_case(b):
+    h = mp.variational.RotatingHoop()
+    y = _r(2, *b)
+    return [("L", h(_r(*b), _r(*b)), b), ("rhs", h.rhs(0.0, y), (2,) + b),
+            ("jacobi_integral", h.jacobi_integral(y), b),
+            ("normal_force, scalar t", h.normal_force(0.3, y), (3,) + b),
+            ("normal_force, t per state", h.normal_force(_t(b), y), (3,) + b)]
+
+
+def _trajectory3d_case(b):
+    pytest.importorskip("matplotlib")
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    path = _r(3, 7)                          # a path (3, m), as sol.y[:3]
+    ax = mp.plot.trajectory3d(path)
+    drawn = np.array(ax.lines[0].get_data_3d())
+    plt.close("all")
+    assert np.array_equal(drawn, path)       # rows read as x, y, z: not transposed
+    return [("drawn path", drawn, (3, 7))]
+
+
+# clause 2: NumPy stacks (batch first, components last)
+
+def _point_masses_case(b):
+    I = mp.inertia
+    m, r, v = _r(*b, 4), _r(*b, 4, 3), _r(*b, 4, 3)
+    return [("point_masses", I.point_masses(m, r), b + (3, 3)),
+            ("center_of_mass", I.center_of_mass(m, r), b + (3,)),
+            ("total_momentum", I.total_momentum(m, v), b + (3,)),
+            ("angular_momentum_about", I.angular_momentum_about(m, r, v), b + (3,))]
+
+
+def _inertia_case(b):
+    I = mp.inertia
+    J, w = _spd(b), _r(*b, 3)
+    moments, axes = I.principal_axes(J)
+    return [("shift", I.shift(J, 2.0, _r(*b, 3)), b + (3, 3)),
+            ("principal_axes moments", moments, b + (3,)), ("axes", axes, b + (3, 3)),
+            ("angular_momentum", I.angular_momentum(J, w), b + (3,)),
+            ("kinetic_energy", I.kinetic_energy(J, w), b)]
+
+
+def _stress_case(b):
+    S = mp.stress
+    sig = _spd(b)
+    vals, dirs = S.principal(sig)
+    return [("principal", vals, b + (3,)), ("directions", dirs, b + (3, 3)),
+            ("pressure", S.pressure(sig), b), ("von_mises", S.von_mises(sig), b),
+            ("max_shear", S.max_shear(sig), b), ("deviator", S.deviator(sig), b + (3, 3)),
+            ("traction", S.traction(sig, _r(*b, 3)), b + (3,))]
+
+
+def _rotation_case(b):
+    R = mp.rotation
+    ang = _r(*b, 3)
+    M = R.euler_matrix(ang)
+    q = R.quat_from_matrix(M)
+    return [("euler_matrix (..., 3)", M, b + (3, 3)),
+            ("euler_matrix phi, theta, psi", R.euler_matrix(*np.moveaxis(ang, -1, 0)),
+             b + (3, 3)),
+            ("euler_angles", R.euler_angles(M), b + (3,)),
+            ("angular_velocity", R.angular_velocity(ang, _r(*b, 3)), b + (3,)),
+            ("euler_rates", R.euler_rates(ang, _r(*b, 3)), b + (3,)),
+            ("quat_from_matrix", q, b + (4,)), ("matrix_from_quat", R.matrix_from_quat(q),
+                                                  b + (3, 3)),
+            ("quat_multiply", R.quat_multiply(q, q), b + (4,)),
+            ("quat_normalize", R.quat_normalize(_r(*b, 4)), b + (4,)),
+            ("quat_from_euler", R.quat_from_euler(ang), b + (4,)),
+            ("euler_from_quat", R.euler_from_quat(q), b + (3,)),
+            ("from_scipy(to_scipy)", R.from_scipy(R.to_scipy(M)), b + (3, 3))]
+
+
+def _free_rotation_case(b):
+    t = 0.4 if b == () else np.linspace(0, 1, 6)
+    return [("omega(t)", mp.rigid.free_rotation((1.0, 2.0, 3.0), (0.1, 1.0, 0.1), t),
+             np.shape(t) + (3,))]
+
+
+def _modes_case(b):
+    m = mp.modes.normal_modes(*mp.modes.chain(3))
+    t = 0.4 if b == () else np.linspace(0, 1, 6)
+    q = _r(*b, 3)
+    qt, vt = m.evolve(_r(3), _r(3), t, velocities=True)
+    return [("omega", m.omega, (3,)), ("vectors", m.vectors, (3, 3)),
+            ("eigenvalues", m.eigenvalues, (3,)), ("frequencies", m.frequencies, (3,)),
+            ("zero_modes", m.zero_modes, (3,)), ("n", np.zeros(m.n), (3,)),
+            ("evolve", m.evolve(_r(3), _r(3), t), np.shape(t) + (3,)),
+            ("evolve q, velocities", qt, np.shape(t) + (3,)),
+            ("evolve v", vt, np.shape(t) + (3,)),
+            ("coordinates", m.coordinates(q), b + (3,)),
+            ("energy", m.energy(q, _r(*b, 3)), b + (3,))]
+
+
+def _dispersion_case(b):
+    q = _r(*b)
+    o1, o2 = mp.modes.dispersion_diatomic(1.0, 2.0, 1.0, 1.0, q)
+    return [("dispersion", mp.modes.dispersion(1.0, 1.0, 1.0, q), b),
+            ("acoustic", o1, b), ("optical", o2, b)]
+
+
+def _vector_field_case(b):
+    X, Y = _r(*b), _r(*b)
+    U, V = mp.phase.vector_field(mp.scenes.Pendulum(), X, Y)
+    return [("U", U, b), ("V", V, b)]
+
+
+def _poincare_case(b):
+    d = mp.scenes.Duffing(-1.0, 1.0, 0.3, 0.5, 1.2)
+    P = 2 * np.pi / 1.2
+    return [("poincare", mp.phase.poincare(d, [1.0, 0.0], P, 7), (7, 2)),
+            ("bifurcation", mp.phase.bifurcation(d, "gamma", [0.3, 0.5], [1.0, 0.0], P, 7, 2),
+             (2, 7, 2))]
+
+
+def _frames_case(b):
+    F = mp.frames
+    w, r, v = _r(*b, 3), _r(*b, 3), _r(*b, 3)
+    out = [("fictitious " + k, a, b + (3,)) for k, a in F.fictitious(w, r, v).items()]
+    out += [("earth_omega", F.earth_omega(_r(*b, lo=10, hi=80)), b + (3,)),
+            ("foucault_period", F.foucault_period(_r(*b, lo=10, hi=80)), b),
+            ("eastward_deflection", F.eastward_deflection(_r(*b, lo=10, hi=90), 45.0), b)]
+    return out
+
+
+def _to_rotating_case(b):
+    F = mp.frames
+    w, r, v = [0.0, 0.0, 1.0], _r(*b, 3), _r(*b, 3)
+    out = []
+    for name, fn in (("to_rotating", F.to_rotating), ("from_rotating", F.from_rotating)):
+        rr, vv = fn(r, v, w, 0.3)                           # batch of vectors, scalar t
+        out += [(name + " r", rr, b + (3,)), (name + " v", vv, b + (3,))]
+        rr, vv = fn([1.0, 0.0, 0.0], [0.0, 1.0, 0.0], w, _t(b))   # a series at times t
+        out += [(name + " r(t)", rr, b + (3,)), (name + " v(t)", vv, b + (3,))]
+    return out
+
+
+def _drift_case(b):
+    F = mp.frames
+    return [("drift, batch of v0", F.projectile_drift(_r(*b, 3), 1.0, 45.0), b + (3,)),
+            ("drift at times t", F.projectile_drift([10.0, 0.0, 10.0], _t(b), 45.0), b + (3,))]
+
+
+def _constraint_forces_case(b):
+    lam, f = mp.variational.constraint_forces(1.0, _r(*b, 3), _r(*b, 1, 3), _r(*b, 1))
+    return [("lam", lam, b + (1,)), ("f", f, b + (3,))]
+
+
+# single objects (not vectorised): one call, the documented shapes
+
+def _single(fn):
+    def case(b):
+        return fn() if b == () else []
+    return case
+
+
+def _body():
+    bd = mp.inertia.solid("box", 2.0, a=1.0, b=2.0, c=3.0)
+    moments, axes = bd.principal()
+    return [("com", bd.com, (3,)), ("inertia", bd.inertia, (3, 3)),
+            ("inertia_about", bd.inertia_about([1.0, 0.0, 0.0]), (3, 3)),
+            ("moments", moments, (3,)), ("axes", axes, (3, 3)),
+            ("moved", bd.moved([1.0, 0, 0]).com, (3,)),
+            ("rotated", bd.rotated(np.eye(3)).inertia, (3, 3)),
+            ("density", bd.density, ()),
+            ("classify", np.array(bd.classify()), ()),
+            ("from_point_masses", mp.inertia.Body.from_point_masses(
+                [1.0, 2.0], [[1.0, 0, 0], [0, 1.0, 0]]).inertia, (3, 3))]
+
+
+def _mesh():
+    v, f = mp.inertia.uv_sphere(1.0, 4, 8)
+    bd = mp.inertia.mesh(v, f, density=1.0)
+    return [("vertices", v, (26, 3)), ("faces", f, (48, 3)), ("inertia", bd.inertia, (3, 3))]
+
+
+def _grid():
+    return [("inertia", mp.inertia.density_grid(np.ones((3, 4, 5)), 0.1).inertia, (3, 3))]
+
+
+def _classify():
+    return [("classify", np.array(mp.inertia.classify(np.diag([1.0, 2.0, 3.0]))), ())]
+
+
+def _split():
+    s = mp.inertia.kinetic_energy_split(_r(4), _r(4, 3), _r(4, 3))
+    return [("total", s.total, ()), ("omega", s.omega, (3,))]
+
+
+def _flip():
+    return [("flip_period", mp.rigid.flip_period((1.0, 2.0, 3.0), (0.1, 1.0, 0.1)), ())]
+
+
+def _nutation():
+    lo, hi = mp.rigid.nutation_bounds(1.0, 2.0, 1.0, 9.81, 1.0, 0.5, 0.0, 0.0, 20.0)
+    return [("theta_min", lo, ()), ("theta_max", hi, ())]
+
+
+def _chain():
+    K, M = mp.modes.chain(4)
+    return [("K", K, (4, 4)), ("M", M, (4, 4))]
+
+
+def _triatomic():
+    tri = mp.modes.linear_triatomic()
+    return [("modes.omega", tri.modes.omega, (tri.modes.n,)), ("omega", tri.omega, (4,)),
+            ("wavenumbers", tri.wavenumbers, (4,))]
+
+
+def _fixed_points():
+    fps = mp.phase.fixed_points(mp.scenes.Pendulum(), [(-4.0, 4.0), (-1.0, 1.0)])
+    return [("x", fp.x, (2,)) for fp in fps] + [("eigenvalues", fp.eigenvalues, (2,))
+                                                for fp in fps]
+
+
+def _limit_cycle():
+    T, A = mp.phase.limit_cycle(mp.scenes.VanDerPol(), [2.0, 0.0])
+    return [("period", T, ()), ("amplitude", A, ())]
+
+
+def _lyapunov():
+    return [("exponent", mp.phase.lyapunov(mp.scenes.Duffing(-1.0, 1.0, 0.3, 0.5, 1.2),
+                                           [1.0, 0.0], 20.0), ())]
+
+
+def _drop():
+    r, t = mp.frames.drop(100.0, 45.0)
+    r2, t2 = mp.frames.projectile([10.0, 0.0, 10.0], 45.0)
+    return [("drop r", r, (3,)), ("drop t", t, ()), ("projectile r", r2, (3,)),
+            ("projectile t", t2, ())]
+
+
+def _minimize():
+    e = mp.variational.minimize_functional(lambda x, y, yp: np.sqrt(1 + yp ** 2),
+                                           (0.0, 1.0), (0.0, 1.0), 10)
+    return [("x", e.x, (11,)), ("y", e.y, (11,))]
+
+
+def _brach():
+    c = mp.variational.brachistochrone(1.0, 1.0, n=20)
+    k = mp.variational.catenary((0.0, 0.0), (1.0, 0.0), 1.5, n=20)
+    return [("x", c.x, (21,)), ("y", c.y, (21,)), ("y_exact", c.y_exact, (21,)),
+            ("catenary y", k.y, (21,)), ("catenary y_exact", k.y_exact, (21,))]
+
+
+def _cyclic():
+    c = mp.variational.cyclic_coordinates(mp.variational.CentralForce(), _r(2, 3), _r(2, 3))
+    return [("cyclic", np.array(c), (1,))]
+
+
+def _methods():
+    return [("methods", np.array(len(mp.methods()) > 0), ())]
+
+
+def _coordinates():
+    return [("coordinates", np.array(mp.coordinates("a b c"), dtype=object), (3,))]
+
+
+def _no_array():
+    """Plots return matplotlib objects (exercised in test_plot.py); exception
+    and warning classes return nothing."""
+    return []
+
+
+# ------------------------------------------------------------------ the table
+STATE, STACK, SINGLE, NONE = "state", "stack", "single", "none"
+
+TABLE = {
+    # integrate
+    "mechpy.integrate.solve": (STATE, _solve_case),
+    "mechpy.integrate.Solution": (STATE, _solve_case),
+    "mechpy.integrate.DenseOutput": (STATE, _solve_case),
+    "mechpy.integrate.solve_many": (STATE, _solve_many_case),
+    "mechpy.integrate.EnsembleSolution": (STATE, _solve_many_case),
+    "mechpy.integrate.SecondOrder": (STATE, _second_order_case),
+    "mechpy.integrate.methods": (SINGLE, _single(_methods)),
+    # scenes
+    **{f"mechpy.scenes.{n}": (STATE, _scenes) for n in (
+        "Scene", "Pendulum", "VanDerPol", "Duffing", "Kepler", "RestrictedThreeBody",
+        "Foucault", "RigidBody", "HeavyTop", "SpringChain")},
+    # compiled scenes
+    "mechpy.symbolic.lagrangian": (STATE, _lagrangian_case),
+    "mechpy.symbolic.equations": (STATE, _equations_case),
+    "mechpy.symbolic.coordinates": (SINGLE, _single(_coordinates)),
+    "mechpy.symbolic.CompileError": (NONE, None),
+    # inertia
+    "mechpy.inertia.point_masses": (STACK, _point_masses_case),
+    "mechpy.inertia.center_of_mass": (STACK, _point_masses_case),
+    "mechpy.inertia.total_momentum": (STACK, _point_masses_case),
+    "mechpy.inertia.angular_momentum_about": (STACK, _point_masses_case),
+    "mechpy.inertia.shift": (STACK, _inertia_case),
+    "mechpy.inertia.principal_axes": (STACK, _inertia_case),
+    "mechpy.inertia.angular_momentum": (STACK, _inertia_case),
+    "mechpy.inertia.kinetic_energy": (STACK, _inertia_case),
+    "mechpy.inertia.Body": (SINGLE, _single(_body)),
+    "mechpy.inertia.solid": (SINGLE, _single(_body)),
+    "mechpy.inertia.mesh": (SINGLE, _single(_mesh)),
+    "mechpy.inertia.uv_sphere": (SINGLE, _single(_mesh)),
+    "mechpy.inertia.density_grid": (SINGLE, _single(_grid)),
+    "mechpy.inertia.classify": (SINGLE, _single(_classify)),
+    "mechpy.inertia.kinetic_energy_split": (SINGLE, _single(_split)),
+    "mechpy.inertia.EnergySplit": (SINGLE, _single(_split)),
+    # stress
+    **{f"mechpy.stress.{n}": (STACK, _stress_case) for n in (
+        "principal", "pressure", "von_mises", "max_shear", "deviator", "traction")},
+    # rotation
+    **{f"mechpy.rotation.{n}": (STACK, _rotation_case) for n in (
+        "euler_matrix", "euler_angles", "angular_velocity", "euler_rates", "quat_from_matrix",
+        "matrix_from_quat", "quat_multiply", "quat_normalize", "quat_from_euler",
+        "euler_from_quat", "to_scipy", "from_scipy")},
+    "mechpy.rotation.GimbalLockWarning": (NONE, None),
+    # rigid
+    "mechpy.rigid.free_rotation": (STACK, _free_rotation_case),
+    "mechpy.rigid.flip_period": (SINGLE, _single(_flip)),
+    "mechpy.rigid.nutation_bounds": (SINGLE, _single(_nutation)),
+    # modes
+    "mechpy.modes.Modes": (STACK, _modes_case),
+    "mechpy.modes.normal_modes": (STACK, _modes_case),
+    "mechpy.modes.dispersion": (STACK, _dispersion_case),
+    "mechpy.modes.dispersion_diatomic": (STACK, _dispersion_case),
+    "mechpy.modes.chain": (SINGLE, _single(_chain)),
+    "mechpy.modes.linear_triatomic": (SINGLE, _single(_triatomic)),
+    "mechpy.modes.TriatomicModes": (SINGLE, _single(_triatomic)),
+    # phase
+    "mechpy.phase.vector_field": (STACK, _vector_field_case),
+    "mechpy.phase.poincare": (STACK, _poincare_case),
+    "mechpy.phase.bifurcation": (STACK, _poincare_case),
+    "mechpy.phase.fixed_points": (SINGLE, _single(_fixed_points)),
+    "mechpy.phase.FixedPoint": (SINGLE, _single(_fixed_points)),
+    "mechpy.phase.limit_cycle": (SINGLE, _single(_limit_cycle)),
+    "mechpy.phase.lyapunov": (SINGLE, _single(_lyapunov)),
+    "mechpy.phase.LyapunovFloorWarning": (NONE, None),
+    # frames
+    "mechpy.frames.fictitious": (STACK, _frames_case),
+    "mechpy.frames.earth_omega": (STACK, _frames_case),
+    "mechpy.frames.foucault_period": (STACK, _frames_case),
+    "mechpy.frames.eastward_deflection": (STACK, _frames_case),
+    "mechpy.frames.to_rotating": (STACK, _to_rotating_case),
+    "mechpy.frames.from_rotating": (STACK, _to_rotating_case),
+    "mechpy.frames.projectile_drift": (STACK, _drift_case),
+    "mechpy.frames.drop": (SINGLE, _single(_drop)),
+    "mechpy.frames.projectile": (SINGLE, _single(_drop)),
+    # variational
+    "mechpy.variational.stationary_path": (STATE, _stationary_path_case),
+    "mechpy.variational.StationaryPath": (STATE, _stationary_path_case),
+    "mechpy.variational.variational_integrate": (STATE, _variational_integrate_case),
+    "mechpy.variational.VariationalTrajectory": (STATE, _variational_integrate_case),
+    "mechpy.variational.lagrangian": (STATE, _lagrangian_fn_case),
+    "mechpy.variational.generalized_momenta": (STATE, _momenta_case),
+    "mechpy.variational.pendulum_tension": (STATE, _tension_case),
+    "mechpy.variational.CentralForce": (STATE, _central_force_case),
+    "mechpy.variational.RotatingHoop": (STATE, _hoop_case),
+    "mechpy.variational.constraint_forces": (STACK, _constraint_forces_case),
+    "mechpy.variational.cyclic_coordinates": (SINGLE, _single(_cyclic)),
+    "mechpy.variational.minimize_functional": (SINGLE, _single(_minimize)),
+    "mechpy.variational.Extremal": (SINGLE, _single(_minimize)),
+    "mechpy.variational.brachistochrone": (SINGLE, _single(_brach)),
+    "mechpy.variational.Brachistochrone": (SINGLE, _single(_brach)),
+    "mechpy.variational.catenary": (SINGLE, _single(_brach)),
+    "mechpy.variational.Catenary": (SINGLE, _single(_brach)),
+    # plot: matplotlib objects; a path is (3, m) as sol.y[:3] gives it
+    "mechpy.plot.trajectory3d": (STATE, _trajectory3d_case),
+    **{f"mechpy.plot.{n}": (NONE, None) for n in (
+        "phase_portrait", "work_precision", "modes", "animate_field")},
+    # exceptions
+    **{f"mechpy.errors.{n}": (NONE, None) for n in mp.errors.__all__},
+}
+
+
+# Public methods and properties of the public classes (and of the compiled
+# scene that mp.lagrangian returns): the TABLE entry whose case checks each, or
+# None for members that hold no array (names, flags, SymPy objects, source).
+_SCENE, _CHAIN, _RB = "mechpy.scenes.Pendulum", "mechpy.scenes.SpringChain", "mechpy.scenes.RigidBody"
+_LAG, _BODY, _MODES = "mechpy.symbolic.lagrangian", "mechpy.inertia.Body", "mechpy.modes.Modes"
+METHODS = {
+    **{f"Scene.{n}": _SCENE for n in ("replace", "ensemble_params", "rhs", "jacobian", "energy")},
+    "Scene.dim": None, "Scene.params": None,
+    "Pendulum.period": _SCENE, "Kepler.initial_state": _SCENE,
+    "Foucault.precession_rate": _SCENE,
+    **{f"RigidBody.{n}": _RB for n in ("rhs", "jacobian", "moments", "initial_state",
+                                      "angular_momentum", "replace")},
+    "RigidBody.params": None,
+    "HeavyTop.p_psi": "mechpy.scenes.HeavyTop", "HeavyTop.p_phi": "mechpy.scenes.HeavyTop",
+    **{f"SpringChain.{n}": _CHAIN for n in ("uniform", "replace", "ensemble_params",
+                                           "initial_state", "matrices", "modes",
+                                           "mode_energies", "momentum")},
+    "SpringChain.N": None, "SpringChain.nonlinear": None, "SpringChain.params": None,
+    **{f"Body.{n}": _BODY for n in ("from_point_masses", "density", "inertia_about", "moved",
+                                    "rotated", "principal", "classify")},
+    **{f"Modes.{n}": _MODES for n in ("n", "eigenvalues", "frequencies", "zero_modes",
+                                      "coordinates", "energy", "evolve")},
+    "TriatomicModes.omega": "mechpy.modes.TriatomicModes",
+    "TriatomicModes.wavenumbers": "mechpy.modes.TriatomicModes",
+    "CentralForce.rhs": "mechpy.variational.CentralForce",
+    "CentralForce.momenta": "mechpy.variational.CentralForce",
+    **{f"RotatingHoop.{n}": "mechpy.variational.RotatingHoop"
+       for n in ("rhs", "jacobi_integral", "normal_force")},
+    **{f"CompiledScene.{n}": _LAG for n in ("replace", "rhs", "jacobian", "energy", "momenta",
+                                           "multipliers", "constraint_forces", "cyclic",
+                                           "small_oscillations")},
+    **{f"CompiledScene.{n}": None for n in ("params", "constraints", "coordinates",
+                                           "c_source", "equations")},
+}
+
+
+def _public_members(cls) -> list:
+    """Public methods and properties defined on cls itself."""
+    return [n for n, v in vars(cls).items() if not n.startswith("_") and (
+        inspect.isfunction(v) or isinstance(v, (property, classmethod, staticmethod,
+                                                functools.cached_property)))]
+
+
+def test_every_public_method_is_classified():
+    from mechpy.symbolic.scene import CompiledScene
+    classes = [o for o in _public_callables().values()
+               if inspect.isclass(o) and not issubclass(o, (BaseException, Warning))]
+    members = {f"{c.__name__}.{n}" for c in classes + [CompiledScene] for n in _public_members(c)}
+    missing = sorted(members - set(METHODS))
+    assert not missing, f"public methods not in tests/test_layout.py's METHODS: {missing}"
+    stale = sorted(set(METHODS) - members)
+    assert not stale, f"METHODS names that are not public (any more): {stale}"
+    for name, entry in METHODS.items():
+        assert entry is None or TABLE[entry][1] is not None, name
+
+
+def _public_callables() -> dict:
+    """Every public callable: each public module's ``__all__`` (mechpy's own
+    ``__all__`` lists the modules and the re-exported names), first listing wins."""
+    found, seen = {}, set()
+    modules = [getattr(mp, n) for n in mp.__all__ if isinstance(getattr(mp, n), types.ModuleType)]
+    for mod in modules + [mp]:
+        for name in mod.__all__:
+            obj = getattr(mod, name)
+            if isinstance(obj, types.ModuleType) or not callable(obj) or id(obj) in seen:
+                continue
+            seen.add(id(obj))
+            found[f"{mod.__name__}.{name}"] = obj
+    return found
+
+
+def test_every_public_callable_is_classified():
+    public = _public_callables()
+    missing = sorted(set(public) - set(TABLE))
+    assert not missing, f"public callables not in tests/test_layout.py's TABLE: {missing}"
+    stale = sorted(set(TABLE) - set(public))
+    assert not stale, f"TABLE names that are not public (any more): {stale}"
+    assert len(public) > 90
+
+
+def test_module_all_lists_are_complete():
+    """No public function escapes the walk by being left out of its __all__."""
+    for n in mp.__all__:
+        mod = getattr(mp, n)
+        if not isinstance(mod, types.ModuleType):
+            continue
+        for name, obj in vars(mod).items():
+            if (name.startswith("_") or not (inspect.isfunction(obj) or inspect.isclass(obj))
+                    or getattr(obj, "__module__", "").split(".")[:2] != mod.__name__.split(".")[:2]):
+                continue
+            assert name in mod.__all__, f"{mod.__name__}.{name} is public but not in __all__"
+
+
+_CASES = {}
+for _name, (_kind, _case) in TABLE.items():
+    if _case is not None:
+        _CASES.setdefault(_case, []).append(_name)
+
+
+@pytest.mark.parametrize("batch", BATCHES, ids=["scalar", "batch"])
+@pytest.mark.parametrize("case", list(_CASES), ids=[", ".join(v) for v in _CASES.values()])
+def test_layout(case, batch):
+    results = case(batch)
+    if batch == () or TABLE[_CASES[case][0]][0] != SINGLE:
+        assert results, "a case must check at least one output"
+    for label, out, expected in results:
+        assert np.shape(out) == expected, (
+            f"{label}: shape {np.shape(out)}, the layout rule says {expected}")
+        if expected != ():
+            assert isinstance(out, np.ndarray), f"{label}: a {type(out).__name__}, not an array"
+        if np.ndim(out) == 0 and expected == () and np.asarray(out).dtype.kind == "f":
+            assert np.isfinite(out)
+
+
+def test_rule_is_written_where_users_read_it():
+    doc = mp.__doc__
+    assert "States follow SciPy" in doc and "NumPy stack" in doc
+    for n in mp.__all__:
+        mod = getattr(mp, n)
+        if isinstance(mod, types.ModuleType) and n in (
+                "integrate", "scenes", "inertia", "stress", "rotation", "rigid", "modes",
+                "phase", "frames", "variational", "plot"):
+            assert "layout rule in :mod:`mechpy`" in mod.__doc__, n
+    from pathlib import Path
+    readme = Path(__file__).resolve().parent.parent / "README.md"
+    if readme.exists():
+        text = readme.read_text()
+        assert "## Conventions: array layout" in text and "States follow SciPy" in text
+
+
+# ------------------------------------------------------------------ regressions
+
+def test_hoop_normal_force_scalar_t_with_a_batch_of_states():
+    """normal_force(t, y) with a scalar t and states (2, ...) failed to
+    broadcast; it must equal the closed forms of its docstring (radial
+    -mR(thd^2 + w^2 sin^2 th) - mg cos th, azimuthal 2 m R w thd cos th,
+    tangential 0) at every state."""
+    h = mp.variational.RotatingHoop(R=0.5, omega=6.0, m=0.2)
+    th = np.linspace(-2.5, 2.5, 12).reshape(3, 4)
+    thd = np.linspace(-3.0, 2.0, 12).reshape(3, 4)
+    N = h.normal_force(0.7, np.stack([th, thd]))
+    m, R, w, g = h.m, h.R, h.omega, h.g
+    radial = -m * R * (thd ** 2 + (w * np.sin(th)) ** 2) - m * g * np.cos(th)
+    azimuthal = 2 * m * R * w * thd * np.cos(th)
+    assert N.shape == (3, 3, 4)
+    scale = np.max(np.abs(radial))
+    # measured relative to the largest radial force: 4.4e-16, 1.1e-16, 1.1e-16, 2.7e-16
+    assert np.max(np.abs(N[0] - radial)) < 5e-15 * scale
+    assert np.max(np.abs(N[1] - azimuthal)) < 5e-15 * scale
+    assert np.max(np.abs(N[2])) < 5e-15 * scale
+    # a time per state gives the same forces: the hoop's spin only turns the frame
+    Nt = h.normal_force(np.linspace(0.0, 3.0, 4), np.stack([th, thd]))
+    assert np.max(np.abs(Nt - N)) < 5e-15 * scale
+
+
+def test_dense_output_keeps_the_shape_of_t():
+    """sol(t) for times of shape (2, 3) gave (n, 6); it is (n, 2, 3), each
+    column the value at its own time, and a scalar or 1-D t is as SciPy's."""
+    s = mp.solve(mp.scenes.Pendulum(), (0, 2), [0.3, 0.0], dense_output=True)
+    t = np.linspace(0.1, 1.9, 6).reshape(2, 3)
+    y = s.sol(t)
+    assert y.shape == (2, 2, 3)
+    flat = s.sol(t.ravel())
+    assert flat.shape == (2, 6)
+    assert np.array_equal(y.reshape(2, 6), flat)
+    assert np.array_equal(y[:, 1, 2], s.sol(t[1, 2]))
+
+
+def test_hoop_normal_force_rejects_bad_states():
+    h = mp.variational.RotatingHoop()
+    with pytest.raises(ValueError, match="y must have 2 components"):
+        h.normal_force(0.0, np.ones((3, 4)))
+    with pytest.raises(ValueError, match="t of shape"):
+        h.normal_force(np.ones(5), np.ones((2, 4)))
