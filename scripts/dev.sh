@@ -2,9 +2,11 @@
 # Set up mechpy on this machine (once) and run one of its jobs.
 #
 #   bash scripts/dev.sh tour     # set up, then: python -m mechpy tour
-#   bash scripts/dev.sh test     # set up, then: the test suite; the suite again against
-#                                #   mechpy built from its sdist into a fresh environment;
-#                                #   the suite against the ASan+UBSan build (scripts/sanitize.sh)
+#   bash scripts/dev.sh test     # set up, then: the test suite once, against mechpy built
+#                                #   from its sdist and installed into a fresh environment
+#                                #   (the editable install when the work tree has changes not
+#                                #   yet committed); then the suite against the ASan+UBSan
+#                                #   build (scripts/sanitize.sh)
 #   bash scripts/dev.sh bench    # set up (with the bench extras), then: python -m mechpy bench
 #
 # Set-up installs what is missing and nothing twice: Debian's libgsl-dev,
@@ -15,7 +17,8 @@
 # of .venv: tests, their subprocesses, notebook kernels); pip runs again only
 # when the build files or the extras change.
 #
-# MECHPY_SANITIZE_SKIP=1 skips the sanitizer pass, MECHPY_SDIST_SKIP=1 the sdist pass.
+# MECHPY_SANITIZE_SKIP=1 skips the sanitizer pass; MECHPY_SDIST_SKIP=1 runs the suite
+# against the editable install in .venv instead of the sdist-installed copy.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 job=${1:-test}
@@ -78,12 +81,8 @@ fi
 # source tree is not importable.  Redone only when the committed tree changes
 # (the sdist holds what git tracks at HEAD).
 sdist_pass() {
-    if ! tree=$(git rev-parse -q --verify 'HEAD^{tree}' 2>/dev/null); then
-        say "not a git checkout: no sdist pass"; return 0; fi
-    [ -n "$(git status --porcelain --untracked-files=no 2>/dev/null)" ] &&
-        say "note: uncommitted changes are not in the sdist (it holds HEAD)"
     local out=build/sdist env=build/sdist/venv
-    local st; st=$(printf '%s %s' "$tree" "$("$vpy" -c 'import sys; print(sys.version)')" | sha256sum | cut -c1-16)
+    local st; st=$(printf '%s %s' "$(git rev-parse 'HEAD^{tree}')" "$("$vpy" -c 'import sys; print(sys.version)')" | sha256sum | cut -c1-16)
     if [ "$(cat "$out/.stamp" 2>/dev/null)" != "$st" ] || [ ! -x "$env/bin/python" ]; then
         say "building the sdist and installing it into a fresh environment ($env)"
         rm -rf "$out"; mkdir -p "$out"
@@ -91,20 +90,39 @@ sdist_pass() {
         "$vpy" -m build --sdist --outdir "$out" . >"$out/build.log" 2>&1 ||
             { tail -30 "$out/build.log"; say "python -m build --sdist failed"; return 1; }
         local sd; sd=$(ls "$out"/mechpy-*.tar.gz)
+        # the files the build needs are in the sdist (it holds what git tracks)
+        for f in LICENSE meson.build csrc/meson.build csrc/check_sources.py mechpy/py.typed; do
+            tar -tzf "$sd" | grep -qx "mechpy-[^/]*/$f" || { say "$f is missing from $sd"; return 1; }
+        done
         "$vpy" -m venv "$env"
         "$env/bin/python" -m pip install -q --upgrade pip >/dev/null
         "$env/bin/python" -m pip install -q "$sd[test]" ||
             { say "installing $sd (with build isolation) failed"; return 1; }
         echo "$st" > "$out/.stamp"
     fi
-    # the tests and notebooks only, in a folder of their own (no mechpy/ beside them)
+    # the tests and notebooks only, in a folder of their own (no mechpy/ beside them);
+    # notebook kernels start from this environment's python, so import the same copy
     local run=$out/run
     rm -rf "$run"; mkdir -p "$run"
     cp -r tests notebooks "$run/"
     find "$run" -name __pycache__ -prune -exec rm -rf {} +
     say "the test suite against mechpy installed from $(basename "$(ls "$out"/mechpy-*.tar.gz)")"
-    (cd "$run" && PYTHONSAFEPATH=1 "$OLDPWD/$env/bin/python" -m pytest -q -p no:cacheprovider \
-        --rootdir=. "$@")
+    (cd "$run" && PYTHONSAFEPATH=1 MECHPY_INSTALLED_COPY=1 "$OLDPWD/$env/bin/python" -m pytest -q \
+        -p no:cacheprovider --rootdir=. "$@")
+}
+
+# The suite runs once: against the sdist-installed copy when the work tree is a clean git
+# checkout (as CI's fresh clone is: the sdist holds HEAD), else against the editable install.
+suite() {
+    local why=""
+    if [ -n "${MECHPY_SDIST_SKIP:-}" ]; then why="MECHPY_SDIST_SKIP is set"
+    elif ! git rev-parse -q --verify HEAD >/dev/null 2>&1; then why="not a git checkout"
+    elif [ -n "$(git status --porcelain 2>/dev/null)" ]; then
+        why="the work tree has changes not committed (the sdist holds HEAD)"
+    fi
+    if [ -z "$why" ]; then sdist_pass "$@"; return; fi
+    say "the test suite against the editable install in .venv ($why)"
+    "$vpy" -m pytest -q "$@"
 }
 
 # 3b. The docs job ------------------------------------------------------------
@@ -136,14 +154,14 @@ fi
 case "$job" in
     tour)  exec "$vpy" -m mechpy tour "$@" ;;
     bench) exec "$vpy" -m mechpy bench "$@" ;;
-    test)  # the suite; the suite against the installed sdist; the suite against
-           # the ASan+UBSan build (scripts/sanitize.sh)
+    test)  # the suite once (sdist-installed or editable), then under the sanitizers
            t0=$SECONDS
-           "$vpy" -m pytest -q "$@"
-           say "the suite took $((SECONDS - t0)) s"; t0=$SECONDS
-           [ -n "${MECHPY_SDIST_SKIP:-}" ] || { sdist_pass "$@"; say "the sdist pass took $((SECONDS - t0)) s"; }
+           suite "$@"
+           say "the suite took $((SECONDS - t0)) s (with its set-up)"
            [ -n "${MECHPY_SANITIZE_SKIP:-}" ] && exit 0
            say "the test suite again, under AddressSanitizer and UndefinedBehaviorSanitizer"
-           PYTHON="$vpy" exec bash scripts/sanitize.sh "$@" ;;
+           t0=$SECONDS
+           PYTHON="$vpy" bash scripts/sanitize.sh "$@"
+           say "the sanitizer pass took $((SECONDS - t0)) s" ;;
     *) say "unknown job '$job' (tour, test or bench)"; exit 2 ;;
 esac
