@@ -91,8 +91,9 @@ sdist_pass() {
             { tail -30 "$out/build.log"; say "python -m build --sdist failed"; return 1; }
         local sd; sd=$(ls "$out"/mechpy-*.tar.gz)
         # the files the build needs are in the sdist (it holds what git tracks)
+        local listing; listing=$(tar -tzf "$sd")
         for f in LICENSE meson.build csrc/meson.build csrc/check_sources.py mechpy/py.typed; do
-            tar -tzf "$sd" | grep -qx "mechpy-[^/]*/$f" || { say "$f is missing from $sd"; return 1; }
+            grep -qx "mechpy-[^/]*/$f" <<<"$listing" || { say "$f is missing from $sd"; return 1; }
         done
         "$vpy" -m venv "$env"
         "$env/bin/python" -m pip install -q --upgrade pip >/dev/null
