@@ -29,7 +29,20 @@ walks them all and checks it):
 A scalar input gives the output without its batch axes; results are NumPy
 arrays of float64.
 """
-from . import _core
+try:
+    from . import _core
+except ImportError as _exc:  # no built C core next to these sources
+    import os as _os
+    _here = _os.path.dirname(_os.path.abspath(__file__))
+    if _os.path.exists(_os.path.join(_here, _os.pardir, "meson.build")):
+        raise ImportError(
+            "you are importing mechpy from its source tree, where its C core "
+            "(mechpy._core) is not built. Build and install it (from the source "
+            "tree: 'bash scripts/dev.sh test', or 'pip install .' with GSL and LAPACK "
+            "where pkg-config finds them), then run Python from outside the source "
+            "tree or in the environment that holds the editable install."
+        ) from None
+    raise ImportError(f"mechpy's C core mechpy._core could not be loaded: {_exc}") from _exc
 from .errors import *  # noqa: F401,F403
 from .errors import __all__ as _errors_all
 from . import integrate, plot, scenes  # noqa: F401

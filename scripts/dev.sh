@@ -2,14 +2,23 @@
 # Set up mechpy on this machine (once) and run one of its jobs.
 #
 #   bash scripts/dev.sh tour     # set up, then: python -m mechpy tour
-#   bash scripts/dev.sh test     # set up, then: the test suite, then the suite again
-#                                #   against the ASan+UBSan build (scripts/sanitize.sh)
+#   bash scripts/dev.sh test     # set up, then: the test suite once, against mechpy built
+#                                #   from its sdist and installed into a fresh environment
+#                                #   (the editable install when the work tree has changes not
+#                                #   yet committed); then the suite against the ASan+UBSan
+#                                #   build (scripts/sanitize.sh)
 #   bash scripts/dev.sh bench    # set up (with the bench extras), then: python -m mechpy bench
 #
 # Set-up installs what is missing and nothing twice: Debian's libgsl-dev,
 # libopenblas-dev and pkg-config (apt-get, as root or through sudo), a virtual
-# environment in .venv, and mechpy in it (editable) with its extras.  The
-# package is rebuilt only when its C sources or build files change.
+# environment in .venv, and mechpy in it as an editable meson-python install
+# (build directory build/editable) with its extras.  The editable install
+# rebuilds the C core on import whenever csrc/ changes (in every interpreter
+# of .venv: tests, their subprocesses, notebook kernels); pip runs again only
+# when the build files or the extras change.
+#
+# MECHPY_SANITIZE_SKIP=1 skips the sanitizer pass; MECHPY_SDIST_SKIP=1 runs the suite
+# against the editable install in .venv instead of the sdist-installed copy.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 job=${1:-test}
@@ -48,20 +57,74 @@ if [ ! -x .venv/bin/python ]; then
 fi
 vpy=.venv/bin/python
 
-# 3. The package, rebuilt only when sources or build files change ------------
+# 3. The package: an editable install, pip run only when build files change --
 extras="test"
 [ "$job" = bench ] && extras="test,bench"
-stamp=$( (cat pyproject.toml setup.py; find csrc -type f -name '*.[ch]' | sort | xargs cat; echo "$extras ${MECHPY_SANITIZE:-}") | sha256sum | cut -c1-16)
-if [ "$(cat .venv/.mechpy-stamp 2>/dev/null)" != "$stamp" ]; then
-    say "installing mechpy[$extras] into .venv"
+buildfiles() { cat pyproject.toml; find . -name meson.build -not -path './.venv/*' -not -path './build/*' | sort | xargs cat; }
+stamp=$( (buildfiles; echo "$extras") | sha256sum | cut -c1-16)
+if [ "$(cat .venv/.mechpy-stamp 2>/dev/null)" != "$stamp" ] || [ ! -f build/editable/build.ninja ]; then
+    say "installing mechpy[$extras] into .venv (editable, built in build/editable)"
     "$vpy" -m pip install -q --upgrade pip >/dev/null
-    "$vpy" -m pip install -q "setuptools>=64" wheel "numpy>=2.0"
+    # the build tools in .venv itself: the editable install rebuilds with them on import
+    "$vpy" -m pip install -q "meson-python>=0.18" "meson>=1.1" ninja "numpy>=2.0"
     # numbalsoda (bench extra) is built from source with its own build tools:
     # install it with build isolation before mechpy's isolation-free install
     [ "$job" = bench ] && "$vpy" -m pip install -q numbalsoda
-    "$vpy" -m pip install -q --no-build-isolation -e ".[$extras]"
+    "$vpy" -m pip install -q --no-build-isolation -Cbuild-dir="$PWD/build/editable" -e ".[$extras]"
     echo "$stamp" > .venv/.mechpy-stamp
 fi
+# build now (not at the first import, inside a timed test)
+"$vpy" -c "import mechpy" || { say "mechpy does not import from .venv"; exit 1; }
+
+# The sdist pass: build the sdist, install it (with build isolation) into a
+# fresh environment, run the suite against that copy from a folder where the
+# source tree is not importable.  Redone only when the committed tree changes
+# (the sdist holds what git tracks at HEAD).
+sdist_pass() {
+    local out=build/sdist env=build/sdist/venv
+    local st; st=$(printf '%s %s' "$(git rev-parse 'HEAD^{tree}')" "$("$vpy" -c 'import sys; print(sys.version)')" | sha256sum | cut -c1-16)
+    if [ "$(cat "$out/.stamp" 2>/dev/null)" != "$st" ] || [ ! -x "$env/bin/python" ]; then
+        say "building the sdist and installing it into a fresh environment ($env)"
+        rm -rf "$out"; mkdir -p "$out"
+        "$vpy" -m pip install -q build
+        "$vpy" -m build --sdist --outdir "$out" . >"$out/build.log" 2>&1 ||
+            { tail -30 "$out/build.log"; say "python -m build --sdist failed"; return 1; }
+        local sd; sd=$(ls "$out"/mechpy-*.tar.gz)
+        # the files the build needs are in the sdist (it holds what git tracks)
+        local listing; listing=$(tar -tzf "$sd")
+        for f in LICENSE meson.build csrc/meson.build csrc/check_sources.py mechpy/py.typed; do
+            grep -qx "mechpy-[^/]*/$f" <<<"$listing" || { say "$f is missing from $sd"; return 1; }
+        done
+        "$vpy" -m venv "$env"
+        "$env/bin/python" -m pip install -q --upgrade pip >/dev/null
+        "$env/bin/python" -m pip install -q "$sd[test]" ||
+            { say "installing $sd (with build isolation) failed"; return 1; }
+        echo "$st" > "$out/.stamp"
+    fi
+    # the tests and notebooks only, in a folder of their own (no mechpy/ beside them);
+    # notebook kernels start from this environment's python, so import the same copy
+    local run=$out/run
+    rm -rf "$run"; mkdir -p "$run"
+    cp -r tests notebooks "$run/"
+    find "$run" -name __pycache__ -prune -exec rm -rf {} +
+    say "the test suite against mechpy installed from $(basename "$(ls "$out"/mechpy-*.tar.gz)")"
+    (cd "$run" && PYTHONSAFEPATH=1 MECHPY_INSTALLED_COPY=1 "$OLDPWD/$env/bin/python" -m pytest -q \
+        -p no:cacheprovider --rootdir=. "$@")
+}
+
+# The suite runs once: against the sdist-installed copy when the work tree is a clean git
+# checkout (as CI's fresh clone is: the sdist holds HEAD), else against the editable install.
+suite() {
+    local why=""
+    if [ -n "${MECHPY_SDIST_SKIP:-}" ]; then why="MECHPY_SDIST_SKIP is set"
+    elif ! git rev-parse -q --verify HEAD >/dev/null 2>&1; then why="not a git checkout"
+    elif [ -n "$(git status --porcelain 2>/dev/null)" ]; then
+        why="the work tree has changes not committed (the sdist holds HEAD)"
+    fi
+    if [ -z "$why" ]; then sdist_pass "$@"; return; fi
+    say "the test suite against the editable install in .venv ($why)"
+    "$vpy" -m pytest -q "$@"
+}
 
 # 3b. The docs job ------------------------------------------------------------
 #   bash scripts/dev.sh docs     # set up (with the docs extra), then: the site, built with
@@ -92,11 +155,14 @@ fi
 case "$job" in
     tour)  exec "$vpy" -m mechpy tour "$@" ;;
     bench) exec "$vpy" -m mechpy bench "$@" ;;
-    test)  # the suite, then the same suite against the ASan+UBSan build
-           # (scripts/sanitize.sh; MECHPY_SANITIZE_SKIP=1 skips that second pass)
-           "$vpy" -m pytest -q "$@"
+    test)  # the suite once (sdist-installed or editable), then under the sanitizers
+           t0=$SECONDS
+           suite "$@"
+           say "the suite took $((SECONDS - t0)) s (with its set-up)"
            [ -n "${MECHPY_SANITIZE_SKIP:-}" ] && exit 0
            say "the test suite again, under AddressSanitizer and UndefinedBehaviorSanitizer"
-           PYTHON="$vpy" exec bash scripts/sanitize.sh "$@" ;;
+           t0=$SECONDS
+           PYTHON="$vpy" bash scripts/sanitize.sh "$@"
+           say "the sanitizer pass took $((SECONDS - t0)) s" ;;
     *) say "unknown job '$job' (tour, test or bench)"; exit 2 ;;
 esac
