@@ -310,9 +310,7 @@ def free_precession(moments, omega):
     >>> round(2 * np.pi / body / day, 9)
     305.0
     """
-    from .scenes import _moments
-    m = _moments(moments)
-    w = as_array(omega, "omega", shape=(3,))
+    m, w = _moments_omega(moments, omega)
     if abs(m[0] - m[1]) > 1e-12 * max(m[0], m[1]):
         raise ValueError(f"moments must be those of a symmetric body, I1 = I2 (axis 3 the "
                          f"symmetry axis), got {m}")
