@@ -101,11 +101,13 @@ sdist_pass() {
             { say "installing $sd (with build isolation) failed"; return 1; }
         echo "$st" > "$out/.stamp"
     fi
-    # the tests and notebooks only, in a folder of their own (no mechpy/ beside them);
-    # notebook kernels start from this environment's python, so import the same copy
+    # the tests and notebooks in a folder of their own (no mechpy/ beside them), with
+    # pyproject.toml (pytest's settings), README.md and csrc/ (the tests that check the
+    # README's Layout read them); notebook kernels start from this environment's python,
+    # so they import the same copy
     local run=$out/run
     rm -rf "$run"; mkdir -p "$run"
-    cp -r tests notebooks "$run/"
+    cp -r tests notebooks README.md pyproject.toml csrc "$run/"
     find "$run" -name __pycache__ -prune -exec rm -rf {} +
     say "the test suite against mechpy installed from $(basename "$(ls "$out"/mechpy-*.tar.gz)")"
     (cd "$run" && PYTHONSAFEPATH=1 MECHPY_INSTALLED_COPY=1 "$OLDPWD/$env/bin/python" -m pytest -q \

@@ -13,17 +13,14 @@ ROOT = Path(__file__).resolve().parent.parent
 
 
 def _test_extra():
-    """Import names of pyproject.toml's `test` extra (``pytest-timeout`` -> ``pytest_timeout``)."""
-    try:
-        import tomllib
-    except ImportError:  # Python 3.10: the names are read from the text
-        text = (ROOT / "pyproject.toml").read_text()
-        block = re.search(r"^test = \[(.*?)\]", text, re.S | re.M)
-        reqs = re.findall(r'"([^"]+)"', block.group(1)) if block else []
-    else:
-        with open(ROOT / "pyproject.toml", "rb") as f:
-            reqs = tomllib.load(f)["project"]["optional-dependencies"]["test"]
-    return {re.split(r"[<>=!~\[; ]", r)[0].lower().replace("-", "_") for r in reqs}
+    """Import names of mechpy's `test` extra (``pytest-timeout`` -> ``pytest_timeout``),
+    from the installed distribution's metadata (the sdist run has no pyproject.toml)."""
+    from importlib import metadata
+    reqs = [r.split(";")[0] for r in metadata.requires("mechpy") or []
+            if re.search(r"""extra\s*==\s*["']test["']""", r)]
+    if not reqs:
+        raise RuntimeError("mechpy's installed metadata lists no `test` extra")
+    return {re.split(r"[<>=!~\[; (]", r.strip())[0].lower().replace("-", "_") for r in reqs}
 
 
 @pytest.hookimpl(hookwrapper=True)

@@ -6,12 +6,14 @@ import ast
 import re
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-PKG = ROOT / "mechpy"
+import mechpy
+
+ROOT = Path(__file__).resolve().parents[1]          # README.md and csrc/ beside tests/
+PKG = Path(mechpy.__file__).resolve().parent        # the mechpy under test (maybe installed)
 
 
 def _module_name(path: Path) -> str:
-    parts = path.relative_to(ROOT).with_suffix("").parts
+    parts = path.relative_to(PKG.parent).with_suffix("").parts
     return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
 
 
