@@ -407,6 +407,17 @@ def _samples(system, sol, t):
     return tt, y
 
 
+def _square_view(ax, r, xlabel, ylabel):
+    """A plane view of [-r, r]^2 at equal aspect, labelled, with the origin (the pivot)
+    marked."""
+    ax.set_xlim(-r, r)
+    ax.set_ylim(-r, r)
+    ax.set_aspect("equal")
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.plot([0.0], [0.0], "k+", ms=8)
+
+
 def _trail(ax, color):
     """An empty fading trail (a line collection, 3-D on 3-D axes)."""
     if ax.name == "3d":
@@ -455,13 +466,7 @@ def _planar_pendulum(ax, system, t, y, trail, lengths):
     # x to the right, y up, angles from the downward vertical
     xs = np.cumsum(ls[:, None] * np.sin(y[:ls.size]), axis=0)
     ys = np.cumsum(-ls[:, None] * np.cos(y[:ls.size]), axis=0)
-    reach = ls.sum() * 1.12
-    ax.set_xlim(-reach, reach)
-    ax.set_ylim(-reach, reach)
-    ax.set_aspect("equal")
-    ax.set_xlabel("x (m)")
-    ax.set_ylabel("y, up (m)")
-    ax.plot([0.0], [0.0], "k+", ms=8)
+    _square_view(ax, ls.sum() * 1.12, "x (m)", "y, up (m)")
     tr = _trail(ax, "tab:orange")
     (rod,) = ax.plot([], [], "-", color="0.3", lw=2, gid="rod")
     (bob,) = ax.plot([], [], "o", color="tab:blue", ms=10, gid="bob", zorder=3)
@@ -477,13 +482,8 @@ def _planar_pendulum(ax, system, t, y, trail, lengths):
 
 def _foucault(ax, system, t, y, trail, lengths):
     """The bob seen from above, tracing its rosette in the floor plane."""
-    r = np.max(np.hypot(y[0], y[1])) * 1.15 or 1.0
-    ax.set_xlim(-r, r)
-    ax.set_ylim(-r, r)
-    ax.set_aspect("equal")
-    ax.set_xlabel("x, east (m)")
-    ax.set_ylabel("y, north (m)")
-    ax.plot([0.0], [0.0], "k+", ms=8)
+    _square_view(ax, np.max(np.hypot(y[0], y[1])) * 1.15 or 1.0, "x, east (m)",
+                 "y, north (m)")
     tr = _trail(ax, "tab:blue")
     (bob,) = ax.plot([], [], "o", color="tab:red", ms=8, gid="bob", zorder=3)
     first = _window(t, trail)
