@@ -6,26 +6,14 @@ import pytest
 from scipy.special import ellipkm1
 
 import mechpy as mp
+# the problems and their published end values (IVP test set), as the bench runs them
+from mechpy.benches.hard_cases import ROBER_REF, VDP_REF
+from mechpy.benches.hard_cases import _rober as robertson
+from mechpy.benches.hard_cases import _vdp as vdp_stiff
+from mechpy.benches.hard_cases import _vdp_jac as vdp_stiff_jac
 
-EPS = 1e-6
-VDP_REF = np.array([1.706167732170483, -0.8928097010247975])        # IVP test set
-ROBER_REF = np.array([0.2083340149701255e-7, 0.8333360770334713e-13, 0.9999999791665050])
 ARENSTORF_Y0 = [0.994, 0.0, 0.0, -2.00158510637908252240537862224]
 ARENSTORF_T = 17.0652165601579625588917206249
-
-
-def vdp_stiff(t, y):
-    return [y[1], ((1 - y[0] ** 2) * y[1] - y[0]) / EPS]
-
-
-def vdp_stiff_jac(t, y):
-    return [[0.0, 1.0], [(-2 * y[0] * y[1] - 1) / EPS, (1 - y[0] ** 2) / EPS]]
-
-
-def robertson(t, y):
-    return [-0.04 * y[0] + 1e4 * y[1] * y[2],
-            0.04 * y[0] - 1e4 * y[1] * y[2] - 3e7 * y[1] ** 2,
-            3e7 * y[1] ** 2]
 
 
 STIFF = ["radau", "auto", "gsl:bsimp", "gsl:msbdf"]

@@ -365,17 +365,9 @@ def test_callback_torque_with_params_and_lowlevelcallable():
 
 
 def test_callback_torque_numba():
-    numba = pytest.importorskip("numba")
-    from numba import types
-
-    sig = types.void(types.double, types.CPointer(types.double), types.CPointer(types.double),
-                     types.voidptr)
-
-    @numba.cfunc(sig)
-    def driven(t, y, tau, ud):
-        tau[0] = 0.3 * np.cos(1.7 * t)
-        tau[1] = 0.2 * np.sin(0.9 * t)
-        tau[2] = -0.05 * y[2]
+    pytest.importorskip("numba")
+    from mechpy.benches.rigid import _numba_torque
+    driven = _numba_torque()  # the torque of _driven_c, as a numba cfunc
 
     w0 = [0.3, 1.0, -0.4]
     a = mp.solve(RigidBody(I123, torque=driven), (0, 20), w0, rtol=1e-12, atol=1e-12)

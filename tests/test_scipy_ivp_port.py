@@ -16,7 +16,7 @@ jac_sparsity / vectorized have no counterpart in mp.solve and are not ported.
 """
 import numpy as np
 import pytest
-from numpy.testing import assert_allclose, assert_array_less, assert_equal
+from numpy.testing import assert_allclose, assert_equal
 
 import mechpy as mp
 
@@ -128,6 +128,19 @@ def compute_error(y, y_true, rtol, atol):
     e = (y - y_true) / (atol + rtol * np.abs(y_true))
     return np.linalg.norm(e, axis=0) / np.sqrt(e.shape[0])
 
+def assert_accurate(res, exact, t_span, rtol, atol, bound, dense=True):
+    """SciPy's accuracy checks of a successful run: the samples, and with
+    dense output the interpolant on a grid and at the samples, within bound
+    (compute_error's scaled error) of the exact solution."""
+    assert res.success
+    assert_equal(res.status, 0)
+    assert np.all(compute_error(res.y, exact(res.t), rtol, atol) < bound)
+    if dense:
+        tc = np.linspace(*t_span)
+        assert np.all(compute_error(res.sol(tc), exact(tc), rtol, atol) < bound)
+        assert_allclose(res.sol(res.t), res.y, rtol=1e-15, atol=1e-15)
+
+
 
 def rational_events():
     def event_rational_1(t, y):
@@ -179,19 +192,9 @@ def test_integration(method, span, with_jac):
         assert 0 < res.nlu < 10
 
     bound = err_bound(method, t_span)
-    y_true = sol_rational(res.t)
-    e = compute_error(res.y, y_true, rtol, atol)
-    assert np.all(e < bound)
-
-    tc = np.linspace(*t_span)
-    e = compute_error(res.sol(tc), sol_rational(tc), rtol, atol)
-    assert np.all(e < bound)
-
-    tc = (t_span[0] + t_span[-1]) / 2
-    e = compute_error(res.sol(tc), sol_rational(tc), rtol, atol)
-    assert np.all(e < bound)
-
-    assert_allclose(res.sol(res.t), res.y, rtol=1e-15, atol=1e-15)
+    assert_accurate(res, sol_rational, t_span, rtol, atol, bound)
+    tc = (t_span[0] + t_span[-1]) / 2  # a scalar t
+    assert np.all(compute_error(res.sol(tc), sol_rational(tc), rtol, atol) < bound)
 
 
 @pytest.mark.parametrize("method", ["dop853", "radau", "RK45", "BDF"])
@@ -299,144 +302,70 @@ def test_integration_stiff(method):
 
 # ---- events ----------------------------------------------------------------------
 
-def _check_event(event, res, k):
-    assert np.isclose(event(res.t_events[k][0], res.y_events[k][0]), 0)
+def _check_events(res, status, events, windows):
+    """SciPy's event checks: the status, and for each event function either
+    no crossing (window None) or one crossing inside its window (lo, hi) where
+    the event function vanishes and y_events has shape (1, 2)."""
+    assert_equal(res.status, status)
+    for k, (event, window) in enumerate(zip(events, windows)):
+        if window is None:
+            assert_equal(res.t_events[k].size, 0)
+            assert_equal(res.y_events[k].shape[0], 0)  # SciPy: (0,); mechpy: (0, n)
+            continue
+        assert_equal(res.t_events[k].size, 1)
+        assert window[0] < res.t_events[k][0] < window[1]
+        assert_equal(res.y_events[k].shape, (1, 2))
+        assert np.isclose(event(res.t_events[k][0], res.y_events[k][0]), 0)
 
 
+def _check_event_states(method, res, ks):
+    """Termination by an event does not break the interpolants, and y_events
+    matches the solution (SciPy's bound is the tolerance itself; the multistep
+    rows' own error there is 1.4e-3 relative: SciPy's error-5 bound)."""
+    tc = np.linspace(res.t[0], res.t[-1])
+    assert np.all(compute_error(res.sol(tc), sol_rational(tc), 1e-3, 1e-6) < 5)
+    rt = 5e-3 if method in MULTISTEP else 1e-3
+    for k in ks:
+        assert np.allclose(sol_rational(res.t_events[k][0]), res.y_events[k][0], rtol=rt,
+                           atol=1e-6)
+
+
+# SciPy's test_events and its backward twin: t_span, y0, then per direction of
+# ev1 and ev2 the windows of their crossings, then the status and windows with
+# ev3 (terminal) added
+LOW, HIGH, TERMINAL = (5.3, 5.7), (7.3, 7.7), (7.3, 7.5)
+EVENT_CASES = {
+    "forward": ([5, 8], [1 / 3, 2 / 9],
+                [(0, (LOW, HIGH)), (1, (LOW, None)), (-1, (None, HIGH))],
+                (1, (LOW, None, TERMINAL))),
+    "backward": ([8, 5], [4 / 9, 20 / 81],
+                 [(0, (LOW, HIGH)), (-1, (LOW, None)), (1, (None, HIGH))],
+                 (1, (None, HIGH, TERMINAL))),
+}
+
+
+@pytest.mark.parametrize("way", EVENT_CASES)
 @pytest.mark.parametrize("method", ALL)
-def test_events(method):
+def test_events(method, way):
+    t_span, y0, by_direction, (status3, windows3) = EVENT_CASES[way]
     ev1, ev2, ev3 = rational_events()
     kw = dict(rtol=1e-3, atol=1e-6)  # solve_ivp's defaults
-    res = solve(method, fun_rational, [5, 8], [1 / 3, 2 / 9], events=(ev1, ev2), **kw)
-    assert_equal(res.status, 0)
-    assert_equal(res.t_events[0].size, 1)
-    assert_equal(res.t_events[1].size, 1)
-    assert 5.3 < res.t_events[0][0] < 5.7
-    assert 7.3 < res.t_events[1][0] < 7.7
-    assert_equal(res.y_events[0].shape, (1, 2))
-    assert_equal(res.y_events[1].shape, (1, 2))
-    _check_event(ev1, res, 0)
-    _check_event(ev2, res, 1)
+    for direction, windows in by_direction:
+        ev1.direction = ev2.direction = direction
+        res = solve(method, fun_rational, t_span, y0, events=(ev1, ev2), **kw)
+        _check_events(res, 0, (ev1, ev2), windows)
 
-    ev1.direction = 1
-    ev2.direction = 1
-    res = solve(method, fun_rational, [5, 8], [1 / 3, 2 / 9], events=(ev1, ev2), **kw)
-    assert_equal(res.status, 0)
-    assert_equal(res.t_events[0].size, 1)
-    assert_equal(res.t_events[1].size, 0)
-    assert 5.3 < res.t_events[0][0] < 5.7
-    assert_equal(res.y_events[0].shape, (1, 2))
-    assert_equal(res.y_events[1].shape[0], 0)  # SciPy: (0,); mechpy: (0, n)
-    _check_event(ev1, res, 0)
-
-    ev1.direction = -1
-    ev2.direction = -1
-    res = solve(method, fun_rational, [5, 8], [1 / 3, 2 / 9], events=(ev1, ev2), **kw)
-    assert_equal(res.status, 0)
-    assert_equal(res.t_events[0].size, 0)
-    assert_equal(res.t_events[1].size, 1)
-    assert 7.3 < res.t_events[1][0] < 7.7
-    assert_equal(res.y_events[0].shape[0], 0)
-    assert_equal(res.y_events[1].shape, (1, 2))
-    _check_event(ev2, res, 1)
-
-    ev1.direction = 0
-    ev2.direction = 0
-    res = solve(method, fun_rational, [5, 8], [1 / 3, 2 / 9], events=(ev1, ev2, ev3),
-                dense_output=True, **kw)
-    assert_equal(res.status, 1)
-    assert_equal(res.t_events[0].size, 1)
-    assert_equal(res.t_events[1].size, 0)
-    assert_equal(res.t_events[2].size, 1)
-    assert 5.3 < res.t_events[0][0] < 5.7
-    assert 7.3 < res.t_events[2][0] < 7.5
-    assert_equal(res.y_events[0].shape, (1, 2))
-    assert_equal(res.y_events[1].shape[0], 0)
-    assert_equal(res.y_events[2].shape, (1, 2))
-    _check_event(ev1, res, 0)
-    _check_event(ev3, res, 2)
-
-    res = solve(method, fun_rational, [5, 8], [1 / 3, 2 / 9], events=ev1, dense_output=True,
+    ev1.direction = ev2.direction = 0
+    res = solve(method, fun_rational, t_span, y0, events=(ev1, ev2, ev3), dense_output=True,
                 **kw)
-    assert_equal(res.status, 0)
-    assert_equal(res.t_events[0].size, 1)
-    assert 5.3 < res.t_events[0][0] < 5.7
-    assert_equal(res.y_events[0].shape, (1, 2))
-    _check_event(ev1, res, 0)
-
-    # termination by an event does not break the interpolants
-    tc = np.linspace(res.t[0], res.t[-1])
-    e = compute_error(res.sol(tc), sol_rational(tc), 1e-3, 1e-6)
-    assert np.all(e < 5)
-    # y_events matches the solution (SciPy's bound is the tolerance itself; the
-    # multistep rows' own error there is 1.4e-3 relative: SciPy's error-5 bound)
-    rt = 5e-3 if method in MULTISTEP else 1e-3
-    assert np.allclose(sol_rational(res.t_events[0][0]), res.y_events[0][0], rtol=rt,
-                       atol=1e-6)
-
-
-@pytest.mark.parametrize("method", ALL)
-def test_events_backward(method):
-    ev1, ev2, ev3 = rational_events()
-    kw = dict(rtol=1e-3, atol=1e-6)
-    y0 = [4 / 9, 20 / 81]
-    res = solve(method, fun_rational, [8, 5], y0, events=(ev1, ev2), **kw)
-    assert_equal(res.status, 0)
-    assert_equal(res.t_events[0].size, 1)
-    assert_equal(res.t_events[1].size, 1)
-    assert 5.3 < res.t_events[0][0] < 5.7
-    assert 7.3 < res.t_events[1][0] < 7.7
-    assert_equal(res.y_events[0].shape, (1, 2))
-    assert_equal(res.y_events[1].shape, (1, 2))
-    _check_event(ev1, res, 0)
-    _check_event(ev2, res, 1)
-
-    ev1.direction = -1
-    ev2.direction = -1
-    res = solve(method, fun_rational, [8, 5], y0, events=(ev1, ev2), **kw)
-    assert_equal(res.status, 0)
-    assert_equal(res.t_events[0].size, 1)
-    assert_equal(res.t_events[1].size, 0)
-    assert 5.3 < res.t_events[0][0] < 5.7
-    assert_equal(res.y_events[0].shape, (1, 2))
-    assert_equal(res.y_events[1].shape[0], 0)
-    _check_event(ev1, res, 0)
-
-    ev1.direction = 1
-    ev2.direction = 1
-    res = solve(method, fun_rational, [8, 5], y0, events=(ev1, ev2), **kw)
-    assert_equal(res.status, 0)
-    assert_equal(res.t_events[0].size, 0)
-    assert_equal(res.t_events[1].size, 1)
-    assert 7.3 < res.t_events[1][0] < 7.7
-    assert_equal(res.y_events[0].shape[0], 0)
-    assert_equal(res.y_events[1].shape, (1, 2))
-    _check_event(ev2, res, 1)
-
-    ev1.direction = 0
-    ev2.direction = 0
-    res = solve(method, fun_rational, [8, 5], y0, events=(ev1, ev2, ev3), dense_output=True,
-                **kw)
-    assert_equal(res.status, 1)
-    assert_equal(res.t_events[0].size, 0)
-    assert_equal(res.t_events[1].size, 1)
-    assert_equal(res.t_events[2].size, 1)
-    assert 7.3 < res.t_events[1][0] < 7.7
-    assert 7.3 < res.t_events[2][0] < 7.5
-    assert_equal(res.y_events[0].shape[0], 0)
-    assert_equal(res.y_events[1].shape, (1, 2))
-    assert_equal(res.y_events[2].shape, (1, 2))
-    _check_event(ev2, res, 1)
-    _check_event(ev3, res, 2)
-
-    tc = np.linspace(res.t[-1], res.t[0])
-    e = compute_error(res.sol(tc), sol_rational(tc), 1e-3, 1e-6)
-    assert np.all(e < 5)
-    rt = 5e-3 if method in MULTISTEP else 1e-3
-    assert np.allclose(sol_rational(res.t_events[1][0]), res.y_events[1][0], rtol=rt,
-                       atol=1e-6)
-    assert np.allclose(sol_rational(res.t_events[2][0]), res.y_events[2][0], rtol=rt,
-                       atol=1e-6)
+    _check_events(res, status3, (ev1, ev2, ev3), windows3)
+    if way == "backward":
+        _check_event_states(method, res, [1, 2])
+        return
+    # forward only, as SciPy: one event function alone
+    res = solve(method, fun_rational, t_span, y0, events=ev1, dense_output=True, **kw)
+    _check_events(res, 0, (ev1,), (LOW,))
+    _check_event_states(method, res, [0])
 
 
 def _harmonic_oscillator():
@@ -499,15 +428,7 @@ def test_max_step(method, span):
     assert_equal(res.t[-1], t_span[-1])
     assert np.all(np.abs(np.diff(res.t)) <= 0.5 + 1e-15)
     assert res.t_events is None
-    assert res.success
-    assert_equal(res.status, 0)
-    bound = err_bound(method, t_span)
-    e = compute_error(res.y, sol_rational(res.t), rtol, atol)
-    assert np.all(e < bound)
-    tc = np.linspace(*t_span)
-    e = compute_error(res.sol(tc), sol_rational(tc), rtol, atol)
-    assert np.all(e < bound)
-    assert_allclose(res.sol(res.t), res.y, rtol=1e-15, atol=1e-15)
+    assert_accurate(res, sol_rational, t_span, rtol, atol, err_bound(method, t_span))
 
     with pytest.raises(ValueError, match="max_step"):
         mp.solve(fun_rational, t_span, y0, method=method, max_step=-1)
@@ -534,15 +455,7 @@ def test_first_step(method, span):
     assert_equal(res.t[-1], t_span[-1])
     assert_allclose(first_step, np.abs(res.t[1] - 5))
     assert res.t_events is None
-    assert res.success
-    assert_equal(res.status, 0)
-    bound = err_bound(method, t_span)
-    e = compute_error(res.y, sol_rational(res.t), rtol, atol)
-    assert np.all(e < bound)
-    tc = np.linspace(*t_span)
-    e = compute_error(res.sol(tc), sol_rational(tc), rtol, atol)
-    assert np.all(e < bound)
-    assert_allclose(res.sol(res.t), res.y, rtol=1e-15, atol=1e-15)
+    assert_accurate(res, sol_rational, t_span, rtol, atol, err_bound(method, t_span))
 
     with pytest.raises(ValueError, match="first_step"):
         mp.solve(fun_rational, t_span, y0, method=method, first_step=-1)
@@ -576,10 +489,8 @@ def test_t_eval(method):
         res = solve(method, fun_rational, t_span, y0, rtol=rtol, atol=atol, t_eval=t_eval)
         assert_equal(res.t, t_eval)
         assert res.t_events is None
-        assert res.success
-        assert_equal(res.status, 0)
-        e = compute_error(res.y, sol_rational(res.t), rtol, atol)
-        assert np.all(e < err_bound(method, t_span))
+        assert_accurate(res, sol_rational, t_span, rtol, atol, err_bound(method, t_span),
+                        dense=False)
 
     for t_span, t_eval in [([5, 9], [5, 5.01, 7, 8, 8.01, 9]),
                            ([5, 1], [5, 4.99, 3, 1.5, 1.1, 1.01, 1]),
@@ -588,10 +499,8 @@ def test_t_eval(method):
         res = solve(method, fun_rational, t_span, y0, rtol=rtol, atol=atol, t_eval=t_eval)
         assert_equal(res.t, t_eval)
         assert res.t_events is None
-        assert res.success
-        assert_equal(res.status, 0)
-        e = compute_error(res.y, sol_rational(res.t), rtol, atol)
-        assert np.all(e < err_bound(method, t_span))
+        assert_accurate(res, sol_rational, t_span, rtol, atol, err_bound(method, t_span),
+                        dense=False)
 
     with pytest.raises(ValueError, match="t_eval"):
         solve(method, fun_rational, [5, 9], y0, rtol=rtol, atol=atol, t_eval=[4, 6])
@@ -654,14 +563,7 @@ def test_event_dense_output_lsoda(method):
     assert_equal(res.t[0], t_span[0])
     assert_equal(res.t[-1], t_span[-1])
     assert_allclose(first_step, np.abs(res.t[1] - t_span[0]))
-    assert res.success
-    assert_equal(res.status, 0)
-    e = compute_error(res.y, sol_event_dense_output_lsoda(res.t), rtol, atol)
-    assert_array_less(e, 5)
-    tc = np.linspace(*t_span)
-    e = compute_error(res.sol(tc), sol_event_dense_output_lsoda(tc), rtol, atol)
-    assert_array_less(e, 5)
-    assert_allclose(res.sol(res.t), res.y, rtol=1e-15, atol=1e-15)
+    assert_accurate(res, sol_event_dense_output_lsoda, t_span, rtol, atol, 5)
 
 
 # ---- empty and degenerate problems (documented differences) ------------------------

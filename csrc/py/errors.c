@@ -194,6 +194,48 @@ int mp_py_require_finite(PyArrayObject *a, const char *name)
     return 0;
 }
 
+PyArrayObject *mp_py_array_shape(PyObject *obj, const char *name, int ndim,
+                                 const npy_intp *shape)
+{
+    PyArrayObject *a = mp_py_array(obj, name, ndim);
+    if (!a) return NULL;
+    for (int k = 0; k < ndim; k++) {
+        if (shape[k] >= 0 && PyArray_DIM(a, k) != shape[k]) {
+            PyErr_Format(PyExc_ValueError, "%s has a wrong shape (axis %d has length %zd, "
+                         "expected %zd)", name, k, (Py_ssize_t)PyArray_DIM(a, k),
+                         (Py_ssize_t)shape[k]);
+            Py_DECREF(a);
+            return NULL;
+        }
+    }
+    return a;
+}
+
+void *mp_py_hold(mp_py_refs *k, void *obj)
+{
+    if (!obj) return NULL;
+    if (k->n == MP_PY_MAXREFS) { /* a binding holding too many: refuse, never leak */
+        Py_DECREF((PyObject *)obj);
+        PyErr_SetString(PyExc_SystemError, "mechpy binding: too many held references");
+        return NULL;
+    }
+    k->o[k->n++] = obj;
+    return obj;
+}
+
+PyObject *mp_py_release(mp_py_refs *k, PyObject *result)
+{
+    while (k->n > 0) Py_DECREF(k->o[--k->n]);
+    return result;
+}
+
+PyObject *mp_py_result(int status, const char *context, PyObject *out)
+{
+    if (status != MP_OK) return mp_py_raise(status, context);
+    Py_INCREF(out);
+    return out;
+}
+
 PyArrayObject *mp_py_empty(int ndim, const npy_intp *shape)
 {
     return (PyArrayObject *)PyArray_SimpleNew(ndim, (npy_intp *)shape, NPY_DOUBLE);

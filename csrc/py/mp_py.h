@@ -42,8 +42,37 @@ PyArrayObject *mp_py_array_finite(PyObject *obj, const char *name, int ndim, npy
 /* ValueError naming `name` unless every element is finite. */
 int mp_py_require_finite(PyArrayObject *a, const char *name);
 
+/* mp_py_array with exactly the given shape (shape[k] = -1: any length);
+ * the error names the argument and the axis. */
+PyArrayObject *mp_py_array_shape(PyObject *obj, const char *name, int ndim,
+                                 const npy_intp *shape);
+
 /* A new float64 array of the given shape (C order), or NULL. */
 PyArrayObject *mp_py_empty(int ndim, const npy_intp *shape);
+
+/* The new references one binding call holds (the arrays it converted or
+ * created), dropped together on every way out.  A call declares
+ * `mp_py_refs k = {0};`, passes each new reference through mp_py_hold and
+ * leaves through `return mp_py_release(&k, result);`, so no exit path can
+ * leak or drop one twice.  At most MP_PY_MAXREFS per call. */
+#define MP_PY_MAXREFS 32
+typedef struct mp_py_refs {
+    PyObject *o[MP_PY_MAXREFS];
+    int n;
+} mp_py_refs;
+
+/* Hold the new reference `obj` (NULL passes through: the error it stands for
+ * is already set) until mp_py_release; returns obj. */
+void *mp_py_hold(mp_py_refs *k, void *obj);
+
+/* Drop every held reference and return `result` (a new reference of the
+ * caller's, or NULL with an exception set). */
+PyObject *mp_py_release(mp_py_refs *k, PyObject *result);
+
+/* How a C call ends a binding call: MP_OK gives a new reference to `out`,
+ * another status raises its exception ("context: description") and gives
+ * NULL. */
+PyObject *mp_py_result(int status, const char *context, PyObject *out);
 
 /* Interrupt check usable from C loops with the GIL released: takes the GIL,
  * runs PyErr_CheckSignals, returns MP_EINTR if an exception is pending. */

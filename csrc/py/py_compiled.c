@@ -31,12 +31,14 @@ static PyObject *py_compiled_eval(PyObject *self, PyObject *args)
     }
     mp_gen_fn f;
     *(void **)&f = addr; /* a data pointer handed over as an address */
-    PyArrayObject *p = mp_py_array(po, "params", 1), *y = NULL, *out = NULL;
-    if (!p) return NULL;
-    if (!(y = mp_py_array(yo, "y", 2))) goto fail;
+    PyArrayObject *p, *y, *out;
+    mp_py_refs k = {0};
+    if (!(p = mp_py_hold(&k, mp_py_array(po, "params", 1))) ||
+        !(y = mp_py_hold(&k, mp_py_array(yo, "y", 2))))
+        return mp_py_release(&k, NULL);
     npy_intp m = PyArray_DIM(y, 0), n = PyArray_DIM(y, 1);
     npy_intp shape[2] = {m, (npy_intp)nout};
-    if (!(out = mp_py_empty(2, shape))) goto fail;
+    if (!(out = mp_py_hold(&k, mp_py_empty(2, shape)))) return mp_py_release(&k, NULL);
     const double *yd = PyArray_DATA(y);
     double *od = PyArray_DATA(out);
     void *pd = PyArray_DATA(p);
@@ -54,17 +56,9 @@ static PyObject *py_compiled_eval(PyObject *self, PyObject *args)
     if (rc != MP_OK) {
         char detail[64];
         snprintf(detail, sizeof detail, "at state %ld, t = %.17g", (long)bad, t);
-        mp_py_raise_detail(rc, context, detail);
-        goto fail;
+        return mp_py_release(&k, mp_py_raise_detail(rc, context, detail));
     }
-    Py_DECREF(p);
-    Py_DECREF(y);
-    return (PyObject *)out;
-fail:
-    Py_XDECREF(p);
-    Py_XDECREF(y);
-    Py_XDECREF(out);
-    return NULL;
+    return mp_py_release(&k, mp_py_result(MP_OK, context, (PyObject *)out));
 }
 
 PyMethodDef mp_py_compiled_methods[] = {

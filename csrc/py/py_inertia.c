@@ -7,95 +7,75 @@
 
 #include "inertia.h"
 
-/* Require a float64 array of exactly the given shape (-1: any length). */
-static PyArrayObject *mp_py_inertia_arg(PyObject *obj, const char *name, int ndim,
-                                        const npy_intp *shape)
-{
-    PyArrayObject *a = mp_py_array(obj, name, ndim);
-    if (!a) return NULL;
-    for (int k = 0; k < ndim; k++) {
-        if (shape[k] >= 0 && PyArray_DIM(a, k) != shape[k]) {
-            PyErr_Format(PyExc_ValueError, "%s has a wrong shape (axis %d has length %zd, "
-                         "expected %zd)", name, k, (Py_ssize_t)PyArray_DIM(a, k),
-                         (Py_ssize_t)shape[k]);
-            Py_DECREF(a);
-            return NULL;
-        }
-    }
-    return a;
-}
-
 static PyObject *py_inertia_point_masses(PyObject *self, PyObject *args)
 {
     (void)self;
-    PyObject *om, *ox, *oo, *res = NULL;
-    PyArrayObject *m = NULL, *x = NULL, *o = NULL, *out = NULL;
+    PyObject *om, *ox, *oo;
+    PyArrayObject *m, *x, *o, *out;
+    mp_py_refs k = {0};
     if (!PyArg_ParseTuple(args, "OOO", &om, &ox, &oo)) return NULL;
     npy_intp sm[2] = {-1, -1};
-    if (!(m = mp_py_inertia_arg(om, "masses", 2, sm))) goto done;
+    if (!(m = mp_py_hold(&k, mp_py_array_shape(om, "masses", 2, sm))))
+        return mp_py_release(&k, NULL);
     npy_intp B = PyArray_DIM(m, 0), n = PyArray_DIM(m, 1);
     npy_intp sx[3] = {B, n, 3}, so[2] = {B, 3}, sI[3] = {B, 3, 3};
-    if (!(x = mp_py_inertia_arg(ox, "positions", 3, sx))) goto done;
-    if (!(o = mp_py_inertia_arg(oo, "origin", 2, so))) goto done;
-    if (!(out = mp_py_empty(3, sI))) goto done;
+    if (!(x = mp_py_hold(&k, mp_py_array_shape(ox, "positions", 3, sx))) ||
+        !(o = mp_py_hold(&k, mp_py_array_shape(oo, "origin", 2, so))) ||
+        !(out = mp_py_hold(&k, mp_py_empty(3, sI))))
+        return mp_py_release(&k, NULL);
     int rc;
     Py_BEGIN_ALLOW_THREADS
     rc = mp_inertia_point_masses((size_t)B, (size_t)n, PyArray_DATA(m), PyArray_DATA(x),
                                  PyArray_DATA(o), PyArray_DATA(out));
     Py_END_ALLOW_THREADS
-    if (rc != MP_OK) { mp_py_raise(rc, "point_masses: masses must be positive"); goto done; }
-    res = (PyObject *)out;
-    out = NULL;
-done:
-    Py_XDECREF(m); Py_XDECREF(x); Py_XDECREF(o); Py_XDECREF(out);
-    return res;
+    return mp_py_release(&k, mp_py_result(rc, "point_masses: masses must be positive",
+                                          (PyObject *)out));
 }
 
 static PyObject *py_inertia_shift(PyObject *self, PyObject *args)
 {
     (void)self;
-    PyObject *oi, *om, *oa, *res = NULL;
+    PyObject *oi, *om, *oa;
     int sign;
-    PyArrayObject *J = NULL, *m = NULL, *a = NULL, *out = NULL;
+    PyArrayObject *J, *m, *a, *out;
+    mp_py_refs k = {0};
     if (!PyArg_ParseTuple(args, "OOOi", &oi, &om, &oa, &sign)) return NULL;
     npy_intp si[3] = {-1, 3, 3};
-    if (!(J = mp_py_inertia_arg(oi, "I", 3, si))) goto done;
+    if (!(J = mp_py_hold(&k, mp_py_array_shape(oi, "I", 3, si)))) return mp_py_release(&k, NULL);
     npy_intp B = PyArray_DIM(J, 0), sm[1] = {B}, sa[2] = {B, 3}, sI[3] = {B, 3, 3};
-    if (!(m = mp_py_inertia_arg(om, "mass", 1, sm))) goto done;
-    if (!(a = mp_py_inertia_arg(oa, "a", 2, sa))) goto done;
-    if (!(out = mp_py_empty(3, sI))) goto done;
+    if (!(m = mp_py_hold(&k, mp_py_array_shape(om, "mass", 1, sm))) ||
+        !(a = mp_py_hold(&k, mp_py_array_shape(oa, "a", 2, sa))) ||
+        !(out = mp_py_hold(&k, mp_py_empty(3, sI))))
+        return mp_py_release(&k, NULL);
     int rc;
     Py_BEGIN_ALLOW_THREADS
     rc = mp_inertia_shift((size_t)B, PyArray_DATA(J), PyArray_DATA(m), PyArray_DATA(a),
                           sign < 0 ? -1 : 1, PyArray_DATA(out));
     Py_END_ALLOW_THREADS
-    if (rc != MP_OK) { mp_py_raise(rc, "shift: mass must be non-negative"); goto done; }
-    res = (PyObject *)out;
-    out = NULL;
-done:
-    Py_XDECREF(J); Py_XDECREF(m); Py_XDECREF(a); Py_XDECREF(out);
-    return res;
+    return mp_py_release(&k, mp_py_result(rc, "shift: mass must be non-negative",
+                                          (PyObject *)out));
 }
 
 static PyObject *py_inertia_eigh(PyObject *self, PyObject *args)
 {
     (void)self;
-    PyObject *oa, *res = NULL;
-    PyArrayObject *A = NULL, *w = NULL, *V = NULL;
+    PyObject *oa;
+    PyArrayObject *A, *w, *V;
+    mp_py_refs k = {0};
     if (!PyArg_ParseTuple(args, "O", &oa)) return NULL;
     npy_intp sa[3] = {-1, 3, 3};
-    if (!(A = mp_py_inertia_arg(oa, "matrix", 3, sa))) goto done;
+    if (!(A = mp_py_hold(&k, mp_py_array_shape(oa, "matrix", 3, sa))))
+        return mp_py_release(&k, NULL);
     npy_intp B = PyArray_DIM(A, 0), sw[2] = {B, 3};
-    if (!(w = mp_py_empty(2, sw)) || !(V = mp_py_empty(3, PyArray_DIMS(A)))) goto done;
+    if (!(w = mp_py_hold(&k, mp_py_empty(2, sw))) ||
+        !(V = mp_py_hold(&k, mp_py_empty(3, PyArray_DIMS(A)))))
+        return mp_py_release(&k, NULL);
     int rc;
     Py_BEGIN_ALLOW_THREADS
     rc = mp_inertia_eigh((size_t)B, PyArray_DATA(A), PyArray_DATA(w), PyArray_DATA(V));
     Py_END_ALLOW_THREADS
-    if (rc != MP_OK) { mp_py_raise(rc, "symmetric 3x3 eigen-decomposition"); goto done; }
-    res = Py_BuildValue("OO", w, V);
-done:
-    Py_XDECREF(A); Py_XDECREF(w); Py_XDECREF(V);
-    return res;
+    return mp_py_release(&k, rc == MP_OK ? Py_BuildValue("OO", w, V)
+                                         : mp_py_raise(rc, "symmetric 3x3 eigen-decomposition"));
 }
 
 static void mp_py_mesh_detail(const struct mp_mesh_report *r, char *buf, size_t size)
@@ -149,19 +129,20 @@ static void mp_py_mesh_detail(const struct mp_mesh_report *r, char *buf, size_t 
 static PyObject *py_inertia_mesh(PyObject *self, PyObject *args)
 {
     (void)self;
-    PyObject *ov, *of, *res = NULL;
-    PyArrayObject *V = NULL, *F = NULL, *com = NULL, *J = NULL;
+    PyObject *ov, *of;
+    PyArrayObject *V, *F, *com, *J;
+    mp_py_refs k = {0};
     if (!PyArg_ParseTuple(args, "OO", &ov, &of)) return NULL;
-    npy_intp sv[2] = {-1, 3};
-    if (!(V = mp_py_inertia_arg(ov, "vertices", 2, sv))) goto done;
-    F = (PyArrayObject *)PyArray_FROM_OTF(of, NPY_INT64, NPY_ARRAY_IN_ARRAY);
-    if (!F) goto done;
+    npy_intp sv[2] = {-1, 3}, s3[1] = {3}, s33[2] = {3, 3};
+    if (!(V = mp_py_hold(&k, mp_py_array_shape(ov, "vertices", 2, sv))) ||
+        !(F = mp_py_hold(&k, PyArray_FROM_OTF(of, NPY_INT64, NPY_ARRAY_IN_ARRAY))))
+        return mp_py_release(&k, NULL);
     if (PyArray_NDIM(F) != 2 || PyArray_DIM(F, 1) != 3) {
         PyErr_SetString(PyExc_ValueError, "faces must have shape (n, 3)");
-        goto done;
+        return mp_py_release(&k, NULL);
     }
-    npy_intp s3[1] = {3}, s33[2] = {3, 3};
-    if (!(com = mp_py_empty(1, s3)) || !(J = mp_py_empty(2, s33))) goto done;
+    if (!(com = mp_py_hold(&k, mp_py_empty(1, s3))) || !(J = mp_py_hold(&k, mp_py_empty(2, s33))))
+        return mp_py_release(&k, NULL);
     double vol = 0;
     struct mp_mesh_report rep;
     int rc;
@@ -173,31 +154,31 @@ static PyObject *py_inertia_mesh(PyObject *self, PyObject *args)
     if (rc != MP_OK) {
         char detail[256];
         mp_py_mesh_detail(&rep, detail, sizeof detail);
-        mp_py_raise_detail(rc, rep.defect == MP_MESH_OK ? "mesh: vertices must be finite"
-                                                        : "mesh", detail);
-        goto done;
+        return mp_py_release(&k, mp_py_raise_detail(rc, rep.defect == MP_MESH_OK
+                                                          ? "mesh: vertices must be finite"
+                                                          : "mesh", detail));
     }
-    res = Py_BuildValue("dOO", vol, com, J);
-done:
-    Py_XDECREF(V); Py_XDECREF(F); Py_XDECREF(com); Py_XDECREF(J);
-    return res;
+    return mp_py_release(&k, Py_BuildValue("dOO", vol, com, J));
 }
 
 static PyObject *py_inertia_grid(PyObject *self, PyObject *args)
 {
     (void)self;
-    PyObject *orho, *oh, *oo, *res = NULL;
-    PyArrayObject *R = NULL, *h = NULL, *o = NULL, *com = NULL, *J = NULL;
+    PyObject *orho, *oh, *oo;
+    PyArrayObject *R, *h, *o, *com, *J;
+    mp_py_refs k = {0};
     if (!PyArg_ParseTuple(args, "OOO", &orho, &oh, &oo)) return NULL;
     npy_intp sr[3] = {-1, -1, -1}, s3[1] = {3}, s33[2] = {3, 3};
-    if (!(R = mp_py_inertia_arg(orho, "rho", 3, sr))) goto done;
-    if (!(h = mp_py_inertia_arg(oh, "spacing", 1, s3))) goto done;
-    if (!(o = mp_py_inertia_arg(oo, "origin", 1, s3))) goto done;
+    if (!(R = mp_py_hold(&k, mp_py_array_shape(orho, "rho", 3, sr))) ||
+        !(h = mp_py_hold(&k, mp_py_array_shape(oh, "spacing", 1, s3))) ||
+        !(o = mp_py_hold(&k, mp_py_array_shape(oo, "origin", 1, s3))))
+        return mp_py_release(&k, NULL);
     if (PyArray_SIZE(R) == 0) {
         PyErr_SetString(PyExc_ValueError, "rho must not be empty");
-        goto done;
+        return mp_py_release(&k, NULL);
     }
-    if (!(com = mp_py_empty(1, s3)) || !(J = mp_py_empty(2, s33))) goto done;
+    if (!(com = mp_py_hold(&k, mp_py_empty(1, s3))) || !(J = mp_py_hold(&k, mp_py_empty(2, s33))))
+        return mp_py_release(&k, NULL);
     double mass = 0;
     int rc;
     Py_BEGIN_ALLOW_THREADS
@@ -205,14 +186,9 @@ static PyObject *py_inertia_grid(PyObject *self, PyObject *args)
                          (size_t)PyArray_DIM(R, 2), PyArray_DATA(R), PyArray_DATA(h),
                          PyArray_DATA(o), &mass, PyArray_DATA(com), PyArray_DATA(J));
     Py_END_ALLOW_THREADS
-    if (rc != MP_OK) {
-        mp_py_raise(rc, "density_grid: rho must be finite and >= 0 with a positive total");
-        goto done;
-    }
-    res = Py_BuildValue("dOO", mass, com, J);
-done:
-    Py_XDECREF(R); Py_XDECREF(h); Py_XDECREF(o); Py_XDECREF(com); Py_XDECREF(J);
-    return res;
+    return mp_py_release(&k, rc == MP_OK ? Py_BuildValue("dOO", mass, com, J)
+                                         : mp_py_raise(rc, "density_grid: rho must be finite "
+                                                           "and >= 0 with a positive total"));
 }
 
 PyMethodDef mp_py_inertia_methods[] = {

@@ -99,6 +99,22 @@ static PyArrayObject *mp_py_modes_square(PyObject *obj, const char *name, int *n
     return a;
 }
 
+/* The square pair (K, M) of one order *n, held in refs. */
+static int mp_py_modes_pair(mp_py_refs *refs, PyObject *ko, PyObject *mo, PyArrayObject **k,
+                            PyArrayObject **m, int *n)
+{
+    int nm = 0;
+    if (!(*k = mp_py_hold(refs, mp_py_modes_square(ko, "K", n))) ||
+        !(*m = mp_py_hold(refs, mp_py_modes_square(mo, "M", &nm))))
+        return -1;
+    if (nm != *n) {
+        PyErr_Format(PyExc_ValueError, "M must have the shape of K (%d x %d), got %d x %d",
+                     *n, *n, nm, nm);
+        return -1;
+    }
+    return 0;
+}
+
 /* The (w, Z) result of a finished job, or the exception of its status; the
  * job is freed either way. */
 static PyObject *mp_py_modes_result(struct mp_modes_job *j, double **zbuf, const char *context)
@@ -142,23 +158,12 @@ static PyObject *modes_dense(PyObject *self, PyObject *args)
 {
     (void)self;
     PyObject *ko, *mo;
-    int n = 0, nm = 0;
+    int n = 0;
     double zero_rtol = -1.0;
     if (!PyArg_ParseTuple(args, "OO|d:modes_dense", &ko, &mo, &zero_rtol)) return NULL;
-    PyArrayObject *k = mp_py_modes_square(ko, "K", &n);
-    if (!k) return NULL;
-    PyArrayObject *m = mp_py_modes_square(mo, "M", &nm);
-    if (!m) {
-        Py_DECREF(k);
-        return NULL;
-    }
-    if (nm != n) {
-        PyErr_Format(PyExc_ValueError, "M must have the shape of K (%d x %d), got %d x %d",
-                     n, n, nm, nm);
-        Py_DECREF(k);
-        Py_DECREF(m);
-        return NULL;
-    }
+    mp_py_refs refs = {0};
+    PyArrayObject *k, *m;
+    if (mp_py_modes_pair(&refs, ko, mo, &k, &m, &n) < 0) return mp_py_release(&refs, NULL);
     /* LAPACK overwrites both: the job works on its own copies. */
     size_t nn = (size_t)n * (size_t)n;
     struct mp_modes_job *j = mp_modes_job_new(1, n, zero_rtol);
@@ -167,8 +172,7 @@ static PyObject *modes_dense(PyObject *self, PyObject *args)
         j->m = mp_modes_copy(m, nn);
         j->w = malloc((size_t)n * sizeof *j->w);
     }
-    Py_DECREF(k);
-    Py_DECREF(m);
+    mp_py_release(&refs, NULL);
     if (!j || !j->k || !j->m || !j->w) {
         mp_modes_job_free(j);
         return PyErr_NoMemory();
@@ -190,22 +194,22 @@ static PyObject *modes_tridiag(PyObject *self, PyObject *args)
     double zero_rtol = -1.0;
     if (!PyArg_ParseTuple(args, "OOO|d:modes_tridiag", &kdo, &keo, &mdo, &zero_rtol))
         return NULL;
-    PyArrayObject *kd = mp_py_array(kdo, "kd", 1);
-    PyArrayObject *ke = mp_py_array(keo, "ke", 1);
-    PyArrayObject *md = mp_py_array(mdo, "md", 1);
-    PyObject *res = NULL;
-    struct mp_modes_job *j = NULL;
-    if (!kd || !ke || !md) goto done;
+    mp_py_refs refs = {0};
+    PyArrayObject *kd, *ke, *md;
+    if (!(kd = mp_py_hold(&refs, mp_py_array(kdo, "kd", 1))) ||
+        !(ke = mp_py_hold(&refs, mp_py_array(keo, "ke", 1))) ||
+        !(md = mp_py_hold(&refs, mp_py_array(mdo, "md", 1))))
+        return mp_py_release(&refs, NULL);
     npy_intp n = PyArray_DIM(kd, 0);
     if (n < 1 || n > 100000 || PyArray_DIM(md, 0) != n || PyArray_DIM(ke, 0) != n - 1) {
         PyErr_Format(PyExc_ValueError,
                      "kd, ke, md must have lengths n, n-1, n with 1 <= n <= 100000");
-        goto done;
+        return mp_py_release(&refs, NULL);
     }
     if (mp_py_require_finite(kd, "K") < 0 || mp_py_require_finite(ke, "K") < 0 ||
         mp_py_require_finite(md, "M") < 0)
-        goto done;
-    j = mp_modes_job_new(0, (int)n, zero_rtol);
+        return mp_py_release(&refs, NULL);
+    struct mp_modes_job *j = mp_modes_job_new(0, (int)n, zero_rtol);
     if (j) {
         j->kd = mp_modes_copy(kd, (size_t)n);
         j->ke = mp_modes_copy(ke, (size_t)n - 1);
@@ -213,18 +217,13 @@ static PyObject *modes_tridiag(PyObject *self, PyObject *args)
         j->w = malloc((size_t)n * sizeof *j->w);
         j->z = malloc((size_t)n * (size_t)n * sizeof *j->z);
     }
+    mp_py_release(&refs, NULL);
     if (!j || !j->kd || !j->ke || !j->md || !j->w || !j->z) {
         mp_modes_job_free(j);
-        PyErr_NoMemory();
-        goto done;
+        return PyErr_NoMemory();
     }
     mp_modes_run(j);
-    res = mp_py_modes_result(j, &j->z, "normal_modes(K, M) (chain)");
-done:
-    Py_XDECREF(kd);
-    Py_XDECREF(ke);
-    Py_XDECREF(md);
-    return res;
+    return mp_py_modes_result(j, &j->z, "normal_modes(K, M) (chain)");
 }
 
 PyDoc_STRVAR(modes_is_chain_doc,
@@ -235,40 +234,24 @@ static PyObject *modes_is_chain(PyObject *self, PyObject *args)
 {
     (void)self;
     PyObject *ko, *mo;
-    int n = 0, nm = 0;
+    int n = 0;
     if (!PyArg_ParseTuple(args, "OO:modes_is_chain", &ko, &mo)) return NULL;
-    PyArrayObject *k = mp_py_modes_square(ko, "K", &n);
-    if (!k) return NULL;
-    PyArrayObject *m = mp_py_modes_square(mo, "M", &nm);
-    if (!m || nm != n) {
-        if (m) PyErr_Format(PyExc_ValueError, "M must have the shape of K");
-        Py_DECREF(k);
-        Py_XDECREF(m);
-        return NULL;
-    }
+    mp_py_refs refs = {0};
+    PyArrayObject *k, *m, *kd, *ke, *md;
+    if (mp_py_modes_pair(&refs, ko, mo, &k, &m, &n) < 0) return mp_py_release(&refs, NULL);
     npy_intp s1[1] = {n}, s0[1] = {n - 1};
-    PyArrayObject *kd = mp_py_empty(1, s1), *ke = mp_py_empty(1, s0), *md = mp_py_empty(1, s1);
-    PyObject *res = NULL;
-    if (kd && ke && md) {
-        int yes;
-        Py_BEGIN_ALLOW_THREADS
-        yes = mp_modes_is_chain(n, (const double *)PyArray_DATA(k),
-                                (const double *)PyArray_DATA(m), (double *)PyArray_DATA(kd),
-                                (double *)PyArray_DATA(ke), (double *)PyArray_DATA(md));
-        Py_END_ALLOW_THREADS
-        if (yes) {
-            res = Py_BuildValue("(OOO)", kd, ke, md);
-        } else {
-            Py_INCREF(Py_None);
-            res = Py_None;
-        }
-    }
-    Py_DECREF(k);
-    Py_DECREF(m);
-    Py_XDECREF(kd);
-    Py_XDECREF(ke);
-    Py_XDECREF(md);
-    return res;
+    if (!(kd = mp_py_hold(&refs, mp_py_empty(1, s1))) ||
+        !(ke = mp_py_hold(&refs, mp_py_empty(1, s0))) ||
+        !(md = mp_py_hold(&refs, mp_py_empty(1, s1))))
+        return mp_py_release(&refs, NULL);
+    int yes;
+    Py_BEGIN_ALLOW_THREADS
+    yes = mp_modes_is_chain(n, (const double *)PyArray_DATA(k), (const double *)PyArray_DATA(m),
+                            (double *)PyArray_DATA(kd), (double *)PyArray_DATA(ke),
+                            (double *)PyArray_DATA(md));
+    Py_END_ALLOW_THREADS
+    return mp_py_release(&refs, yes ? Py_BuildValue("(OOO)", kd, ke, md)
+                                    : mp_py_result(MP_OK, NULL, Py_None));
 }
 
 PyMethodDef mp_py_modes_methods[] = {

@@ -27,15 +27,8 @@ typedef struct {
 typedef struct {
     mp_var_builtin b;
     PyObject *fn;            /* borrowed: the Python callable, or NULL */
-    PyArrayObject *params;   /* owned: the compiled function's parameters, or NULL */
     mp_var_integrand F;
 } py_var_spec;
-
-/* Release what py_var_parse took (safe on a zeroed spec). */
-static void py_var_release(py_var_spec *s)
-{
-    Py_CLEAR(s->params);
-}
 
 /* The Python integrand adapter: called from C with the GIL released. */
 static int py_var_eval(size_t m, const double *x, const double *y, const double *p, double *out,
@@ -46,17 +39,18 @@ static int py_var_eval(size_t m, const double *x, const double *y, const double 
     int st = MP_ECALLBACK;
     PyGILState_STATE gs = PyGILState_Ensure();
     npy_intp d1 = (npy_intp)m, d2[2] = {(npy_intp)m, (npy_intp)d};
-    PyArrayObject *ax = mp_py_empty(1, &d1), *ay = mp_py_empty(2, d2), *ap = mp_py_empty(2, d2);
-    PyObject *r = NULL;
-    PyArrayObject *ra = NULL;
-    if (!ax || !ay || !ap) goto done;
+    mp_py_refs k = {0};
+    PyArrayObject *ax, *ay, *ap, *ra;
+    if (!(ax = mp_py_hold(&k, mp_py_empty(1, &d1))) || !(ay = mp_py_hold(&k, mp_py_empty(2, d2)))
+        || !(ap = mp_py_hold(&k, mp_py_empty(2, d2))))
+        goto done;
     memcpy(PyArray_DATA(ax), x, m * sizeof(double));
     memcpy(PyArray_DATA(ay), y, m * d * sizeof(double));
     memcpy(PyArray_DATA(ap), p, m * d * sizeof(double));
-    r = PyObject_CallFunctionObjArgs(s->fn, (PyObject *)ax, (PyObject *)ay, (PyObject *)ap, NULL);
-    if (!r) goto done;
-    ra = mp_py_array(r, "integrand derivatives", 2);
-    if (!ra) goto done;
+    PyObject *r = mp_py_hold(&k, PyObject_CallFunctionObjArgs(s->fn, (PyObject *)ax,
+                                                             (PyObject *)ay, (PyObject *)ap,
+                                                             NULL));
+    if (!r || !(ra = mp_py_hold(&k, mp_py_array(r, "integrand derivatives", 2)))) goto done;
     if (PyArray_DIM(ra, 0) != d1 || PyArray_DIM(ra, 1) != (npy_intp)K) {
         PyErr_Format(PyExc_ValueError,
                      "the integrand must return an array of shape (%zd, %zd), got (%zd, %zd)",
@@ -67,11 +61,7 @@ static int py_var_eval(size_t m, const double *x, const double *y, const double 
     memcpy(out, PyArray_DATA(ra), m * K * sizeof(double));
     st = MP_OK;
 done:
-    Py_XDECREF(ax);
-    Py_XDECREF(ay);
-    Py_XDECREF(ap);
-    Py_XDECREF(r);
-    Py_XDECREF(ra);
+    mp_py_release(&k, NULL);
     PyGILState_Release(gs);
     return st;
 }
@@ -91,8 +81,8 @@ static int py_var_dim(PyObject *o, size_t *d, const char *what)
 }
 
 /* Parse ("scene", name, params) into s: the row's Lagrangian on the row's
- * checked parameters; -1 with an exception set. */
-static int py_var_parse_scene(PyObject *obj, py_var_spec *s, const char *what)
+ * checked parameters (held in k); -1 with an exception set. */
+static int py_var_parse_scene(PyObject *obj, py_var_spec *s, const char *what, mp_py_refs *k)
 {
     const char *scene = PyTuple_GET_SIZE(obj) == 3 && PyUnicode_Check(PyTuple_GET_ITEM(obj, 1))
                             ? PyUnicode_AsUTF8(PyTuple_GET_ITEM(obj, 1)) : NULL;
@@ -103,23 +93,24 @@ static int py_var_parse_scene(PyObject *obj, py_var_spec *s, const char *what)
                          "Lagrangian", what);
         return -1;
     }
-    s->params = mp_py_array(PyTuple_GET_ITEM(obj, 2), "params", 1);
-    if (!s->params) return -1;
+    PyArrayObject *params = mp_py_hold(k, mp_py_array(PyTuple_GET_ITEM(obj, 2), "params", 1));
+    if (!params) return -1;
     size_t dim;
     char why[200];
-    if (mp_model_check(m, PyArray_DATA(s->params), (size_t)PyArray_SIZE(s->params), &dim, why,
+    if (mp_model_check(m, PyArray_DATA(params), (size_t)PyArray_SIZE(params), &dim, why,
                        sizeof why) != MP_OK) {
         PyErr_Format(PyExc_ValueError, "%s: %s: %s", what, m->name, why);
         return -1;
     }
     s->F.eval = m->lagrangian;
-    s->F.ctx = PyArray_DATA(s->params);
+    s->F.ctx = PyArray_DATA(params);
     s->F.d = dim / 2;
     return 0;
 }
 
-/* Parse a spec (see the file comment) into s; -1 with an exception set. */
-static int py_var_parse(PyObject *obj, py_var_spec *s, const char *what)
+/* Parse a spec (see the file comment) into s; the arrays it keeps (the
+ * parameters) are held in k.  -1 with an exception set. */
+static int py_var_parse(PyObject *obj, py_var_spec *s, const char *what, mp_py_refs *k)
 {
     memset(s, 0, sizeof *s);
     Py_ssize_t len = PyTuple_Check(obj) ? PyTuple_GET_SIZE(obj) : -1;
@@ -153,13 +144,13 @@ static int py_var_parse(PyObject *obj, py_var_spec *s, const char *what)
         if (py_var_dim(PyTuple_GET_ITEM(obj, 3), &s->F.d, what) < 0) return -1;
         py_var_cfun *cf = PyCapsule_GetPointer(cap, MP_VAR_CAPSULE);
         if (!cf) return -1;
-        s->params = mp_py_array(PyTuple_GET_ITEM(obj, 2), "params", 1);
-        if (!s->params) return -1;
+        PyArrayObject *params = mp_py_hold(k, mp_py_array(PyTuple_GET_ITEM(obj, 2), "params", 1));
+        if (!params) return -1;
         s->F.eval = cf->fn;
-        s->F.ctx = PyArray_DATA(s->params);
+        s->F.ctx = PyArray_DATA(params);
         return 0;
     }
-    if (strcmp(name, "scene") == 0) return py_var_parse_scene(obj, s, what);
+    if (strcmp(name, "scene") == 0) return py_var_parse_scene(obj, s, what, k);
     if (len != 2) {
         PyErr_Format(PyExc_TypeError, "%s: a built-in is a pair (name, params)", what);
         return -1;
@@ -169,20 +160,15 @@ static int py_var_parse(PyObject *obj, py_var_spec *s, const char *what)
         PyErr_Format(PyExc_ValueError, "%s: unknown built-in integrand %s", what, name);
         return -1;
     }
-    PyArrayObject *p = mp_py_array(PyTuple_GET_ITEM(obj, 1), "params", 1);
+    PyArrayObject *p = mp_py_hold(k, mp_py_array(PyTuple_GET_ITEM(obj, 1), "params", 1));
     if (!p) return -1;
     if ((size_t)PyArray_SIZE(p) != np) {
         PyErr_Format(PyExc_ValueError, "%s: %s takes %zd parameters, got %zd", what, name,
                      (Py_ssize_t)np, (Py_ssize_t)PyArray_SIZE(p));
-        Py_DECREF(p);
         return -1;
     }
-    if (mp_py_require_finite(p, "params") < 0) {
-        Py_DECREF(p);
-        return -1;
-    }
+    if (mp_py_require_finite(p, "params") < 0) return -1;
     memcpy(s->b.params, PyArray_DATA(p), np * sizeof(double));
-    Py_DECREF(p);
     mp_variational_builtin_bind(&s->b, &s->F);
     return 0;
 }
@@ -248,48 +234,47 @@ static PyObject *py_variational_capsule(PyObject *self, PyObject *arg)
 static PyObject *py_variational_solve(PyObject *self, PyObject *args)
 {
     (void)self;
-    PyObject *fo, *xo, *yo, *co, *vo, *lo;
+    PyObject *fo, *xo, *yo, *co, *vo, *lo, *seq;
     int stationary;
     double tol;
     Py_ssize_t max_iter;
     if (!PyArg_ParseTuple(args, "OOOOOOpdn", &fo, &xo, &yo, &co, &vo, &lo, &stationary, &tol,
                           &max_iter))
         return NULL;
-    py_var_spec F, G[MP_VAR_MAXCON];
-    memset(G, 0, sizeof G);
+    mp_py_refs k = {0};
+    py_var_spec F, G[MP_VAR_MAXCON]; /* a Python integrand's context is its spec */
     mp_var_integrand GI[MP_VAR_MAXCON];
-    PyArrayObject *x = NULL, *y = NULL, *v = NULL, *lam = NULL, *y0 = NULL, *l0 = NULL;
-    PyObject *seq = NULL, *res = NULL;
-    Py_ssize_t nc = 0;
-    if (py_var_parse(fo, &F, "F") < 0) return NULL;
-    seq = PySequence_Fast(co, "constraints must be a sequence");
-    if (!seq) goto done;
-    nc = PySequence_Fast_GET_SIZE(seq);
+    PyArrayObject *x, *y, *v, *lam, *y0, *l0;
+    if (py_var_parse(fo, &F, "F", &k) < 0 ||
+        !(seq = mp_py_hold(&k, PySequence_Fast(co, "constraints must be a sequence"))))
+        return mp_py_release(&k, NULL);
+    Py_ssize_t nc = PySequence_Fast_GET_SIZE(seq);
     if (nc > MP_VAR_MAXCON) {
         PyErr_Format(PyExc_ValueError, "at most %d constraints", MP_VAR_MAXCON);
-        nc = 0;
-        goto done;
+        return mp_py_release(&k, NULL);
     }
-    for (Py_ssize_t k = 0; k < nc; k++) {
-        if (py_var_parse(PySequence_Fast_GET_ITEM(seq, k), &G[k], "constraint") < 0) goto done;
-        if (G[k].F.d != F.F.d) {
+    for (Py_ssize_t c = 0; c < nc; c++) {
+        if (py_var_parse(PySequence_Fast_GET_ITEM(seq, c), &G[c], "constraint", &k) < 0)
+            return mp_py_release(&k, NULL);
+        if (G[c].F.d != F.F.d) {
             PyErr_SetString(PyExc_ValueError, "a constraint must have the functional's "
                             "dimension");
-            goto done;
+            return mp_py_release(&k, NULL);
         }
-        GI[k] = G[k].F;
+        GI[c] = G[c].F;
     }
     npy_intp npts = 0;
-    if (!(x = mp_py_array_finite(xo, "x", 1, -1)) || !(v = mp_py_array(vo, "values", 1)) ||
-        !(l0 = mp_py_array(lo, "lambda0", 1)) ||
-        !(y0 = py_var_points(yo, "y0", F.F.d, PyArray_SIZE(x), &npts)))
-        goto done;
-    if (!(y = py_var_copy(y0)) || !(lam = py_var_copy(l0))) goto done;
+    if (!(x = mp_py_hold(&k, mp_py_array_finite(xo, "x", 1, -1))) ||
+        !(v = mp_py_hold(&k, mp_py_array(vo, "values", 1))) ||
+        !(l0 = mp_py_hold(&k, mp_py_array(lo, "lambda0", 1))) ||
+        !(y0 = mp_py_hold(&k, py_var_points(yo, "y0", F.F.d, PyArray_SIZE(x), &npts))) ||
+        !(y = mp_py_hold(&k, py_var_copy(y0))) || !(lam = mp_py_hold(&k, py_var_copy(l0))))
+        return mp_py_release(&k, NULL);
     if (npts < 3 || PyArray_SIZE(v) != nc || PyArray_SIZE(lam) != nc || max_iter < 1) {
         PyErr_SetString(PyExc_ValueError,
                         "variational_solve: need len(x) == len(y0) >= 3, one value and one "
                         "multiplier per constraint, max_iter >= 1");
-        goto done;
+        return mp_py_release(&k, NULL);
     }
     mp_var_problem pb = {.n = (size_t)npts - 1, .x = PyArray_DATA(x), .F = F.F,
                          .ncon = (size_t)nc, .G = GI, .value = PyArray_DATA(v),
@@ -306,23 +291,19 @@ static PyObject *py_variational_solve(PyObject *self, PyObject *args)
         snprintf(detail, sizeof detail,
                  "after %zu Newton iterations (residual %.3g, constraint error %.3g)",
                  info.iterations, info.residual, info.constraint_error);
-        mp_py_raise_detail(st, "variational_solve", detail);
-        goto done;
+        return mp_py_release(&k, mp_py_raise_detail(st, "variational_solve", detail));
     }
-    res = Py_BuildValue("(OO{s:n,s:d,s:d,s:d})", (PyObject *)y, (PyObject *)lam, "iterations",
-                        (Py_ssize_t)info.iterations, "J", info.J, "residual", info.residual,
-                        "constraint_error", info.constraint_error);
-done:
-    py_var_release(&F);
-    for (Py_ssize_t k = 0; k < nc; k++) py_var_release(&G[k]);
-    Py_XDECREF(seq);
-    Py_XDECREF(x);
-    Py_XDECREF(y);
-    Py_XDECREF(y0);
-    Py_XDECREF(v);
-    Py_XDECREF(lam);
-    Py_XDECREF(l0);
-    return res;
+    return mp_py_release(&k, Py_BuildValue("(OO{s:n,s:d,s:d,s:d})", (PyObject *)y,
+                                           (PyObject *)lam, "iterations",
+                                           (Py_ssize_t)info.iterations, "J", info.J,
+                                           "residual", info.residual, "constraint_error",
+                                           info.constraint_error));
+}
+
+/* The message of a singular d2L/dqdot2 in `what`, or "" for other statuses. */
+static const char *py_var_singular(int st, const char *what)
+{
+    return st == MP_ESINGULAR ? what : "";
 }
 
 /* variational_integrate(L, t0, h, nsteps, q0, p0, v0, sing_tol) -> (q, p), each of
@@ -335,21 +316,23 @@ static PyObject *py_variational_integrate(PyObject *self, PyObject *args)
     Py_ssize_t nsteps;
     if (!PyArg_ParseTuple(args, "OddnOOOd", &fo, &t0, &h, &nsteps, &qo, &po, &vo, &sing_tol))
         return NULL;
+    mp_py_refs k = {0};
     py_var_spec L;
-    if (py_var_parse(fo, &L, "L") < 0) return NULL;
-    PyArrayObject *q0 = NULL, *p0 = NULL, *v0 = NULL, *q = NULL, *p = NULL;
-    PyObject *res = NULL;
+    PyArrayObject *q0, *p0, *v0, *q, *p;
     npy_intp one;
+    if (py_var_parse(fo, &L, "L", &k) < 0) return mp_py_release(&k, NULL);
     size_t d = L.F.d;
-    if (!(q0 = py_var_points(qo, "q0", d, 1, &one)) || !(p0 = py_var_points(po, "p0", d, 1, &one))
-        || !(v0 = py_var_points(vo, "v0", d, 1, &one)))
-        goto done;
+    if (!(q0 = mp_py_hold(&k, py_var_points(qo, "q0", d, 1, &one))) ||
+        !(p0 = mp_py_hold(&k, py_var_points(po, "p0", d, 1, &one))) ||
+        !(v0 = mp_py_hold(&k, py_var_points(vo, "v0", d, 1, &one))))
+        return mp_py_release(&k, NULL);
     if (nsteps < 0 || (size_t)nsteps >= (size_t)PY_SSIZE_T_MAX / (8 * d) - 1) {
         PyErr_SetString(PyExc_ValueError, "nsteps must be >= 0 and fit in memory");
-        goto done;
+        return mp_py_release(&k, NULL);
     }
     npy_intp dims[2] = {nsteps + 1, (npy_intp)d};
-    if (!(q = mp_py_empty(2, dims)) || !(p = mp_py_empty(2, dims))) goto done;
+    if (!(q = mp_py_hold(&k, mp_py_empty(2, dims))) || !(p = mp_py_hold(&k, mp_py_empty(2, dims))))
+        return mp_py_release(&k, NULL);
     int st;
     double *qq = PyArray_DATA(q), *pp = PyArray_DATA(p);
     const double *a = PyArray_DATA(q0), *b = PyArray_DATA(p0), *c = PyArray_DATA(v0);
@@ -357,21 +340,27 @@ static PyObject *py_variational_integrate(PyObject *self, PyObject *args)
     st = mp_variational_integrate(&L.F, t0, h, (size_t)nsteps, a, b, c, sing_tol, qq, pp,
                                   mp_py_check_interrupt, NULL);
     Py_END_ALLOW_THREADS
-    if (st != MP_OK) {
-        mp_py_raise_detail(st, "variational_integrate",
-                           st == MP_ESINGULAR ? "d2L/dqdot2 is singular: the Lagrangian does "
-                                                "not determine the velocities" : "");
-        goto done;
-    }
-    res = Py_BuildValue("(OO)", (PyObject *)q, (PyObject *)p);
-done:
-    py_var_release(&L);
-    Py_XDECREF(q0);
-    Py_XDECREF(p0);
-    Py_XDECREF(v0);
-    Py_XDECREF(q);
-    Py_XDECREF(p);
-    return res;
+    return mp_py_release(&k, st == MP_OK ? Py_BuildValue("(OO)", (PyObject *)q, (PyObject *)p)
+                                         : mp_py_raise_detail(st, "variational_integrate",
+                                                              py_var_singular(st,
+                                           "d2L/dqdot2 is singular: the Lagrangian does not "
+                                           "determine the velocities")));
+}
+
+/* Parse (L, x, y[, p]) of the pointwise entry points: the spec, x (m,), y
+ * (m, d) and, when po is given, p (m, d); all held in k.  -1 with an
+ * exception set. */
+static int py_var_path(mp_py_refs *k, PyObject *fo, PyObject *xo, PyObject *yo, PyObject *po,
+                       py_var_spec *L, PyArrayObject **x, PyArrayObject **y, PyArrayObject **p,
+                       npy_intp *m)
+{
+    npy_intp m2;
+    if (py_var_parse(fo, L, "L", k) < 0 ||
+        !(*x = mp_py_hold(k, mp_py_array_finite(xo, "x", 1, -1))) ||
+        !(*y = mp_py_hold(k, py_var_points(yo, "y", L->F.d, PyArray_SIZE(*x), m))))
+        return -1;
+    if (po && !(*p = mp_py_hold(k, py_var_points(po, "p", L->F.d, *m, &m2)))) return -1;
+    return 0;
 }
 
 /* variational_momenta(L, x, y) -> p, the discrete momenta along the path (x, y). */
@@ -380,37 +369,25 @@ static PyObject *py_variational_momenta(PyObject *self, PyObject *args)
     (void)self;
     PyObject *fo, *xo, *yo;
     if (!PyArg_ParseTuple(args, "OOO", &fo, &xo, &yo)) return NULL;
+    mp_py_refs k = {0};
     py_var_spec L;
-    if (py_var_parse(fo, &L, "L") < 0) return NULL;
-    PyArrayObject *x = NULL, *y = NULL, *p = NULL;
-    PyObject *res = NULL;
+    PyArrayObject *x, *y, *p;
     npy_intp m;
-    if (!(x = mp_py_array_finite(xo, "x", 1, -1)) ||
-        !(y = py_var_points(yo, "y", L.F.d, PyArray_SIZE(x), &m)))
-        goto done;
+    if (py_var_path(&k, fo, xo, yo, NULL, &L, &x, &y, NULL, &m) < 0)
+        return mp_py_release(&k, NULL);
     if (m < 2) {
         PyErr_SetString(PyExc_ValueError, "variational_momenta: need at least 2 points");
-        goto done;
+        return mp_py_release(&k, NULL);
     }
-    if (!(p = (PyArrayObject *)PyArray_NewLikeArray(y, NPY_CORDER, NULL, 0))) goto done;
+    if (!(p = mp_py_hold(&k, PyArray_NewLikeArray(y, NPY_CORDER, NULL, 0))))
+        return mp_py_release(&k, NULL);
     int st;
     const double *xx = PyArray_DATA(x), *yy = PyArray_DATA(y);
     double *pp = PyArray_DATA(p);
     Py_BEGIN_ALLOW_THREADS
     st = mp_variational_momenta(&L.F, (size_t)m - 1, xx, yy, pp);
     Py_END_ALLOW_THREADS
-    if (st != MP_OK) {
-        mp_py_raise(st, "variational_momenta");
-        goto done;
-    }
-    res = (PyObject *)p;
-    p = NULL;
-done:
-    py_var_release(&L);
-    Py_XDECREF(x);
-    Py_XDECREF(y);
-    Py_XDECREF(p);
-    return res;
+    return mp_py_release(&k, mp_py_result(st, "variational_momenta", (PyObject *)p));
 }
 
 /* variational_velocities(L, x, y, p, v0, sing_tol) -> (v, energy): dL/dv = p solved for v. */
@@ -420,40 +397,25 @@ static PyObject *py_variational_velocities(PyObject *self, PyObject *args)
     PyObject *fo, *xo, *yo, *po, *vo;
     double sing_tol;
     if (!PyArg_ParseTuple(args, "OOOOOd", &fo, &xo, &yo, &po, &vo, &sing_tol)) return NULL;
+    mp_py_refs k = {0};
     py_var_spec L;
-    if (py_var_parse(fo, &L, "L") < 0) return NULL;
-    PyArrayObject *x = NULL, *y = NULL, *p = NULL, *v0 = NULL, *v = NULL, *E = NULL;
-    PyObject *res = NULL;
+    PyArrayObject *x, *y, *p, *v0, *v, *E;
     npy_intp m, m2;
-    size_t d = L.F.d;
-    if (!(x = mp_py_array_finite(xo, "x", 1, -1)) ||
-        !(y = py_var_points(yo, "y", d, PyArray_SIZE(x), &m)) ||
-        !(p = py_var_points(po, "p", d, m, &m2)) || !(v0 = py_var_points(vo, "v0", d, m, &m2)))
-        goto done;
-    if (!(v = py_var_copy(v0)) || !(E = mp_py_empty(1, &m))) goto done;
+    if (py_var_path(&k, fo, xo, yo, po, &L, &x, &y, &p, &m) < 0 ||
+        !(v0 = mp_py_hold(&k, py_var_points(vo, "v0", L.F.d, m, &m2))) ||
+        !(v = mp_py_hold(&k, py_var_copy(v0))) || !(E = mp_py_hold(&k, mp_py_empty(1, &m))))
+        return mp_py_release(&k, NULL);
     int st;
     const double *xx = PyArray_DATA(x), *yy = PyArray_DATA(y), *pp = PyArray_DATA(p);
     double *vv = PyArray_DATA(v), *ee = PyArray_DATA(E);
     Py_BEGIN_ALLOW_THREADS
     st = mp_variational_velocities(&L.F, (size_t)m, xx, yy, pp, vv, ee, sing_tol);
     Py_END_ALLOW_THREADS
-    if (st != MP_OK) {
-        mp_py_raise_detail(st, "variational_velocities",
-                           st == MP_ESINGULAR ? "d2L/dqdot2 is singular: the velocities do "
-                                                "not follow from the momenta"
-                                              : "");
-        goto done;
-    }
-    res = Py_BuildValue("(OO)", (PyObject *)v, (PyObject *)E);
-done:
-    py_var_release(&L);
-    Py_XDECREF(x);
-    Py_XDECREF(y);
-    Py_XDECREF(p);
-    Py_XDECREF(v0);
-    Py_XDECREF(v);
-    Py_XDECREF(E);
-    return res;
+    return mp_py_release(&k, st == MP_OK ? Py_BuildValue("(OO)", (PyObject *)v, (PyObject *)E)
+                                         : mp_py_raise_detail(st, "variational_velocities",
+                                                              py_var_singular(st,
+                                           "d2L/dqdot2 is singular: the velocities do not "
+                                           "follow from the momenta")));
 }
 
 /* variational_eval(L, x, y, p) -> (m, K): the values and derivatives at m points. */
@@ -462,37 +424,20 @@ static PyObject *py_variational_eval(PyObject *self, PyObject *args)
     (void)self;
     PyObject *fo, *xo, *yo, *po;
     if (!PyArg_ParseTuple(args, "OOOO", &fo, &xo, &yo, &po)) return NULL;
+    mp_py_refs k = {0};
     py_var_spec L;
-    if (py_var_parse(fo, &L, "L") < 0) return NULL;
-    PyArrayObject *x = NULL, *y = NULL, *p = NULL, *out = NULL;
-    PyObject *res = NULL;
-    npy_intp m, m2;
-    size_t d = L.F.d;
-    if (!(x = mp_py_array_finite(xo, "x", 1, -1)) ||
-        !(y = py_var_points(yo, "y", d, PyArray_SIZE(x), &m)) ||
-        !(p = py_var_points(po, "p", d, m, &m2)))
-        goto done;
-    npy_intp dims[2] = {m, (npy_intp)mp_var_nvalues(d)};
-    if (!(out = mp_py_empty(2, dims))) goto done;
+    PyArrayObject *x, *y, *p, *out;
+    npy_intp m;
+    if (py_var_path(&k, fo, xo, yo, po, &L, &x, &y, &p, &m) < 0) return mp_py_release(&k, NULL);
+    npy_intp dims[2] = {m, (npy_intp)mp_var_nvalues(L.F.d)};
+    if (!(out = mp_py_hold(&k, mp_py_empty(2, dims)))) return mp_py_release(&k, NULL);
     int st;
     const double *xx = PyArray_DATA(x), *yy = PyArray_DATA(y), *pp = PyArray_DATA(p);
     double *oo = PyArray_DATA(out);
     Py_BEGIN_ALLOW_THREADS
     st = m ? L.F.eval((size_t)m, xx, yy, pp, oo, L.F.ctx) : MP_OK;
     Py_END_ALLOW_THREADS
-    if (st != MP_OK) {
-        mp_py_raise(st, "variational_eval");
-        goto done;
-    }
-    res = (PyObject *)out;
-    out = NULL;
-done:
-    py_var_release(&L);
-    Py_XDECREF(x);
-    Py_XDECREF(y);
-    Py_XDECREF(p);
-    Py_XDECREF(out);
-    return res;
+    return mp_py_release(&k, mp_py_result(st, "variational_eval", (PyObject *)out));
 }
 
 PyMethodDef mp_py_variational_methods[] = {

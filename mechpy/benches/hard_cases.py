@@ -11,6 +11,7 @@ TITLE = "Hard cases: stiff, long, near a separatrix"
 ORDER = 20
 
 EPS = 1e-6
+# end values published with the IVP test set (Mazzia, Magherini; Hairer & Wanner)
 VDP_REF = np.array([1.706167732170483, -0.8928097010247975])
 ROBER_REF = np.array([0.2083340149701255e-7, 0.8333360770334713e-13, 0.9999999791665050])
 

@@ -1,9 +1,4 @@
 """Bench: the variational solvers beside SciPy's optimisers, solve_bvp and solve_ivp."""
-import ctypes
-import shutil
-import subprocess
-import tempfile
-from pathlib import Path
 
 import numpy as np
 
@@ -60,59 +55,16 @@ def _pendulum_refs():
     return qa, qb, T, sol
 
 
-# The double pendulum (unit masses and lengths) as a compiled Lagrangian with the
-# mp_gen_lagrangian interface (what a scene from mp.lagrangian exports):
-# K = 1 + 2d + 3d^2 = 17 values per point.
-_DP_C = r"""
-#include <math.h>
-#include <stddef.h>
-int mp_gen_lagrangian(size_t m, const double *t, const double *q, const double *qd,
-                      double *out, void *params)
-{
-    const double *k = params; /* m1, m2, l1, l2, g */
-    double a = (k[0] + k[1]) * k[2] * k[2], b = k[1] * k[3] * k[3], c0 = k[1] * k[2] * k[3];
-    double g1 = (k[0] + k[1]) * k[4] * k[2], g2 = k[1] * k[4] * k[3];
-    (void)t;
-    for (size_t i = 0; i < m; i++) {
-        const double *x = q + 2 * i, *v = qd + 2 * i;
-        double *o = out + 17 * i, C = cos(x[0] - x[1]), S = sin(x[0] - x[1]);
-        double w = c0 * v[0] * v[1];
-        o[0] = 0.5 * a * v[0] * v[0] + 0.5 * b * v[1] * v[1] + w * C + g1 * cos(x[0])
-               + g2 * cos(x[1]);
-        o[1] = -w * S - g1 * sin(x[0]);
-        o[2] = w * S - g2 * sin(x[1]);
-        o[3] = a * v[0] + c0 * v[1] * C;
-        o[4] = b * v[1] + c0 * v[0] * C;
-        o[5] = -w * C - g1 * cos(x[0]);
-        o[6] = o[7] = w * C;
-        o[8] = -w * C - g2 * cos(x[1]);
-        o[9] = -c0 * v[1] * S; o[10] = -c0 * v[0] * S;
-        o[11] = c0 * v[1] * S; o[12] = c0 * v[0] * S;
-        o[13] = a; o[14] = o[15] = c0 * C; o[16] = b;
-    }
-    return 0;
-}
-"""
-
-
-class _CompiledDoublePendulum:
-    """The compiled-scene face the variational tools read: _lagrangian_c and dim."""
-
-    def __init__(self, lib):
-        self._lib = lib
-        addr = ctypes.cast(lib.mp_gen_lagrangian, ctypes.c_void_p).value
-        self._lagrangian_c = (addr, np.array([1.0, 1.0, 1.0, 1.0, G]))
-        self.dim = 4
-
-
-def _compiled_double_pendulum(tmp: Path):
-    cc = shutil.which("cc") or shutil.which("gcc")
-    if cc is None:
+def _compiled_double_pendulum():
+    """The double pendulum (unit masses and lengths) as users build it:
+    ``mp.lagrangian`` of its SymPy Lagrangian, compiled to C; None without a
+    C compiler."""
+    from .own import double_pendulum_lagrangian
+    L, q = double_pendulum_lagrangian()
+    try:
+        return mp.lagrangian(L, q, params=dict(m1=1.0, m2=1.0, l1=1.0, l2=1.0, g=G))
+    except mp.symbolic.CompileError:
         return None
-    (tmp / "dp.c").write_text(_DP_C)
-    r = subprocess.run([cc, "-shared", "-fPIC", "-O2", "-o", str(tmp / "dp.so"),
-                        str(tmp / "dp.c"), "-lm"], capture_output=True)
-    return _CompiledDoublePendulum(ctypes.CDLL(str(tmp / "dp.so"))) if r.returncode == 0 else None
 
 
 def _dp_lagrangian(q, v):
@@ -129,6 +81,20 @@ def _dp_rhs(t, y):
     return [v1, v2, (f1 - c * f2) / det, (2 * f2 - c * f1) / det]
 
 
+def _dp_bvp(qa, qb, T, nodes=11):
+    """solve_bvp's pieces for the double pendulum's path from the angles qa to
+    qb in time T: (f, bc, t, guess), the guess the uniform motion between them."""
+    def bc(ya, yb):
+        return np.r_[ya[:2] - qa, yb[:2] - qb]
+
+    def f(t, y):
+        return np.array(_dp_rhs(t, y))
+    t = np.linspace(0, T, nodes)
+    guess = np.vstack([qa[:, None] + np.outer(qb - qa, t / T),
+                       np.repeat(((qb - qa) / T)[:, None], nodes, axis=1)])
+    return f, bc, t, guess
+
+
 def _double_pendulum_rows(quick: bool):
     """d = 2: the compiled Lagrangian (C), the Python Lagrangian (finite
     differences through the callback) and solve_ivp on the same system."""
@@ -139,59 +105,51 @@ def _double_pendulum_rows(quick: bool):
     ref = solve_ivp(_dp_rhs, (0, T), np.r_[q0, v0], method="DOP853", rtol=1e-13,
                     atol=1e-13).y[:2, -1]
     prob = f"double pendulum (d = 2), {T:g} s from rest"
-    with tempfile.TemporaryDirectory() as tmp:
-        dp = _compiled_double_pendulum(Path(tmp))
-        for h in ((0.01, 0.001) if quick else (0.01, 0.001, 0.0001)):
-            if dp is None:
-                break
-            r = V.variational_integrate(dp, (0, T), q0, v0, h)
-            rows.append(dict(problem=prob, impl="mechpy variational_integrate, compiled L (C)",
-                             n=len(r.t) - 1, error=float(np.max(np.abs(r.q[:, -1] - ref))),
-                             time=median_time(lambda: V.variational_integrate(dp, (0, T), q0,
-                                                                              v0, h))))
-        r = V.variational_integrate(_dp_lagrangian, (0, T), q0, v0, 0.01)
-        rows.append(dict(problem=prob, impl="mechpy variational_integrate, Python L",
+    dp = _compiled_double_pendulum()
+    for h in ((0.01, 0.001) if quick else (0.01, 0.001, 0.0001)):
+        if dp is None:
+            break
+        r = V.variational_integrate(dp, (0, T), q0, v0, h)
+        rows.append(dict(problem=prob, impl="mechpy variational_integrate, compiled L (C)",
                          n=len(r.t) - 1, error=float(np.max(np.abs(r.q[:, -1] - ref))),
-                         time=median_time(lambda: V.variational_integrate(
-                             _dp_lagrangian, (0, T), q0, v0, 0.01), repeat=1, budget=5.0)))
-        for tol in ((1e-6, 1e-9) if quick else (1e-4, 1e-6, 1e-8, 1e-10)):
-            s = solve_ivp(_dp_rhs, (0, T), np.r_[q0, v0], method="DOP853", rtol=tol, atol=tol)
-            rows.append(dict(problem=prob, impl=f"scipy solve_ivp DOP853 rtol {tol:g}",
-                             n=len(s.t) - 1, error=float(np.max(np.abs(s.y[:2, -1] - ref))),
-                             time=median_time(lambda: solve_ivp(_dp_rhs, (0, T), np.r_[q0, v0],
-                                                                method="DOP853", rtol=tol,
-                                                                atol=tol))))
+                         time=median_time(lambda: V.variational_integrate(dp, (0, T), q0,
+                                                                          v0, h))))
+    r = V.variational_integrate(_dp_lagrangian, (0, T), q0, v0, 0.01)
+    rows.append(dict(problem=prob, impl="mechpy variational_integrate, Python L",
+                     n=len(r.t) - 1, error=float(np.max(np.abs(r.q[:, -1] - ref))),
+                     time=median_time(lambda: V.variational_integrate(
+                         _dp_lagrangian, (0, T), q0, v0, 0.01), repeat=1, budget=5.0)))
+    for tol in ((1e-6, 1e-9) if quick else (1e-4, 1e-6, 1e-8, 1e-10)):
+        s = solve_ivp(_dp_rhs, (0, T), np.r_[q0, v0], method="DOP853", rtol=tol, atol=tol)
+        rows.append(dict(problem=prob, impl=f"scipy solve_ivp DOP853 rtol {tol:g}",
+                         n=len(s.t) - 1, error=float(np.max(np.abs(s.y[:2, -1] - ref))),
+                         time=median_time(lambda: solve_ivp(_dp_rhs, (0, T), np.r_[q0, v0],
+                                                            method="DOP853", rtol=tol,
+                                                            atol=tol))))
 
-        # the path of stationary action between two configurations
-        qa, qb, Tp = np.array([0.4, -0.3]), np.array([-0.2, 0.5]), 0.8
-        prob = "double pendulum (d = 2) least-action path, 0.8 s"
+    # the path of stationary action between two configurations
+    qa, qb, Tp = np.array([0.4, -0.3]), np.array([-0.2, 0.5]), 0.8
+    prob = "double pendulum (d = 2) least-action path, 0.8 s"
 
-        def bc(ya, yb):
-            return np.r_[ya[:2] - qa, yb[:2] - qb]
-
-        def f(t, y):
-            return np.array(_dp_rhs(t, y))
-        tt = np.linspace(0, Tp, 11)
-        guess = np.vstack([qa[:, None] + np.outer(qb - qa, tt / Tp),
-                           np.repeat(((qb - qa) / Tp)[:, None], 11, axis=1)])
-        fine = solve_bvp(f, bc, tt, guess, tol=1e-12, max_nodes=200000)
-        for n in ((400,) if quick else (400, 1600)):
-            for impl, system in (("compiled L (C)", dp), ("Python L", _dp_lagrangian)):
-                if system is None:
-                    continue
-                r = V.stationary_path(system, qa, qb, Tp, n)
-                rows.append(dict(problem=prob, impl=f"mechpy stationary_path, {impl}", n=n,
-                                 error=float(np.max(np.abs(r.q - fine.sol(r.t)[:2]))),
-                                 time=median_time(lambda: V.stationary_path(system, qa, qb, Tp,
-                                                                            n), repeat=3),
-                                 note=f"{r.iterations} iterations"))
-        for tol in ((1e-6,) if quick else (1e-4, 1e-6, 1e-8)):
-            b = solve_bvp(f, bc, tt, guess, tol=tol, max_nodes=100000)
-            tq = np.linspace(0, Tp, 201)
-            rows.append(dict(problem=prob, impl=f"scipy solve_bvp tol {tol:g}", n=len(b.x),
-                             error=float(np.max(np.abs(b.sol(tq)[:2] - fine.sol(tq)[:2]))),
-                             time=median_time(lambda: solve_bvp(f, bc, tt, guess, tol=tol,
-                                                                max_nodes=100000), repeat=3)))
+    f, bc, tt, guess = _dp_bvp(qa, qb, Tp)
+    fine = solve_bvp(f, bc, tt, guess, tol=1e-12, max_nodes=200000)
+    for n in ((400,) if quick else (400, 1600)):
+        for impl, system in (("compiled L (C)", dp), ("Python L", _dp_lagrangian)):
+            if system is None:
+                continue
+            r = V.stationary_path(system, qa, qb, Tp, n)
+            rows.append(dict(problem=prob, impl=f"mechpy stationary_path, {impl}", n=n,
+                             error=float(np.max(np.abs(r.q - fine.sol(r.t)[:2]))),
+                             time=median_time(lambda: V.stationary_path(system, qa, qb, Tp,
+                                                                        n), repeat=3),
+                             note=f"{r.iterations} iterations"))
+    for tol in ((1e-6,) if quick else (1e-4, 1e-6, 1e-8)):
+        b = solve_bvp(f, bc, tt, guess, tol=tol, max_nodes=100000)
+        tq = np.linspace(0, Tp, 201)
+        rows.append(dict(problem=prob, impl=f"scipy solve_bvp tol {tol:g}", n=len(b.x),
+                         error=float(np.max(np.abs(b.sol(tq)[:2] - fine.sol(tq)[:2]))),
+                         time=median_time(lambda: solve_bvp(f, bc, tt, guess, tol=tol,
+                                                            max_nodes=100000), repeat=3)))
     return rows
 
 

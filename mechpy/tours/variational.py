@@ -59,17 +59,9 @@ def run(out: Path) -> None:
          ref=f"rk4 {dr[:k].max():.1e} / {dr[-k:].max():.1e} J/kg (drifts)")
     # two coordinates: the double pendulum's least-action path (its Lagrangian
     # as a Python callable, derivatives by finite differences) and solve_bvp
-    from mechpy.benches.variational import _dp_lagrangian, _dp_rhs
+    from mechpy.benches.variational import _dp_bvp, _dp_lagrangian
     qa2, qb2, T2 = np.array([0.4, -0.3]), np.array([-0.2, 0.5]), 0.8
-
-    def bc2(ya, yb):
-        return np.r_[ya[:2] - qa2, yb[:2] - qb2]
-
-    def f2(t, y):
-        return np.array(_dp_rhs(t, y))
-    tt2 = np.linspace(0, T2, 11)
-    guess2 = np.vstack([qa2[:, None] + np.outer(qb2 - qa2, tt2 / T2),
-                        np.repeat(((qb2 - qa2) / T2)[:, None], 11, axis=1)])
+    f2, bc2, tt2, guess2 = _dp_bvp(qa2, qb2, T2)
     dp = V.stationary_path(_dp_lagrangian, qa2, qb2, T2, n=400)
     bvp2 = solve_bvp(f2, bc2, tt2, guess2, tol=1e-12, max_nodes=200000)
     line("double pendulum action path, d = 2, n = 400",
