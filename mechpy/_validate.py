@@ -65,7 +65,7 @@ def as_array(x, name: str, *, ndim=None, shape=None, min_ndim=None, finite=True,
 def as_scalar(x, name: str, *, positive=False, nonnegative=False, finite=True,
               lo=None, hi=None) -> float:
     """A real number, checked (bools are refused)."""
-    if type(x) is not float:  # the common case skips the type checks
+    if type(x) is not float and type(x) is not int:  # the common cases skip the type checks
         if isinstance(x, (bool, np.bool_)) or not isinstance(x, (numbers.Real, np.ndarray)):
             raise TypeError(f"{name} must be a real number, got {type(x).__name__}")
         if isinstance(x, np.ndarray):
@@ -94,12 +94,15 @@ def as_int(x, name: str, *, minimum=None, maximum=None) -> int:
     Python integers beyond int64 (what the C core and NumPy index with) are a
     ``ValueError`` naming the argument, never an ``OverflowError`` from deeper
     down."""
-    if isinstance(x, (bool, np.bool_)):
+    if type(x) is int:  # the common case skips the type checks
+        v = x
+    elif isinstance(x, (bool, np.bool_)):
         raise TypeError(f"{name} must be an integer, got bool")
-    try:
-        v = operator.index(x)
-    except TypeError:
-        raise TypeError(f"{name} must be an integer, got {type(x).__name__}") from None
+    else:
+        try:
+            v = operator.index(x)
+        except TypeError:
+            raise TypeError(f"{name} must be an integer, got {type(x).__name__}") from None
     if not -_INT64_MAX - 1 <= v <= _INT64_MAX:
         digits = len(str(abs(v)))
         raise ValueError(f"{name} is too large ({'a negative ' if v < 0 else 'a '}{digits}-digit "

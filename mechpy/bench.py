@@ -58,7 +58,9 @@ def targets(rows) -> list[dict]:
     * C callback against numbalsoda with the same numba ``cfunc``, at equal
       error as for the C scene;
     * ``solve_many``: against the Python loop, and 2 threads against 1;
-    * fixed-step rk4 against a plain C loop (the time ratio, target <= 1.3).
+    * fixed-step rk4, verlet and yoshida4 against plain C loops doing the same
+      arithmetic (the time ratio, target <= 1.3);
+    * the benches' own targets (the call cost against numbalsoda, ...).
     """
     def ok(r):
         e = r.get("error")
@@ -106,10 +108,11 @@ def targets(rows) -> list[dict]:
         v = by["ensemble-1"]["time"] / by["ensemble-2"]["time"]
         out.append(dict(target="solve_many, 2 threads vs 1", problem=by["ensemble-1"]["problem"],
                         goal=">= 1.7x", worst=v, median=v, n=1))
-    if "rk4" in by and "plain-c" in by:
-        v = by["rk4"]["time"] / by["plain-c"]["time"]
-        out.append(dict(target="fixed-step rk4: time / plain C loop", problem=by["rk4"]["problem"],
-                        goal="<= 1.3x", worst=v, median=v, n=1))
+    for meth in ("rk4", "verlet", "yoshida4"):  # each against its own plain loop
+        if meth in by and f"plain-c-{meth}" in by:
+            v = by[meth]["time"] / by[f"plain-c-{meth}"]["time"]
+            out.append(dict(target=f"fixed-step {meth}: time / plain C loop",
+                            problem=by[meth]["problem"], goal="<= 1.3x", worst=v, median=v, n=1))
     for mod in entries():  # a section with its own targets computes them from its rows
         if hasattr(mod, "targets"):
             out += mod.targets(rows)

@@ -319,8 +319,12 @@ def _as_args(args) -> tuple:
     return tuple(args) if isinstance(args, list) else (args,)
 
 
-def _common(method, t_span, rtol, atol, n, h, first_step, max_step, max_steps):
-    """Validate the arguments solve and solve_many share."""
+def _common(method, t_span, rtol, atol, n, h, first_step, max_step, max_steps,
+            scalar_atol=False):
+    """Validate the arguments solve and solve_many share.
+
+    atol comes back as n values, or with ``scalar_atol`` a scalar as a float
+    (the C core of ``solve`` spreads it over the n states)."""
     if not isinstance(method, str):
         raise TypeError(f"method must be a string, got {type(method).__name__}")
     names = _method_names()
@@ -329,7 +333,8 @@ def _common(method, t_span, rtol, atol, n, h, first_step, max_step, max_steps):
         raise ValueError(f"unknown method {method!r}; choose one of {sorted(names)} "
                          f"or SciPy's {sorted(SCIPY_METHODS)}")
     info = names[method]
-    if isinstance(t_span, (str, bytes)) or not hasattr(t_span, "__len__") or len(t_span) != 2:
+    if type(t_span) is not tuple and (isinstance(t_span, (str, bytes)) or
+                                      not hasattr(t_span, "__len__")) or len(t_span) != 2:
         raise ValueError("t_span must be a pair (t0, tf)")
     t0 = as_scalar(t_span[0], "t_span[0]")
     tf = as_scalar(t_span[1], "t_span[1]")
@@ -342,13 +347,14 @@ def _common(method, t_span, rtol, atol, n, h, first_step, max_step, max_steps):
     if not rtol > 0:
         raise ValueError(f"rtol must be positive, got {rtol}")
     if type(atol) is float and math.isfinite(atol) and atol >= 0:  # the common case
-        atol_a = np.full(n, atol)
+        atol_a = atol if scalar_atol else np.full(n, atol)
     else:
         atol_a = as_array(atol, "atol", nonnegative=True)
-    if atol_a.ndim == 0 or atol_a.size == 1:
-        atol_a = np.full(n, float(atol_a.reshape(-1)[0]))
-    elif atol_a.shape != (n,):
-        raise ValueError(f"atol must be a scalar or have shape ({n},), got {atol_a.shape}")
+        if atol_a.ndim == 0 or atol_a.size == 1:
+            a1 = float(atol_a.reshape(-1)[0])
+            atol_a = a1 if scalar_atol else np.full(n, a1)
+        elif atol_a.shape != (n,):
+            raise ValueError(f"atol must be a scalar or have shape ({n},), got {atol_a.shape}")
     hh = 0.0
     if not info["adaptive"]:
         if h is None:
@@ -487,10 +493,11 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
     step below round-off) are reported in ``status``/``message`` as SciPy does
     (see ``errors``); ``Solution.raise_for_status()`` raises them.
     """
-    y0a = as_array(y0, "y0", ndim=1)
+    # y0's values are checked finite by the C core, which reads them anyway
+    y0a = as_array(y0, "y0", ndim=1, finite=False)
     n = y0a.size
     method, t0, tf, rtol, atol_a, hh, fs, ms, budget = _common(
-        method, t_span, rtol, atol, n, h, first_step, max_step, max_steps)
+        method, t_span, rtol, atol, n, h, first_step, max_step, max_steps, scalar_atol=True)
     tev = None if t_eval is None else _t_eval(t_eval, t0, tf)
     if not isinstance(dense_output, (bool, np.bool_)):
         raise TypeError("dense_output must be a bool")
@@ -508,36 +515,32 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
     if check is not None:
         check(t0, y0a)
     evs, term, dirs = _events_spec(events)
-
     errors = _errors_mode(errors)
 
-    opts = _options(t0, tf, rtol, atol_a, tev, hh, fs, ms, budget)
-    kw = dict(dense=bool(dense_output), events=evs, terminal=term, direction=dirs, args=args,
-              jac=jac)
     watch = _watch_list(system)
+    call = (method, spec, y0a, t0, tf, rtol, atol_a, tev, hh, fs, ms, budget, dense_output,
+            evs, term, dirs, args, jac, watch)
     if watch is None:
-        r = _core.ode_solve(method, spec, y0a, opts, **kw)
+        r = _core.ode_solve(*call)
     else:
         with _catch_unraisable(watch):
-            r = _core.ode_solve(method, spec, y0a, opts, watch=watch, **kw)
-    code = r["code"]
-    if _raises(code, errors):
-        raise _status_error(code, "solve", r["message"])
+            r = _core.ode_solve(*call)
+    code, message, t, y, nfev, njev, nlu, nsteps, nreject, dense, events_out, backward = r
+    if code and _raises(code, errors):
+        raise _status_error(code, "solve", message)
     status = _STATUS[code]["solve_status"]
     sol = None
-    if dense_output and r["dense"] is not None:
-        sol = DenseOutput(*r["dense"], backward=bool(r["backward"]))
+    if dense_output and dense is not None:
+        sol = DenseOutput(*dense, backward=bool(backward))
     t_events = y_events = None
     if evs is not None:
-        t_events = [te for te, _ in r["events"]]
-        y_events = [ye for _, ye in r["events"]]
-    out = Solution(t=r["t"], y=r["y"].T, sol=sol, t_events=t_events, y_events=y_events,
-                   nfev=r["nfev"], njev=r["njev"], nlu=r["nlu"], nsteps=r["nsteps"],
-                   nreject=r["nreject"], status=status, message=r["message"],
-                   success=status >= 0)
+        t_events = [te for te, _ in events_out]
+        y_events = [ye for _, ye in events_out]
+    out = Solution(t=t, y=y.T, sol=sol, t_events=t_events, y_events=y_events, nfev=nfev,
+                   njev=njev, nlu=nlu, nsteps=nsteps, nreject=nreject, status=status,
+                   message=message, success=status >= 0)
     object.__setattr__(out, "_code", code)
     return out
-
 
 
 class EnsembleSolution(Solution):

@@ -1,5 +1,6 @@
 """mp.solve against closed forms, SciPy's solve_ivp and odeint, and bad input."""
 import ctypes
+import math
 import pickle
 import shutil
 import subprocess
@@ -461,3 +462,132 @@ print("ok")
 """
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
     assert r.returncode == 0 and r.stdout.strip() == "ok", r.stderr
+
+
+# ---- fixed-step methods against a plain loop, bit for bit ----------------------
+#
+# The driver runs rk4 and the splitting methods in unchecked blocks of steps and
+# replays a block checked when a value is not finite.  These plain loops do the
+# same arithmetic in the same order (the driver's step sequence: steps of h, the
+# last one cut to end at tf; every evaluation checked), so that states, times,
+# counts and the place of the first non-finite value must agree exactly.
+
+YOSHIDA = {"verlet": [1.0],
+           "yoshida4": [1.3512071919596576340476878089715, -1.7024143839193152680953756179429,
+                        1.3512071919596576340476878089715]}
+
+
+def _sin(x):
+    return math.sin(x) if math.isfinite(x) else math.nan  # C's sin(inf) is NaN
+
+
+def _pendulum_c(g=9.81, length=1.0, drive=0.0):
+    """The Pendulum scene's right-hand side as its C row computes it."""
+    if drive:
+        return lambda t, y: [y[1], -(g / length) * _sin(y[0]) - 0.0 * y[1] + drive * math.cos(0.0 * t)]
+    return lambda t, y: [y[1], -(g / length) * _sin(y[0])]
+
+
+class _Failed(Exception):
+    pass
+
+
+def _fixed_step_reference(method, f, tf, y0, h):
+    """(times, states, nfev, failure) of the fixed-step driver's loop from t = 0;
+    failure = (component, t of the failing step) of the first non-finite value."""
+    count = [0]
+
+    def rhs(t, y):
+        count[0] += 1
+        d = f(t, y)
+        bad = [i for i, v in enumerate(d) if not math.isfinite(v)]
+        if bad:
+            raise _Failed(bad[0])
+        return d
+
+    def rk4(t, h, y, k1):
+        k2 = rhs(t + 0.5 * h, [y[i] + 0.5 * h * k1[i] for i in range(2)])
+        k3 = rhs(t + 0.5 * h, [y[i] + 0.5 * h * k2[i] for i in range(2)])
+        k4 = rhs(t + h, [y[i] + h * k3[i] for i in range(2)])
+        yn = [y[i] + (h / 6.0) * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i]) for i in range(2)]
+        return yn, rhs(t + h, yn)
+
+    def compose(t, h, y, fy):
+        q, v, a = y[0], y[1], fy[1]
+        for c in YOSHIDA[method]:
+            hc = c * h
+            v += 0.5 * hc * a
+            q += hc * v
+            a = rhs(t + hc, [q, v])[1]
+            v += 0.5 * hc * a
+            t += hc
+        return [q, v], [v, a]
+
+    t, y = 0.0, list(y0)
+    ts, ys = [t], [y]
+    try:
+        fy = rhs(t, y)
+        while t < tf:
+            hh, last = h, False
+            if t + hh * (1.0 + 1e-9) >= tf:
+                hh = tf - t
+                while t + hh > tf:
+                    hh = math.nextafter(hh, 0.0)
+                last = True
+            y, fy = (rk4 if method == "rk4" else compose)(t, hh, y, fy)
+            t = tf if last else t + hh
+            ts.append(t)
+            ys.append(y)
+    except _Failed as e:
+        return np.array(ts), np.array(ys).T, count[0], (e.args[0], t)
+    return np.array(ts), np.array(ys).T, count[0], None
+
+
+@pytest.mark.parametrize("method", ["rk4", "verlet", "yoshida4"])
+def test_fixed_step_equals_plain_loop_bit_for_bit(method):
+    # 1234 steps: blocks of up to 255 between the interrupt polls, and a cut last step
+    tf, h, y0 = 12.345, 0.01, [2.5, 0.0]
+    ts, ys, nfev, failure = _fixed_step_reference(method, _pendulum_c(), tf, y0, h)
+    assert failure is None and len(ts) == 1236
+    s = mp.solve(mp.scenes.Pendulum(), (0, tf), y0, method=method, h=h)
+    assert s.nsteps == len(ts) - 1 and s.nfev == nfev
+    assert np.array_equal(s.t, ts) and np.array_equal(s.y, ys)
+    # output at step ends only: the blocks stop at each t_eval point
+    pick = [0, 1, 254, 255, 256, 600, 1234, 1235]
+    s = mp.solve(mp.scenes.Pendulum(), (0, tf), y0, method=method, h=h, t_eval=ts[pick])
+    assert s.nsteps == len(ts) - 1 and s.nfev == nfev
+    assert np.array_equal(s.t, ts[pick]) and np.array_equal(s.y, ys[:, pick])
+
+
+@pytest.mark.parametrize("method", ["rk4", "verlet", "yoshida4"])
+@pytest.mark.parametrize("t_eval", [None, [0.0, 1000.0]])
+def test_fixed_step_non_finite_found_where_the_plain_loop_finds_it(method, t_eval):
+    # a drive of 1e303 overflows theta after ~600 steps of h = 1, in the middle of
+    # an unchecked block: the block is replayed checked and the solve stops at
+    # the first non-finite evaluation, with the counts of a checked run
+    A, tf = 1e303, 2000.0
+    ts, ys, nfev, failure = _fixed_step_reference(method, _pendulum_c(drive=A), tf,
+                                                  [0.0, 0.0], 1.0)
+    assert failure is not None and 300 < len(ts) < 1000
+    index, t_fail = failure
+    s = mp.solve(mp.scenes.Pendulum(drive_amplitude=A), (0, tf), [0.0, 0.0], method=method,
+                 h=1.0, t_eval=t_eval, errors="status")
+    assert s.status == -2 and s.nfev == nfev and s.nsteps == len(ts) - 1
+    assert f"dydt[{index}] = NaN or inf near t = {t_fail:.17g})" in s.message
+    if t_eval is None:
+        assert np.array_equal(s.t, ts) and np.array_equal(s.y, ys)
+    else:
+        assert np.array_equal(s.t, [0.0]) and np.array_equal(s.y, [[0.0], [0.0]])
+    with pytest.raises(mp.NonFiniteError, match=f"near t = {t_fail:.17g}"):
+        mp.solve(mp.scenes.Pendulum(drive_amplitude=A), (0, tf), [0.0, 0.0], method=method,
+                 h=1.0)
+
+
+def test_scalar_atol_is_the_same_as_n_copies():
+    # solve hands a scalar atol to the C core, which spreads it over the states
+    p = mp.scenes.Kepler()
+    y0 = p.initial_state(0.6)
+    a = mp.solve(p, (0, 20), y0, rtol=1e-7, atol=1e-9)
+    b = mp.solve(p, (0, 20), y0, rtol=1e-7, atol=np.full(4, 1e-9))
+    c = mp.solve(p, (0, 20), y0, rtol=1e-7, atol=[1e-9])
+    assert a.nfev == b.nfev == c.nfev and np.array_equal(a.y, b.y) and np.array_equal(a.y, c.y)

@@ -12,22 +12,11 @@
 
 /* ---- small helpers ------------------------------------------------------ */
 
-/* Contract: dydt = f(t, y), counted in nfev; MP_ENONFINITE (with the first
- * offending component in w->bad_index) when a value is NaN or inf.  The one
- * pass over dydt is the only check of a stage: the driver decides whether a
- * non-finite value rejects a trial step or ends the solve. */
-int mp_ode_ws_rhs(mp_ode_ws *w, double t, const double *y, double *dydt)
+int mp_ode_ws_bad_rhs(mp_ode_ws *w, size_t i)
 {
-    int rc = w->p->rhs(t, y, dydt, w->p->data);
-    w->nfev++;
-    if (rc != MP_OK) return rc;
-    for (size_t i = 0; i < w->n; i++)
-        if (!isfinite(dydt[i])) {
-            w->bad_what = MP_ODE_BAD_RHS;
-            w->bad_index = i;
-            return MP_ENONFINITE;
-        }
-    return MP_OK;
+    w->bad_what = MP_ODE_BAD_RHS;
+    w->bad_index = i;
+    return MP_ENONFINITE;
 }
 
 int mp_ode_ws_jac(mp_ode_ws *w, double t, const double *y, const double *f0, double *jac,
@@ -122,12 +111,20 @@ static int grow(void **p, size_t *cap, size_t need, size_t elem)
     return MP_OK;
 }
 
-static int push_sample(mp_ode_result *r, double t, const double *y)
+/* Contract: room in r for `more` samples beyond r->m.  MP_OK or MP_ENOMEM. */
+static int reserve_samples(mp_ode_result *r, size_t more)
 {
     size_t cap_t = r->mcap, cap_y = r->mcap;
-    if (grow((void **)&r->t, &cap_t, r->m + 1, sizeof(double)) != MP_OK) return MP_ENOMEM;
-    if (grow((void **)&r->y, &cap_y, r->m + 1, r->n * sizeof(double)) != MP_OK) return MP_ENOMEM;
+    if (grow((void **)&r->t, &cap_t, r->m + more, sizeof(double)) != MP_OK) return MP_ENOMEM;
+    if (grow((void **)&r->y, &cap_y, r->m + more, r->n * sizeof(double)) != MP_OK)
+        return MP_ENOMEM;
     r->mcap = cap_t < cap_y ? cap_t : cap_y;
+    return MP_OK;
+}
+
+static int push_sample(mp_ode_result *r, double t, const double *y)
+{
+    if (reserve_samples(r, 1) != MP_OK) return MP_ENOMEM;
     r->t[r->m] = t;
     memcpy(r->y + r->m * r->n, y, r->n * sizeof(double));
     r->m++;
@@ -460,204 +457,357 @@ static int switch_method(const mp_ode_method *m, mp_ode_ws *w, const mp_ode_meth
 #define MP_ODE_SWITCH_FRAC 0.8
 #endif
 
-/* Contract: the forward solve (t0 < tf) of mp_ode_solve. */
-static int solve_forward(const mp_ode_method *m, const mp_ode_problem *p, double t0, double tf,
-                         const double *y0, const mp_ode_options *o, mp_ode_result *r)
-{
-    size_t n = p->n, ne = o->n_events;
-    int need_dense = o->n_eval > 0 || o->dense || ne > 0;
-    int rc = MP_OK;
+/* One forward solve in progress: what the loop reads and writes besides the
+ * method's workspace. */
+typedef struct {
+    const mp_ode_method *m;   /* the row asked for (a switching row: the pair) */
+    const mp_ode_method *cur; /* the method running */
+    const mp_ode_options *o;
+    mp_ode_result *r;
     mp_ode_ws w;
-    double *buf = NULL, *g_old = NULL, *g_sub = NULL, *ytmp = NULL, *gtmp = NULL;
-    ev_hit *hits = NULL;
+    ode_control c;
+    double t, tf, h, hmax;    /* where the solve is, its end, the next step, the largest */
+    size_t ie;                /* the next t_eval index */
+    long attempts;            /* steps attempted (the budget) */
+    int need_dense;           /* some step may need the interpolant */
+    int fast;                 /* the fixed-step fast path may run (fixed_block) */
+    long checked_until;       /* ... not before this many attempts (a block replayed) */
+    double *buf, *ytmp, *save;                  /* the vectors: one block */
+    double *g_old, *g_sub, *gtmp; ev_hit *hits; /* events: one block, and the hits */
+} ode_run;
 
-    memset(r, 0, sizeof *r);
-    memset(&w, 0, sizeof w);
-    r->n = n;
-    r->ncoef = m->ncoef;
-    r->n_events = ne;
-    r->t_fail = t0;
-    if (n == 0 || !(tf > t0) || !isfinite(t0) || !isfinite(tf) || !(o->rtol > 0) ||
+/* Contract: MP_OK when the arguments of a forward solve are in its domain:
+ * n > 0, t0 < tf finite, rtol > 0, a budget, max_step > 0, for a fixed-step
+ * method h > 0 large enough to advance t, y0 finite and atol >= 0; else
+ * MP_EDOM. */
+static int check_args(const mp_ode_method *m, const mp_ode_problem *p, double t0, double tf,
+                      const double *y0, const mp_ode_options *o)
+{
+    if (p->n == 0 || !(tf > t0) || !isfinite(t0) || !isfinite(tf) || !(o->rtol > 0) ||
         !(o->max_steps > 0) || (!m->adaptive && !(o->h > 0)) || !(o->max_step > 0))
-        return r->status = MP_EDOM;
+        return MP_EDOM;
     /* a fixed step below the spacing of floats at t would never advance t */
     double tmax = fmax(fabs(t0), fabs(tf));
-    if (!m->adaptive && !(tmax + o->h > tmax)) return r->status = MP_EDOM;
-    for (size_t i = 0; i < n; i++)
-        if (!isfinite(y0[i]) || !(o->atol[i] >= 0)) return r->status = MP_EDOM;
+    if (!m->adaptive && !(tmax + o->h > tmax)) return MP_EDOM;
+    for (size_t i = 0; i < p->n; i++)
+        if (!isfinite(y0[i]) || !(o->atol[i] >= 0)) return MP_EDOM;
+    return MP_OK;
+}
 
-    if (ne) {
-        r->ev_count = calloc(ne, sizeof(size_t));
-        r->ev_cap = calloc(ne, sizeof(size_t));
-        r->ev_t = calloc(ne, sizeof(double *));
-        r->ev_y = calloc(ne, sizeof(double *));
-        g_old = malloc((2 * ne + ne) * sizeof(double));
-        hits = malloc(ne * MP_ODE_EVENT_SUBDIV * sizeof(ev_hit));
-        if (!r->ev_count || !r->ev_cap || !r->ev_t || !r->ev_y || !g_old || !hits) {
-            rc = MP_ENOMEM;
-            goto done;
-        }
-        g_sub = g_old + ne;
-        gtmp = g_sub + ne;
-    }
-    /* a switching row runs its two methods in turn; everything else is one method */
-    const mp_ode_method *cur = m->nonstiff ? m->nonstiff : m;
-    size_t nvec = 5 + m->nscratch + m->ncoef;
-    buf = malloc(nvec * n * sizeof(double));
-    if (!buf) { rc = MP_ENOMEM; goto done; }
-    w.p = p; w.m = cur; w.o = o; w.n = n; w.ncoef = m->ncoef; w.t_start = t0; w.t_end = tf;
-    w.y = buf; w.ynew = buf + n; w.f = buf + 2 * n; w.fnew = buf + 3 * n; ytmp = buf + 4 * n;
-    w.k = buf + 5 * n;
-    w.coef = w.k + m->nscratch * n;
-    memset(w.coef, 0, m->ncoef * n * sizeof(double));
+/* Contract: the storage of a solve with events: r's per-event lists (empty)
+ * and s's buffers for g at the step start, at sub-points, scratch, and the
+ * crossings of one step.  Nothing without events.  MP_OK or MP_ENOMEM (what
+ * was allocated is freed by free_run and mp_ode_result_free). */
+static int alloc_events(ode_run *s)
+{
+    size_t ne = s->o->n_events;
+    mp_ode_result *r = s->r;
+    if (!ne) return MP_OK;
+    r->ev_count = calloc(ne, sizeof(size_t));
+    r->ev_cap = calloc(ne, sizeof(size_t));
+    r->ev_t = calloc(ne, sizeof(double *));
+    r->ev_y = calloc(ne, sizeof(double *));
+    s->g_old = malloc(3 * ne * sizeof(double));
+    s->hits = malloc(ne * MP_ODE_EVENT_SUBDIV * sizeof(ev_hit));
+    if (!r->ev_count || !r->ev_cap || !r->ev_t || !r->ev_y || !s->g_old || !s->hits)
+        return MP_ENOMEM;
+    s->g_sub = s->g_old + ne;
+    s->gtmp = s->g_sub + ne;
+    return MP_OK;
+}
+
+/* Contract: the workspace of a solve of m on [t0, tf]: its vectors (y, ynew,
+ * f, fnew, scratch, the fast path's saved state, the method's scratch and
+ * interpolant, zeroed) in one block, and the method's own state; a switching
+ * row also allocates its stiff method's state, kept in w.state2 while the
+ * non-stiff one runs.  MP_OK or the allocation's failure (freed by free_run). */
+static int alloc_workspace(ode_run *s, const mp_ode_problem *p, double t0, double tf)
+{
+    const mp_ode_method *m = s->m;
+    mp_ode_ws *w = &s->w;
+    size_t n = p->n, nvec = 7 + m->nscratch + m->ncoef;
+    s->buf = malloc(nvec * n * sizeof(double));
+    if (!s->buf) return MP_ENOMEM;
+    w->p = p; w->m = s->cur; w->o = s->o; w->n = n; w->ncoef = m->ncoef;
+    w->t_start = t0; w->t_end = tf;
+    w->y = s->buf; w->ynew = s->buf + n; w->f = s->buf + 2 * n; w->fnew = s->buf + 3 * n;
+    s->ytmp = s->buf + 4 * n;
+    s->save = s->buf + 5 * n; /* 2n: y and f at the start of a fast block */
+    w->k = s->buf + 7 * n;
+    w->coef = w->k + m->nscratch * n;
+    memset(w->coef, 0, m->ncoef * n * sizeof(double));
+    int rc;
     if (m->nonstiff) {
         void *st = NULL;
         if (m->stiff->alloc) {
-            w.m = m->stiff;
-            if ((rc = m->stiff->alloc(&w)) != MP_OK) goto done;
-            st = w.state;
-            w.m = cur;
+            w->m = m->stiff;
+            if ((rc = m->stiff->alloc(w)) != MP_OK) return rc;
+            st = w->state;
+            w->m = s->cur;
         }
-        w.state2 = st; /* the stiff method's state while the non-stiff one runs */
-        w.state = NULL;
+        w->state2 = st; /* the stiff method's state while the non-stiff one runs */
+        w->state = NULL;
     }
-    if (cur->alloc && (rc = cur->alloc(&w)) != MP_OK) goto done;
+    return s->cur->alloc ? s->cur->alloc(w) : MP_OK;
+}
 
-    double t = t0;
-    memcpy(w.y, y0, n * sizeof(double));
-    if ((rc = mp_ode_ws_rhs(&w, t, w.y, w.f)) != MP_OK) goto done;
-
-    size_t ie = 0; /* next t_eval index */
+/* Contract: the start of the solve at (t0, y0): f(t0, y0), the first output
+ * (y0 itself, or the t_eval points at t0), g at t0 when there are events (a
+ * non-finite g is MP_ENONFINITE), and the first step (fixed h, the user's
+ * first_step, or Hairer's guess), at most hmax.  MP_OK or the failure. */
+static int start_run(ode_run *s, double t0, const double *y0)
+{
+    mp_ode_ws *w = &s->w;
+    const mp_ode_options *o = s->o;
+    size_t n = w->n, ne = o->n_events;
+    int rc;
+    s->t = t0;
+    memcpy(w->y, y0, n * sizeof(double));
+    if ((rc = mp_ode_ws_rhs(w, t0, w->y, w->f)) != MP_OK) return rc;
     if (o->n_eval == 0) {
-        if ((rc = push_sample(r, t, w.y)) != MP_OK) goto done;
+        if ((rc = push_sample(s->r, t0, w->y)) != MP_OK) return rc;
     } else {
-        while (ie < o->n_eval && o->t_eval[ie] <= t0) {
-            if ((rc = push_sample(r, o->t_eval[ie], w.y)) != MP_OK) goto done;
-            ie++;
-        }
+        for (; s->ie < o->n_eval && o->t_eval[s->ie] <= t0; s->ie++)
+            if ((rc = push_sample(s->r, o->t_eval[s->ie], w->y)) != MP_OK) return rc;
     }
     if (ne) {
-        if ((rc = o->events(t, w.y, g_old, o->events_data)) != MP_OK) goto done;
+        if ((rc = o->events(t0, w->y, s->g_old, o->events_data)) != MP_OK) return rc;
         for (size_t k = 0; k < ne; k++)
-            if (!isfinite(g_old[k])) {
-                w.bad_what = MP_ODE_BAD_EVENT;
-                w.bad_index = k;
-                rc = MP_ENONFINITE;
-                goto done;
+            if (!isfinite(s->g_old[k])) {
+                w->bad_what = MP_ODE_BAD_EVENT;
+                w->bad_index = k;
+                return MP_ENONFINITE;
             }
     }
+    s->hmax = fmin(o->max_step, s->tf - t0);
+    if (!s->cur->adaptive) s->h = o->h;
+    else if (o->first_step > 0) s->h = o->first_step;
+    else if ((rc = first_step(w, t0, s->tf, s->hmax, &s->h)) != MP_OK) return rc;
+    s->h = fmin(s->h, s->hmax);
+    return MP_OK;
+}
 
-    double hmax = fmin(o->max_step, tf - t0);
-    double h;
-    if (!cur->adaptive) h = o->h;
-    else if (o->first_step > 0) h = o->first_step;
-    else if ((rc = first_step(&w, t0, tf, hmax, &h)) != MP_OK) goto done;
-    h = fmin(h, hmax);
+/* Contract: Hairer's stiffness test on an explicit step with estimate w.rho =
+ * h |lambda| > 0: near the stability boundary for 15 of the recent steps sets
+ * r->stiff.  A switching row tests against a fraction of the boundary: the
+ * step-size controller of a stiff problem holds h |lambda| just inside it
+ * (dop853 on ROBER: ~5.3 against 6.1), where the test at the boundary itself
+ * rarely fires. */
+static void stiffness_test(ode_run *s)
+{
+    double rho_stiff = s->m->nonstiff ? MP_ODE_SWITCH_FRAC * s->cur->stiff_rho
+                                      : s->cur->stiff_rho;
+    if (s->w.rho > rho_stiff) {
+        s->c.calm_count = 0;
+        if (++s->c.stiff_count >= 15) s->r->stiff = 1;
+    } else if (++s->c.calm_count >= 6) {
+        s->c.stiff_count = 0;
+    }
+}
 
-    ode_control c = {1e-4, 0, 0, 0, 0};
-    long attempts = 0;
-    while (t < tf) {
-        if (attempts >= o->max_steps) { rc = MP_EMAXSTEPS; break; }
-        if (o->interrupt && attempts % MP_ODE_INTERRUPT_EVERY == MP_ODE_INTERRUPT_EVERY - 1 &&
+/* Contract: the rest of an accepted step [t, t + h] ending at tnew (tf on
+ * the last step), the next one to be hnew (adaptive): the method's finish
+ * (with the interpolant only when a t_eval point, events or dense output need
+ * it), the stiffness test, events, output; then (t, y, f) move to the step's
+ * end, or to a terminal event's point (r->terminated), and a switching row
+ * may change method.  MP_OK or the failure. */
+static int accept_step(ode_run *s, double h, double hnew, double tnew)
+{
+    mp_ode_ws *w = &s->w;
+    mp_ode_result *r = s->r;
+    const mp_ode_options *o = s->o;
+    size_t n = w->n;
+    double t = s->t;
+    int rc, dense_now = s->need_dense && (o->dense || o->n_events > 0 ||
+                                          (s->ie < o->n_eval && o->t_eval[s->ie] < tnew));
+    if ((rc = s->cur->finish(w, t, h, dense_now)) != MP_OK) return rc;
+    if (w->rho > 0.0) stiffness_test(s);
+    double s_stop = 2.0;
+    if (o->n_events && (rc = ev_step(w, r, o, t, h, s->g_old, s->g_sub, s->ytmp, s->gtmp,
+                                     s->hits, &s_stop)) != MP_OK)
+        return rc;
+    double tend = s_stop <= 1.0 ? t + s_stop * h : tnew;
+    if ((rc = output_step(r, o, w, t, h, tnew, tend, &s->ie, s->ytmp)) != MP_OK) return rc;
+    r->nsteps++;
+    if (s_stop <= 1.0) { /* a terminal event: the solve ends at its point */
+        mp_ode_dense_eval(w->coef, w->ncoef, n, s_stop, s->ytmp);
+        if (o->n_eval == 0 && (rc = push_sample(r, tend, s->ytmp)) != MP_OK) return rc;
+        memcpy(w->y, s->ytmp, n * sizeof(double));
+        s->t = tend;
+        r->terminated = 1;
+        return MP_OK;
+    }
+    if (o->n_eval == 0 && (rc = push_sample(r, tnew, w->ynew)) != MP_OK) return rc;
+    double *sw = w->y; w->y = w->ynew; w->ynew = sw;
+    if (w->fnew_valid) { sw = w->f; w->f = w->fnew; w->fnew = sw; }
+    s->t = tnew;
+    s->h = fmin(s->cur->adaptive ? hnew : o->h, s->hmax);
+    /* the switching row: to the stiff method when the test fires, back when
+     * the stiff method's steps are within the explicit stability region */
+    return s->m->nonstiff ? switch_method(s->m, w, &s->cur, &s->c, s->t, s->h, r) : MP_OK;
+}
+
+/* Contract: the fixed-step fast path, for a row with a block (ode.h) on a
+ * replayable problem, with no events and no dense output.  Runs in one block
+ * the steps that need nothing of the driver but the step itself (not the last
+ * one, none reaching the next t_eval point, none at an interrupt poll, within
+ * the budget), with the stage checks off, and checks once at the block's end
+ * that y, f and the values the steps dropped are finite.  A non-finite value
+ * or a failure puts everything back as it was at the block's start (y, f,
+ * counts, samples) and leaves the block to the checked loop, which stops
+ * where and as it always does: results and counts are the checked loop's,
+ * bit for bit. */
+static void fixed_block(ode_run *s)
+{
+    mp_ode_ws *w = &s->w;
+    mp_ode_result *r = s->r;
+    const mp_ode_options *o = s->o;
+    size_t n = w->n;
+    if (s->attempts < s->checked_until) return;
+    /* the steps before the next interrupt poll (attempts % EVERY == EVERY - 1) */
+    long k = 0, kmax = MP_ODE_INTERRUPT_EVERY - 1 - s->attempts % MP_ODE_INTERRUPT_EVERY;
+    if (kmax > o->max_steps - s->attempts) kmax = o->max_steps - s->attempts;
+    double t = s->t, h = s->h, tout = s->ie < o->n_eval ? o->t_eval[s->ie] : INFINITY;
+    for (; k < kmax && t + h * (1.0 + 1e-9) < s->tf && t + h < tout; k++) t += h;
+    if (k == 0) return;
+    int every = o->n_eval == 0; /* every step is a sample */
+    if (every && reserve_samples(r, (size_t)k) != MP_OK) return; /* the checked loop reports */
+    long nfev0 = w->nfev;
+    memcpy(s->save, w->y, n * sizeof(double));
+    memcpy(s->save + n, w->f, n * sizeof(double));
+    w->unchecked = 1;
+    w->discarded = 0.0;
+    int rc = s->cur->block(w, s->t, h, k, every ? r->t + r->m : NULL,
+                           every ? r->y + r->m * n : NULL);
+    w->unchecked = 0;
+    int bad = rc != MP_OK || !isfinite(w->discarded);
+    for (size_t i = 0; i < n && !bad; i++) bad = !isfinite(w->y[i]) || !isfinite(w->f[i]);
+    if (bad) { /* back to the block's start: the checked loop runs it, and the failing step */
+        memcpy(w->y, s->save, n * sizeof(double));
+        memcpy(w->f, s->save + n, n * sizeof(double));
+        w->nfev = nfev0;
+        s->checked_until = s->attempts + k + 1;
+        return;
+    }
+    if (every) r->m += (size_t)k;
+    r->nsteps += k;
+    s->t = t;
+    s->attempts += k;
+}
+
+/* Contract: the loop of a forward solve from start_run's state to tf: each
+ * attempt within the budget (every MP_ODE_INTERRUPT_EVERY-th first polls for
+ * an interrupt) steps, lets the controller accept or reject the step (a
+ * non-finite trial stage rejects it with h / 10), and completes an accepted
+ * one (accept_step); fixed steps run in fast blocks where they can.  MP_OK at
+ * tf or at a terminal event, else the failure; r->t_fail is where it stopped. */
+static int run_loop(ode_run *s)
+{
+    mp_ode_ws *w = &s->w;
+    mp_ode_result *r = s->r;
+    const mp_ode_options *o = s->o;
+    int rc = MP_OK;
+    while (s->t < s->tf) {
+        if (s->fast) fixed_block(s);
+        const mp_ode_method *cur = s->cur;
+        double t = s->t, h = s->h;
+        if (s->attempts >= o->max_steps) { rc = MP_EMAXSTEPS; break; }
+        if (o->interrupt && s->attempts % MP_ODE_INTERRUPT_EVERY == MP_ODE_INTERRUPT_EVERY - 1 &&
             (rc = o->interrupt(o->interrupt_ctx)) != MP_OK)
             break;
-        attempts++;
-        int last = 0;
-        if (cur->adaptive ? t + 1.01 * h >= tf : t + h * (1.0 + 1e-9) >= tf) {
-            h = tf - t;
-            while (t + h > tf) h = nextafter(h, 0.0); /* no stage beyond tf */
+        s->attempts++;
+        int last = 0, controlled = cur->adaptive && !cur->self_controlled;
+        if (cur->adaptive ? t + 1.01 * h >= s->tf : t + h * (1.0 + 1e-9) >= s->tf) {
+            h = s->tf - t;
+            while (t + h > s->tf) h = nextafter(h, 0.0); /* no stage beyond tf */
             last = 1;
         }
-        if (cur->adaptive && !cur->self_controlled &&
-            h <= 16.0 * DBL_EPSILON * fmax(fabs(t), 1e-300)) {
-            rc = c.nonfinite ? MP_ENONFINITE : MP_ESTEP;
+        if (controlled && h <= 16.0 * DBL_EPSILON * fmax(fabs(t), 1e-300)) {
+            rc = s->c.nonfinite ? MP_ENONFINITE : MP_ESTEP;
             break;
         }
         double err = 0.0, hnew = h;
-        w.fnew_valid = 0;
-        w.rho = 0.0;
-        rc = cur->step(&w, t, h, &err);
-        if (rc == MP_ENONFINITE && cur->adaptive && !cur->self_controlled) {
+        w->fnew_valid = 0;
+        w->rho = 0.0;
+        rc = cur->step(w, t, h, &err);
+        if (rc == MP_ENONFINITE && controlled) {
             /* a trial stage overflowed: reject and shrink as Hairer's codes do */
-            h /= 10.0;
-            c.rejected = c.nonfinite = 1;
+            s->h = h / 10.0;
+            s->c.rejected = s->c.nonfinite = 1;
             r->nreject++;
             rc = MP_OK;
             continue;
         }
         if (rc != MP_OK) break;
         if (cur->self_controlled) {
-            last = last && w.h_taken >= h;
-            h = w.h_taken;
-            hnew = w.h_next;
-        } else if (cur->adaptive && !control(cur, &c, err, &h, &hnew)) {
+            last = last && w->h_taken >= h;
+            h = w->h_taken;
+            hnew = w->h_next;
+        } else if (controlled && !control(cur, &s->c, err, &h, &hnew)) {
+            s->h = h; /* rejected: retry with the smaller step */
             r->nreject++;
             continue;
         }
-        double tnew = last ? tf : t + h;
-        /* the interpolant is built only for a step that needs it: one holding a
-         * t_eval point, with events to locate, or when all steps are kept */
-        int dense_now = need_dense && (o->dense || ne > 0 ||
-                                       (ie < o->n_eval && o->t_eval[ie] < tnew));
-        if ((rc = cur->finish(&w, t, h, dense_now)) != MP_OK) break;
-        /* Hairer's stiffness test on explicit steps: h |lambda| near the
-         * stability boundary for 15 of the recent steps.  A switching row tests
-         * against a fraction of the boundary: the step-size controller of a
-         * stiff problem holds h |lambda| just inside it (dop853 on ROBER: ~5.3
-         * against 6.1), where the test at the boundary itself rarely fires. */
-        if (w.rho > 0.0) {
-            double rho_stiff = m->nonstiff ? MP_ODE_SWITCH_FRAC * cur->stiff_rho : cur->stiff_rho;
-            if (w.rho > rho_stiff) {
-                c.calm_count = 0;
-                if (++c.stiff_count >= 15) r->stiff = 1;
-            } else if (++c.calm_count >= 6) {
-                c.stiff_count = 0;
-            }
-        }
-        double s_stop = 2.0;
-        if (ne) {
-            rc = ev_step(&w, r, o, t, h, g_old, g_sub, ytmp, gtmp, hits, &s_stop);
-            if (rc != MP_OK) break;
-        }
-        double tend = s_stop <= 1.0 ? t + s_stop * h : tnew;
-        if ((rc = output_step(r, o, &w, t, h, tnew, tend, &ie, ytmp)) != MP_OK) break;
-        r->nsteps++;
-        if (s_stop <= 1.0) {
-            mp_ode_dense_eval(w.coef, w.ncoef, n, s_stop, ytmp);
-            if (o->n_eval == 0 && (rc = push_sample(r, tend, ytmp)) != MP_OK) break;
-            memcpy(w.y, ytmp, n * sizeof(double));
-            t = tend;
-            r->terminated = 1;
+        if ((rc = accept_step(s, h, hnew, last ? s->tf : t + h)) != MP_OK || r->terminated)
             break;
-        }
-        if (o->n_eval == 0 && (rc = push_sample(r, tnew, w.ynew)) != MP_OK) break;
-        double *sw = w.y; w.y = w.ynew; w.ynew = sw;
-        if (w.fnew_valid) { sw = w.f; w.f = w.fnew; w.fnew = sw; }
-        t = tnew;
-        h = fmin(cur->adaptive ? hnew : o->h, hmax);
-        /* the switching row: to the stiff method when the test fires, back when
-         * the stiff method's steps are within the explicit stability region */
-        if (m->nonstiff && (rc = switch_method(m, &w, &cur, &c, t, h, r)) != MP_OK) break;
     }
-    r->t_fail = t;
+    r->t_fail = s->t;
+    return rc;
+}
 
-done:
-    if (w.m && w.m->free) w.m->free(&w);
-    if (m->nonstiff && w.state2) { /* the method not running at the end */
-        const mp_ode_method *other = w.m == m->stiff ? m->nonstiff : m->stiff;
-        w.state = w.state2;
-        if (other->free) other->free(&w);
+/* Contract: free what a solve allocated (the methods' states, the vectors,
+ * the event buffers; r keeps its own arrays) and record in r the counts, the
+ * origin of a non-finite value and the status rc. */
+static void free_run(ode_run *s, int rc)
+{
+    mp_ode_ws *w = &s->w;
+    const mp_ode_method *m = s->m;
+    mp_ode_result *r = s->r;
+    if (w->m && w->m->free) w->m->free(w);
+    if (m->nonstiff && w->state2) { /* the method not running at the end */
+        const mp_ode_method *other = w->m == m->stiff ? m->nonstiff : m->stiff;
+        w->state = w->state2;
+        if (other->free) other->free(w);
     }
-    r->bad_what = w.bad_what;
-    r->bad_index = w.bad_index;
-    r->nfev = w.nfev;
-    r->njev = w.njev;
-    r->nlu = w.nlu;
-    r->nreject += w.nreject_inner;
+    r->bad_what = w->bad_what;
+    r->bad_index = w->bad_index;
+    r->nfev = w->nfev;
+    r->njev = w->njev;
+    r->nlu = w->nlu;
+    r->nreject += w->nreject_inner;
     r->status = rc;
-    free(buf);
-    free(g_old);
-    free(hits);
+    free(s->buf);
+    free(s->g_old);
+    free(s->hits);
+}
+
+/* Contract: the forward solve (t0 < tf) of mp_ode_solve: the arguments
+ * checked, the storage allocated, the start, the loop; everything freed on
+ * every path, the counts and the status in r. */
+static int solve_forward(const mp_ode_method *m, const mp_ode_problem *p, double t0, double tf,
+                         const double *y0, const mp_ode_options *o, mp_ode_result *r)
+{
+    ode_run s;
+    memset(r, 0, sizeof *r);
+    memset(&s, 0, sizeof s);
+    r->n = p->n;
+    r->ncoef = m->ncoef;
+    r->n_events = o->n_events;
+    r->t_fail = t0;
+    int rc = check_args(m, p, t0, tf, y0, o);
+    if (rc != MP_OK) return r->status = rc;
+    s.m = m;
+    s.cur = m->nonstiff ? m->nonstiff : m; /* a switching row runs its two methods in turn */
+    s.o = o;
+    s.r = r;
+    s.tf = tf;
+    s.c = (ode_control){1e-4, 0, 0, 0, 0};
+    s.need_dense = o->n_eval > 0 || o->dense || o->n_events > 0;
+    s.fast = m->block && p->replayable && o->n_events == 0 && !o->dense;
+    if ((rc = alloc_events(&s)) == MP_OK && (rc = alloc_workspace(&s, p, t0, tf)) == MP_OK &&
+        (rc = start_run(&s, t0, y0)) == MP_OK)
+        rc = run_loop(&s);
+    free_run(&s, rc);
     return rc;
 }
 

@@ -18,7 +18,10 @@ static int separable_alloc(mp_ode_ws *w)
 }
 
 /* One kick-drift-kick step of size h on y = (q, v), with f = f(t, y) on
- * entry and f(t + h, y) on exit; one right-hand side evaluation. */
+ * entry and f(t + h, y) on exit; one right-hand side evaluation.  Unchecked
+ * (the fast path), the first half of f(t + h, y), which v replaces, leaves
+ * its trace in w->discarded, so that the driver's check of the state sees a
+ * non-finite value there too. */
 static int kdk(mp_ode_ws *w, double t, double h, double *y, double *f)
 {
     size_t nq = w->p->nq;
@@ -28,7 +31,25 @@ static int kdk(mp_ode_ws *w, double t, double h, double *y, double *f)
     int rc = mp_ode_ws_rhs(w, t + h, y, f); /* its second half is a(t + h, q) */
     if (rc != MP_OK) return rc;
     for (size_t i = 0; i < nq; i++) v[i] += 0.5 * h * f[nq + i];
+    if (w->unchecked) {
+        double z = 0.0;
+        for (size_t i = 0; i < nq; i++) z += 0.0 * f[i];
+        w->discarded += z;
+    }
     memcpy(f, v, nq * sizeof(double)); /* q' = v at the new state */
+    return MP_OK;
+}
+
+/* The composition c[0..ns) of kick-drift-kick steps over one step h from
+ * (t, y, f), in place. */
+static inline __attribute__((always_inline)) int
+compose_in_place(mp_ode_ws *w, double t, double h, const double *c, int ns, double *y, double *f)
+{
+    for (int i = 0; i < ns; i++) {
+        int rc = kdk(w, t, c[i] * h, y, f);
+        if (rc != MP_OK) return rc;
+        t += c[i] * h;
+    }
     return MP_OK;
 }
 
@@ -36,11 +57,23 @@ static int compose(mp_ode_ws *w, double t, double h, const double *c, int ns)
 {
     memcpy(w->ynew, w->y, w->n * sizeof(double));
     memcpy(w->fnew, w->f, w->n * sizeof(double));
-    double tt = t;
-    for (int i = 0; i < ns; i++) {
-        int rc = kdk(w, tt, c[i] * h, w->ynew, w->fnew);
+    return compose_in_place(w, t, h, c, ns, w->ynew, w->fnew);
+}
+
+/* Contract: the block of ode.h's method row for the composition c[0..ns):
+ * k steps in place, each as compose makes it. */
+static int compose_block(mp_ode_ws *w, double t, double h, long k, double *ts, double *ys,
+                         const double *c, int ns)
+{
+    size_t n = w->n;
+    for (long j = 0; j < k; j++) {
+        int rc = compose_in_place(w, t, h, c, ns, w->y, w->f);
         if (rc != MP_OK) return rc;
-        tt += c[i] * h;
+        t += h;
+        if (ys) {
+            memcpy(ys + (size_t)j * n, w->y, n * sizeof(double));
+            ts[j] = t;
+        }
     }
     return MP_OK;
 }
@@ -63,16 +96,31 @@ static int verlet_step(mp_ode_ws *w, double t, double h, double *err)
     return compose(w, t, h, verlet_c, 1);
 }
 
+static int verlet_block(mp_ode_ws *w, double t, double h, long k, double *ts, double *ys)
+{
+    return compose_block(w, t, h, k, ts, ys, verlet_c, 1);
+}
+
 static int yoshida4_step(mp_ode_ws *w, double t, double h, double *err)
 {
     *err = 0.0;
     return compose(w, t, h, yoshida4_c, 3);
 }
 
+static int yoshida4_block(mp_ode_ws *w, double t, double h, long k, double *ts, double *ys)
+{
+    return compose_block(w, t, h, k, ts, ys, yoshida4_c, 3);
+}
+
 static int yoshida6_step(mp_ode_ws *w, double t, double h, double *err)
 {
     *err = 0.0;
     return compose(w, t, h, yoshida6_c, 7);
+}
+
+static int yoshida6_block(mp_ode_ws *w, double t, double h, long k, double *ts, double *ys)
+{
+    return compose_block(w, t, h, k, ts, ys, yoshida6_c, 7);
 }
 
 /* fnew = f(t + h, ynew) came out of the last kick */
@@ -86,7 +134,7 @@ static int fsal_hermite_finish(mp_ode_ws *w, double t, double h, int need_dense)
     const mp_ode_method mp_ode_##nm = {                                                       \
         .name = #nm, .order = ord, .adaptive = 0, .symplectic = 1, .dense_order = 3,          \
         .ncoef = 4, .nscratch = 0, .alloc = separable_alloc, .step = nm##_step,               \
-        .finish = fsal_hermite_finish,                                                       \
+        .finish = fsal_hermite_finish, .block = nm##_block,                                   \
     }
 
 MP_SPLIT_ROW(verlet, 2);

@@ -7,6 +7,7 @@
 #ifndef MP_ODE_H
 #define MP_ODE_H
 
+#include <math.h>
 #include <stddef.h>
 
 #include "mp_status.h"
@@ -33,6 +34,11 @@ typedef struct mp_ode_problem {
     /* jac returns the same matrix everywhere (SciPy's array jac): it is not
      * counted as an evaluation (njev), as SciPy counts none. */
     int jac_const;
+    /* rhs is plain C with no side effects (no Python, no state of its own):
+     * calling it again at the same point gives the same values, so the
+     * fixed-step fast path may run a block of steps unchecked and replay it
+     * checked.  0: every stage is checked as it comes. */
+    int replayable;
 } mp_ode_problem;
 
 typedef struct mp_ode_options {
@@ -120,6 +126,13 @@ typedef struct mp_ode_method {
     /* After acceptance: fnew = f(t + h, ynew) when the method or the dense
      * output needs it, and the interpolant's coefficients when need_dense. */
     int (*finish)(mp_ode_ws *w, double t, double h, int need_dense);
+    /* Optional, for a fixed-step row whose steps depend on (t, h, y, f) alone:
+     * k steps of size h from (t, w->y, w->f) in place, the times t + h, t + 2h,
+     * ... accumulated step by step, ending with f = f(t_k, y_k); the same
+     * arithmetic as k calls of step and finish.  The state after step j is
+     * written to ys + j n and its time to ts[j] when ys is not NULL.  The
+     * driver's fast path runs it with the stage checks off (w->unchecked). */
+    int (*block)(mp_ode_ws *w, double t, double h, long k, double *ts, double *ys);
     /* Optional: forget history (a switching row changed method). */
     void (*restart)(mp_ode_ws *w);
     /* A switching row ("auto"): the driver runs `nonstiff` and `stiff` in
@@ -145,17 +158,35 @@ struct mp_ode_ws {
     double jnorm;                /* implicit methods: ||J||_inf of their last Jacobian */
     size_t ncoef;                /* vectors in coef (the row's, padded with zeros) */
     long nfev, njev, nlu, nreject_inner;
+    int unchecked;               /* the fixed-step fast path: stages are not checked finite */
+    double discarded;            /* ... and 0 * (values a step computes and drops): NaN when
+                                    one was not finite (else 0) */
     int bad_what;                /* the last non-finite value found (see mp_ode_result) */
     size_t bad_index;
     void *state;                 /* method's own state (alloc/free) */
     void *state2;                /* a switching row's idle method's state */
 };
 
-/* f(t, y) with counting; checks the result is finite (MP_ENONFINITE, recording
- * the component in w->bad_index).  Every evaluation of f goes through here.  A
- * non-finite value in a trial stage makes the driver reject the step; at an
- * accepted state it ends the solve. */
-int mp_ode_ws_rhs(mp_ode_ws *w, double t, const double *y, double *dydt);
+/* Contract: MP_ENONFINITE, recording that dydt[i] of the right-hand side is
+ * not finite (w->bad_what, w->bad_index). */
+int mp_ode_ws_bad_rhs(mp_ode_ws *w, size_t i);
+
+/* Contract: dydt = f(t, y), counted in nfev; MP_ENONFINITE (with the first
+ * offending component in w->bad_index) when a value is NaN or inf.  Every
+ * evaluation of f goes through here.  The one pass over dydt is the only
+ * check of a stage: a non-finite value in a trial stage makes the driver
+ * reject the step; at an accepted state it ends the solve.  In the driver's
+ * fixed-step fast path (w->unchecked) there is no pass: the driver checks the
+ * state.  Inline: it is called for every stage of every step. */
+static inline int mp_ode_ws_rhs(mp_ode_ws *w, double t, const double *y, double *dydt)
+{
+    int rc = w->p->rhs(t, y, dydt, w->p->data);
+    w->nfev++;
+    if (rc != MP_OK || w->unchecked) return rc;
+    for (size_t i = 0; i < w->n; i++)
+        if (!isfinite(dydt[i])) return mp_ode_ws_bad_rhs(w, i);
+    return MP_OK;
+}
 
 /* Jacobian df/dy (row-major) at (t, y): the problem's own when it has one,
  * else forward differences with increments sqrt(eps) * max(|y_j|, atol_j/rtol);

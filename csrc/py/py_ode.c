@@ -411,9 +411,11 @@ static PyObject *array_from(const double *src, int nd, const npy_intp *shape)
     return (PyObject *)a;
 }
 
-/* Contract: the dict ode_solve returns for a finished solve (any status the
- * table lets be a status): samples, dense segments, events, counts, "code"
- * (the C status, MP_TERMINATED for a terminal event) and "message". */
+/* Contract: the tuple ode_solve returns for a finished solve (any status the
+ * table lets be a status): (code, message, t (m,), y (m, n), nfev, njev, nlu,
+ * nsteps, nreject, dense (seg_t, seg_h, seg_c) or None, events [(t, y) per
+ * event function] or None when there are none, backward), code being the C
+ * status (MP_TERMINATED for a terminal event). */
 static PyObject *result_to_python(const py_system *sys, const mp_ode_result *r, int dense,
                                   long max_steps)
 {
@@ -436,7 +438,7 @@ static PyObject *result_to_python(const py_system *sys, const mp_ode_result *r, 
     } else {
         den = Py_NewRef(Py_None);
     }
-    ev = PyList_New((Py_ssize_t)r->n_events);
+    ev = r->n_events ? PyList_New((Py_ssize_t)r->n_events) : Py_NewRef(Py_None);
     if (!ev) goto fail;
     for (size_t k = 0; k < r->n_events; k++) {
         npy_intp c = (npy_intp)r->ev_count[k];
@@ -454,11 +456,8 @@ static PyObject *result_to_python(const py_system *sys, const mp_ode_result *r, 
     mp_ode_result_outcome(r, &oc);
     PyObject *msg = ode_message(sys, &oc, max_steps);
     if (!msg) goto fail;
-    out = Py_BuildValue("{s:i,s:N,s:i,s:l,s:N,s:N,s:l,s:l,s:l,s:l,s:l,s:N,s:N}", "code",
-                        oc.status, "message", msg, "backward", r->backward, "nswitch",
-                        r->nswitch, "t", t, "y", y, "nfev", r->nfev, "njev", r->njev, "nlu",
-                        r->nlu, "nsteps", r->nsteps, "nreject", r->nreject, "dense", den,
-                        "events", ev);
+    out = Py_BuildValue("(iNNNlllllNNi)", oc.status, msg, t, y, r->nfev, r->njev, r->nlu,
+                        r->nsteps, r->nreject, den, ev, r->backward);
     return out;
 fail:
     Py_XDECREF(t);
@@ -469,17 +468,66 @@ fail:
 }
 
 /* The options ode_solve and ode_solve_many share, as integrate.py hands them
- * over: one dict, parsed here and nowhere else. */
+ * over, parsed here and nowhere else: ode_solve_many's as one dict, ode_solve's
+ * as positional arguments (its call is the one whose fixed cost counts). */
 typedef struct {
     double t0, tf, rtol, h, first_step, max_step;
     long max_steps;
-    PyArrayObject *atol, *tev; /* owned; tev NULL: no t_eval */
+    PyArrayObject *atol, *tev; /* owned; atol NULL: a scalar in atol1; tev NULL: no t_eval */
+    double *atol1;             /* PyMem: n copies of a scalar atol */
 } ode_args;
 
 static void ode_args_clear(ode_args *a)
 {
     Py_CLEAR(a->atol);
     Py_CLEAR(a->tev);
+    PyMem_Free(a->atol1);
+    a->atol1 = NULL;
+}
+
+/* Contract: the arrays of a from atol (a Python float, taken as n copies, or
+ * n values) and t_eval (None or m values), then o from a (o points into a:
+ * clear a after the solve).  0, or -1 with an exception set and a cleared. */
+static int ode_args_fill(PyObject *atolo, PyObject *tevo, size_t n, ode_args *a,
+                         mp_ode_options *o)
+{
+    const double *atol;
+    if (PyFloat_CheckExact(atolo)) {
+        double v = PyFloat_AS_DOUBLE(atolo);
+        if (!(v >= 0) || !isfinite(v)) {
+            PyErr_Format(PyExc_ValueError, "atol must be finite and non-negative, got %R", atolo);
+            return -1;
+        }
+        if (!(a->atol1 = PyMem_Malloc((n ? n : 1) * sizeof(double)))) {
+            PyErr_NoMemory();
+            return -1;
+        }
+        for (size_t i = 0; i < n; i++) a->atol1[i] = v;
+        atol = a->atol1;
+    } else {
+        if (!(a->atol = mp_py_array(atolo, "atol", 1))) return -1;
+        if ((size_t)PyArray_SIZE(a->atol) != n) {
+            PyErr_SetString(PyExc_ValueError, "atol must be a scalar or have one value per state");
+            ode_args_clear(a);
+            return -1;
+        }
+        atol = PyArray_DATA(a->atol);
+    }
+    if (tevo != Py_None && !(a->tev = mp_py_array(tevo, "t_eval", 1))) {
+        ode_args_clear(a);
+        return -1;
+    }
+    memset(o, 0, sizeof *o);
+    o->rtol = a->rtol;
+    o->atol = atol;
+    o->first_step = a->first_step;
+    o->max_step = a->max_step;
+    o->h = a->h;
+    o->max_steps = a->max_steps;
+    o->t_eval = a->tev ? PyArray_DATA(a->tev) : NULL;
+    o->n_eval = a->tev ? (size_t)PyArray_SIZE(a->tev) : 0;
+    o->interrupt = mp_py_check_interrupt;
+    return 0;
 }
 
 /* Contract: parse the dict {t0, tf, rtol, atol (n,), t_eval (m,) or None, h,
@@ -507,49 +555,55 @@ static int ode_args_parse(PyObject *opts, size_t n, ode_args *a, mp_ode_options 
                                          "first_step, max_step and max_steps");
         return -1;
     }
-    if (!(a->atol = mp_py_array(atolo, "atol", 1))) return -1;
-    if ((size_t)PyArray_SIZE(a->atol) != n) {
-        PyErr_SetString(PyExc_ValueError, "atol must be a scalar or have one value per state");
-        ode_args_clear(a);
-        return -1;
+    return ode_args_fill(atolo, tevo, n, a, o);
+}
+
+/* Contract: the options of ode_solve from its positional arguments argv[0..8]
+ * (t0, tf, rtol, atol, t_eval, h, first_step, max_step, max_steps), as
+ * ode_args_parse does from the dict.  0, or -1 with an exception set. */
+static int ode_args_from_argv(PyObject *const *argv, size_t n, ode_args *a, mp_ode_options *o)
+{
+    double *dst[8] = {&a->t0, &a->tf, &a->rtol, NULL, NULL, &a->h, &a->first_step, &a->max_step};
+    memset(a, 0, sizeof *a);
+    for (int i = 0; i < 8; i++) {
+        if (!dst[i]) continue;
+        *dst[i] = PyFloat_AsDouble(argv[i]);
+        if (*dst[i] == -1.0 && PyErr_Occurred()) return -1;
     }
-    if (tevo != Py_None && !(a->tev = mp_py_array(tevo, "t_eval", 1))) {
-        ode_args_clear(a);
-        return -1;
-    }
-    memset(o, 0, sizeof *o);
-    o->rtol = a->rtol;
-    o->atol = PyArray_DATA(a->atol);
-    o->first_step = a->first_step;
-    o->max_step = a->max_step;
-    o->h = a->h;
-    o->max_steps = a->max_steps;
-    o->t_eval = a->tev ? PyArray_DATA(a->tev) : NULL;
-    o->n_eval = a->tev ? (size_t)PyArray_SIZE(a->tev) : 0;
-    o->interrupt = mp_py_check_interrupt;
-    return 0;
+    a->max_steps = PyLong_AsLong(argv[8]);
+    if (a->max_steps == -1 && PyErr_Occurred()) return -1;
+    return ode_args_fill(argv[3], argv[4], n, a, o);
 }
 
 /* ---- ode_solve ------------------------------------------------------------ */
 
-/* Contract: ode_solve(method, system, y0, options, *, dense, events, terminal,
- * direction, args, jac, watch) -> the dict of result_to_python.  A failure the
- * status table marks as always raising (a callback's exception, Ctrl-C,
- * memory) raises; every other outcome is returned with its code and message
- * (integrate.py decides, from the same table, what raises). */
-static PyObject *py_ode_solve(PyObject *self, PyObject *args, PyObject *kw)
+/* Contract: ode_solve(method, system, y0, t0, tf, rtol, atol, t_eval, h,
+ * first_step, max_step, max_steps, dense, events, terminal, direction, args,
+ * jac, watch), all positional (its fixed cost is the cost of a small solve;
+ * integrate.py has validated them) -> the tuple of result_to_python.  A
+ * failure the status table marks as always raising (a callback's exception,
+ * Ctrl-C, memory) raises; every other outcome is returned with its code and
+ * message (integrate.py decides, from the same table, what raises). */
+static PyObject *py_ode_solve(PyObject *self, PyObject *const *argv, Py_ssize_t nargs)
 {
     (void)self;
-    static char *kwlist[] = {"method", "system", "y0", "options", "dense", "events", "terminal",
-                             "direction", "args", "jac", "watch", NULL};
-    const char *mname;
-    PyObject *spec, *y0o, *opts, *evo = Py_None, *termo = Py_None, *diro = Py_None,
-             *eargs = NULL, *jaco = Py_None, *watch = Py_None;
-    int dense = 0;
-    if (!PyArg_ParseTupleAndKeywords(args, kw, "sOOO|$pOOOO!OO", kwlist, &mname, &spec, &y0o,
-                                     &opts, &dense, &evo, &termo, &diro, &PyTuple_Type, &eargs,
-                                     &jaco, &watch))
+    if (nargs != 19) {
+        PyErr_Format(PyExc_TypeError, "ode_solve takes 19 arguments, got %zd", nargs);
         return NULL;
+    }
+    const char *mname = PyUnicode_Check(argv[0]) ? PyUnicode_AsUTF8(argv[0]) : NULL;
+    if (!mname) {
+        if (!PyErr_Occurred()) PyErr_SetString(PyExc_TypeError, "method must be a str");
+        return NULL;
+    }
+    PyObject *spec = argv[1], *y0o = argv[2], *evo = argv[13], *termo = argv[14],
+             *diro = argv[15], *eargs = argv[16], *jaco = argv[17], *watch = argv[18];
+    int dense = PyObject_IsTrue(argv[12]);
+    if (dense < 0) return NULL;
+    if (!PyTuple_Check(spec) || !PyTuple_Check(eargs)) {
+        PyErr_SetString(PyExc_TypeError, "system spec and args must be tuples");
+        return NULL;
+    }
     if (watch != Py_None && !PyList_Check(watch)) {
         PyErr_SetString(PyExc_TypeError, "watch must be a list");
         return NULL;
@@ -559,9 +613,6 @@ static PyObject *py_ode_solve(PyObject *self, PyObject *args, PyObject *kw)
         PyErr_Format(PyExc_ValueError, "unknown method %s", mname);
         return NULL;
     }
-    if (!eargs) eargs = PyTuple_New(0);
-    else Py_INCREF(eargs);
-    if (!eargs) return NULL;
     PyArrayObject *y0 = NULL, *term = NULL, *dir = NULL, *jm = NULL;
     PyObject *result = NULL;
     ode_args oa = {0};
@@ -575,9 +626,9 @@ static PyObject *py_ode_solve(PyObject *self, PyObject *args, PyObject *kw)
     memset(&sys, 0, sizeof sys);
 
     y0 = mp_py_array(y0o, "y0", 1);
-    if (!y0) goto out;
+    if (!y0 || mp_py_require_finite(y0, "y0") < 0) goto out;
     size_t n = (size_t)PyArray_SIZE(y0);
-    if (ode_args_parse(opts, n, &oa, &o) < 0) goto out;
+    if (ode_args_from_argv(argv + 3, n, &oa, &o) < 0) goto out;
     if (py_system_parse(spec, n, &sys) < 0) goto out;
     mp_ode_problem prob = sys.prob;
     int holds_python = sys.holds_python;
@@ -647,6 +698,7 @@ static PyObject *py_ode_solve(PyObject *self, PyObject *args, PyObject *kw)
         }
     }
 
+    prob.replayable = !holds_python; /* plain C all through: a block may be run again */
     mp_ode_result r;
     int rc;
     if (holds_python) {
@@ -663,7 +715,6 @@ out:
     py_system_clear(&sys);
     ode_args_clear(&oa);
     PyMem_Free(pe.fns);
-    Py_XDECREF(eargs);
     Py_XDECREF(y0);
     Py_XDECREF(term);
     Py_XDECREF(dir);
@@ -976,7 +1027,7 @@ static PyObject *py_ode_methods(PyObject *self, PyObject *unused)
 }
 
 PyMethodDef mp_py_ode_methods[] = {
-    {"ode_solve", (PyCFunction)(void (*)(void))py_ode_solve, METH_VARARGS | METH_KEYWORDS,
+    {"ode_solve", (PyCFunction)(void (*)(void))py_ode_solve, METH_FASTCALL,
      "Integrate an ODE system (internal; use mechpy.solve)."},
     {"ode_solve_many", (PyCFunction)(void (*)(void))py_ode_solve_many,
      METH_VARARGS | METH_KEYWORDS, "Integrate an ensemble (internal; use mechpy.solve_many)."},

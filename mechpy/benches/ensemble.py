@@ -13,25 +13,39 @@ from mechpy._timing import median_time
 TITLE = "Ensembles and overhead"
 ORDER = 15
 
-_PLAIN_RK4 = r"""
+# The plain loops the fixed-step methods are measured against: the same
+# arithmetic with f inlined, argv[3] choosing rk4 (0), verlet (1) or yoshida4 (2).
+_PLAIN_FIXED = r"""
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <time.h>
 static void f(double t, const double *y, double *d) { (void)t; d[0] = y[1]; d[1] = -9.81 * sin(y[0]); }
+static const double Y4[3] = {1.3512071919596576340476878089715, -1.7024143839193152680953756179429,
+                             1.3512071919596576340476878089715};
 int main(int argc, char **argv) {
-    long n = atol(argv[1]); double h = atof(argv[2]);
+    long n = atol(argv[1]); double h = atof(argv[2]); int m = argc > 3 ? atoi(argv[3]) : 0;
     double y[2] = {1.0, 0.0}, k1[2], k2[2], k3[2], k4[2], yt[2], t = 0;
     struct timespec a, b; clock_gettime(CLOCK_MONOTONIC, &a);
+    f(t, y, k1);
     for (long s = 0; s < n; s++) {
-        f(t, y, k1);
-        for (int i = 0; i < 2; i++) yt[i] = y[i] + 0.5 * h * k1[i];
-        f(t + 0.5 * h, yt, k2);
-        for (int i = 0; i < 2; i++) yt[i] = y[i] + 0.5 * h * k2[i];
-        f(t + 0.5 * h, yt, k3);
-        for (int i = 0; i < 2; i++) yt[i] = y[i] + h * k3[i];
-        f(t + h, yt, k4);
-        for (int i = 0; i < 2; i++) y[i] += h / 6 * (k1[i] + 2 * (k2[i] + k3[i]) + k4[i]);
+        if (m == 0) {
+            for (int i = 0; i < 2; i++) yt[i] = y[i] + 0.5 * h * k1[i];
+            f(t + 0.5 * h, yt, k2);
+            for (int i = 0; i < 2; i++) yt[i] = y[i] + 0.5 * h * k2[i];
+            f(t + 0.5 * h, yt, k3);
+            for (int i = 0; i < 2; i++) yt[i] = y[i] + h * k3[i];
+            f(t + h, yt, k4);
+            for (int i = 0; i < 2; i++) y[i] += h / 6 * (k1[i] + 2 * (k2[i] + k3[i]) + k4[i]);
+            f(t + h, y, k1);
+        } else {
+            for (int j = 0; j < (m == 1 ? 1 : 3); j++) {
+                double c = m == 1 ? h : Y4[j] * h;
+                y[1] += 0.5 * c * k1[1]; y[0] += c * y[1];
+                f(t, y, k1);
+                y[1] += 0.5 * c * k1[1];
+            }
+        }
         t += h;
     }
     clock_gettime(CLOCK_MONOTONIC, &b);
@@ -40,23 +54,29 @@ int main(int argc, char **argv) {
 }
 """
 
+FIXED = ("rk4", "verlet", "yoshida4")  # argv[3] of the plain loop: the index
 
-def _plain_rk4(nsteps, h):
+
+def _plain_fixed(nsteps, h):
+    """{method: (median seconds, final state)} of the plain C loops, or None without cc."""
     cc = shutil.which("cc") or shutil.which("gcc")
     if not cc:
         return None
+    out = {}
     with tempfile.TemporaryDirectory() as d:
-        src, exe = os.path.join(d, "rk4.c"), os.path.join(d, "rk4")
+        src, exe = os.path.join(d, "fixed.c"), os.path.join(d, "fixed")
         with open(src, "w") as fh:
-            fh.write(_PLAIN_RK4)
+            fh.write(_PLAIN_FIXED)
         subprocess.run([cc, "-O2", src, "-o", exe, "-lm"], check=True)
-        times, y = [], None
-        for _ in range(5):
-            out = subprocess.run([exe, str(nsteps), repr(h)], capture_output=True, text=True,
-                                 check=True).stdout.split()
-            times.append(float(out[0]))
-            y = np.array([float(out[1]), float(out[2])])
-        return float(np.median(times)), y
+        for i, meth in enumerate(FIXED):
+            times, y = [], None
+            for _ in range(5):
+                res = subprocess.run([exe, str(nsteps), repr(h), str(i)], capture_output=True,
+                                     text=True, check=True).stdout.split()
+                times.append(float(res[0]))
+                y = np.array([float(res[1]), float(res[2])])
+            out[meth] = float(np.median(times)), y
+    return out
 
 
 def run(quick: bool):
@@ -88,19 +108,20 @@ def run(quick: bool):
                      error=float("nan"),
                      note=f"{sub} trajectories timed, scaled to {k}"))
 
-    # fixed-step rk4 on a C scene beside a plain C loop doing the same arithmetic
+    # the fixed-step methods on a C scene beside plain C loops doing the same arithmetic
     nsteps, h = (200_000 if quick else 2_000_000), 1e-4
     T = nsteps * h
-    plain = _plain_rk4(nsteps, h)
-    name = f"rk4, h=1e-4, {nsteps} steps, pendulum (C scene)"
-    fn = lambda: mp.solve(p, (0, T), [1.0, 0.0], method="rk4", h=h, t_eval=[T])  # noqa: E731
-    ours = fn().y[:, -1]
-    rows.append(dict(problem=name, impl="mechpy solve rk4 (C scene)", path="rk4",
-                     time=median_time(fn),
-                     error=float("nan")))
-    if plain is not None:
-        rows.append(dict(problem=name, impl="plain C loop (cc -O2)", path="plain-c",
-                         time=plain[0],
-                         error=float(np.max(np.abs(plain[1] - ours))),
-                         note="error = difference from mechpy's result"))
+    plain = _plain_fixed(nsteps, h)
+    for meth in FIXED:
+        name = f"{meth}, h=1e-4, {nsteps} steps, pendulum (C scene)"
+        fn = lambda meth=meth: mp.solve(p, (0, T), [1.0, 0.0], method=meth, h=h,  # noqa: E731
+                                        t_eval=[T])
+        ours = fn().y[:, -1]
+        rows.append(dict(problem=name, impl=f"mechpy solve {meth} (C scene)", path=meth,
+                         time=median_time(fn), error=float("nan")))
+        if plain is not None:
+            rows.append(dict(problem=name, impl="plain C loop (cc -O2)", path=f"plain-c-{meth}",
+                             time=plain[meth][0],
+                             error=float(np.max(np.abs(plain[meth][1] - ours))),
+                             note="error = difference from mechpy's result"))
     return rows

@@ -129,13 +129,51 @@ def _numbalsoda():
     return numbalsoda
 
 
+def _call_cost(cfs, nbs):
+    """The fixed cost of a call: a tiny solve (pendulum, t in (0, 1), rtol 1e-3,
+    default output) by mechpy (C scene), numbalsoda (the same right-hand side as
+    a numba cfunc) and solve_ivp, each dop853 with atol 1e-10."""
+    from scipy.integrate import solve_ivp
+    pr = _pendulum()
+    scene, f = pr["scene"], pr["f"]
+    y0 = np.array([1.0, 0.0])
+    name = "call cost: pendulum, t in (0, 1), rtol=1e-3, dop853"
+    ref = mp.solve(scene, (0, 1), y0, rtol=1e-13, atol=1e-15).y[:, -1]
+    cases = [("mechpy solve (C scene)", "call-mechpy",
+              lambda: mp.solve(scene, (0, 1), y0, rtol=1e-3)),
+             ("scipy solve_ivp DOP853", "call-scipy",
+              lambda: solve_ivp(f, (0, 1), y0, method="DOP853", rtol=1e-3, atol=1e-10))]
+    if nbs is not None:
+        addr, tt = cfs[0].address, np.array([0.0, 1.0])
+        cases.append(("numbalsoda dop853 (numba cfunc)", "call-numbalsoda",
+                      lambda: nbs.dop853(addr, y0, tt, rtol=1e-3, atol=1e-10)))
+    rows = []
+    for impl, path, fn in cases:
+        out = fn()
+        y1 = out[0][-1] if path == "call-numbalsoda" else out.y[:, -1]
+        rows.append(dict(problem=name, impl=impl, path=path, rtol=1e-3,
+                         error=float(np.max(np.abs(y1 - ref))),
+                         time=median_time(fn, repeat=7, budget=1.0)))
+    return rows
+
+
+def targets(rows) -> list[dict]:
+    """The call cost: mechpy's tiny solve against numbalsoda's (goal <= 2x)."""
+    by = {r.get("path"): r for r in rows if r.get("path", "").startswith("call-")}
+    if "call-mechpy" not in by or "call-numbalsoda" not in by:
+        return []
+    v = by["call-mechpy"]["time"] / by["call-numbalsoda"]["time"]
+    return [dict(target="call cost: mechpy / numbalsoda (tiny solve)",
+                 problem=by["call-mechpy"]["problem"], goal="<= 2x", worst=v, median=v, n=1)]
+
+
 def run(quick: bool):
     from scipy.integrate import odeint, solve_ivp
     rtols = [1e-4, 1e-7, 1e-10] if quick else [1e-3, 1e-5, 1e-7, 1e-9, 1e-11, 1e-13]
     problems = [_pendulum(), _vdp(), _arenstorf(), _kepler()]
     cfs = _cfuncs(problems)
     nbs = _numbalsoda() if cfs is not None else None
-    rows = []
+    rows = _call_cost(cfs, nbs)
     for ip, pr in enumerate(problems):
         scene, f, y0, T, ref = pr["scene"], pr["f"], pr["y0"], pr["T"], pr["ref"]
         for rtol in rtols:
