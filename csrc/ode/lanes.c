@@ -60,33 +60,49 @@ typedef struct {
  * Counts nfev per lane; rc[l] = the lane's status, MP_ENONFINITE (recording
  * the component) for a NaN or inf, as mp_ode_ws_rhs does.  A lane that fails
  * is taken out of on. */
-static void lane_eval(lane_group *g, const double *s, const double *y, double *f, int *on,
-                      int *rc)
+/* Contract: each lane's scalar problem at (t[l], lane l of y) into lane l
+ * of f, for the lanes in on; st[l] its status. */
+static void lane_eval_generic(lane_group *g, const double *t, const double *y, double *f,
+                              const int *on, int *st)
 {
-    double tp[W];
-    int st[W];
     size_t n = g->n;
     for (int l = 0; l < W; l++) {
+        if (!on[l]) continue;
+        const mp_ode_problem *p = &g->probs[g->idx[l]];
+        for (size_t c = 0; c < n; c++) g->gy[c] = y[c * W + l];
+        st[l] = p->rhs(t[l], g->gy, g->gf, p->data);
+        for (size_t c = 0; c < n; c++) f[c * W + l] = g->gf[c];
+    }
+}
+
+static inline void lane_eval(lane_group *g, const double *s, const double *y, double *f,
+                             int *on, int *rc)
+{
+    double tp[W], probe[W] = {0.0};
+    int st[W];
+    size_t n = g->n;
+    MP_LANE_LOOP {
         tp[l] = g->dir * s[l];
         st[l] = MP_OK;
     }
-    if (g->ls->rhs) {
-        g->ls->rhs(tp, y, f, g->par, st);
-    } else {
-        for (int l = 0; l < W; l++) {
-            if (!on[l]) continue;
-            const mp_ode_problem *p = &g->probs[g->idx[l]];
-            for (size_t c = 0; c < n; c++) g->gy[c] = y[c * W + l];
-            st[l] = p->rhs(tp[l], g->gy, g->gf, p->data);
-            for (size_t c = 0; c < n; c++) f[c * W + l] = g->gf[c];
-        }
-    }
+    if (g->ls->rhs) g->ls->rhs(tp, y, f, g->par, st);
+    else lane_eval_generic(g, tp, y, f, on, st);
     if (g->dir < 0)
         for (size_t i = 0; i < g->nW; i++) f[i] = -f[i];
+    for (size_t c = 0; c < g->nW; c += W) /* x - x: 0 when finite, NaN otherwise */
+        MP_LANE_LOOP probe[l] += f[c + l] - f[c + l];
+    int fails = 0;
+    MP_LANE_LOOP {
+        g->nfev[l] += on[l];
+        rc[l] = on[l] ? st[l] : rc[l];
+        fails |= st[l];
+    }
+    double psum = 0.0;
+    for (int l = 0; l < W; l++) psum += probe[l];
+    if (fails == 0 && psum == 0.0) return; /* all well */
     for (int l = 0; l < W; l++) {
         if (!on[l]) continue;
-        g->nfev[l]++;
-        if (st[l] == MP_OK)
+        if (st[l] == MP_OK && probe[l] != 0.0)
             for (size_t c = 0; c < n; c++)
                 if (!isfinite(f[c * W + l])) {
                     g->bad_what[l] = MP_ODE_BAD_RHS;
@@ -114,6 +130,18 @@ lane_stage(size_t nW, const double *y, const double *h, const double *a, double 
             }
         MP_LANE_LOOP out[c + l] = y[c + l] + h[l] * sum[l];
     }
+}
+
+/* out[l] = sum_j w[j] K[j][c + l] over the non-zero w[j] (constant rows fold). */
+static inline __attribute__((always_inline)) void
+lane_dot(const double *w, double *const *K, size_t ns, size_t c, double *out)
+{
+    MP_LANE_LOOP out[l] = 0.0;
+#pragma GCC unroll 16
+    for (size_t j = 0; j < ns; j++)
+        if (w[j] != 0.0) {
+            MP_LANE_LOOP out[l] += w[j] * K[j][c + l];
+        }
 }
 
 /* ---- output and the end of a lane -------------------------------------------- */
@@ -354,10 +382,10 @@ static void dopri5_lanes(lane_group *g, int *on, int *rc, double *err, double *r
     lane_eval(g, ts, g->ynew, K[6], on, rc); /* FSAL */
     for (int l = 0; l < W; l++) /* stages 6, 7 both at t + h */
         if (on[l]) rho[l] = lane_rho(g, l, g->h[l], K[6], K[5], g->ynew, yt);
-    for (size_t i = 0; i < nW; i++) {
-        double e = 0.0;
-        for (int s = 0; s < 7; s++) e += dp_e[s] * K[s][i];
-        yt[i] = g->h[i % W] * e;
+    for (size_t c = 0; c < nW; c += W) {
+        double e[W];
+        lane_dot(dp_e, K, 7, c, e);
+        MP_LANE_LOOP yt[c + l] = g->h[l] * e[l];
     }
     for (int l = 0; l < W; l++)
         if (on[l]) err[l] = lane_err_norm(g, l, yt);
@@ -382,19 +410,17 @@ static void dop853_lanes(lane_group *g, int *on, int *rc, double *err, double *r
     D8_LANE_STAGE(11);
 #undef D8_LANE_STAGE
     lane_stage(nW, g->y, g->h, mp_dop853_b, K, 12, g->ynew);
-    double e5s[W] = {0.0}, e3s[W] = {0.0};
+    double e5s[W] = {0.0}, e3s[W] = {0.0}, rtol = g->o->rtol;
     for (size_t c = 0; c < n; c++) {
-        for (int l = 0; l < W; l++) {
-            size_t i = c * W + (size_t)l;
-            double e5 = 0.0, e3 = 0.0;
-#pragma GCC unroll 12
-            for (int s = 0; s < 12; s++) {
-                if (mp_dop853_e5[s] != 0.0) e5 += mp_dop853_e5[s] * K[s][i];
-                if (mp_dop853_e3[s] != 0.0) e3 += mp_dop853_e3[s] * K[s][i];
-            }
-            double sk = g->o->atol[c] + g->o->rtol * fmax(fabs(g->y[i]), fabs(g->ynew[i]));
-            e5s[l] += (e5 / sk) * (e5 / sk);
-            e3s[l] += (e3 / sk) * (e3 / sk);
+        double e5[W], e3[W], at = g->o->atol[c];
+        const double *y = g->y + c * W, *y1 = g->ynew + c * W;
+        lane_dot(mp_dop853_e5, K, 12, c * W, e5);
+        lane_dot(mp_dop853_e3, K, 12, c * W, e3);
+        MP_LANE_LOOP {
+            double sk = at + rtol * fmax(fabs(y[l]), fabs(y1[l]));
+            double r = 1.0 / sk, q5 = e5[l] * r, q3 = e3[l] * r;
+            e5s[l] += q5 * q5;
+            e3s[l] += q3 * q3;
         }
     }
     for (int l = 0; l < W; l++) {
@@ -425,14 +451,18 @@ static void finish_lanes(lane_group *g, int *on, const int *dense, int *rc, doub
         K[0] = g->f;
         for (int s = 1; s < 6; s++) K[s] = g->kbuf + (size_t)(s - 1) * nW;
         K[6] = g->fnew;
-        for (size_t i = 0; i < nW; i++) {
-            double h = g->h[i % W], dy = g->ynew[i] - g->y[i], c3 = h * K[0][i] - dy, d = 0.0;
-            for (int s = 0; s < 7; s++) d += dp_d[s] * K[s][i];
-            c[i] = g->y[i];
-            c[nW + i] = dy;
-            c[2 * nW + i] = c3;
-            c[3 * nW + i] = dy - h * K[6][i] - c3;
-            c[4 * nW + i] = h * d;
+        for (size_t b = 0; b < nW; b += W) {
+            double d[W];
+            lane_dot(dp_d, K, 7, b, d);
+            MP_LANE_LOOP {
+                size_t i = b + (size_t)l;
+                double h = g->h[l], dy = g->ynew[i] - g->y[i], c3 = h * K[0][i] - dy;
+                c[i] = g->y[i];
+                c[nW + i] = dy;
+                c[2 * nW + i] = c3;
+                c[3 * nW + i] = dy - h * K[6][i] - c3;
+                c[4 * nW + i] = h * d[l];
+            }
         }
         return;
     }
@@ -466,16 +496,20 @@ static void finish_lanes(lane_group *g, int *on, const int *dense, int *rc, doub
         for (int l = 0; l < W; l++) ts[l] = g->t[l] + mp_dop853_c[s] * g->h[l];
         lane_eval(g, ts, yt, K[s], dn, rc);
     }
-    for (size_t i = 0; i < nW; i++) {
-        double h = g->h[i % W], dy = g->ynew[i] - g->y[i];
-        c[i] = g->y[i];
-        c[nW + i] = dy;
-        c[2 * nW + i] = h * K[0][i] - dy;
-        c[3 * nW + i] = 2.0 * dy - h * (K[12][i] + K[0][i]);
+    for (size_t b = 0; b < nW; b += W) {
+        MP_LANE_LOOP {
+            size_t i = b + (size_t)l;
+            double h = g->h[l], dy = g->ynew[i] - g->y[i];
+            c[i] = g->y[i];
+            c[nW + i] = dy;
+            c[2 * nW + i] = h * K[0][i] - dy;
+            c[3 * nW + i] = 2.0 * dy - h * (K[12][i] + K[0][i]);
+        }
+#pragma GCC unroll 4
         for (int r = 0; r < 4; r++) {
-            double d = 0.0;
-            for (int s = 0; s < 16; s++) d += mp_dop853_d[r][s] * K[s][i];
-            c[(size_t)(4 + r) * nW + i] = h * d;
+            double d[W];
+            lane_dot(mp_dop853_d[r], K, 16, b, d);
+            MP_LANE_LOOP c[(size_t)(4 + r) * nW + b + (size_t)l] = g->h[l] * d[l];
         }
     }
     for (int l = 0; l < W; l++) /* a dense stage that failed ends its lane */
@@ -484,21 +518,22 @@ static void finish_lanes(lane_group *g, int *on, const int *dense, int *rc, doub
 
 /* ---- the controller and one lock-step attempt ------------------------------------ */
 
-/* Contract: driver.c's control() for lane l: 1 when the step (error err) is
- * accepted with *hnew the next step, 0 when rejected with h[l] the retry. */
-static int lane_control(lane_group *g, int l, double err, double *hnew)
+/* Contract: driver.c's control() for lane l: 1 when the step (error err,
+ * fac11 = err^expo, fold = facold^beta) is accepted with *hnew the next step,
+ * 0 when rejected with h[l] the retry. */
+static int lane_control(lane_group *g, int l, double err, double fac11, double fold,
+                        double *hnew)
 {
     const mp_ode_method *m = g->m;
     double h = g->h[l];
     if (!(err <= 1.0)) {
         g->nonfinite[l] = !isfinite(err);
-        double fac = isfinite(err) ? fmin(1.0 / m->fac_min, pow(err, m->expo) / m->safety) : 10.0;
+        double fac = isfinite(err) ? fmin(1.0 / m->fac_min, fac11 / m->safety) : 10.0;
         g->h[l] = h / fac;
         g->rejected[l] = 1;
         return 0;
     }
-    double fac11 = pow(err, m->expo);
-    double fac = m->beta > 0.0 ? fac11 / pow(g->facold[l], m->beta) : fac11;
+    double fac = m->beta > 0.0 ? fac11 / fold : fac11;
     fac = fmax(1.0 / m->fac_max, fmin(1.0 / m->fac_min, fac / m->safety));
     *hnew = h / fac;
     g->facold[l] = fmax(err, 1e-4);
@@ -545,6 +580,15 @@ static void lane_attempt(lane_group *g)
     if (g->kind == LANE_DOPRI5) dopri5_lanes(g, on, rc, err, rho);
     else if (g->kind == LANE_DOP853) dop853_lanes(g, on, rc, err, rho);
     else rk4_lanes(g, on, rc, err, rho);
+    double fac11[W], fold[W], expo = g->m->expo, beta = g->m->beta; /* the controller's powers */
+    if (g->adaptive) {
+        MP_LANE_LOOP fac11[l] = mp_lane_pow(err[l], expo);
+        if (beta > 0.0) {
+            MP_LANE_LOOP fold[l] = mp_lane_pow(g->facold[l], beta);
+        } else {
+            MP_LANE_LOOP fold[l] = 1.0;
+        }
+    }
     for (int l = 0; l < W; l++) {
         if (!att[l]) continue;
         if (rc[l] == MP_ENONFINITE && g->adaptive) { /* a trial stage overflowed */
@@ -556,7 +600,7 @@ static void lane_attempt(lane_group *g)
             lane_end(g, l, rc[l]);
             continue;
         }
-        if (g->adaptive && !lane_control(g, l, err[l], &hnew[l])) continue;
+        if (g->adaptive && !lane_control(g, l, err[l], fac11[l], fold[l], &hnew[l])) continue;
         acc[l] = 1;
         tnew[l] = last[l] ? g->sf : g->t[l] + g->h[l];
         dense[l] = g->ie[l] < g->nt && g->sev[g->ie[l]] < tnew[l];
