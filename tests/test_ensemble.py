@@ -53,7 +53,7 @@ def test_scene_params_per_trajectory():
     e = mp.solve_many(P, (0, 5), y0s, params={"damping": damping}, rtol=1e-10,
                       lanes=False)   # bit for bit solve; in lanes: tests/test_lanes.py
     full = np.column_stack([np.full(k, 9.81), np.ones(k), damping, np.zeros(k), np.zeros(k)])
-    f = mp.solve_many(P, (0, 5), y0s, params=full, rtol=1e-10)
+    f = mp.solve_many(P, (0, 5), y0s, params=full, rtol=1e-10, lanes=False)
     assert np.array_equal(e.y, f.y)
     for i in range(k):
         s = mp.solve(P.replace(damping=damping[i]), (0, 5), y0s[i], rtol=1e-10)
