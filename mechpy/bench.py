@@ -57,7 +57,9 @@ def targets(rows) -> list[dict]:
       method and tolerance;
     * C callback against numbalsoda with the same numba ``cfunc``, at equal
       error as for the C scene;
-    * ``solve_many``: against the Python loop, and 2 threads against 1;
+    * ``solve_many``: in lanes against the Python loop, against the scalar
+      path per core (1 thread each), against numbalsoda in a numba ``prange``
+      loop, and 2 threads against 1;
     * fixed-step rk4, verlet and yoshida4 against plain C loops doing the same
       arithmetic (the time ratio, target <= 1.3);
     * the benches' own targets (the call cost against numbalsoda, ...).
@@ -98,15 +100,27 @@ def targets(rows) -> list[dict]:
             out.append(dict(target="Python rhs vs solve_ivp, same method and rtol", problem=p,
                             goal=">= 5x", worst=got[0], median=got[1], n=got[2]))
     by = {r.get("path"): r for r in rows if r.get("path")}
-    if "ensemble-1" in by and "ensemble-loop" in by:
-        best = min(by["ensemble-1"]["time"], by.get("ensemble-2", by["ensemble-1"])["time"])
-        v = by["ensemble-loop"]["time"] / best
-        out.append(dict(target="solve_many vs a Python loop of solve_ivp",
-                        problem=by["ensemble-1"]["problem"], goal=">= 1000x", worst=v,
-                        median=v, n=1))
-    if "ensemble-1" in by and "ensemble-2" in by:
-        v = by["ensemble-1"]["time"] / by["ensemble-2"]["time"]
-        out.append(dict(target="solve_many, 2 threads vs 1", problem=by["ensemble-1"]["problem"],
+    def best(tag):  # the faster of 1 and 2 threads
+        got = [by[f"ensemble-{tag}-{th}"]["time"] for th in (1, 2)
+               if f"ensemble-{tag}-{th}" in by]
+        return min(got) if got else None
+    lanes, scalar, nbs = best("lanes"), best("scalar"), best("numbalsoda")
+    problem = by.get("ensemble-lanes-1", {}).get("problem")
+    if lanes and "ensemble-loop" in by:
+        v = by["ensemble-loop"]["time"] / lanes
+        out.append(dict(target="solve_many vs a Python loop of solve_ivp", problem=problem,
+                        goal=">= 1000x", worst=v, median=v, n=1))
+    if "ensemble-lanes-1" in by and "ensemble-scalar-1" in by:
+        v = by["ensemble-scalar-1"]["time"] / by["ensemble-lanes-1"]["time"]
+        out.append(dict(target="solve_many in lanes vs one solve per trajectory, per core",
+                        problem=problem, goal=">= 2x", worst=v, median=v, n=1))
+    if lanes and nbs:
+        v = nbs / lanes
+        out.append(dict(target="solve_many vs numbalsoda in a numba prange loop",
+                        problem=problem, goal=">= 1x", worst=v, median=v, n=1))
+    if "ensemble-lanes-1" in by and "ensemble-lanes-2" in by:
+        v = by["ensemble-lanes-1"]["time"] / by["ensemble-lanes-2"]["time"]
+        out.append(dict(target="solve_many, 2 threads vs 1", problem=problem,
                         goal=">= 1.7x", worst=v, median=v, n=1))
     for meth in ("rk4", "verlet", "yoshida4"):  # each against its own plain loop
         if meth in by and f"plain-c-{meth}" in by:

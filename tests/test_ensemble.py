@@ -19,7 +19,8 @@ def _starts(k):
 def test_each_trajectory_equals_solve():
     y0s = _starts(50)
     te = np.linspace(0, 5, 21)
-    e = mp.solve_many(P, (0, 5), y0s, t_eval=te, rtol=1e-9)
+    # the scalar path (lanes=False) is bit for bit solve; lanes: tests/test_lanes.py
+    e = mp.solve_many(P, (0, 5), y0s, t_eval=te, rtol=1e-9, lanes=False)
     assert e.y.shape == (50, 2, 21) and e.t.shape == (21,)
     assert e.success.all() and (e.status == 0).all() and e.nfev.shape == (50,)
     for i in (0, 17, 49):
@@ -49,9 +50,10 @@ def test_scene_params_per_trajectory():
     k = 6
     damping = np.linspace(0, 1, k)
     y0s = np.tile([1.0, 0.0], (k, 1))
-    e = mp.solve_many(P, (0, 5), y0s, params={"damping": damping}, rtol=1e-10)
+    e = mp.solve_many(P, (0, 5), y0s, params={"damping": damping}, rtol=1e-10,
+                      lanes=False)   # bit for bit solve; in lanes: tests/test_lanes.py
     full = np.column_stack([np.full(k, 9.81), np.ones(k), damping, np.zeros(k), np.zeros(k)])
-    f = mp.solve_many(P, (0, 5), y0s, params=full, rtol=1e-10)
+    f = mp.solve_many(P, (0, 5), y0s, params=full, rtol=1e-10, lanes=False)
     assert np.array_equal(e.y, f.y)
     for i in range(k):
         s = mp.solve(P.replace(damping=damping[i]), (0, 5), y0s[i], rtol=1e-10)

@@ -62,7 +62,26 @@ static double foucault_energy(const double *p, const double *y)
     return 0.5 * (y[2] * y[2] + y[3] * y[3]) + 0.5 * (p[FG] / p[FLEN]) * (y[0] * y[0] + y[1] * y[1]);
 }
 
+/* Lanes (ode/lanes.h): foucault_rhs for MP_LANES states at once (SoA). */
+#define W MP_LANES
+MP_LANE_FN static void foucault_lanes_rhs(const double *t, const double *y, double *f,
+                                          const double *p, int *st)
+{
+    (void)t;
+    MP_LANE_LOOP {
+        double w2 = p[FG * W + l] / p[FLEN * W + l];
+        double oz = p[FOM * W + l] * mp_lane_sin(p[FLAT * W + l] * (3.14159265358979323846 / 180.0));
+        f[l] = y[2 * W + l];
+        f[W + l] = y[3 * W + l];
+        f[2 * W + l] = -w2 * y[l] + 2.0 * oz * y[3 * W + l];
+        f[3 * W + l] = -w2 * y[W + l] - 2.0 * oz * y[2 * W + l];
+        st[l] = MP_OK;
+    }
+}
+MP_MODEL_ONE_LANE_RHS(foucault_lanes, foucault_lanes_rhs)
+
 const mp_model mp_model_foucault = {
     .name = "Foucault", .dim = 4, .nparams = FN, .params = foucault_params,
     .bind = foucault_bind, .energy = foucault_energy,
+    .lanes = foucault_lanes,
 };

@@ -18,6 +18,7 @@
 #include <stddef.h>
 
 #include "mp_status.h"
+#include "ode/lanes.h"
 #include "ode/ode.h"
 #include "variational.h"
 
@@ -68,6 +69,11 @@ typedef struct mp_model {
     /* The Lagrangian with y = (q, qdot), q of dim / 2 coordinates, as the
      * variational tools take it (ctx = params); NULL: none. */
     mp_var_eval_fn lagrangian;
+    /* The lane right-hand side (ode/lanes.h) for an ensemble whose k
+     * parameter rows lie `stride` doubles apart at params: the variant that
+     * serves them all (as bind picks for one row).  NULL (the field or its
+     * result): the lanes run bind's scalar rhs through the generic wrapper. */
+    mp_lane_rhs (*lanes)(const double *params, size_t k, size_t stride);
 } mp_model;
 
 extern const mp_model *const mp_models[];
@@ -88,6 +94,23 @@ int mp_model_prepare(const mp_model *m, const double *params, size_t np, size_t 
  * when its row says it is (or that it never is); for anything else (scene
  * NULL or not a row), the scenes whose rows say they can be. */
 void mp_model_separable_hint(const char *scene, char *buf, size_t len);
+
+/* Whether parameter j is non-zero in any of k rows `stride` apart (a lanes
+ * function's choice of variant). */
+static inline int mp_model_any_nonzero(const double *p, size_t k, size_t stride, size_t j)
+{
+    for (size_t i = 0; i < k; i++)
+        if (p[i * stride + j] != 0.0) return 1;
+    return 0;
+}
+
+/* The lanes field of a scene with one lane rhs for every parameter row. */
+#define MP_MODEL_ONE_LANE_RHS(name, fn)                                    \
+    static mp_lane_rhs name(const double *p, size_t k, size_t stride)     \
+    {                                                                      \
+        (void)p, (void)k, (void)stride;                                    \
+        return fn;                                                         \
+    }
 
 /* What a row's bind writes, in one call. */
 static inline void mp_model_set(mp_ode_problem *prob, size_t n, mp_ode_rhs rhs, mp_ode_jac jac,

@@ -47,9 +47,29 @@ static double kepler_energy(const double *p, const double *y)
     return 0.5 * (y[2] * y[2] + y[3] * y[3]) - p[0] / hypot(y[0], y[1]);
 }
 
+/* Lanes (ode/lanes.h): MP_LANES states at once, SoA, each lane's mu. */
+#define W MP_LANES
+MP_LANE_FN static void kepler_lanes_rhs(const double *t, const double *y, double *f,
+                                        const double *p, int *st)
+{
+    (void)t;
+    MP_LANE_LOOP {
+        double r2 = y[l] * y[l] + y[W + l] * y[W + l];
+        double k = -p[l] / (r2 * sqrt(r2));
+        f[l] = y[2 * W + l];
+        f[W + l] = y[3 * W + l];
+        f[2 * W + l] = k * y[l];
+        f[3 * W + l] = k * y[W + l];
+        st[l] = MP_OK;
+    }
+}
+
+MP_MODEL_ONE_LANE_RHS(kepler_lanes, kepler_lanes_rhs)
+
 const mp_model mp_model_kepler = {
     .name = "Kepler", .dim = 4, .nparams = 1, .params = kepler_params,
     .separable = MP_SEPARABLE_ALWAYS, .bind = kepler_bind, .energy = kepler_energy,
+    .lanes = kepler_lanes,
 };
 
 /* ---- restricted three-body problem, rotating frame -------------------------
@@ -105,7 +125,25 @@ static double r3b_energy(const double *p, const double *y)
            mu / r2;
 }
 
+MP_LANE_FN static void r3b_lanes_rhs(const double *t, const double *y, double *f,
+                                     const double *p, int *st)
+{
+    (void)t;
+    MP_LANE_LOOP {
+        double mu = p[l], mp1 = 1.0 - mu, x = y[l], yy = y[W + l];
+        double u = x + mu, w = x - mp1, y2 = yy * yy;
+        double r1 = u * u + y2, r2 = w * w + y2;
+        double d1 = r1 * sqrt(r1), d2 = r2 * sqrt(r2);
+        f[l] = y[2 * W + l];
+        f[W + l] = y[3 * W + l];
+        f[2 * W + l] = x + 2.0 * y[3 * W + l] - mp1 * u / d1 - mu * w / d2;
+        f[3 * W + l] = yy - 2.0 * y[2 * W + l] - mp1 * yy / d1 - mu * yy / d2;
+        st[l] = MP_OK;
+    }
+}
+MP_MODEL_ONE_LANE_RHS(r3b_lanes, r3b_lanes_rhs)
+
 const mp_model mp_model_r3b = {
     .name = "RestrictedThreeBody", .dim = 4, .nparams = 1, .params = r3b_params,
-    .bind = r3b_bind, .energy = r3b_energy,
+    .bind = r3b_bind, .energy = r3b_energy, .lanes = r3b_lanes,
 };

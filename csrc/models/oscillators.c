@@ -81,10 +81,53 @@ static int pendulum_lagrangian(size_t m, const double *x, const double *y, const
     return MP_OK;
 }
 
+/* Lanes (ode/lanes.h): the three right-hand sides above, MP_LANES states at
+ * once, with each lane's parameters (y, f, p in SoA layout). */
+#define W MP_LANES
+MP_LANE_FN static void pendulum_lanes_free(const double *t, const double *y, double *f,
+                                           const double *p, int *st)
+{
+    (void)t;
+    MP_LANE_LOOP {
+        f[l] = y[W + l];
+        f[W + l] = -(p[PG * W + l] / p[PL * W + l]) * mp_lane_sin(y[l]);
+        st[l] = MP_OK;
+    }
+}
+
+MP_LANE_FN static void pendulum_lanes_damped(const double *t, const double *y, double *f,
+                                             const double *p, int *st)
+{
+    (void)t;
+    MP_LANE_LOOP {
+        f[l] = y[W + l];
+        f[W + l] = -(p[PG * W + l] / p[PL * W + l]) * mp_lane_sin(y[l]) - p[PB * W + l] * y[W + l];
+        st[l] = MP_OK;
+    }
+}
+
+MP_LANE_FN static void pendulum_lanes_driven(const double *t, const double *y, double *f,
+                                             const double *p, int *st)
+{
+    MP_LANE_LOOP {
+        f[l] = y[W + l];
+        f[W + l] = -(p[PG * W + l] / p[PL * W + l]) * mp_lane_sin(y[l]) - p[PB * W + l] * y[W + l] +
+                   p[PA * W + l] * mp_lane_cos(p[PW * W + l] * t[l]);
+        st[l] = MP_OK;
+    }
+}
+
+static mp_lane_rhs pendulum_lanes(const double *p, size_t k, size_t stride)
+{
+    return mp_model_any_nonzero(p, k, stride, PA)   ? pendulum_lanes_driven
+           : mp_model_any_nonzero(p, k, stride, PB) ? pendulum_lanes_damped
+                                           : pendulum_lanes_free;
+}
+
 const mp_model mp_model_pendulum = {
     .name = "Pendulum", .dim = 2, .nparams = 5, .params = pendulum_params,
     .separable = "damping = 0", .bind = pendulum_bind, .energy = pendulum_energy,
-    .lagrangian = pendulum_lagrangian,
+    .lagrangian = pendulum_lagrangian, .lanes = pendulum_lanes,
 };
 
 /* ---- Van der Pol: x'' - mu (1 - x^2) x' + x = 0 ------------------------------ */
@@ -122,9 +165,22 @@ static double vdp_energy(const double *p, const double *y)
     return 0.5 * (y[0] * y[0] + y[1] * y[1]);
 }
 
+MP_LANE_FN static void vdp_lanes_rhs(const double *t, const double *y, double *f,
+                                     const double *p, int *st)
+{
+    (void)t;
+    MP_LANE_LOOP {
+        f[l] = y[W + l];
+        f[W + l] = p[l] * (1.0 - y[l] * y[l]) * y[W + l] - y[l];
+        st[l] = MP_OK;
+    }
+}
+
+MP_MODEL_ONE_LANE_RHS(vdp_lanes, vdp_lanes_rhs)
+
 const mp_model mp_model_vanderpol = {
     .name = "VanDerPol", .dim = 2, .nparams = 1, .params = vdp_params, .bind = vdp_bind,
-    .energy = vdp_energy,
+    .energy = vdp_energy, .lanes = vdp_lanes,
 };
 
 /* ---- Duffing: x'' + delta x' + alpha x + beta x^3 = gamma cos(omega t) ------- */
@@ -191,8 +247,37 @@ static int duffing_lagrangian(size_t m, const double *x, const double *y, const 
     return MP_OK;
 }
 
+MP_LANE_FN static void duffing_lanes_free(const double *t, const double *y, double *f,
+                                          const double *p, int *st)
+{
+    (void)t;
+    MP_LANE_LOOP {
+        double x = y[l];
+        f[l] = y[W + l];
+        f[W + l] = -p[DA * W + l] * x - p[DB * W + l] * x * x * x - p[DD * W + l] * y[W + l];
+        st[l] = MP_OK;
+    }
+}
+
+MP_LANE_FN static void duffing_lanes_driven(const double *t, const double *y, double *f,
+                                            const double *p, int *st)
+{
+    MP_LANE_LOOP {
+        double x = y[l];
+        f[l] = y[W + l];
+        f[W + l] = -p[DA * W + l] * x - p[DB * W + l] * x * x * x - p[DD * W + l] * y[W + l] +
+                   p[DG * W + l] * mp_lane_cos(p[DW * W + l] * t[l]);
+        st[l] = MP_OK;
+    }
+}
+
+static mp_lane_rhs duffing_lanes(const double *p, size_t k, size_t stride)
+{
+    return mp_model_any_nonzero(p, k, stride, DG) ? duffing_lanes_driven : duffing_lanes_free;
+}
+
 const mp_model mp_model_duffing = {
     .name = "Duffing", .dim = 2, .nparams = 5, .params = duffing_params,
     .separable = "delta = 0", .bind = duffing_bind, .energy = duffing_energy,
-    .lagrangian = duffing_lagrangian,
+    .lagrangian = duffing_lagrangian, .lanes = duffing_lanes,
 };

@@ -305,9 +305,33 @@ static int top_lagrangian(size_t m, const double *x, const double *y, const doub
     return MP_OK;
 }
 
+/* Lanes (ode/lanes.h): top_rhs for MP_LANES states at once (SoA), each
+ * lane's parameters; a lane at theta = 0 or pi is singular, as top_rhs says. */
+#define W MP_LANES
+MP_LANE_FN static void top_lanes_rhs(const double *t, const double *y, double *f,
+                                     const double *p, int *st)
+{
+    (void)t;
+    MP_LANE_LOOP {
+        double s = mp_lane_sin(y[W + l]), c = mp_lane_cos(y[W + l]);
+        double r = p[W + l] / p[l], A = p[2 * W + l] * p[3 * W + l] * p[4 * W + l] / p[l];
+        double pd = y[3 * W + l], td = y[4 * W + l], w3 = y[5 * W + l] + pd * c;
+        double f3 = td * (r * w3 - 2.0 * pd * c) / s;
+        f[l] = pd;
+        f[W + l] = td;
+        f[2 * W + l] = y[5 * W + l];
+        f[3 * W + l] = f3;
+        f[4 * W + l] = pd * pd * s * c - r * w3 * pd * s + A * s;
+        f[5 * W + l] = -f3 * c + pd * td * s;
+        st[l] = s == 0.0 ? MP_ESINGULAR : MP_OK;
+    }
+}
+MP_MODEL_ONE_LANE_RHS(top_lanes, top_lanes_rhs)
+
 const mp_model mp_model_heavy_top = {
     .name = "HeavyTop", .dim = 6, .nparams = 5, .params = top_params, .bind = top_bind,
     .energy = top_energy, .lagrangian = top_lagrangian,
+    .lanes = top_lanes,
 };
 
 /* ---- the exact torque-free motion ------------------------------------------

@@ -1,7 +1,8 @@
 /* Ensembles: many independent solves of one method, spread over threads.
- * Each trajectory is an ordinary mp_ode_solve (the one driver loop); only the
- * t_eval samples are kept.  Nothing is shared between threads but the
- * read-only inputs, a work counter and a stop flag. */
+ * Each trajectory is an ordinary mp_ode_solve (the one driver loop), or, in
+ * lanes, a lane of a thread's lane group (lanes.c); only the t_eval samples
+ * are kept.  Nothing is shared between threads but the read-only inputs, a
+ * work counter and a stop flag. */
 #define _POSIX_C_SOURCE 199309L /* clock_gettime */
 #include "ode/ensemble.h"
 
@@ -20,6 +21,7 @@
 typedef struct {
     const mp_ode_method *m;
     const mp_ode_problem *probs;
+    const mp_lane_system *lanes; /* NULL: the scalar path */
     size_t k, n, nt;
     double t0, tf;
     const double *y0s;
@@ -65,10 +67,55 @@ static int main_interrupt(void *ctx)
     return MP_OK;
 }
 
+/* ---- the lane feed: ens_run's loop for a lane group ---- */
+
+/* Contract: the next trajectory index, or k when stopped or none is left. */
+static size_t lane_take(void *ctx)
+{
+    ens_ctx *e = ((ens_arg *)ctx)->e;
+    if (atomic_load(&e->stop)) return e->k;
+    size_t i = atomic_fetch_add(&e->next, 1);
+    return i < e->k ? i : e->k;
+}
+
+/* Contract: trajectory i is written: count it, report progress and check for
+ * interrupts on the main thread; non-zero stops the group. */
+static int lane_done(void *ctx, size_t i)
+{
+    ens_arg *a = ctx;
+    ens_ctx *e = a->e;
+    (void)i;
+    size_t d = atomic_fetch_add(&e->done, 1) + 1;
+    if (!a->is_main) return atomic_load(&e->stop);
+    if (e->progress) e->progress(d, e->k, e->progress_ctx);
+    return main_interrupt(e) != MP_OK;
+}
+
+static int lane_interrupt(void *ctx)
+{
+    ens_arg *a = ctx;
+    return a->is_main ? main_interrupt(a->e) : worker_interrupt(a->e);
+}
+
+/* Contract: run ens_run's share of the ensemble in one lane group; a stop
+ * (interrupt, memory) is recorded as the scalar path records it. */
+static void ens_run_lanes(ens_arg *a)
+{
+    ens_ctx *e = a->e;
+    mp_lane_feed feed = {lane_take, lane_done, lane_interrupt, a};
+    int rc = mp_ode_lanes_run(e->m, e->probs, e->lanes, e->k, e->t0, e->tf, e->y0s, e->o,
+                              e->yout, e->out, &feed);
+    if (rc != MP_OK && !atomic_exchange(&e->stop, 1)) e->fatal = rc;
+}
+
 static void *ens_run(void *argp)
 {
     ens_arg *a = argp;
     ens_ctx *e = a->e;
+    if (e->lanes) {
+        ens_run_lanes(a);
+        return NULL;
+    }
     mp_ode_options o = *e->o;
     o.interrupt = a->is_main ? main_interrupt : worker_interrupt;
     o.interrupt_ctx = e;
@@ -95,16 +142,48 @@ static void *ens_run(void *argp)
     return NULL;
 }
 
-int mp_ode_solve_many(const mp_ode_method *m, const mp_ode_problem *probs, size_t k, double t0,
-                      double tf, const double *y0s, const mp_ode_options *o, int threads,
-                      double *yout, mp_ode_outcome *out,
-                      void (*progress)(size_t, size_t, void *), void *progress_ctx)
+/* Contract: see lanes.h: dopri5, dop853 or rk4, t_eval given, no events or
+ * dense output, and the checks solve_forward makes at its start pass (else
+ * the scalar path reports them). */
+int mp_ode_lanes_supported(const mp_ode_method *m, const mp_ode_options *o, double t0, double tf)
+{
+    int method = strcmp(m->name, "dopri5") == 0 || strcmp(m->name, "dop853") == 0 ||
+                 strcmp(m->name, "rk4") == 0;
+    if (!method || o->n_eval == 0 || o->dense || o->n_events) return 0;
+    double span = fabs(tf - t0), tmax = fmax(fabs(t0), fabs(tf));
+    if (!(span > 0) || !isfinite(t0) || !isfinite(tf) || !(o->rtol > 0) || !(o->max_steps > 0) ||
+        !(o->max_step > 0))
+        return 0;
+    if (!m->adaptive && !(o->h > 0 && tmax + o->h > tmax)) return 0;
+    return 1;
+}
+
+/* Contract: the lane driver built for this processor: AVX2+FMA when it has
+ * them, else the portable build. */
+int mp_ode_lanes_run(const mp_ode_method *m, const mp_ode_problem *probs,
+                     const mp_lane_system *ls, size_t k, double t0, double tf, const double *y0s,
+                     const mp_ode_options *o, double *yout, mp_ode_outcome *out,
+                     const mp_lane_feed *feed)
+{
+#if defined(MP_LANES_HAVE_AVX2)
+    if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma"))
+        return mp_ode_lanes_run_avx2(m, probs, ls, k, t0, tf, y0s, o, yout, out, feed);
+#endif
+    return mp_ode_lanes_run_base(m, probs, ls, k, t0, tf, y0s, o, yout, out, feed);
+}
+
+int mp_ode_solve_many(const mp_ode_method *m, const mp_ode_problem *probs,
+                      const mp_lane_system *lanes, size_t k, double t0, double tf,
+                      const double *y0s, const mp_ode_options *o, int threads, double *yout,
+                      mp_ode_outcome *out, void (*progress)(size_t, size_t, void *),
+                      void *progress_ctx)
 {
     if (k == 0) return MP_OK;
     ens_ctx e = {0};
     memset(&e, 0, sizeof e);
     e.m = m;
     e.probs = probs;
+    e.lanes = lanes;
     e.k = k;
     e.n = probs[0].n;
     e.nt = o->n_eval;

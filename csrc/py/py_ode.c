@@ -752,22 +752,45 @@ static void many_progress(size_t done, size_t total, void *ctx)
     PyGILState_Release(g);
 }
 
+/* Contract: the lane system of an ensemble (lanes.h) of a scene or compiled
+ * system: the scene row's lane rhs for these parameter rows (NULL: the
+ * generic wrapper of each trajectory's scalar problem) and the rows. */
+static void many_lane_system(const py_system *sys, const char *kind, PyObject *spec,
+                             PyArrayObject *par, size_t k, mp_lane_system *ls)
+{
+    memset(ls, 0, sizeof *ls);
+    if (par) {
+        ls->params = PyArray_DATA(par);
+        ls->np = ls->pstride = (size_t)PyArray_DIM(par, 1);
+    } else if (sys->params) {
+        ls->params = PyArray_DATA(sys->params);
+        ls->np = (size_t)PyArray_SIZE(sys->params);
+        k = 1;
+    }
+    if (strcmp(kind, "scene") != 0 || sys->torque.fn) return;
+    const mp_model *mod = mp_model_find(PyUnicode_AsUTF8(PyTuple_GET_ITEM(spec, 1)));
+    if (mod && mod->lanes && ls->params) ls->rhs = mod->lanes(ls->params, k, ls->pstride);
+}
+
 /* Contract: ode_solve_many(method, system, y0s, options, *, params, args,
- * threads, progress, watch) -> {"y": (k, n, m), "code": (k,) C statuses,
- * "message": k str, "nfev": (k,)}.  options must hold a t_eval.  An ensemble
- * stopped by a callback's exception, Ctrl-C or memory raises. */
+ * threads, progress, watch, lanes) -> {"y": (k, n, m), "code": (k,) C
+ * statuses, "message": k str, "nfev": (k,), "lanes": whether the ensemble ran
+ * in SIMD lanes}.  lanes: -1 when possible (a scene or compiled system, an
+ * explicit method lanes.c has), 0 never, 1 always (ValueError when not
+ * possible).  options must hold a t_eval.  An ensemble stopped by a
+ * callback's exception, Ctrl-C or memory raises. */
 static PyObject *py_ode_solve_many(PyObject *self, PyObject *args, PyObject *kw)
 {
     (void)self;
     static char *kwlist[] = {"method", "system", "y0s", "options", "params", "args", "threads",
-                             "progress", "watch", NULL};
+                             "progress", "watch", "lanes", NULL};
     const char *mname;
     PyObject *spec, *y0o, *opts, *paro = Py_None, *eargs = NULL, *watch = Py_None;
-    int threads = 1;
+    int threads = 1, want_lanes = -1;
     PyObject *progress = Py_False; /* False, True (a stderr line) or a callable report(done, total) */
-    if (!PyArg_ParseTupleAndKeywords(args, kw, "sOOO|$OO!iOO", kwlist, &mname, &spec, &y0o,
+    if (!PyArg_ParseTupleAndKeywords(args, kw, "sOOO|$OO!iOOi", kwlist, &mname, &spec, &y0o,
                                      &opts, &paro, &PyTuple_Type, &eargs, &threads, &progress,
-                                     &watch))
+                                     &watch, &want_lanes))
         return NULL;
     if (watch != Py_None && !PyList_Check(watch)) {
         PyErr_SetString(PyExc_TypeError, "watch must be a list");
@@ -912,18 +935,30 @@ static PyObject *py_ode_solve_many(PyObject *self, PyObject *args, PyObject *kw)
         for (size_t i = 0; i < k; i++) watch_problem(&probs[i], &watched[i], watch);
         holds_python = 1;
     }
+    /* SIMD lanes: a system that runs in C without the GIL and a method lanes.c has */
+    int lanes_ok = !holds_python && (strcmp(spec_kind, "scene") == 0 ||
+                                     strcmp(spec_kind, "compiled") == 0) &&
+                   mp_ode_lanes_supported(m, &o, oa.t0, oa.tf);
+    if (want_lanes == 1 && !lanes_ok) {
+        PyErr_Format(PyExc_ValueError, "lanes=True needs a scene or compiled system and method "
+                     "dopri5, dop853 or rk4 (got %s with a %s system)", m->name, spec_kind);
+        goto out;
+    }
+    mp_lane_system lsys;
+    many_lane_system(&sys, spec_kind, spec, par, k, &lsys);
+    const mp_lane_system *lanes = lanes_ok && want_lanes != 0 ? &lsys : NULL;
     npy_intp shape[3] = {(npy_intp)k, (npy_intp)n, (npy_intp)nt};
     if (!(yout = mp_py_empty(3, shape))) goto out;
     many_progress_ctx pctx = {0, PyCallable_Check(progress) ? progress : NULL};
     int want_progress = pctx.report || PyObject_IsTrue(progress) == 1;
     int rc;
     if (holds_python) {
-        rc = mp_ode_solve_many(m, probs, k, oa.t0, oa.tf, PyArray_DATA(y0s), &o, 1,
+        rc = mp_ode_solve_many(m, probs, NULL, k, oa.t0, oa.tf, PyArray_DATA(y0s), &o, 1,
                                PyArray_DATA(yout), outc, want_progress ? many_progress : NULL,
                                &pctx);
     } else {
         Py_BEGIN_ALLOW_THREADS
-        rc = mp_ode_solve_many(m, probs, k, oa.t0, oa.tf, PyArray_DATA(y0s), &o, threads,
+        rc = mp_ode_solve_many(m, probs, lanes, k, oa.t0, oa.tf, PyArray_DATA(y0s), &o, threads,
                                PyArray_DATA(yout), outc, want_progress ? many_progress : NULL,
                                &pctx);
         Py_END_ALLOW_THREADS
@@ -944,8 +979,8 @@ static PyObject *py_ode_solve_many(PyObject *self, PyObject *args, PyObject *kw)
         if (!msg) goto out;
         PyList_SET_ITEM(msgs, (Py_ssize_t)i, msg);
     }
-    result = Py_BuildValue("{s:O,s:O,s:O,s:O}", "y", yout, "code", st, "message", msgs, "nfev",
-                           nf);
+    result = Py_BuildValue("{s:O,s:O,s:O,s:O,s:O}", "y", yout, "code", st, "message", msgs,
+                           "nfev", nf, "lanes", lanes ? Py_True : Py_False);
 out:
     if (tuples)
         for (size_t i = 0; i < k; i++) Py_XDECREF(tuples[i]);

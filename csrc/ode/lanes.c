@@ -1,0 +1,715 @@
+/* The lane driver: MP_LANES trajectories of an ensemble in lock-step lanes of
+ * one vectorised explicit Runge-Kutta step (dopri5, dop853, rk4).
+ *
+ * Each lane repeats exactly what driver.c's loop does for one trajectory
+ * (Hairer's first step, the controller with the method row's constants, the
+ * budget, rejection of non-finite trial stages, the step-size floor, t_eval
+ * output from the method's interpolant, the stiffness test, the statuses);
+ * only the arithmetic is done MP_LANES lanes at a time.  A lane whose
+ * trajectory ends takes the next one before the next step.
+ *
+ * This file is compiled twice (csrc/meson.build): with -mavx2 -mfma as
+ * mp_ode_lanes_run_avx2 and portable as mp_ode_lanes_run_base; MP_LANES_RUN
+ * names the build. */
+#include "ode/lanes.h"
+
+#include <float.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "ode/dop853_tableau.h"
+#include "ode/dopri5_tableau.h"
+
+#ifndef MP_LANES_RUN
+#error "MP_LANES_RUN names this build of the lane driver (csrc/meson.build)"
+#endif
+
+#define W MP_LANES
+#define LANES_INTERRUPT_EVERY 256 /* lock-step attempts between interrupt polls */
+
+enum { LANE_RK4, LANE_DOPRI5, LANE_DOP853 };
+
+/* One thread's lane group: the SoA workspace and each lane's driver state. */
+typedef struct {
+    const mp_ode_method *m;
+    int kind, adaptive;
+    const mp_ode_problem *probs;
+    const mp_lane_system *ls;
+    const mp_ode_options *o;
+    const mp_lane_feed *feed;
+    size_t k, n, nW, nt;
+    double dir, s0, sf, hmax; /* the solve runs in s = dir t, s0 < sf */
+    const double *y0s, *sev;  /* sev: t_eval in s */
+    double *yout;
+    mp_ode_outcome *out;
+    double *y, *ynew, *f, *fnew, *kbuf, *coef, *par, *gy, *gf;
+    int stop, exhausted;
+    /* per lane */
+    int active[W];
+    size_t idx[W], ie[W], bad_index[W];
+    double t[W], h[W], facold[W];
+    long attempts[W], nfev[W];
+    int rejected[W], nonfinite[W], stiff_count[W], calm_count[W], stiff[W], bad_what[W];
+} lane_group;
+
+/* ---- evaluation ------------------------------------------------------------ */
+
+/* Contract: f = f(dir s, y) (times dir) for the lanes with on[l]: through the
+ * scene's lane rhs, else each lane's scalar problem (gather, call, scatter).
+ * Counts nfev per lane; rc[l] = the lane's status, MP_ENONFINITE (recording
+ * the component) for a NaN or inf, as mp_ode_ws_rhs does.  A lane that fails
+ * is taken out of on. */
+/* Contract: each lane's scalar problem at (t[l], lane l of y) into lane l
+ * of f, for the lanes in on; st[l] its status. */
+static void lane_eval_generic(lane_group *g, const double *t, const double *y, double *f,
+                              const int *on, int *st)
+{
+    size_t n = g->n;
+    for (int l = 0; l < W; l++) {
+        if (!on[l]) continue;
+        const mp_ode_problem *p = &g->probs[g->idx[l]];
+        for (size_t c = 0; c < n; c++) g->gy[c] = y[c * W + l];
+        st[l] = p->rhs(t[l], g->gy, g->gf, p->data);
+        for (size_t c = 0; c < n; c++) f[c * W + l] = g->gf[c];
+    }
+}
+
+static inline void lane_eval(lane_group *g, const double *s, const double *y, double *f,
+                             int *on, int *rc)
+{
+    double tp[W], probe[W] = {0.0};
+    int st[W];
+    size_t n = g->n;
+    MP_LANE_LOOP {
+        tp[l] = g->dir * s[l];
+        st[l] = MP_OK;
+    }
+    if (g->ls->rhs) g->ls->rhs(tp, y, f, g->par, st);
+    else lane_eval_generic(g, tp, y, f, on, st);
+    if (g->dir < 0)
+        for (size_t i = 0; i < g->nW; i++) f[i] = -f[i];
+    for (size_t c = 0; c < g->nW; c += W) /* x - x: 0 when finite, NaN otherwise */
+        MP_LANE_LOOP probe[l] += f[c + l] - f[c + l];
+    int fails = 0;
+    MP_LANE_LOOP {
+        g->nfev[l] += on[l];
+        rc[l] = on[l] ? st[l] : rc[l];
+        fails |= st[l];
+    }
+    double psum = 0.0;
+    for (int l = 0; l < W; l++) psum += probe[l];
+    if (fails == 0 && psum == 0.0) return; /* all well */
+    for (int l = 0; l < W; l++) {
+        if (!on[l]) continue;
+        if (st[l] == MP_OK && probe[l] != 0.0)
+            for (size_t c = 0; c < n; c++)
+                if (!isfinite(f[c * W + l])) {
+                    g->bad_what[l] = MP_ODE_BAD_RHS;
+                    g->bad_index[l] = c;
+                    st[l] = MP_ENONFINITE;
+                    break;
+                }
+        rc[l] = st[l];
+        if (st[l] != MP_OK) on[l] = 0;
+    }
+}
+
+/* out = y + h sum_j a[j] K[j] over the non-zero a[j], lane by lane (the scalar
+ * stage_point's order of operations).  Always inlined with a constant row. */
+static inline __attribute__((always_inline)) void
+lane_stage(size_t nW, const double *y, const double *h, const double *a, double *const *K,
+           size_t ns, double *out)
+{
+    for (size_t c = 0; c < nW; c += W) {
+        double sum[W] = {0.0};
+#pragma GCC unroll 16
+        for (size_t j = 0; j < ns; j++)
+            if (a[j] != 0.0) {
+                MP_LANE_LOOP sum[l] += a[j] * K[j][c + l];
+            }
+        MP_LANE_LOOP out[c + l] = y[c + l] + h[l] * sum[l];
+    }
+}
+
+/* out[l] = sum_j w[j] K[j][c + l] over the non-zero w[j] (constant rows fold). */
+static inline __attribute__((always_inline)) void
+lane_dot(const double *w, double *const *K, size_t ns, size_t c, double *out)
+{
+    MP_LANE_LOOP out[l] = 0.0;
+#pragma GCC unroll 16
+    for (size_t j = 0; j < ns; j++)
+        if (w[j] != 0.0) {
+            MP_LANE_LOOP out[l] += w[j] * K[j][c + l];
+        }
+}
+
+/* ---- output and the end of a lane -------------------------------------------- */
+
+/* Contract: column j of trajectory idx[l]'s (n, nt) block = lane l of the SoA
+ * vector v. */
+static void lane_sample(lane_group *g, int l, size_t j, const double *v)
+{
+    double *dst = g->yout + g->idx[l] * g->n * g->nt;
+    for (size_t c = 0; c < g->n; c++) dst[c * g->nt + j] = v[c * W + l];
+}
+
+/* Contract: lane l's trajectory ends with status st at its current time:
+ * its outcome, NaN for the samples not reached, the lane idle; then the
+ * feed's done (a stop request sets g->stop). */
+static void lane_end(lane_group *g, int l, int st)
+{
+    size_t i = g->idx[l];
+    g->out[i] = (mp_ode_outcome){.status = st, .stiff = g->stiff[l], .bad_what = g->bad_what[l],
+                                 .bad_index = g->bad_index[l], .t_fail = g->dir * g->t[l],
+                                 .nfev = g->nfev[l]};
+    double *dst = g->yout + i * g->n * g->nt;
+    for (size_t j = g->ie[l]; j < g->nt; j++)
+        for (size_t c = 0; c < g->n; c++) dst[c * g->nt + j] = NAN;
+    g->active[l] = 0;
+    if (g->feed->done(g->feed->ctx, i) != 0) g->stop = 1;
+}
+
+/* Contract: the t_eval samples of lane l's accepted step [t, t + h] ending at
+ * tnew: the step end itself exactly, the others from the interpolant in coef
+ * (mp_ode_dense_eval's form, lane by lane). */
+static void lane_output(lane_group *g, int l, double h, double tnew)
+{
+    size_t nc = g->m->ncoef, nW = g->nW;
+    for (; g->ie[l] < g->nt && g->sev[g->ie[l]] <= tnew; g->ie[l]++) {
+        size_t j = g->ie[l];
+        double te = g->sev[j];
+        double *dst = g->yout + g->idx[l] * g->n * g->nt;
+        if (te == tnew) {
+            lane_sample(g, l, j, g->ynew);
+            continue;
+        }
+        double s = (te - g->t[l]) / h, s1 = 1.0 - s;
+        for (size_t c = 0; c < g->n; c++) {
+            size_t o = c * W + (size_t)l;
+            double acc = g->coef[(nc - 1) * nW + o];
+            for (size_t q = nc - 1; q-- > 0;) acc = g->coef[q * nW + o] + ((q % 2 == 0) ? s : s1) * acc;
+            dst[c * g->nt + j] = acc;
+        }
+    }
+}
+
+/* ---- the start of a trajectory ----------------------------------------------- */
+
+/* Contract: Hairer's first step (driver.c's first_step) for the lanes in on,
+ * whose y and f = f(s0, y) are set: h[l], or the lane ends with the failure
+ * of its explicit Euler trial. */
+static void lane_first_step(lane_group *g, int *on)
+{
+    size_t n = g->n;
+    const mp_ode_options *o = g->o;
+    double dnf[W] = {0}, ts[W], span = g->sf - g->s0;
+    int pend[W], rc[W], ev[W];
+    for (int l = 0; l < W; l++) {
+        pend[l] = on[l];
+        if (!on[l]) continue;
+        double sf2 = 0.0, sy2 = 0.0;
+        for (size_t c = 0; c < n; c++) {
+            double sk = o->atol[c] + o->rtol * fabs(g->y[c * W + l]);
+            double qf = g->f[c * W + l] / sk, qy = g->y[c * W + l] / sk;
+            sf2 += qf * qf;
+            sy2 += qy * qy;
+        }
+        dnf[l] = sf2 / (double)n;
+        double dny = sy2 / (double)n;
+        double h = (dnf[l] <= 1e-10 || dny <= 1e-10) ? 1e-6 : sqrt(dny / dnf[l]) * 0.01;
+        g->h[l] = fmin(h, fmin(g->hmax, span));
+    }
+    for (int tries = 0;; tries++) { /* an explicit Euler trial that overflows: shorter */
+        int any = 0;
+        for (int l = 0; l < W; l++) {
+            ev[l] = pend[l];
+            if (!pend[l]) continue;
+            any = 1;
+            while (g->s0 + g->h[l] > g->sf) g->h[l] = nextafter(g->h[l], 0.0);
+            for (size_t c = 0; c < n; c++)
+                g->ynew[c * W + l] = g->y[c * W + l] + g->h[l] * g->f[c * W + l];
+            ts[l] = g->s0 + g->h[l];
+        }
+        if (!any) break;
+        lane_eval(g, ts, g->ynew, g->fnew, ev, rc);
+        for (int l = 0; l < W; l++) {
+            if (!pend[l]) continue;
+            if (rc[l] != MP_ENONFINITE || tries == 20) {
+                pend[l] = 0;
+                if (rc[l] != MP_OK) {
+                    on[l] = 0;
+                    lane_end(g, l, rc[l]);
+                }
+            } else {
+                g->h[l] *= 0.1;
+            }
+        }
+    }
+    for (int l = 0; l < W; l++) {
+        if (!on[l]) continue;
+        double der2 = 0.0, h = g->h[l];
+        for (size_t c = 0; c < n; c++) {
+            double sk = o->atol[c] + o->rtol * fabs(g->y[c * W + l]);
+            double d = (g->fnew[c * W + l] - g->f[c * W + l]) / sk;
+            der2 += d * d;
+        }
+        der2 = sqrt(der2 / (double)n) / h;
+        double der12 = fmax(fabs(der2), sqrt(dnf[l]));
+        double h1 = der12 <= 1e-15 ? fmax(1e-6, h * 1e-3)
+                                   : pow(0.01 / der12, 1.0 / (double)g->m->order);
+        g->h[l] = fmin(fmin(100.0 * h, h1), fmin(g->hmax, span));
+    }
+}
+
+/* Contract: the lanes in fresh have just been given trajectories idx[l]:
+ * their state, parameters and driver state from the start, f(s0, y0), the
+ * samples at t0 and the first step; a lane that fails there ends. */
+static void lane_start(lane_group *g, int *fresh)
+{
+    size_t n = g->n, np = g->ls->np;
+    int rc[W], on[W];
+    double ts[W];
+    for (int l = 0; l < W; l++) {
+        on[l] = fresh[l];
+        ts[l] = g->s0;
+        if (!fresh[l]) continue;
+        size_t i = g->idx[l];
+        const double *y0 = g->y0s + i * n, *row = g->ls->params + i * g->ls->pstride;
+        for (size_t j = 0; j < np; j++) g->par[j * W + l] = row[j];
+        g->t[l] = g->s0;
+        g->ie[l] = 0;
+        g->attempts[l] = g->nfev[l] = 0;
+        g->facold[l] = 1e-4;
+        g->rejected[l] = g->nonfinite[l] = g->stiff_count[l] = g->calm_count[l] = 0;
+        g->stiff[l] = g->bad_what[l] = 0;
+        g->bad_index[l] = 0;
+        int finite = 1;
+        for (size_t c = 0; c < n; c++) {
+            g->y[c * W + l] = y0[c];
+            finite &= isfinite(y0[c]) != 0;
+        }
+        if (!finite) {
+            on[l] = 0;
+            lane_end(g, l, MP_EDOM);
+        }
+    }
+    lane_eval(g, ts, g->y, g->fnew, on, rc); /* fnew: f of the running lanes stays */
+    for (int l = 0; l < W; l++) {
+        if (!fresh[l]) continue;
+        if (g->active[l] && !on[l]) lane_end(g, l, rc[l]);
+        if (!on[l]) continue;
+        for (size_t c = 0; c < n; c++) g->f[c * W + l] = g->fnew[c * W + l];
+        for (; g->ie[l] < g->nt && g->sev[g->ie[l]] <= g->s0; g->ie[l]++)
+            lane_sample(g, l, g->ie[l], g->y);
+        if (!g->adaptive) g->h[l] = g->o->h;
+        else if (g->o->first_step > 0) g->h[l] = g->o->first_step;
+    }
+    if (g->adaptive && !(g->o->first_step > 0)) lane_first_step(g, on);
+    for (int l = 0; l < W; l++)
+        if (on[l]) g->h[l] = fmin(g->h[l], g->hmax);
+}
+
+/* ---- the methods' steps -------------------------------------------------------- */
+
+/* Hairer's stiffness estimate h |lambda| of lane l from two stages at one time. */
+static double lane_rho(const lane_group *g, int l, double h, const double *fa, const double *fb,
+                       const double *a, const double *b)
+{
+    double num = 0.0, den = 0.0;
+    for (size_t c = 0; c < g->n; c++) {
+        size_t i = c * W + (size_t)l;
+        num += (fa[i] - fb[i]) * (fa[i] - fb[i]);
+        den += (a[i] - b[i]) * (a[i] - b[i]);
+    }
+    return den > 0.0 ? fabs(h) * sqrt(num / den) : 0.0;
+}
+
+/* Contract (every lane step): one attempt of the lanes in on from (t, y, f)
+ * with steps h into ynew; rc[l] the lane's failure, err[l] its scaled error
+ * norm, rho[l] its stiffness estimate (0: none). */
+static void rk4_lanes(lane_group *g, int *on, int *rc, double *err, double *rho)
+{
+    size_t nW = g->nW;
+    double *k2 = g->kbuf, *k3 = k2 + nW, *k4 = k3 + nW, *yt = k4 + nW, ts[W], hh[W];
+    const double *y = g->y, *k1 = g->f;
+    for (int l = 0; l < W; l++) {
+        ts[l] = g->t[l] + 0.5 * g->h[l];
+        hh[l] = 0.5 * g->h[l];
+        err[l] = rho[l] = 0.0;
+    }
+    for (size_t i = 0; i < nW; i++) yt[i] = y[i] + hh[i % W] * k1[i];
+    lane_eval(g, ts, yt, k2, on, rc);
+    for (size_t i = 0; i < nW; i++) yt[i] = y[i] + hh[i % W] * k2[i];
+    lane_eval(g, ts, yt, k3, on, rc);
+    for (int l = 0; l < W; l++) ts[l] = g->t[l] + g->h[l];
+    for (size_t i = 0; i < nW; i++) yt[i] = y[i] + g->h[i % W] * k3[i];
+    lane_eval(g, ts, yt, k4, on, rc);
+    for (size_t i = 0; i < nW; i++)
+        g->ynew[i] = y[i] + (g->h[i % W] / 6.0) * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i]);
+}
+
+/* Hairer's RMS error norm of lane l, e being h times the error weights' sum. */
+static double lane_err_norm(const lane_group *g, int l, const double *e)
+{
+    double s = 0.0;
+    for (size_t c = 0; c < g->n; c++) {
+        size_t i = c * W + (size_t)l;
+        double sc = g->o->atol[c] + g->o->rtol * fmax(fabs(g->y[i]), fabs(g->ynew[i]));
+        double q = e[i] / sc;
+        s += q * q;
+    }
+    return sqrt(s / (double)g->n);
+}
+
+static void dopri5_lanes(lane_group *g, int *on, int *rc, double *err, double *rho)
+{
+    size_t nW = g->nW;
+    double *K[7], *yt = g->kbuf + 5 * nW, ts[W];
+    K[0] = g->f;
+    for (int s = 1; s < 6; s++) K[s] = g->kbuf + (size_t)(s - 1) * nW;
+    K[6] = g->fnew;
+#define DP_LANE_STAGE(s)                                                   \
+    do {                                                                   \
+        lane_stage(nW, g->y, g->h, dp_a[s], K, (s), yt);                   \
+        for (int l = 0; l < W; l++) ts[l] = g->t[l] + dp_c[s] * g->h[l];   \
+        lane_eval(g, ts, yt, K[s], on, rc);                                \
+    } while (0)
+    DP_LANE_STAGE(1); DP_LANE_STAGE(2); DP_LANE_STAGE(3); DP_LANE_STAGE(4); DP_LANE_STAGE(5);
+#undef DP_LANE_STAGE
+    lane_stage(nW, g->y, g->h, dp_a[6], K, 6, g->ynew);
+    for (int l = 0; l < W; l++) ts[l] = g->t[l] + g->h[l];
+    lane_eval(g, ts, g->ynew, K[6], on, rc); /* FSAL */
+    for (int l = 0; l < W; l++) /* stages 6, 7 both at t + h */
+        if (on[l]) rho[l] = lane_rho(g, l, g->h[l], K[6], K[5], g->ynew, yt);
+    for (size_t c = 0; c < nW; c += W) {
+        double e[W];
+        lane_dot(dp_e, K, 7, c, e);
+        MP_LANE_LOOP yt[c + l] = g->h[l] * e[l];
+    }
+    for (int l = 0; l < W; l++)
+        if (on[l]) err[l] = lane_err_norm(g, l, yt);
+}
+
+static void dop853_lanes(lane_group *g, int *on, int *rc, double *err, double *rho)
+{
+    size_t nW = g->nW, n = g->n;
+    double *K[16], *yt = g->kbuf + 14 * nW, ts[W];
+    K[0] = g->f;
+    for (int s = 1; s < 12; s++) K[s] = g->kbuf + (size_t)(s - 1) * nW;
+    K[12] = g->fnew;
+    for (int s = 13; s < 16; s++) K[s] = g->kbuf + (size_t)(s - 2) * nW;
+#define D8_LANE_STAGE(s)                                                       \
+    do {                                                                       \
+        lane_stage(nW, g->y, g->h, mp_dop853_a[s], K, (s), yt);                \
+        for (int l = 0; l < W; l++) ts[l] = g->t[l] + mp_dop853_c[s] * g->h[l]; \
+        lane_eval(g, ts, yt, K[s], on, rc);                                    \
+    } while (0)
+    D8_LANE_STAGE(1); D8_LANE_STAGE(2); D8_LANE_STAGE(3); D8_LANE_STAGE(4); D8_LANE_STAGE(5);
+    D8_LANE_STAGE(6); D8_LANE_STAGE(7); D8_LANE_STAGE(8); D8_LANE_STAGE(9); D8_LANE_STAGE(10);
+    D8_LANE_STAGE(11);
+#undef D8_LANE_STAGE
+    lane_stage(nW, g->y, g->h, mp_dop853_b, K, 12, g->ynew);
+    double e5s[W] = {0.0}, e3s[W] = {0.0}, rtol = g->o->rtol;
+    for (size_t c = 0; c < n; c++) {
+        double e5[W], e3[W], at = g->o->atol[c];
+        const double *y = g->y + c * W, *y1 = g->ynew + c * W;
+        lane_dot(mp_dop853_e5, K, 12, c * W, e5);
+        lane_dot(mp_dop853_e3, K, 12, c * W, e3);
+        MP_LANE_LOOP {
+            double sk = at + rtol * fmax(fabs(y[l]), fabs(y1[l]));
+            double r = 1.0 / sk, q5 = e5[l] * r, q3 = e3[l] * r;
+            e5s[l] += q5 * q5;
+            e3s[l] += q3 * q3;
+        }
+    }
+    for (int l = 0; l < W; l++) {
+        double deno = e5s[l] + 0.01 * e3s[l];
+        if (deno <= 0.0) deno = 1.0;
+        err[l] = fabs(g->h[l]) * e5s[l] / sqrt(deno * (double)n);
+        rho[l] = 0.0;
+    }
+}
+
+/* Contract (every lane finish): for the accepted lanes in on, fnew = f(t + h,
+ * ynew) and, for those with dense[l], the interpolant in coef; rc[l] a lane's
+ * failure, rho[l] its stiffness estimate where the finish makes it. */
+static void finish_lanes(lane_group *g, int *on, const int *dense, int *rc, double *rho)
+{
+    size_t nW = g->nW;
+    double ts[W];
+    int any_dense = 0, dn[W];
+    for (int l = 0; l < W; l++) {
+        ts[l] = g->t[l] + g->h[l];
+        dn[l] = on[l] && dense[l];
+        any_dense |= dn[l];
+    }
+    double *c = g->coef;
+    if (g->kind == LANE_DOPRI5) { /* fnew is stage 7 */
+        if (!any_dense) return;
+        double *K[7];
+        K[0] = g->f;
+        for (int s = 1; s < 6; s++) K[s] = g->kbuf + (size_t)(s - 1) * nW;
+        K[6] = g->fnew;
+        for (size_t b = 0; b < nW; b += W) {
+            double d[W];
+            lane_dot(dp_d, K, 7, b, d);
+            MP_LANE_LOOP {
+                size_t i = b + (size_t)l;
+                double h = g->h[l], dy = g->ynew[i] - g->y[i], c3 = h * K[0][i] - dy;
+                c[i] = g->y[i];
+                c[nW + i] = dy;
+                c[2 * nW + i] = c3;
+                c[3 * nW + i] = dy - h * K[6][i] - c3;
+                c[4 * nW + i] = h * d[l];
+            }
+        }
+        return;
+    }
+    lane_eval(g, ts, g->ynew, g->fnew, on, rc);
+    if (g->kind == LANE_RK4) {
+        if (!any_dense) return;
+        for (size_t i = 0; i < nW; i++) { /* mp_ode_dense_hermite, lane by lane */
+            double h = g->h[i % W], dy = g->ynew[i] - g->y[i], c3 = h * g->f[i] - dy;
+            c[i] = g->y[i];
+            c[nW + i] = dy;
+            c[2 * nW + i] = c3;
+            c[3 * nW + i] = dy - h * g->fnew[i] - c3;
+        }
+        return;
+    }
+    double *K[16], *yt = g->kbuf + 14 * nW;
+    K[0] = g->f;
+    for (int s = 1; s < 12; s++) K[s] = g->kbuf + (size_t)(s - 1) * nW;
+    K[12] = g->fnew;
+    for (int s = 13; s < 16; s++) K[s] = g->kbuf + (size_t)(s - 2) * nW;
+    for (int l = 0; l < W; l++)
+        if (on[l]) rho[l] = lane_rho(g, l, g->h[l], K[12], K[11], g->ynew, yt);
+    any_dense = 0;
+    for (int l = 0; l < W; l++) {
+        dn[l] = on[l] && dense[l];
+        any_dense |= dn[l];
+    }
+    if (!any_dense) return;
+    for (int s = 13; s < 16; s++) {
+        lane_stage(nW, g->y, g->h, mp_dop853_a[s], K, (size_t)s, yt);
+        for (int l = 0; l < W; l++) ts[l] = g->t[l] + mp_dop853_c[s] * g->h[l];
+        lane_eval(g, ts, yt, K[s], dn, rc);
+    }
+    for (size_t b = 0; b < nW; b += W) {
+        MP_LANE_LOOP {
+            size_t i = b + (size_t)l;
+            double h = g->h[l], dy = g->ynew[i] - g->y[i];
+            c[i] = g->y[i];
+            c[nW + i] = dy;
+            c[2 * nW + i] = h * K[0][i] - dy;
+            c[3 * nW + i] = 2.0 * dy - h * (K[12][i] + K[0][i]);
+        }
+#pragma GCC unroll 4
+        for (int r = 0; r < 4; r++) {
+            double d[W];
+            lane_dot(mp_dop853_d[r], K, 16, b, d);
+            MP_LANE_LOOP c[(size_t)(4 + r) * nW + b + (size_t)l] = g->h[l] * d[l];
+        }
+    }
+    for (int l = 0; l < W; l++) /* a dense stage that failed ends its lane */
+        if (on[l] && dense[l] && !dn[l]) on[l] = 0;
+}
+
+/* ---- the controller and one lock-step attempt ------------------------------------ */
+
+/* Contract: driver.c's control() for lane l: 1 when the step (error err,
+ * fac11 = err^expo, fold = facold^beta) is accepted with *hnew the next step,
+ * 0 when rejected with h[l] the retry. */
+static int lane_control(lane_group *g, int l, double err, double fac11, double fold,
+                        double *hnew)
+{
+    const mp_ode_method *m = g->m;
+    double h = g->h[l];
+    if (!(err <= 1.0)) {
+        g->nonfinite[l] = !isfinite(err);
+        double fac = isfinite(err) ? fmin(1.0 / m->fac_min, fac11 / m->safety) : 10.0;
+        g->h[l] = h / fac;
+        g->rejected[l] = 1;
+        return 0;
+    }
+    double fac = m->beta > 0.0 ? fac11 / fold : fac11;
+    fac = fmax(1.0 / m->fac_max, fmin(1.0 / m->fac_min, fac / m->safety));
+    *hnew = h / fac;
+    g->facold[l] = fmax(err, 1e-4);
+    if (g->rejected[l]) *hnew = fmin(*hnew, h);
+    g->rejected[l] = g->nonfinite[l] = 0;
+    return 1;
+}
+
+/* Contract: one attempted step of every active lane, as one iteration of
+ * driver.c's loop for each: budget, last step, step floor, the step, control,
+ * finish, stiffness test, output, advance; a lane that ends calls lane_end. */
+static void lane_attempt(lane_group *g)
+{
+    const double eps16 = 16.0 * DBL_EPSILON;
+    int on[W], rc[W], last[W] = {0}, acc[W], dense[W] = {0};
+    double err[W] = {0.0}, rho[W], hnew[W] = {0.0}, tnew[W] = {0.0};
+    for (int l = 0; l < W; l++) {
+        on[l] = g->active[l];
+        rc[l] = MP_OK;
+        acc[l] = 0;
+        rho[l] = 0.0;
+        if (!on[l]) continue;
+        if (g->attempts[l] >= g->o->max_steps) {
+            on[l] = 0;
+            lane_end(g, l, MP_EMAXSTEPS);
+            continue;
+        }
+        g->attempts[l]++;
+        double t = g->t[l], h = g->h[l];
+        last[l] = 0;
+        if (g->adaptive ? t + 1.01 * h >= g->sf : t + h * (1.0 + 1e-9) >= g->sf) {
+            h = g->sf - t;
+            while (t + h > g->sf) h = nextafter(h, 0.0); /* no stage beyond tf */
+            last[l] = 1;
+        }
+        g->h[l] = h;
+        if (g->adaptive && h <= eps16 * fmax(fabs(t), 1e-300)) {
+            on[l] = 0;
+            lane_end(g, l, g->nonfinite[l] ? MP_ENONFINITE : MP_ESTEP);
+        }
+    }
+    int att[W];
+    memcpy(att, on, sizeof att);
+    if (g->kind == LANE_DOPRI5) dopri5_lanes(g, on, rc, err, rho);
+    else if (g->kind == LANE_DOP853) dop853_lanes(g, on, rc, err, rho);
+    else rk4_lanes(g, on, rc, err, rho);
+    double fac11[W], fold[W], expo = g->m->expo, beta = g->m->beta; /* the controller's powers */
+    if (g->adaptive) {
+        MP_LANE_LOOP fac11[l] = mp_lane_pow(err[l], expo);
+        if (beta > 0.0) {
+            MP_LANE_LOOP fold[l] = mp_lane_pow(g->facold[l], beta);
+        } else {
+            MP_LANE_LOOP fold[l] = 1.0;
+        }
+    }
+    for (int l = 0; l < W; l++) {
+        if (!att[l]) continue;
+        if (rc[l] == MP_ENONFINITE && g->adaptive) { /* a trial stage overflowed */
+            g->h[l] /= 10.0;
+            g->rejected[l] = g->nonfinite[l] = 1;
+            continue;
+        }
+        if (rc[l] != MP_OK) {
+            lane_end(g, l, rc[l]);
+            continue;
+        }
+        if (g->adaptive && !lane_control(g, l, err[l], fac11[l], fold[l], &hnew[l])) continue;
+        acc[l] = 1;
+        tnew[l] = last[l] ? g->sf : g->t[l] + g->h[l];
+        dense[l] = g->ie[l] < g->nt && g->sev[g->ie[l]] < tnew[l];
+    }
+    memcpy(on, acc, sizeof on);
+    finish_lanes(g, on, dense, rc, rho);
+    for (int l = 0; l < W; l++) {
+        if (!acc[l]) continue;
+        if (!on[l]) {
+            lane_end(g, l, rc[l]);
+            continue;
+        }
+        if (rho[l] > 0.0) { /* Hairer's stiffness test */
+            if (rho[l] > g->m->stiff_rho) {
+                g->calm_count[l] = 0;
+                if (++g->stiff_count[l] >= 15) g->stiff[l] = 1;
+            } else if (++g->calm_count[l] >= 6) {
+                g->stiff_count[l] = 0;
+            }
+        }
+        lane_output(g, l, g->h[l], tnew[l]);
+        for (size_t c = 0; c < g->n; c++) {
+            size_t i = c * W + (size_t)l;
+            g->y[i] = g->ynew[i];
+            g->f[i] = g->fnew[i];
+        }
+        g->t[l] = tnew[l];
+        g->h[l] = fmin(g->adaptive ? hnew[l] : g->o->h, g->hmax);
+        if (!(g->t[l] < g->sf)) lane_end(g, l, MP_OK);
+    }
+}
+
+/* ---- the group's loop --------------------------------------------------------------- */
+
+/* Contract: give every idle lane the next trajectory and start it, until the
+ * lanes are full or the feed has none left. */
+static void lane_refill(lane_group *g)
+{
+    for (;;) {
+        int fresh[W] = {0}, any = 0;
+        for (int l = 0; l < W && !g->exhausted && !g->stop; l++) {
+            if (g->active[l]) continue;
+            size_t i = g->feed->take(g->feed->ctx);
+            if (i >= g->k) {
+                g->exhausted = 1;
+                break;
+            }
+            g->idx[l] = i;
+            g->active[l] = fresh[l] = any = 1;
+        }
+        if (!any) return;
+        lane_start(g, fresh);
+    }
+}
+
+int MP_LANES_RUN(const mp_ode_method *m, const mp_ode_problem *probs, const mp_lane_system *ls,
+                 size_t k, double t0, double tf, const double *y0s, const mp_ode_options *o,
+                 double *yout, mp_ode_outcome *out, const mp_lane_feed *feed)
+{
+    lane_group g;
+    memset(&g, 0, sizeof g);
+    g.m = m;
+    g.kind = strcmp(m->name, "dopri5") == 0 ? LANE_DOPRI5
+           : strcmp(m->name, "dop853") == 0 ? LANE_DOP853 : LANE_RK4;
+    g.adaptive = m->adaptive;
+    g.probs = probs;
+    g.ls = ls;
+    g.o = o;
+    g.feed = feed;
+    g.k = k;
+    g.n = probs[0].n;
+    g.nW = g.n * W;
+    g.nt = o->n_eval;
+    g.dir = tf < t0 ? -1.0 : 1.0;
+    g.s0 = g.dir * t0;
+    g.sf = g.dir * tf;
+    g.hmax = fmin(o->max_step, g.sf - g.s0);
+    g.y0s = y0s;
+    g.yout = yout;
+    g.out = out;
+    size_t nvec = 4 + m->nscratch + m->ncoef;
+    double *buf = calloc(nvec * g.nW + ls->np * W + g.nt + 2 * g.n, sizeof(double));
+    if (!buf) return MP_ENOMEM;
+    g.y = buf;
+    g.ynew = g.y + g.nW;
+    g.f = g.ynew + g.nW;
+    g.fnew = g.f + g.nW;
+    g.kbuf = g.fnew + g.nW;
+    g.coef = g.kbuf + m->nscratch * g.nW;
+    g.par = g.coef + m->ncoef * g.nW;
+    double *sev = g.par + ls->np * W;
+    g.gy = sev + g.nt;
+    g.gf = g.gy + g.n;
+    for (size_t j = 0; j < g.nt; j++) sev[j] = g.dir * o->t_eval[j];
+    g.sev = sev;
+    long iter = 0;
+    for (;;) {
+        lane_refill(&g);
+        if (g.stop) break;
+        int any = 0;
+        for (int l = 0; l < W; l++) any |= g.active[l];
+        if (!any) break;
+        if (++iter % LANES_INTERRUPT_EVERY == 0 && feed->interrupt(feed->ctx) != MP_OK) {
+            g.stop = 1;
+            break;
+        }
+        lane_attempt(&g);
+        if (g.stop) break;
+    }
+    free(buf);
+    return g.stop ? MP_EINTR : MP_OK;
+}
