@@ -163,6 +163,27 @@ def test_box_mesh_is_exact():
     np.testing.assert_allclose(body.inertia, 12.0 / 12 * np.diag([4 + 9, 1 + 9, 1 + 4.0]), rtol=1e-13, atol=1e-12)
 
 
+def test_right_tetrahedron_mesh_closed_form():
+    """The tetrahedron with legs a, b, c along the axes from one corner: com at
+    (a, b, c) / 4, about it Ixx = 3 M (b^2 + c^2) / 80 (cyclic) and
+    Ixy = M a b / 80 (products of inertia as -integral of x y dm), the closed
+    form of integral x^2 dV = V a^2 / 10, integral x y dV = V a b / 20.  Unequal
+    legs put the com off the bounding box's centre by a different amount on
+    each axis (every centre-of-mass term of the mesh integrals is used)."""
+    a, b, c, M = 1.0, 2.0, 3.5, 1.5
+    d = np.array([0.3, -1.2, 2.0])
+    v = np.array([[0, 0, 0], [a, 0, 0], [0, b, 0], [0, 0, c]]) + d
+    f = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+    body = mi.mesh(v, f, mass=M)
+    # measured: volume 2.2e-16, com exact, inertia 5.6e-16 (relative)
+    assert body.volume == pytest.approx(a * b * c / 6, rel=2e-15)
+    np.testing.assert_allclose(body.com, d + [a / 4, b / 4, c / 4], rtol=2e-15)
+    expect = M / 80 * np.array([[3 * (b * b + c * c), a * b, a * c],
+                                [a * b, 3 * (a * a + c * c), b * c],
+                                [a * c, b * c, 3 * (a * a + b * b)]])
+    np.testing.assert_allclose(body.inertia, expect, rtol=5e-15, atol=0)
+
+
 def test_sphere_mesh_converges_second_order():
     errs = []
     for n in (16, 32, 64):
