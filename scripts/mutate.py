@@ -35,8 +35,8 @@ import json
 import os
 import random
 import re
-import shlex
 import shutil
+import signal
 import subprocess
 import sys
 import tempfile
@@ -352,6 +352,9 @@ def main(argv=None):
     def log(msg):
         print(msg, flush=True)
 
+    # SIGTERM (a background job ignores SIGINT) ends the run as Ctrl-C does: the
+    # report of the mutants done so far is written and the copy removed
+    signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))
     tree = Tree(sys.executable, keep=a.keep)
     log(f"mutate: copy in {tree.dir}")
     report = {}

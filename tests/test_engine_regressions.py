@@ -418,3 +418,23 @@ def test_gauss4_newton_converges_on_double_pendulum(h, bound):
     assert res.success
     e = _double_pendulum_energy(res.y)
     assert np.max(np.abs(e - e[0])) < bound
+
+
+def test_dopri5_step_control_is_stabilised_on_a_stiff_stretch():
+    # y' = -1000 (y - cos t): on [0, 10] the step is held by stability, not accuracy.
+    # dopri5's controller has Lund's stabilisation (Hairer, Norsett, Wanner I,
+    # section II.4: h_new from err^(1/5) / err_old^0.04), which keeps the step just
+    # inside the stability boundary; the plain controller of SciPy's RK45 (the same
+    # Dormand-Prince pair) oscillates about it and rejects a step every few.
+    # measured: 7 rejected of 3033 steps; RK45 about 400 of 3030
+    lam = 1000.0
+    f = lambda t, y: -lam * (y - np.cos(t))
+    sol = mp.solve(f, (0, 10), [0.0], method="dopri5", rtol=1e-4, atol=1e-9)
+    ref = solve_ivp(f, (0, 10), [0.0], method="RK45", rtol=1e-4, atol=1e-9)
+    rk45_rejected = (ref.nfev - 2) // 6 - (len(ref.t) - 1)
+    assert rk45_rejected > 200
+    assert sol.nreject < 50                   # without the stabilisation: 400 or so
+    # both end on the slow solution y = (lam^2 cos t + lam sin t) / (lam^2 + 1) (the
+    # transient is e^-10000): measured 2.0e-5 (dopri5) and 1.1e-5 (RK45) from it
+    exact = (lam * lam * np.cos(10.0) + lam * np.sin(10.0)) / (lam * lam + 1)
+    assert abs(sol.y[0, -1] - exact) < 2e-4 and abs(ref.y[0, -1] - exact) < 2e-4
