@@ -838,3 +838,17 @@ def test_time_dependent_python_lagrangian_matches_the_scene():
     # and the orbit is the scene's equation of motion (mp.solve), to O(h^2)
     s = mp.solve(duff, (0, 5), [0.2, 0.1], rtol=1e-12, atol=1e-12, t_eval=b.t)
     assert np.max(np.abs(b.q - s.y[0])) < 1e-4         # 1.1e-5 measured
+
+
+def test_stationary_paths_of_the_oscillator_start_at_zero():
+    """T = 2 < pi: one path of stationary action for L = (v^2 - q^2)/2, the
+    closed form (q_a sin(T - t) + q_b sin t) / sin T on t in [0, T] (t0 = 0 by
+    default)."""
+    L = lambda q, v: 0.5 * v * v - 0.5 * q * q
+    qa, qb, T = 0.3, -0.5, 2.0
+    paths = V.stationary_paths(L, qa, qb, T, 200)
+    assert len(paths) == 1
+    p = paths[0]
+    assert p.t[0] == 0.0 and p.t[-1] == T
+    exact = (qa * np.sin(T - p.t) + qb * np.sin(p.t)) / np.sin(T)
+    assert np.abs(p.q - exact).max() < 2e-5                       # measured 2.6e-6 (n = 200)
