@@ -472,3 +472,10 @@ def test_solve_many_defaults_and_rigid_methods_checked():
     with pytest.raises(ValueError, match="RigidBody"):
         mp.solve_many(mp.scenes.Pendulum(), (0, 1), np.ones((2, 2)), method="rigid:split",
                       h=0.01)
+
+
+def test_backward_t_eval_must_strictly_decrease():
+    with pytest.raises(ValueError, match="strictly decreasing"):
+        mp.solve(harmonic, (2, 0), [1.0, 0.0], t_eval=[1.5, 1.0, 1.0, 0.5])
+    with pytest.raises(ValueError, match="strictly increasing"):
+        mp.solve(harmonic, (0, 2), [1.0, 0.0], t_eval=[0.5, 1.0, 1.0, 1.5])

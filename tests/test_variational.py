@@ -852,3 +852,38 @@ def test_stationary_paths_of_the_oscillator_start_at_zero():
     assert p.t[0] == 0.0 and p.t[-1] == T
     exact = (qa * np.sin(T - p.t) + qb * np.sin(p.t)) / np.sin(T)
     assert np.abs(p.q - exact).max() < 2e-5                       # measured 2.6e-6 (n = 200)
+
+
+def test_brachistochrone_grid_and_cycloid_samples():
+    """n intervals give n + 1 points from (0, 0) to the end; the plotted
+    cycloid x = a (theta - sin theta) against 40-digit arithmetic (theta from
+    y = 2 a sin^2(theta / 2)), small theta included, where t - sin t cancels."""
+    mpmath = pytest.importorskip("mpmath")   # a dependency of sympy (runtime)
+    b = V.brachistochrone(1.0, 0.65, n=100)
+    assert b.x.shape == b.y.shape == b.y_exact.shape == (101,)
+    assert b.x[0] == 0.0 and b.x[-1] == 1.0
+    a = b.radius
+    theta = 2 * np.arcsin(np.sqrt(b.y_cycloid / (2 * a)))
+    with mpmath.workdps(40):
+        ref = np.array([float(a * (mpmath.mpf(t) - mpmath.sin(mpmath.mpf(t))))
+                        for t in theta.tolist()])
+    nz = theta > 0
+    assert np.any(nz & (theta < 0.1))
+    rel = np.abs(b.x_cycloid[nz] / ref[nz] - 1)
+    assert rel.max() < 2e-13                                       # measured 2.2e-14
+
+
+def test_variational_integrate_from_a_later_start():
+    """t_span (1, 3) at h = 0.01: 200 steps from t = 1, the oscillator's
+    q = q0 cos(t - 1) + v0 sin(t - 1) to second order."""
+    L = lambda q, v: 0.5 * v * v - 0.5 * q * q
+    r = V.variational_integrate(L, (1.0, 3.0), 0.3, 0.2, 0.01)
+    assert len(r.t) == 201 and r.t[0] == 1.0
+    assert r.t[-1] == pytest.approx(3.0, abs=1e-12)
+    exact = 0.3 * np.cos(r.t - 1.0) + 0.2 * np.sin(r.t - 1.0)
+    assert np.abs(r.q - exact).max() < 6e-5                        # measured 5.9e-6
+
+
+def test_minimize_functional_refuses_an_empty_interval():
+    with pytest.raises(ValueError, match="x_span"):
+        V.minimize_functional(lambda x, y, yp: yp * yp, (1.0, 1.0), (0.0, 1.0))
