@@ -92,16 +92,18 @@ def test_symmetric_precession_rate():
     assert np.abs(mp.rigid.free_rotation((I1, I1, I3), w0, t) - s.y.T).max() < 1e-9
 
 
+@pytest.mark.parametrize("wu", [0.9, 0.0])
 @pytest.mark.parametrize("moments, axis", [((1.0, 2.5, 2.5), 0), ((2.5, 1.0, 2.5), 1),
                                            ((2.5, 2.5, 4.0), 2), ((4.0, 2.5, 2.5), 0)])
-def test_free_rotation_symmetric_body_closed_form(moments, axis):
+def test_free_rotation_symmetric_body_closed_form(moments, axis, wu):
     """A symmetric body, the equal pair the larger or the smaller moments: the
     component along the unique axis u stays constant and the other two turn at
-    Omega = w_u (I_u - I) / I (Euler's equations of a symmetric top)."""
+    Omega = w_u (I_u - I) / I (Euler's equations of a symmetric top); with
+    w_u = 0 the body spins steadily about an axis of the equal pair."""
     I_u = moments[axis]
     i, j = (axis + 1) % 3, (axis + 2) % 3
     I = moments[i]
-    wu, a = 0.9, 0.35
+    a = 0.35
     w0 = np.zeros(3)
     w0[axis], w0[j] = wu, a
     t = np.linspace(0, 25, 251)
