@@ -381,6 +381,12 @@ def test_first_step_longer_than_the_span():
         mp.solve(harmonic, (0, 1), [1.0, 0.0], first_step=2.0)
     with pytest.raises(ValueError, match="`first_step` exceeds bounds"):
         solve_ivp(harmonic, (0, 1), [1.0, 0.0], first_step=2.0)
+    # the span's length, not its end: (10, 11) is 1 long, backwards too
+    for span in [(10, 11), (11, 10)]:
+        with pytest.raises(ValueError, match="`first_step` exceeds bounds"):
+            mp.solve(harmonic, span, [1.0, 0.0], first_step=2.0)
+        with pytest.raises(ValueError, match="`first_step` exceeds bounds"):
+            solve_ivp(harmonic, span, [1.0, 0.0], first_step=2.0)
 
 
 def test_terminal_none_is_false():
