@@ -450,7 +450,8 @@ def test_coupled_oscillators_path_closed_form_and_order():
         q_ex, v_ex = _coupled_path(QA2, QB2, T2, r.t)
         errs.append(np.max(np.abs(r.q - q_ex)))
         verrs.append(np.max(np.abs(r.qdot - v_ex)))
-        assert r.iterations <= 3           # a quadratic action: one Newton step (2 measured)
+        assert r.iterations <= 2           # a quadratic action: one Newton step, then the
+                                           # residual at round-off ends it (2 measured)
     assert errs[-1] < 1e-5, errs           # 1.8e-6 at n = 400
     assert verrs[-1] < 4e-5, verrs         # 3.9e-6 at n = 400
     assert np.all(np.abs(_order(errs) - 2) < 0.05), errs
