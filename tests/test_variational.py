@@ -888,3 +888,14 @@ def test_variational_integrate_from_a_later_start():
 def test_minimize_functional_refuses_an_empty_interval():
     with pytest.raises(ValueError, match="x_span"):
         V.minimize_functional(lambda x, y, yp: yp * yp, (1.0, 1.0), (0.0, 1.0))
+
+
+@pytest.mark.parametrize("qa, qb", [(0.3, 5.0), (1e3, -2e3)])
+def test_free_particle_path_is_the_straight_line_at_once(qa, qb):
+    """L = v^2 / 2: the straight line (the first guess) is the path; its
+    residual is at round-off on the first assembly, which ends the iteration
+    there (no Newton step is needed)."""
+    r = V.stationary_path(lambda q, v: 0.5 * v * v, qa, qb, 2.0, 200)
+    assert r.iterations == 1
+    line = qa + (qb - qa) * r.t / 2.0
+    assert np.abs(r.q - line).max() < 7e-14 * max(abs(qa), abs(qb))   # measured 6.8e-15 rel.
