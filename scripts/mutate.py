@@ -336,7 +336,8 @@ def main(argv=None):
     ap.add_argument("-n", type=int, default=12, help="mutants per module (default 12)")
     ap.add_argument("--seed", type=int, default=20241123)
     ap.add_argument("--only", action="append", help="run only these mutants (module:index)")
-    ap.add_argument("--out", default="mutate-report.json", help="the JSON report")
+    ap.add_argument("--out", default=str(ROOT / "build" / "mutate-report.json"),
+                    help="the JSON report (default: build/, which git ignores)")
     ap.add_argument("--keep", action="store_true", help="keep the temporary copy")
     ap.add_argument("--list", action="store_true", help="list the modules and their tests")
     a = ap.parse_args(argv)
@@ -363,6 +364,7 @@ def main(argv=None):
             report[name] = _run_module(tree, name, a.n, a.seed, only, log)
     finally:
         tree.close()
+        Path(a.out).parent.mkdir(parents=True, exist_ok=True)
         Path(a.out).write_text(json.dumps(report, indent=1))
     print(f"\n{'module':16s} {'mutants':>7s} {'killed':>7s} {'survived':>8s} {'rate':>6s}")
     for name, rows in report.items():
