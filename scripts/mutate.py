@@ -14,16 +14,18 @@ order and drawn at random with a fixed seed, so a run is repeatable and a
 mutant has a stable name (``module:index``).
 
 The working tree is never touched: the tracked files are copied to a
-temporary directory, the C extension is built there once
-(``setup.py build_ext --inplace``) and, for a C mutant, only the mutated
-file is recompiled and the extension relinked.  Each mutant runs the tests
-that cover its module (``-x``: the first failure kills it; a timeout kills
+temporary directory and the C extension is built there once by meson
+(``meson setup`` with this interpreter's meson, ninja and numpy, a release
+build as meson-python's); for a C mutant ``ninja`` recompiles only the
+mutated file and relinks ``_core``, which goes into the copy's package.
+Each mutant runs the tests that cover its module (``-x``: the first failure kills it; a timeout kills
 it too).  A mutant that does not compile (or whose Python does not parse)
 is not counted and another is drawn.
 
-The interpreter is the one running this script (it needs numpy, setuptools
-and the test extra): ``.venv/bin/python scripts/mutate.py``.  The report is
-printed as a table and written as JSON (``--out``).
+The interpreter is the one running this script (it needs numpy, meson,
+ninja and the test extra, as the .venv of scripts/dev.sh has):
+``.venv/bin/python scripts/mutate.py``.  The report is printed as a table
+and written as JSON (``--out``).
 """
 from __future__ import annotations
 
@@ -33,8 +35,8 @@ import json
 import os
 import random
 import re
-import shlex
 import shutil
+import signal
 import subprocess
 import sys
 import tempfile
@@ -44,20 +46,25 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 
 FAST = "not ctrl_c and not interrupt"   # the Ctrl-C cases wait seconds on purpose
+ENGINE_TESTS = ["tests/test_integrate.py", "tests/test_engine_regressions.py",
+                "tests/test_hard_cases.py", "tests/test_ensemble.py", "tests/test_detest.py"]
+SCENE_TESTS = ["tests/test_scenes.py", "tests/test_scene_values.py", "tests/test_chain.py",
+               "tests/test_frames.py", "tests/test_rigid.py"]
 # module -> (source files, the tests that cover them; extra pytest arguments allowed)
 MODULES = {
     "ode": (["csrc/ode/driver.c", "csrc/ode/rk.c", "csrc/ode/radau.c", "csrc/ode/gsl.c",
-             "csrc/ode/geometric.c", "csrc/ode/ensemble.c", "csrc/ode/rigid_split.c"],
-            ["tests/test_integrate.py", "tests/test_ensemble.py", "tests/test_detest.py",
-             "tests/test_rigid.py"]),
+             "csrc/ode/geometric.c", "csrc/ode/ensemble.c", "csrc/ode/rigid_split.c",
+             "csrc/ode/auto.c", "csrc/ode/methods.c"],
+            ENGINE_TESTS + ["tests/test_rigid.py", "-k", FAST]),
+    "integrate.py": (["mechpy/integrate.py"], ENGINE_TESTS + ["-k", FAST]),
     "models": (["csrc/models/oscillators.c", "csrc/models/orbits.c", "csrc/models/chain.c",
-                "csrc/models/foucault.c", "csrc/models/rigid.c"],
-               ["tests/test_scenes.py", "tests/test_integrate.py", "tests/test_frames.py",
-                "tests/test_chain.py", "tests/test_rigid.py"]),
+                "csrc/models/foucault.c", "csrc/models/rigid.c", "csrc/models/rocket.c",
+                "csrc/models/models.c"], SCENE_TESTS),
+    "scenes.py": (["mechpy/scenes.py"], SCENE_TESTS),
     "inertia.c": (["csrc/inertia.c"], ["tests/test_inertia.py"]),
     "rotation.c": (["csrc/rotation.c"], ["tests/test_rotation.py", "tests/test_rigid.py"]),
     "modes.c": (["csrc/modes.c"], ["tests/test_modes.py", "tests/test_chain.py", "-k", FAST]),
-    "variational.c": (["csrc/variational.c"], ["tests/test_variational.py"]),
+    "variational.c": (["csrc/variational.c"], ["tests/test_variational.py", "-k", FAST]),
     "inertia.py": (["mechpy/inertia.py"], ["tests/test_inertia.py"]),
     "rotation.py": (["mechpy/rotation.py"], ["tests/test_rotation.py", "tests/test_rigid.py"]),
     "modes.py": (["mechpy/modes.py"], ["tests/test_modes.py", "tests/test_chain.py", "-k", FAST]),
@@ -65,7 +72,7 @@ MODULES = {
                         "mechpy/variational/constraints.py",
                         "mechpy/variational/functionals.py",
                         "mechpy/variational/lagrangians.py"],
-                       ["tests/test_variational.py"]),
+                       ["tests/test_variational.py", "-k", FAST]),
 }
 
 NUM = r"(?<![\w.])(\d+\.\d*(?:[eE][+-]?\d+)?|\d*\.\d+(?:[eE][+-]?\d+)?|\d+[eE][+-]?\d+)(?![\w.])"
@@ -190,7 +197,15 @@ def _apply(text, cand):
 
 
 class Tree:
-    """A copy of the tracked files with the extension built in place."""
+    """A copy of the tracked files with the extension built by meson beside it.
+
+    ``meson setup`` configures a build directory (``build/mut``) in the copy with
+    the interpreter's own meson, ninja and numpy (as scripts/sanitize.sh and the
+    editable install do); ``ninja`` then recompiles only what changed and
+    relinks ``_core``, which is copied into the copy's ``mechpy/``.  The tests
+    import that package: a ``sitecustomize`` on ``PYTHONPATH`` removes the
+    editable install's import hook (it would load the working tree's build).
+    """
 
     def __init__(self, py, keep=False):
         self.py = py
@@ -203,46 +218,51 @@ class Tree:
             if src.is_file():
                 dst.parent.mkdir(parents=True, exist_ok=True)
                 shutil.copy2(src, dst)
-        r = subprocess.run([py, "setup.py", "build_ext", "--inplace", "-v",
-                            "--build-temp", "build/mut"], cwd=self.dir,
+        bindir = Path(py).parent
+        meson = bindir / "meson"
+        meson = str(meson) if meson.exists() else shutil.which("meson")
+        if meson is None:
+            sys.exit("mutate: meson not found beside the interpreter or on PATH "
+                     "(pip install meson ninja)")
+        path = os.environ.get("PATH", "")
+        self.benv = dict(os.environ, PATH=f"{bindir}{os.pathsep}{path}")
+        self.build_dir = self.dir / "build" / "mut"
+        # the options of meson-python's wheel build: a release build, asserts off
+        r = subprocess.run([meson, "setup", str(self.build_dir), "--buildtype=release",
+                            "-Db_ndebug=if-release"], cwd=self.dir, env=self.benv,
                            capture_output=True, text=True)
         if r.returncode:
-            sys.exit(f"mutate: the unmutated build failed\n{r.stdout[-3000:]}{r.stderr[-3000:]}")
-        # the compiler lines, to recompile one file and relink
-        self.compile, self.link = {}, None
-        for line in (r.stdout + r.stderr).splitlines():
-            if not re.match(r"^\S*(gcc|cc|clang)\S*\s", line):
-                continue
-            args = shlex.split(line)
-            if "-c" in args:
-                self.compile[args[args.index("-c") + 1]] = args
-            elif "-shared" in args:
-                self.link = args
-        if not self.compile or self.link is None:
-            sys.exit("mutate: could not read the compiler commands from the build log")
-        self.env = dict(os.environ, PYTHONPATH=str(self.dir), PYTHONDONTWRITEBYTECODE="1")
+            sys.exit(f"mutate: meson setup failed\n{r.stdout[-3000:]}{r.stderr[-3000:]}")
+        self.ninja = [meson, "compile", "-C", str(self.build_dir)]
+        if not self.build():
+            sys.exit(f"mutate: the unmutated build failed\n{self.last_log[-3000:]}")
+        site = self.dir / "build" / "site"
+        site.mkdir(parents=True, exist_ok=True)
+        (site / "sitecustomize.py").write_text(
+            "import sys\n"
+            "sys.meta_path[:] = [f for f in sys.meta_path\n"
+            "                    if not type(f).__module__.startswith('_mechpy_editable_loader')]\n")
+        self.env = dict(os.environ, PYTHONPATH=f"{self.dir}{os.pathsep}{site}",
+                        PYTHONDONTWRITEBYTECODE="1", PYTHONSAFEPATH="1")
         self.env.pop("MECHPY_SANITIZED", None)
         where = subprocess.run([py, "-c", "import mechpy._core as c; print(c.__file__)"],
                                cwd=self.dir, env=self.env, capture_output=True, text=True)
-        if not where.stdout.startswith(str(self.dir)):
+        if not where.stdout.startswith(str(self.dir / "mechpy")):
             sys.exit(f"mutate: the copy does not import its own build: {where.stdout}"
                      f"{where.stderr}")
-        # setuptools links into build/lib* and copies the result next to the sources
-        self.linked = self.dir / self.link[self.link.index("-o") + 1]
-        self.inplace = Path(where.stdout.strip())
 
-    def _obj(self, src):
-        args = self.compile[src]
-        return self.dir / args[args.index("-o") + 1]
-
-    def build(self, src):
-        """Recompile one C file and relink; True when it compiled."""
-        r = subprocess.run(self.compile[src], cwd=self.dir, capture_output=True)
+    def build(self, src=None):
+        """Rebuild what changed (ninja: the mutated file, then the link) and put
+        the new ``_core`` into the copy's package; True when it compiled."""
+        r = subprocess.run(self.ninja, cwd=self.dir, env=self.benv, capture_output=True,
+                           text=True)
+        self.last_log = r.stdout + r.stderr
         if r.returncode:
             return False
-        if subprocess.run(self.link, cwd=self.dir, capture_output=True).returncode:
-            return False
-        shutil.copyfile(self.linked, self.inplace)
+        for so in self.build_dir.glob("_core*.so"):
+            for old in (self.dir / "mechpy").glob("_core*.so"):
+                old.unlink()
+            shutil.copyfile(so, self.dir / "mechpy" / so.name)
         return True
 
     def pytest(self, tests, timeout):
@@ -289,20 +309,13 @@ def _run_module(tree, name, n, seed, only, log):
         text = path.read_text()
         path.write_text(_apply(text, cand))
         try:
-            if f.endswith(".c"):
-                obj = tree._obj(f)
-                saved = obj.read_bytes()
-                ok = tree.build(f)
-            else:
-                ok = True
+            ok = tree.build() if f.endswith(".c") else True
             if not ok:
                 log(f"   {tag} does not compile, drawn again")
                 continue
             rc, secs = tree.pytest(tests, timeout)
         finally:
             path.write_text(text)
-            if f.endswith(".c"):
-                obj.write_bytes(saved)
         no, a, b, new, kind = cand
         line = text.splitlines()[no]
         status = "survived" if rc == 0 else "killed"
@@ -312,7 +325,7 @@ def _run_module(tree, name, n, seed, only, log):
         results.append(row)
         log(f"   {tag:18s} {status:8s} {f}:{no + 1} {kind}: {row['after']}")
     if any(f.endswith(".c") for f in files):
-        tree.build(files[0])  # relink the unmutated objects
+        tree.build()  # the unmutated sources again
     return results
 
 
@@ -323,7 +336,8 @@ def main(argv=None):
     ap.add_argument("-n", type=int, default=12, help="mutants per module (default 12)")
     ap.add_argument("--seed", type=int, default=20241123)
     ap.add_argument("--only", action="append", help="run only these mutants (module:index)")
-    ap.add_argument("--out", default="mutate-report.json", help="the JSON report")
+    ap.add_argument("--out", default=str(ROOT / "build" / "mutate-report.json"),
+                    help="the JSON report (default: build/, which git ignores)")
     ap.add_argument("--keep", action="store_true", help="keep the temporary copy")
     ap.add_argument("--list", action="store_true", help="list the modules and their tests")
     a = ap.parse_args(argv)
@@ -339,6 +353,9 @@ def main(argv=None):
     def log(msg):
         print(msg, flush=True)
 
+    # SIGTERM (a background job ignores SIGINT) ends the run as Ctrl-C does: the
+    # report of the mutants done so far is written and the copy removed
+    signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))
     tree = Tree(sys.executable, keep=a.keep)
     log(f"mutate: copy in {tree.dir}")
     report = {}
@@ -347,6 +364,7 @@ def main(argv=None):
             report[name] = _run_module(tree, name, a.n, a.seed, only, log)
     finally:
         tree.close()
+        Path(a.out).parent.mkdir(parents=True, exist_ok=True)
         Path(a.out).write_text(json.dumps(report, indent=1))
     print(f"\n{'module':16s} {'mutants':>7s} {'killed':>7s} {'survived':>8s} {'rate':>6s}")
     for name, rows in report.items():

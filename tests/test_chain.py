@@ -201,6 +201,7 @@ def test_fput_matches_solve_ivp(rng, ends):
 
 
 # ---------------------------------------------------------------- conservation
+# measured max |dE/E0|: verlet 1.4e-4, yoshida4 1.1e-6, gauss4 6.3e-8
 @pytest.mark.parametrize("method, h, bound", [("verlet", 0.05, 5e-4), ("yoshida4", 0.1, 5e-6),
                                               ("gauss4", 0.1, 5e-7)])
 def test_symplectic_energy_has_no_drift(method, h, bound):
@@ -227,7 +228,7 @@ def test_fput_energy_conserved_by_dop853():
     sol = mp.solve(ch, (0, 200), y0, method="dop853", rtol=1e-11, atol=1e-12,
                    t_eval=np.linspace(0, 200, 101))
     E = ch.energy(sol.y)
-    assert np.max(np.abs(E / E[0] - 1)) < 1e-8
+    assert np.max(np.abs(E / E[0] - 1)) < 1e-9  # measured 1.3e-10
 
 
 @pytest.mark.parametrize("ends", ["free", "periodic"])
@@ -269,7 +270,7 @@ def test_fput_recurrence():
     k = np.argmax(frac[late])
     assert frac[late][k] > 0.95                                      # recurred
     assert 140 < periods[late][k] < 170
-    assert np.ptp(ch.energy(sol.y)) / ch.energy(y0) < 1e-5
+    assert np.ptp(ch.energy(sol.y)) / ch.energy(y0) < 2e-6  # measured 2.1e-7
 
 
 # ---------------------------------------------------------------- ensembles

@@ -42,6 +42,11 @@ GSL_EVENTS = {"gsl:rk2": 3.2e-11, "gsl:rk4": 1.7e-7, "gsl:rkf45": 1.8e-9, "gsl:r
               "gsl:msbdf": 3.0e-6}
 
 
+# max |y0(t) - cos t| at the three sparse t_eval points below, same tolerances
+GSL_SPARSE = {"gsl:msbdf": 8.2e-7, "gsl:msadams": 3.2e-7, "gsl:rk2imp": 1.1e-6,
+              "gsl:rk8pd": 2.9e-10}
+
+
 def test_every_gsl_row_is_measured():
     assert sorted(GSL) == sorted(GSL_TEVAL) == sorted(GSL_EVENTS)
 
@@ -73,14 +78,14 @@ def test_gsl_event_times_against_closed_form(method):
     assert err < 10 * GSL_EVENTS[method], err
 
 
-@pytest.mark.parametrize("method", ["gsl:msbdf", "gsl:msadams", "gsl:rk2imp", "gsl:rk8pd"])
+@pytest.mark.parametrize("method", sorted(GSL_SPARSE))
 def test_gsl_sparse_t_eval_uses_fresh_derivatives(method):
     """A step without output used to leave f stale for the next interpolant."""
     t = np.array([3.3, 7.1, 15.7])
     sol = mp.solve(harmonic, (0, 20), [1.0, 0.0], method=method, rtol=1e-8, atol=1e-10,
                    t_eval=t)
     err = np.max(np.abs(sol.y[0] - np.cos(t)))
-    assert err < 10 * GSL_TEVAL[method], err
+    assert err < 10 * GSL_SPARSE[method], err
 
 
 @pytest.mark.parametrize("method", ["gsl:rk8pd", "gsl:bsimp", "gsl:msbdf"])
@@ -131,11 +136,11 @@ def test_robertson_at_scipy_default_tolerances_with_auto(method):
     ref = solve_ivp(robertson, (0, 1e5), y0, method="Radau", rtol=1e-10, atol=1e-14)
     for scipy_method in (SCIPY_LSODA, "Radau"):
         theirs = solve_ivp(robertson, (0, 1e5), y0, method=scipy_method, rtol=1e-3, atol=1e-6)
-        # measured: ours 2.4e-5 (relative, y1) from the reference, LSODA 3.7e-3
+        # measured: ours 1.8e-5 (relative, y1) from the reference, LSODA 3.7e-3
         err_ours = np.abs(sol.y[:, -1] - ref.y[:, -1])
         err_theirs = np.abs(theirs.y[:, -1] - ref.y[:, -1])
         assert np.all(err_ours <= 10 * err_theirs + 1e-12)
-    assert np.allclose(sol.y[:, -1], ref.y[:, -1], rtol=2e-4, atol=1e-10)  # measured 2.4e-5
+    assert np.allclose(sol.y[:, -1], ref.y[:, -1], rtol=1.5e-4, atol=1e-10)  # measured 1.8e-5
 
 
 def test_explicit_trial_step_that_overflows_is_rejected():
@@ -303,16 +308,19 @@ def test_nan_event_at_t0_names_the_event():
 
 # ---- 7. SciPy parity -------------------------------------------------------------
 
-@pytest.mark.parametrize("name,ours", [("RK45", "dopri5"), ("DOP853", "dop853"),
-                                       ("Radau", "radau"), ("BDF", "gsl:msbdf"),
-                                       ("LSODA", "auto")])
-def test_scipy_method_names(name, ours):
+# the bound: 10x the error measured at t = 5 against SciPy at rtol 1e-10 (in the comment)
+@pytest.mark.parametrize("name,ours,bound", [("RK45", "dopri5", 5e-8),     # 5.1e-9
+                                             ("DOP853", "dop853", 5e-8),   # 3.5e-9
+                                             ("Radau", "radau", 5e-10),    # 3.4e-11
+                                             ("BDF", "gsl:msbdf", 8e-6),   # 8.4e-7
+                                             ("LSODA", "auto", 5e-8)])     # 3.6e-9
+def test_scipy_method_names(name, ours, bound):
     a = mp.solve(harmonic, (0, 5), [1.0, 0.0], method=name, rtol=1e-8)
     b = mp.solve(harmonic, (0, 5), [1.0, 0.0], method=ours, rtol=1e-8)
     np.testing.assert_array_equal(a.y, b.y)
     ref = solve_ivp(harmonic, (0, 5), [1.0, 0.0], method=SCIPY_LSODA if name == "LSODA" else name,
                     rtol=1e-10, atol=1e-12)
-    assert np.max(np.abs(a.y[:, -1] - ref.y[:, -1])) < 1e-5  # measured <= 3e-7 (BDF)
+    assert np.max(np.abs(a.y[:, -1] - ref.y[:, -1])) < bound
 
 
 @pytest.mark.parametrize("method,scipy_method", [("dop853", "DOP853"), ("dopri5", "RK45"),
@@ -326,12 +334,12 @@ def test_backward_integration_matches_solve_ivp(method, scipy_method):
     ref = solve_ivp(drv, (10, 2), [0.3, -0.2], method=scipy_method, rtol=1e-12, atol=1e-12,
                     t_eval=t_eval, events=ev, dense_output=True)
     np.testing.assert_array_equal(ours.t, t_eval)  # t decreasing, as SciPy returns it
-    assert np.max(np.abs(ours.y - ref.y)) < 1e-8  # measured 1e-10 .. 3e-9
+    assert np.max(np.abs(ours.y - ref.y)) < 2e-9  # measured 2.2e-11 .. 1.7e-10
     assert ours.t_events[0].shape == ref.t_events[0].shape
     assert np.all(np.diff(ours.t_events[0]) < 0)
-    assert np.max(np.abs(ours.t_events[0] - ref.t_events[0])) < 1e-8
+    assert np.max(np.abs(ours.t_events[0] - ref.t_events[0])) < 2e-10  # measured <= 1.9e-11
     tt = np.linspace(9.9, 2.1, 31)
-    assert np.max(np.abs(ours.sol(tt) - ref.sol(tt))) < 1e-7
+    assert np.max(np.abs(ours.sol(tt) - ref.sol(tt))) < 2e-9  # measured 3.1e-11 .. 2.4e-10
     assert ours.sol.t_min == 2.0 and ours.sol.t_max == 10.0
 
 
@@ -341,7 +349,7 @@ def test_backward_event_direction_is_along_the_integration():
     ours = mp.solve(harmonic, (10, 0), [np.cos(10), -np.sin(10)], events=ev)
     ref = solve_ivp(harmonic, (10, 0), [np.cos(10), -np.sin(10)], events=ev, rtol=1e-10,
                     atol=1e-12)
-    np.testing.assert_allclose(ours.t_events[0], ref.t_events[0], atol=1e-7)
+    np.testing.assert_allclose(ours.t_events[0], ref.t_events[0], atol=5e-8)  # measured 5.9e-9
 
 
 def test_backward_solve_many_and_round_trip():
@@ -349,7 +357,7 @@ def test_backward_solve_many_and_round_trip():
     fwd = mp.solve_many(harmonic, (0, 3), y0s)
     back = mp.solve_many(harmonic, (3, 0), fwd.y[:, :, -1])
     assert back.t[0] == 0.0
-    assert np.max(np.abs(back.y[:, :, -1] - y0s)) < 1e-8  # measured ~1e-9
+    assert np.max(np.abs(back.y[:, :, -1] - y0s)) < 5e-9  # measured 8.1e-10
 
 
 def test_backward_refused_for_forward_only_methods():
@@ -363,7 +371,7 @@ def test_constant_jacobian_array():
     ours = mp.solve(f, (0, 1), [1.0, 1.0], method="radau", jac=A, rtol=1e-8, atol=1e-10)
     ref = solve_ivp(f, (0, 1), [1.0, 1.0], method="Radau", jac=A, rtol=1e-12, atol=1e-14)
     assert ours.njev == 0  # an array is no evaluation: SciPy counts none either
-    assert np.max(np.abs(ours.y[:, -1] - ref.y[:, -1])) < 1e-8
+    assert np.max(np.abs(ours.y[:, -1] - ref.y[:, -1])) < 5e-11  # measured 4.8e-12
     with pytest.raises(ValueError, match="jac"):
         mp.solve(f, (0, 1), [1.0, 1.0], method="radau", jac=np.eye(3))
 
@@ -373,6 +381,12 @@ def test_first_step_longer_than_the_span():
         mp.solve(harmonic, (0, 1), [1.0, 0.0], first_step=2.0)
     with pytest.raises(ValueError, match="`first_step` exceeds bounds"):
         solve_ivp(harmonic, (0, 1), [1.0, 0.0], first_step=2.0)
+    # the span's length, not its end: (10, 11) is 1 long, backwards too
+    for span in [(10, 11), (11, 10)]:
+        with pytest.raises(ValueError, match="`first_step` exceeds bounds"):
+            mp.solve(harmonic, span, [1.0, 0.0], first_step=2.0)
+        with pytest.raises(ValueError, match="`first_step` exceeds bounds"):
+            solve_ivp(harmonic, span, [1.0, 0.0], first_step=2.0)
 
 
 def test_terminal_none_is_false():
@@ -400,7 +414,7 @@ def _double_pendulum_energy(y, g=9.81):
             - 2.0 * g * np.cos(a1) - g * np.cos(a2))
 
 
-@pytest.mark.parametrize("h, bound", [(0.01, 2e-3), (0.005, 1.5e-4)])
+@pytest.mark.parametrize("h, bound", [(0.01, 1e-3), (0.005, 1e-4)])
 def test_gauss4_newton_converges_on_double_pendulum(h, bound):
     # gauss4's stages by fixed-point iteration did not contract here for
     # h >= 0.005 (only h = 0.002 worked); by simplified Newton they converge and
@@ -410,3 +424,65 @@ def test_gauss4_newton_converges_on_double_pendulum(h, bound):
     assert res.success
     e = _double_pendulum_energy(res.y)
     assert np.max(np.abs(e - e[0])) < bound
+
+
+def test_dopri5_step_control_is_stabilised_on_a_stiff_stretch():
+    # y' = -1000 (y - cos t): on [0, 10] the step is held by stability, not accuracy.
+    # dopri5's controller has the stabilised (PI) step size control of Hairer's DOPRI5
+    # (its BETA = 0.04: h_new from err^(1/5) / err_old^0.04; Gustafsson, Lundh and
+    # Soderlind 1988), which keeps the step just inside the stability boundary; the
+    # plain controller of SciPy's RK45 (the same Dormand-Prince pair) oscillates about
+    # it and rejects a step every few.
+    # measured: 7 rejected of 3033 steps; RK45 about 400 of 3030
+    lam = 1000.0
+    f = lambda t, y: -lam * (y - np.cos(t))
+    sol = mp.solve(f, (0, 10), [0.0], method="dopri5", rtol=1e-4, atol=1e-9)
+    ref = solve_ivp(f, (0, 10), [0.0], method="RK45", rtol=1e-4, atol=1e-9)
+    rk45_rejected = (ref.nfev - 2) // 6 - (len(ref.t) - 1)
+    assert rk45_rejected > 200
+    assert sol.nreject < 50                   # without the stabilisation: 400 or so
+    # both end on the slow solution y = (lam^2 cos t + lam sin t) / (lam^2 + 1) (the
+    # transient is e^-10000): measured 2.0e-5 (dopri5) and 1.1e-5 (RK45) from it
+    exact = (lam * lam * np.cos(10.0) + lam * np.sin(10.0)) / (lam * lam + 1)
+    assert abs(sol.y[0, -1] - exact) < 2e-4 and abs(ref.y[0, -1] - exact) < 2e-4
+
+
+@pytest.mark.parametrize("problem", ["vdp", "robertson"])
+@pytest.mark.parametrize("rtol", [1e-3, 1e-6])
+def test_radau_takes_scipy_radau_steps_on_stiff_problems(problem, rtol):
+    # radau is SciPy's Radau IIA (order 5) with its step and Jacobian control: on the
+    # stiff Van der Pol (mu = 1000) and Robertson problems, with rejected steps and
+    # Jacobians by differences, the same number of steps and Jacobians as SciPy's
+    # measured: steps within 4.2% (276 / 288), Jacobians within 1% (306 / 309)
+    if problem == "vdp":
+        f = lambda t, y: np.array([y[1], 1000.0 * (1 - y[0] ** 2) * y[1] - y[0]])
+        span, y0 = (0, 3000), [2.0, 0.0]
+    else:
+        f, span, y0 = robertson, (0, 1e5), [1.0, 0.0, 0.0]
+    atol = 1e-3 * rtol
+    ours = mp.solve(f, span, y0, method="radau", rtol=rtol, atol=atol)
+    ref = solve_ivp(f, span, y0, method="Radau", rtol=rtol, atol=atol)
+    assert ours.status == 0 and ours.nreject > 0
+    assert abs(len(ours.t) / len(ref.t) - 1) < 0.1
+    assert abs(ours.njev / ref.njev - 1) < 0.1
+
+
+def test_solve_many_defaults_and_rigid_methods_checked():
+    # the documented defaults: dop853 at rtol 1e-8, atol 1e-10, bit for bit
+    y0s = np.array([[1.0, 0.0], [0.5, 0.2]])
+    a = mp.solve_many(harmonic, (0, 5), y0s)
+    b = mp.solve_many(harmonic, (0, 5), y0s, method="dop853", rtol=1e-8, atol=1e-10)
+    np.testing.assert_array_equal(a.y, b.y)
+    exact = y0s[:, :1] * np.cos(5.0) + y0s[:, 1:] * np.sin(5.0)
+    assert np.max(np.abs(a.y[:, 0, -1] - exact[:, 0])) < 5e-8     # measured 3.5e-9
+    # the rigid-body splitting integrates RigidBody only, in solve_many as in solve
+    with pytest.raises(ValueError, match="RigidBody"):
+        mp.solve_many(mp.scenes.Pendulum(), (0, 1), np.ones((2, 2)), method="rigid:split",
+                      h=0.01)
+
+
+def test_backward_t_eval_must_strictly_decrease():
+    with pytest.raises(ValueError, match="strictly decreasing"):
+        mp.solve(harmonic, (2, 0), [1.0, 0.0], t_eval=[1.5, 1.0, 1.0, 0.5])
+    with pytest.raises(ValueError, match="strictly increasing"):
+        mp.solve(harmonic, (0, 2), [1.0, 0.0], t_eval=[0.5, 1.0, 1.0, 1.5])

@@ -1,4 +1,6 @@
 """mechpy.inertia against closed forms, NumPy/SciPy references and exact arithmetic."""
+import warnings
+
 import numpy as np
 import pytest
 import scipy.linalg
@@ -79,6 +81,13 @@ SOLIDS = [
 ]
 
 
+# their volumes at the dimensions above (None: the thin ones)
+VOLUMES = {"sphere": 4 / 3 * np.pi * 8, "shell": None, "box": 6.0, "cube": 27.0,
+           "cylinder": 2 * np.pi, "tube": np.pi * (4 - 1) * 3, "cone": np.pi * 4 / 3,
+           "hemisphere": 2 / 3 * np.pi * 8, "rod": None, "disk": None, "ring": None,
+           "ellipsoid": 4 / 3 * np.pi * 6}
+
+
 @pytest.mark.parametrize("shape,dims,diag", SOLIDS, ids=[s[0] for s in SOLIDS])
 def test_every_solid_closed_form(shape, dims, diag):
     M = 1.0 * 1.5
@@ -86,6 +95,10 @@ def test_every_solid_closed_form(shape, dims, diag):
     np.testing.assert_allclose(body.inertia, M * np.diag(diag), rtol=1e-14, atol=1e-15)
     assert np.all(body.com == 0)
     assert body.mass == M
+    if VOLUMES[shape] is None:
+        assert body.volume is None
+    else:
+        assert body.volume == pytest.approx(VOLUMES[shape], rel=1e-15)   # measured: 0 or 1 ulp
 
 
 def _uv_grid_fraction(inside, lo, hi, n, sub=4):
@@ -161,6 +174,27 @@ def test_box_mesh_is_exact():
     assert body.volume == pytest.approx(6.0, rel=1e-14)
     np.testing.assert_allclose(body.com, [10, -5, 2], rtol=1e-14)
     np.testing.assert_allclose(body.inertia, 12.0 / 12 * np.diag([4 + 9, 1 + 9, 1 + 4.0]), rtol=1e-13, atol=1e-12)
+
+
+def test_right_tetrahedron_mesh_closed_form():
+    """The tetrahedron with legs a, b, c along the axes from one corner: com at
+    (a, b, c) / 4, about it Ixx = 3 M (b^2 + c^2) / 80 (cyclic) and
+    Ixy = M a b / 80 (products of inertia as -integral of x y dm), the closed
+    form of integral x^2 dV = V a^2 / 10, integral x y dV = V a b / 20.  Unequal
+    legs put the com off the bounding box's centre by a different amount on
+    each axis (every centre-of-mass term of the mesh integrals is used)."""
+    a, b, c, M = 1.0, 2.0, 3.5, 1.5
+    d = np.array([0.3, -1.2, 2.0])
+    v = np.array([[0, 0, 0], [a, 0, 0], [0, b, 0], [0, 0, c]]) + d
+    f = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+    body = mi.mesh(v, f, mass=M)
+    # measured: volume 2.2e-16, com exact, inertia 5.6e-16 (relative)
+    assert body.volume == pytest.approx(a * b * c / 6, rel=2e-15)
+    np.testing.assert_allclose(body.com, d + [a / 4, b / 4, c / 4], rtol=2e-15)
+    expect = M / 80 * np.array([[3 * (b * b + c * c), a * b, a * c],
+                                [a * b, 3 * (a * a + c * c), b * c],
+                                [a * c, b * c, 3 * (a * a + b * b)]])
+    np.testing.assert_allclose(body.inertia, expect, rtol=5e-15, atol=0)
 
 
 def test_sphere_mesh_converges_second_order():
@@ -330,6 +364,28 @@ def _bipyramid(n):
     top = np.stack([j, (j + 1) % n, np.full(n, n)], -1)
     bot = np.stack([(j + 1) % n, j, np.full(n, n + 1)], -1)
     return V, np.concatenate([top, bot]).astype(np.int64)
+
+
+@pytest.mark.parametrize("n", [15, 16, 17])
+def test_mesh_apex_degree_near_the_scan_limit(rng, n):
+    """Apexes of degree 15-17 (about where an edge lookup stops scanning a
+    vertex's list and searches it), the faces in random order: volume of the
+    bipyramid 2/3 x the n-gon's area, and its defects still found."""
+    V, F = _bipyramid(n)
+    F = F[rng.permutation(len(F))]
+    area = 0.5 * n * np.sin(2 * np.pi / n)
+    b = mi.mesh(V, F)
+    assert b.volume == pytest.approx(2 * area / 3, rel=2e-15)          # measured <= 2.2e-16
+    np.testing.assert_allclose(b.com, 0.0, atol=1e-16)
+    apex = np.nonzero(np.any(F == n, axis=1))[0]
+    with pytest.raises(mp.MeshError, match="open"):
+        mi.mesh(V, np.delete(F, apex[3], axis=0))
+    G = F.copy()
+    G[apex[5]] = G[apex[5]][::-1]
+    with pytest.raises(mp.MeshError, match="oriented|open"):
+        mi.mesh(V, G)
+    with pytest.raises(mp.MeshError, match="non-manifold"):
+        mi.mesh(V, np.concatenate([F, F[apex[:1]]]))
 
 
 def test_mesh_high_degree_vertices_bipyramid():
@@ -558,6 +614,25 @@ def test_kinetic_energy_split_rigid_and_internal(rng):
     s2 = mi.kinetic_energy_split(m, x, v + rng.normal(size=v.shape))
     assert s2.total == pytest.approx(s2.translational + s2.internal, rel=1e-12)
     assert s2.deformation > 0
+
+
+def test_kinetic_energy_split_of_a_rotor():
+    """Collinear masses (one principal moment exactly 0): spin about z at w,
+    a drift V and a stretch along the rod with no momentum.  T_rot = I w^2 / 2
+    with I = sum m x^2 = 1.5, T_def the stretch's energy; no 1/0 on the way."""
+    m = np.array([1.0, 2.0])
+    x = np.array([[-1.0, 0.0, 0.0], [0.5, 0.0, 0.0]])          # com at the origin
+    w, V = 0.8, np.array([0.3, -0.2, 0.1])
+    stretch = np.array([[0.2, 0.0, 0.0], [-0.1, 0.0, 0.0]])
+    v = np.cross([0.0, 0.0, w], x) + V + stretch
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        s = mi.kinetic_energy_split(m, x, v)
+    # measured: within 1 ulp (deformation 9e-16)
+    assert s.translational == pytest.approx(0.5 * 3.0 * V @ V, rel=1e-15)
+    assert s.rotational == pytest.approx(0.5 * 1.5 * w * w, rel=1e-15)
+    assert s.deformation == pytest.approx(0.5 * (0.2 ** 2 + 2 * 0.1 ** 2), rel=5e-15)
+    np.testing.assert_allclose(s.omega, [0.0, 0.0, w], rtol=1e-15, atol=0)
 
 
 def test_particle_helpers_bad_input():

@@ -539,6 +539,25 @@ def test_chunked_chain_solve_equals_one_call():
     check_sign_rule(Z.T)
 
 
+@pytest.mark.parametrize("sparse", [False, True])
+def test_one_degree_of_freedom(sparse):
+    """A single mass on a spring, dense or scipy.sparse: omega = sqrt(k/m),
+    the mode normalised to v^T M v = 1, and the exact motion at a scalar t
+    q = q0 cos wt + v0 sin(wt)/w, q' = v0 cos wt - q0 w sin wt."""
+    k, m = 3.0, 0.75
+    K, M = np.array([[k]]), np.array([[m]])
+    md = normal_modes(sp.csr_array(K), sp.csr_array(M)) if sparse else normal_modes(K, M)
+    w = np.sqrt(k / m)
+    assert md.omega == pytest.approx([w], rel=1e-15)                 # measured: exact
+    assert abs(md.vectors[0, 0]) == pytest.approx(m ** -0.5, rel=1e-15)
+    q0, v0, t = 0.3, -0.5, 1.7
+    q, v = md.evolve([q0], [v0], t, velocities=True)
+    assert q.shape == v.shape == (1,)
+    # measured: 1 ulp
+    assert q[0] == pytest.approx(q0 * np.cos(w * t) + v0 * np.sin(w * t) / w, rel=1e-14)
+    assert v[0] == pytest.approx(v0 * np.cos(w * t) - q0 * w * np.sin(w * t), rel=1e-14)
+
+
 def test_results_after_an_interrupted_solve_are_unchanged():
     # the same call in one process after an interrupted solve gives the fresh result
     import subprocess

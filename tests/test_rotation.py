@@ -1,5 +1,6 @@
 """mechpy.rotation against SciPy's Rotation, the textbook formulas of section 5
 and finite differences."""
+import re
 import warnings
 
 import numpy as np
@@ -227,6 +228,16 @@ def test_near_lock_angles_are_exact_down_to_the_smallest_normal(seq, passive, rn
         ref = Rotation.from_matrix(R.swapaxes(-1, -2) if passive else R).as_euler(seq)
     np.testing.assert_allclose(rot.euler_matrix(ref, seq=seq, passive=passive), R, atol=1e-8)
     np.testing.assert_allclose(rot.euler_matrix(b, seq=seq, passive=passive), R, atol=2e-15)
+
+
+@pytest.mark.parametrize("seq", SEQS)
+def test_lock_warning_names_the_lock_angle(seq):
+    # proper Euler sequences lock at theta = 0 or pi, Tait-Bryan ones at +-pi/2
+    exact, _ = lock_angles(seq)
+    R = exact_lock_matrix(seq, np.array([[0.7, exact[0], 0.4]]))
+    which = "0 or pi" if seq in PROPER else "+-pi/2"
+    with pytest.warns(rot.GimbalLockWarning, match=re.escape(f"{seq!r} at {which})")):
+        rot.euler_angles(R, seq, passive=False)
 
 
 @pytest.mark.parametrize("seq", PROPER)

@@ -96,6 +96,13 @@ def test_kepler_initial_state_is_pericentre_with_vis_viva(e, a, mu):
     assert mp.scenes.Kepler(mu=mu).energy(y) == pytest.approx(-mu / (2 * a), rel=1e-14)
 
 
+@pytest.mark.parametrize("e", [1.0, 1.5, -0.1, np.nan])
+def test_kepler_initial_state_refuses_unbound_eccentricity(e):
+    # a pericentre state of a closed orbit needs 0 <= e < 1 (e = 1: infinite speed)
+    with pytest.raises(ValueError, match="eccentricity"):
+        mp.scenes.Kepler().initial_state(e)
+
+
 def test_earth_omega_is_the_sidereal_rate():
     # one sidereal day is 86164.0905 s (IERS Conventions 2010, ch. 1; the IERS value
     # of Omega is 7.292115e-5 rad/s); mechpy's 7.2921159e-5 agrees to 7 digits
@@ -158,3 +165,24 @@ def test_variational_lagrangian_values():
     Ld = V.lagrangian(d)
     x, v = 0.8, 0.3
     assert Ld(x, v) == pytest.approx(v ** 2 / 2 - 0.5 * x ** 2 / 2 - 2.0 * x ** 4 / 4, rel=1e-14)
+
+
+def test_rocket_fly_closed_form_with_gravity():
+    """Marion & Thornton 9.11 with constant g, no drag: while burning
+    v = u ln(m0/m) - g t and h = (u/b)(m0 - m - m ln(m0/m)) - g t^2/2, m = m0 - b t;
+    after burn-out at t_b = (m0 - m_dry)/b a free flight.  fly() stops at t_b
+    (once, the mass there exactly m_dry) and goes on from it."""
+    u, b, m0, md, g = 2500.0, 10.0, 1000.0, 200.0, 9.81
+    r = mp.scenes.Rocket(exhaust_speed=u, burn_rate=b, m0=m0, m_dry=md, g=g)
+    tb, tf = (m0 - md) / b, 100.0
+    sol = r.fly((0.0, tf), rtol=1e-12, atol=1e-12)
+    assert sol.success
+    k = np.nonzero(sol.t == tb)[0]
+    assert len(k) == 1 and sol.y[2, k[0]] == md
+    vb = u * np.log(m0 / md) - g * tb
+    hb = u / b * (m0 - md - md * np.log(m0 / md)) - 0.5 * g * tb ** 2
+    # measured: 2.9e-13 (height), 4.3e-13 (speed), relative, at burn-out and at tf
+    np.testing.assert_allclose(sol.y[:2, k[0]], [hb, vb], rtol=4e-12)
+    dt = tf - tb
+    np.testing.assert_allclose(sol.y[:, -1], [hb + vb * dt - 0.5 * g * dt ** 2, vb - g * dt, md],
+                               rtol=4e-12)

@@ -385,8 +385,13 @@ static int free_setup(const double *I, const double *w, free_sol *S)
     double Dc = dsum(I, w, Ic);       /* 2E Ic - L^2 */
     double Da = -dsum(I, w, Ia);      /* L^2 - 2E Ia */
     double Db = -dsum(I, w, Ib);      /* L^2 - 2E Ib */
-    if (Da == 0.0) { /* pure rotation about a axis-c... or at rest */
-        S->A = S->B = S->lam = S->u0 = S->m = 0.0;
+    if (Da == 0.0) {
+        /* a steady rotation: at rest, or (Ia = Ib) w in the plane of the equal
+         * pair (w_c = 0; a triaxial body has Da = 0 only at rest).  w stays w0:
+         * lam = m = 0, w_a = A cos u0, w_b = B sin u0, w_c = C. */
+        S->A = S->B = hypot(w[a], w[b]);
+        S->u0 = atan2(w[b], w[a]);
+        S->lam = S->m = 0.0;
         S->C = w[c];
         S->sc = 1.0;
         S->K = INFINITY;
