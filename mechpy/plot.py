@@ -20,6 +20,53 @@ def _plt():
     return plt
 
 
+def _func_animation(fig, func, **kw):
+    """A matplotlib FuncAnimation drawing each frame once when saved.
+
+    ``FuncAnimation.save`` (and ``to_jshtml``, which saves) redraws the canvas
+    after each frame and then again for the writer; the first redraw is
+    skipped while saving (the frames written are the same, a third of the
+    drawing less).  Shown live, it is the ordinary animation."""
+    from matplotlib import animation
+
+    class _Animation(animation.FuncAnimation):
+        _saving = False
+
+        def _post_draw(self, framedata, blit):
+            if not self._saving:
+                super()._post_draw(framedata, blit)
+
+        def save(self, *args, **kwargs):
+            self._saving = True
+            try:
+                return super().save(*args, **kwargs)
+            finally:
+                self._saving = False
+
+    return _Animation(fig, func, **kw)
+
+
+def _state_labels(system):
+    """Axis labels, with units, of a two-state system's (q, q_dot): from the
+    scene's type, its coordinate names (compiled scenes), or generic ones."""
+    from .scenes import Pendulum, Scene, VanDerPol
+    if isinstance(system, Pendulum):
+        return r"$\theta$ (rad)", r"$\dot\theta$ (rad/s)"
+    if isinstance(system, VanDerPol):
+        return "$x$ (dimensionless)", r"$\dot x$ (dimensionless)"
+    names = getattr(system, "coordinates", None) if isinstance(system, Scene) else None
+    if isinstance(names, (list, tuple)) and len(names) == 1 and isinstance(names[0], str):
+        return f"{names[0]} (model units)", f"d{names[0]}/dt (model units/s)"
+    return "$y_0$ (state units)", r"$y_1$ (state units)"
+
+
+def _colorbar(ax, mappable, label):
+    """A colorbar beside ``ax`` for ``mappable``, labelled (with units)."""
+    cb = ax.figure.colorbar(mappable, ax=ax, pad=0.02, fraction=0.05)
+    cb.set_label(label)
+    return cb
+
+
 def _field(system, X, Y, t=0.0):
     """(U, V) of a 2-D system on the grid (X, Y)."""
     from .scenes import Scene
@@ -36,8 +83,13 @@ def _field(system, X, Y, t=0.0):
 
 def phase_portrait(system, xlim=(-2 * np.pi, 2 * np.pi), ylim=(-4.0, 4.0), *, t=0.0,
                    trajectories=(), t_max=20.0, grid=41, nullclines=True, ax=None,
-                   labels=("x", "x_dot")):
-    """Streamlines of a 2-D system's vector field, nullclines and trajectories.
+                   labels=None, colorbar=True):
+    r"""Streamlines of a 2-D system's vector field, nullclines and trajectories.
+
+    The streamlines are coloured by the speed of the flow in the state plane,
+    :math:`|\mathbf f(t, \mathbf y)|`, with a colorbar; the nullclines
+    (dashed) and the trajectories (black, a dot at each start) are named in a
+    legend below the axes.
 
     Parameters
     ----------
@@ -45,41 +97,84 @@ def phase_portrait(system, xlim=(-2 * np.pi, 2 * np.pi), ylim=(-4.0, 4.0), *, t=
         A two-dimensional system.
     xlim, ylim : (float, float)
         The window in the state plane.
+    t : float
+        Time at which the field is drawn (driven systems).
     trajectories : sequence of initial states (2,)
         Each is integrated with :func:`mechpy.solve` over ``[0, t_max]`` and drawn.
+    t_max : float
+        Length of each trajectory (time units of the system).
     grid : int
         Grid points per axis for the streamlines.
+    nullclines : bool
+        Draw the curves where each component of the field vanishes.
+    ax : matplotlib Axes, optional
+        Where to draw; a new figure otherwise.
+    labels : (str, str), optional
+        Axis labels, with units.  Default: from the scene (``theta (rad)`` and
+        ``theta_dot (rad/s)`` for a :class:`~mechpy.scenes.Pendulum`, the
+        coordinate's name for a compiled scene), generic otherwise.
+    colorbar : bool
+        Add the colorbar of the speed beside the axes.
 
     Returns
     -------
     matplotlib.axes.Axes
     """
     plt = _plt()
+    from matplotlib.colors import PowerNorm
+    from matplotlib.lines import Line2D
     grid = as_int(grid, "grid", minimum=3)
     xlim = as_array(xlim, "xlim", shape=(2,))
     ylim = as_array(ylim, "ylim", shape=(2,))
+    if labels is None:
+        labels = _state_labels(system)
+    elif (not isinstance(labels, (list, tuple)) or len(labels) != 2
+          or not all(isinstance(lb, str) for lb in labels)):
+        raise ValueError(f"labels must be two strings (x label, y label), got {labels!r}")
     if ax is None:
-        _, ax = plt.subplots(figsize=(6, 4.5))
+        _, ax = plt.subplots(figsize=(6.5, 5), layout="constrained")
     x = np.linspace(*xlim, grid)
     y = np.linspace(*ylim, grid)
     X, Y = np.meshgrid(x, y)
     U, V = _field(system, X, Y, t)
     speed = np.hypot(U, V)
-    ax.streamplot(X, Y, U, V, color=np.log1p(speed), cmap="viridis", density=1.2,
-                  linewidth=0.7, arrowsize=0.8)
+    finite = speed[np.isfinite(speed)]
+    top = float(finite.max()) if finite.size and finite.max() > 0 else 1.0
+    # a square-root scale: the slow flow near fixed points keeps its colours
+    strm = ax.streamplot(X, Y, U, V, color=speed, cmap="viridis",
+                         norm=PowerNorm(0.5, vmin=0.0, vmax=top), density=1.2,
+                         linewidth=0.7, arrowsize=0.8)
+    handles = []
     if nullclines:
         ax.contour(X, Y, U, levels=[0.0], colors="tab:red", linewidths=0.8, linestyles="--")
         ax.contour(X, Y, V, levels=[0.0], colors="tab:orange", linewidths=0.8, linestyles="--")
+        names = [lb.rsplit(" (", 1)[0] for lb in labels]     # the symbols, without units
+        handles += [Line2D([], [], color="tab:red", lw=0.8, ls="--",
+                           label=f"nullcline d{names[0]}/dt = 0"),
+                    Line2D([], [], color="tab:orange", lw=0.8, ls="--",
+                           label=f"nullcline d{names[1]}/dt = 0")]
     from .integrate import solve
     for y0 in trajectories:
         s = solve(system, (0.0, t_max), as_array(y0, "trajectory start", shape=(2,)),
                   t_eval=np.linspace(0.0, t_max, 2000), rtol=1e-9)
         ax.plot(s.y[0], s.y[1], color="k", lw=1.2)
         ax.plot(*s.y[:, 0], "o", color="k", ms=3)
+    if len(trajectories):
+        handles.append(Line2D([], [], color="k", lw=1.2, marker="o", ms=3,
+                              label="trajectories (dot: start)"))
     ax.set_xlim(*xlim)
     ax.set_ylim(*ylim)
     ax.set_xlabel(labels[0])
     ax.set_ylabel(labels[1])
+    if not ax.get_title():
+        from .scenes import Scene
+        name = type(system).__name__ if isinstance(system, Scene) else "f(t, y)"
+        ax.set_title(f"phase portrait of {name}")
+    if colorbar:
+        _colorbar(ax, strm.lines, "speed of the flow |dy/dt| (axis units/s)")
+    if handles:
+        ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.16),
+                  ncol=len(handles), fontsize=7, frameon=False)
     return ax
 
 
@@ -116,19 +211,21 @@ def work_precision(rows, problem=None, *, ax=None):
                  "s--" if impl.startswith("scipy") else "^:")
         ax.loglog([p[1] for p in pts], [p[2] for p in pts], style, label=impl, ms=3.5,
                   color=colors(i % colors.N), lw=1.6 if impl.startswith("mechpy") else 1.1)
-    ax.set_xlabel("median wall time [s]")
-    ax.set_ylabel("error at final time")
-    ax.set_title(problem)
+    ax.set_xlabel("median wall time (s)")
+    ax.set_ylabel("error at the final time (state units)")
+    ax.set_title(f"work-precision: {problem}")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5))
     return ax
 
 
-def modes(m, which=None, *, positions=None, ax=None):
+def modes(m, which=None, *, positions=None, ax=None, position_unit="m"):
     """Mode shapes of a :class:`mechpy.modes.Modes`: the displacement of each
     coordinate in the chosen modes (default: up to the six lowest), each
     labelled with its angular frequency (rad/s).  ``positions`` places the
-    coordinates along the horizontal axis (default 1..n).  Returns the Axes."""
+    coordinates along the horizontal axis (default 1..n, in units of
+    ``position_unit``).  The shapes are M-normalised (:math:`a^T M a = 1`: in
+    kg^-1/2 for masses in kg).  Returns the Axes."""
     plt = _plt()
     V = np.asarray(m.vectors)
     n = V.shape[0]
@@ -136,20 +233,22 @@ def modes(m, which=None, *, positions=None, ax=None):
         [as_int(k, "which", minimum=0, maximum=V.shape[1] - 1) for k in np.atleast_1d(which)]
     x = np.arange(1, n + 1) if positions is None else as_array(positions, "positions", shape=(n,))
     if ax is None:
-        _, ax = plt.subplots(figsize=(6.5, 4))
+        _, ax = plt.subplots(figsize=(8, 4), layout="constrained")
     for k in idx:
-        ax.plot(x, V[:, k], "o-", ms=3, label=f"mode {k + 1}: omega = {m.omega[k]:.4g} rad/s")
+        ax.plot(x, V[:, k], "o-", ms=3, label=rf"mode {k + 1}: $\omega$ = {m.omega[k]:.4g} rad/s")
     ax.axhline(0.0, color="0.6", lw=0.6)
-    ax.set_xlabel("coordinate")
-    ax.set_ylabel("mode shape (M-normalised)")
-    ax.legend(fontsize=7)
+    ax.set_xlabel("coordinate index i (count)" if positions is None
+                  else f"equilibrium position ({position_unit})")
+    ax.set_ylabel(r"mode shape $a_i$ (kg$^{-1/2}$, $a^T M a = 1$)")
+    ax.set_title("normal modes: shapes and angular frequencies")
+    ax.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5))
     return ax
 
 
-def trajectory3d(path, *, ax=None, **line_kw):
+def trajectory3d(path, *, ax=None, unit="m", **line_kw):
     """A curve in space: ``path`` of shape (3, m) (e.g. ``sol.y[:3]``), or a
     :class:`mechpy.Solution` whose first three components are drawn.  Marks the
-    start.  Returns the 3-D Axes."""
+    start; the axes are labelled x, y, z in ``unit``.  Returns the 3-D Axes."""
     plt = _plt()
     y = path.y if hasattr(path, "y") else path
     y = as_array(y, "path", ndim=2)
@@ -160,9 +259,11 @@ def trajectory3d(path, *, ax=None, **line_kw):
         ax = fig.add_subplot(projection="3d")
     ax.plot(y[0], y[1], y[2], **({"lw": 1.0} | line_kw))
     ax.plot([y[0, 0]], [y[1, 0]], [y[2, 0]], "o", color="k", ms=4)
-    ax.set_xlabel("x")
-    ax.set_ylabel("y")
-    ax.set_zlabel("z")
+    ax.set_xlabel(f"x ({unit})")
+    ax.set_ylabel(f"y ({unit})")
+    ax.set_zlabel(f"z ({unit})")
+    if not ax.get_title():
+        ax.set_title("path in space (dot: start)")
     return ax
 
 
@@ -283,7 +384,6 @@ def animate_field(system, xlim=(-2 * np.pi, 2 * np.pi), ylim=(-4.0, 4.0), *, par
 def _animate_field(system, xlim, ylim, *, particles, frames, dt, trail, respawn, t, seed, path,
                    interval):
     plt = _plt()
-    from matplotlib import animation
     from matplotlib.collections import LineCollection
     particles = as_int(particles, "particles", minimum=1)
     frames = as_int(frames, "frames", minimum=1)
@@ -306,6 +406,10 @@ def _animate_field(system, xlim, ylim, *, particles, frames, dt, trail, respawn,
     ax.set_xlim(*xlim)
     ax.set_ylim(*ylim)
     ax.set_facecolor("black")
+    xl, yl = _state_labels(system)
+    ax.set_xlabel(xl)
+    ax.set_ylabel(yl)
+    ax.set_title(f"particles carried by the field, {dt:g} time units per frame")
     lc = LineCollection([], linewidths=1.0)
     ax.add_collection(lc)
     alphas = np.linspace(0.05, 1.0, trail - 1)
@@ -333,7 +437,7 @@ def _animate_field(system, xlim, ylim, *, particles, frames, dt, trail, respawn,
         lc.set_color(colors)
         return (lc,)
 
-    anim = animation.FuncAnimation(fig, step, frames=frames, interval=interval, blit=True)
+    anim = _func_animation(fig, step, frames=frames, interval=interval, blit=True)
     if path is not None:
         _save(anim, path, max(1, 1000 // interval))
     return anim
@@ -467,6 +571,8 @@ def _planar_pendulum(ax, system, t, y, trail, lengths):
     xs = np.cumsum(ls[:, None] * np.sin(y[:ls.size]), axis=0)
     ys = np.cumsum(-ls[:, None] * np.cos(y[:ls.size]), axis=0)
     _square_view(ax, ls.sum() * 1.12, "x (m)", "y, up (m)")
+    ax.set_title("double pendulum: rods, bobs, lower bob's trail" if two
+                 else "pendulum: rod, bob and its trail")
     tr = _trail(ax, "tab:orange")
     (rod,) = ax.plot([], [], "-", color="0.3", lw=2, gid="rod")
     (bob,) = ax.plot([], [], "o", color="tab:blue", ms=10, gid="bob", zorder=3)
@@ -484,6 +590,7 @@ def _foucault(ax, system, t, y, trail, lengths):
     """The bob seen from above, tracing its rosette in the floor plane."""
     _square_view(ax, np.max(np.hypot(y[0], y[1])) * 1.15 or 1.0, "x, east (m)",
                  "y, north (m)")
+    ax.set_title("Foucault pendulum seen from above")
     tr = _trail(ax, "tab:blue")
     (bob,) = ax.plot([], [], "o", color="tab:red", ms=8, gid="bob", zorder=3)
     first = _window(t, trail)
@@ -496,13 +603,15 @@ def _foucault(ax, system, t, y, trail, lengths):
 
 
 def _sphere_axes(ax, label):
+    """The unit cube around the unit sphere, at equal aspect, its axes labelled
+    (the components of unit vectors, dimensionless)."""
     ax.set_xlim(-1, 1)
     ax.set_ylim(-1, 1)
     ax.set_zlim(-1, 1)
     ax.set_box_aspect((1, 1, 1))
-    ax.set_xlabel("x")
-    ax.set_ylabel("y")
-    ax.set_zlabel(label)
+    ax.set_xlabel("x (unit vector)")
+    ax.set_ylabel("y (unit vector)")
+    ax.set_zlabel(f"{label} (unit vector)")
 
 
 def _top(ax, system, t, y, trail, lengths):
@@ -513,6 +622,7 @@ def _top(ax, system, t, y, trail, lengths):
     e3 = euler_matrix(y[0], y[1], y[2])[:, 2, :]        # passive lambda: row 3 is e3
     p = system.params
     _sphere_axes(ax, "z, up")
+    ax.set_title("heavy top: symmetry axis and its tip")
     phi = np.linspace(0.0, 2 * np.pi, 121)
     try:
         bounds = nutation_bounds(p["I1"], p["I3"], p["mass"], p["g"], p["l"], y[1, 0],
@@ -553,6 +663,7 @@ def _rigid(ax, system, t, y, trail, lengths):
     L = np.einsum("mij,jm->mi", R, system.moments[:, None] * y[:3])
     Lhat = L[0] / (np.linalg.norm(L[0]) or 1.0)
     _sphere_axes(ax, "z")
+    ax.set_title("free rigid body: body axes in space")
     ax.plot([0, Lhat[0]], [0, Lhat[1]], [0, Lhat[2]], "k--", lw=1, gid="L",
             label="angular momentum L (fixed)")
     arts, trails = [], []
@@ -588,7 +699,8 @@ def _chain(ax, system, t, y, trail, lengths):
     ax.set_xlim(lo, hi)
     ax.set_ylim(row - 0.6 * A, 1.25 * A)
     ax.set_xlabel("mass index (equilibrium position, spacings)")
-    ax.set_ylabel("displacement x_i (m)")
+    ax.set_ylabel("displacement $x_i$ (m)")
+    ax.set_title("spring chain: displacements and masses")
     ax.axhline(0.0, color="0.7", lw=0.6)
     for w in walls:
         ax.plot([w, w], [row - 0.3 * A, row + 0.3 * A], "k-", lw=3)
@@ -734,7 +846,6 @@ def animate(system, sol, *, kind=None, t=None, frames=None, fps=20, trail=None, 
     [0, 2, 4, 6]
     """
     plt = _plt()
-    from matplotlib import animation
     kind = _kind_of(system, kind, getattr(system, "dim", 0))
     tt, y = _samples(system, sol, t)
     m = tt.size
@@ -768,8 +879,10 @@ def animate(system, sol, *, kind=None, t=None, frames=None, fps=20, trail=None, 
     frame(0)
     if fig.get_layout_engine() is None:
         fig.tight_layout()
-    anim = animation.FuncAnimation(fig, frame, frames=samples.size, interval=1000.0 / fps,
-                                   blit=False)
+        # tight_layout leaves a placeholder engine behind, which makes every savefig
+        # (every frame of to_jshtml) draw the figure twice
+        fig.set_layout_engine(None)
+    anim = _func_animation(fig, frame, frames=samples.size, interval=1000.0 / fps, blit=False)
     anim.samples = samples
     if path is not None:
         _save(anim, path, fps)

@@ -1,4 +1,6 @@
 """mechpy.plot draws what it is given (Agg backend, no display)."""
+import re
+
 import matplotlib
 
 matplotlib.use("Agg")
@@ -296,4 +298,150 @@ def test_animate_bad_input():
         top = mp.scenes.HeavyTop(0.5, 0.2, 1.0)
         mp.plot.animate(top, np.tile([[0.0], [0.8], [0], [0], [0], [15]], 3), t=[0, 1, 2],
                         ax=fig.add_subplot())
+    plt.close("all")
+
+
+# ------------------------------------------------------------ readable figures
+
+UNIT = re.compile(r"\(.+\)")      # every axis label ends in its unit: "t (s)", "x (unit vector)"
+
+
+def _colorbars(fig):
+    return [a for a in fig.axes if getattr(a, "_colorbar", None) is not None]
+
+
+def _plot_axes(fig):
+    return [a for a in fig.axes if getattr(a, "_colorbar", None) is None]
+
+
+def _legend_off_the_data(ax):
+    """No vertex of a drawn line lies under the legend (2-D axes)."""
+    leg = ax.get_legend()
+    if leg is None or ax.name == "3d":
+        return True
+    ax.figure.canvas.draw()
+    box = leg.get_window_extent()
+    for ln in ax.lines:
+        xy = np.column_stack([np.asarray(v, float) for v in ln.get_data()])
+        if ln.get_visible() and xy.size and box.count_contains(ln.get_transform().transform(xy)):
+            return False
+    return True
+
+
+def assert_readable(fig, coloured=False):
+    """Axes labelled with units, a title, legends off the data, and a labelled
+    colorbar when colour carries a value."""
+    for ax in _plot_axes(fig):
+        labels = [ax.get_xlabel(), ax.get_ylabel()]
+        if ax.name == "3d":
+            labels.append(ax.get_zlabel())
+        for lb in labels:
+            assert UNIT.search(lb), f"axis label {lb!r} names no unit"
+        assert ax.get_title(), "the axes have no title"
+        assert _legend_off_the_data(ax), f"the legend of {ax.get_title()!r} covers data"
+    cbs = _colorbars(fig)
+    if coloured:
+        assert cbs, "colour carries a value but there is no colorbar"
+    for cax in cbs:
+        assert UNIT.search(cax.get_ylabel()), f"colorbar label {cax.get_ylabel()!r} names no unit"
+
+
+def test_phase_portrait_is_readable_and_its_colorbar_is_the_speed():
+    pend = mp.scenes.Pendulum(g=1.0, length=1.0)
+    ax = mp.plot.phase_portrait(pend, (-4, 4), (-3, 3), grid=31, trajectories=[[0.0, 1.0]],
+                                t_max=5)
+    fig = ax.figure
+    assert_readable(fig, coloured=True)
+    assert ax.get_xlabel() == r"$\theta$ (rad)" and ax.get_ylabel() == r"$\dot\theta$ (rad/s)"
+    (cax,) = _colorbars(fig)
+    # the field of the pendulum is (theta_dot, -sin theta): its largest speed on the grid
+    X, Y = np.meshgrid(np.linspace(-4, 4, 31), np.linspace(-3, 3, 31))
+    top = np.hypot(Y, np.sin(X)).max()
+    norm = cax._colorbar.norm
+    assert norm.vmin == 0.0 and abs(norm.vmax - top) < 1e-12 * top   # measured 0 (same sums)
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert labels == [r"nullcline d$\theta$/dt = 0", r"nullcline d$\dot\theta$/dt = 0",
+                      "trajectories (dot: start)"]
+    plt.close("all")
+    ax = mp.plot.phase_portrait(lambda t, y: np.array([y[1], -y[0]]), (-1, 1), (-1, 1), grid=5,
+                                colorbar=False, labels=("q (m)", "p (m/s)"))
+    assert _colorbars(ax.figure) == [] and ax.get_title() == "phase portrait of f(t, y)"
+    assert ax.get_xlabel() == "q (m)"
+    with pytest.raises(ValueError, match="labels"):
+        mp.plot.phase_portrait(pend, labels="theta")
+    plt.close("all")
+
+
+def test_phase_portrait_labels_a_compiled_scene_by_its_coordinate():
+    (x,) = mp.coordinates("x")
+    scene = mp.lagrangian(x.diff() ** 2 / 2 - x ** 2 / 2, [x])
+    ax = mp.plot.phase_portrait(scene, (-1, 1), (-1, 1), grid=5)
+    assert ax.get_xlabel() == "x (model units)" and ax.get_ylabel() == "dx/dt (model units/s)"
+    plt.close("all")
+
+
+def test_work_precision_modes_and_trajectory3d_are_readable():
+    rows = [dict(problem="p", impl=i, time=t, error=e) for i, t, e in
+            [("a", 1e-3, 1e-4), ("a", 2e-3, 1e-8), ("b", 1e-2, 1e-4), ("b", 3e-2, 1e-8)]]
+    assert_readable(mp.plot.work_precision(rows).figure)
+    K, M = mp.modes.chain(5)
+    assert_readable(mp.plot.modes(mp.modes.normal_modes(K, M)).figure)
+    ax = mp.plot.modes(mp.modes.normal_modes(K, M), positions=np.arange(5) * 0.1,
+                       position_unit="cm")
+    assert ax.get_xlabel() == "equilibrium position (cm)"
+    y = np.vstack([np.cos(np.linspace(0, 6, 50)), np.sin(np.linspace(0, 6, 50)),
+                   np.linspace(0, 1, 50)])
+    assert_readable(mp.plot.trajectory3d(y).figure)
+    plt.close("all")
+
+
+def test_animate_field_is_readable():
+    anim = mp.plot.animate_field(mp.scenes.VanDerPol(), particles=5, frames=1, trail=2)
+    assert_readable(anim._fig)
+    assert anim._fig.axes[0].get_xlabel() == "$x$ (dimensionless)"
+    plt.close("all")
+
+
+def _motions():
+    import sympy as sp
+    th1, th2 = mp.coordinates("theta1 theta2")
+    w1, w2 = th1.diff(), th2.diff()
+    l1, l2 = sp.symbols("l1 l2")
+    L = (l1**2 * w1**2 + l2**2 * w2**2 / 2 + l1 * l2 * w1 * w2 * sp.cos(th1 - th2)
+         + 9.81 * (2 * l1 * sp.cos(th1) + l2 * sp.cos(th2)))
+    dp = mp.lagrangian(L, [th1, th2], params=dict(l1=1.0, l2=0.7))
+    return [(mp.scenes.Pendulum(), [1.0, 0.0]), (dp, [1.0, 0.5, 0.0, 0.0]),
+            (mp.scenes.Foucault(48.9, 1.0, omega=0.25), [1.0, 0.0, 0.0, 0.0]),
+            (mp.scenes.HeavyTop(0.5, 0.2, 1.0, 9.81, 0.1), [0.0, 0.8, 0.0, 0.0, 0.0, 15.0]),
+            (mp.scenes.RigidBody([1.0, 2.0, 3.0]), [0.02, 1.0, 0.01]),
+            (mp.scenes.SpringChain(np.ones(4), 1.0), [0.1, 0.0, 0.0, 0.0, 0, 0, 0, 0])]
+
+
+def test_every_animation_is_readable():
+    for scene, y0 in _motions():
+        sol = mp.solve(scene, (0, 1), y0, t_eval=np.linspace(0, 1, 6))
+        anim = mp.plot.animate(scene, sol, frames=3)
+        assert_readable(anim._fig)
+        plt.close("all")
+
+
+def test_to_jshtml_draws_each_frame_once(monkeypatch):
+    from matplotlib.figure import Figure
+    p = mp.scenes.Pendulum()
+    sol = mp.solve(p, (0, 1), [1.0, 0.0], t_eval=np.linspace(0, 1, 9))
+    anims = [mp.plot.animate(p, sol),
+             mp.plot.animate_field(mp.scenes.VanDerPol(), particles=5, frames=9, trail=2)]
+    draw = Figure.draw
+    count = [0]
+
+    def counted(self, renderer):
+        count[0] += 1
+        return draw(self, renderer)
+    monkeypatch.setattr(Figure, "draw", counted)
+    for anim in anims:
+        count[0] = 0
+        html = anim.to_jshtml()
+        # 9 frames in the page; matplotlib's own save draws each three times (27)
+        assert html.count("data:image/png;base64") == 9
+        assert count[0] == 9, count[0]
     plt.close("all")
