@@ -68,7 +68,8 @@ def _strip_times(messages):
 
 
 def test_cases_cover_every_scene():
-    classes = {c.__name__ for c in S.Scene.__subclasses__()}
+    # the C scenes (a row of the scene table); compiled scenes are cased apart
+    classes = {c.__name__ for c in S.Scene.__subclasses__() if getattr(c, "_model", None)}
     assert classes <= {type(s).__name__ for s, _, _ in CASES.values()}
 
 
