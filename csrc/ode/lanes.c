@@ -55,11 +55,6 @@ typedef struct {
 
 /* ---- evaluation ------------------------------------------------------------ */
 
-/* Contract: f = f(dir s, y) (times dir) for the lanes with on[l]: through the
- * scene's lane rhs, else each lane's scalar problem (gather, call, scatter).
- * Counts nfev per lane; rc[l] = the lane's status, MP_ENONFINITE (recording
- * the component) for a NaN or inf, as mp_ode_ws_rhs does.  A lane that fails
- * is taken out of on. */
 /* Contract: each lane's scalar problem at (t[l], lane l of y) into lane l
  * of f, for the lanes in on; st[l] its status. */
 static void lane_eval_generic(lane_group *g, const double *t, const double *y, double *f,
@@ -75,6 +70,11 @@ static void lane_eval_generic(lane_group *g, const double *t, const double *y, d
     }
 }
 
+/* Contract: f = f(dir s, y) (times dir) for the lanes with on[l]: through the
+ * scene's lane rhs, else each lane's scalar problem (gather, call, scatter).
+ * Counts nfev per lane; rc[l] = the lane's status, MP_ENONFINITE (recording
+ * the component) for a NaN or inf, as mp_ode_ws_rhs does.  A lane that fails
+ * is taken out of on. */
 static inline void lane_eval(lane_group *g, const double *s, const double *y, double *f,
                              int *on, int *rc)
 {
