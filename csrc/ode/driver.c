@@ -476,19 +476,23 @@ typedef struct {
     double *g_old, *g_sub, *gtmp; ev_hit *hits; /* events: one block, and the hits */
 } ode_run;
 
-/* Contract: MP_OK when the arguments of a forward solve are in its domain:
- * n > 0, t0 < tf finite, rtol > 0, a budget, max_step > 0, for a fixed-step
- * method h > 0 large enough to advance t, y0 finite and atol >= 0; else
- * MP_EDOM. */
-static int check_args(const mp_ode_method *m, const mp_ode_problem *p, double t0, double tf,
-                      const double *y0, const mp_ode_options *o)
+int mp_ode_span_ok(const mp_ode_method *m, double t0, double tf, const mp_ode_options *o)
 {
-    if (p->n == 0 || !(tf > t0) || !isfinite(t0) || !isfinite(tf) || !(o->rtol > 0) ||
+    if (!(t0 != tf) || !isfinite(t0) || !isfinite(tf) || !(o->rtol > 0) ||
         !(o->max_steps > 0) || (!m->adaptive && !(o->h > 0)) || !(o->max_step > 0))
         return MP_EDOM;
     /* a fixed step below the spacing of floats at t would never advance t */
     double tmax = fmax(fabs(t0), fabs(tf));
     if (!m->adaptive && !(tmax + o->h > tmax)) return MP_EDOM;
+    return MP_OK;
+}
+
+/* Contract: MP_OK when the arguments of a forward solve are in its domain:
+ * n > 0, t0 < tf, mp_ode_span_ok, y0 finite and atol >= 0; else MP_EDOM. */
+static int check_args(const mp_ode_method *m, const mp_ode_problem *p, double t0, double tf,
+                      const double *y0, const mp_ode_options *o)
+{
+    if (p->n == 0 || !(tf > t0) || mp_ode_span_ok(m, t0, tf, o) != MP_OK) return MP_EDOM;
     for (size_t i = 0; i < p->n; i++)
         if (!isfinite(y0[i]) || !(o->atol[i] >= 0)) return MP_EDOM;
     return MP_OK;

@@ -149,13 +149,8 @@ int mp_ode_lanes_supported(const mp_ode_method *m, const mp_ode_options *o, doub
 {
     int method = strcmp(m->name, "dopri5") == 0 || strcmp(m->name, "dop853") == 0 ||
                  strcmp(m->name, "rk4") == 0;
-    if (!method || o->n_eval == 0 || o->dense || o->n_events) return 0;
-    double span = fabs(tf - t0), tmax = fmax(fabs(t0), fabs(tf));
-    if (!(span > 0) || !isfinite(t0) || !isfinite(tf) || !(o->rtol > 0) || !(o->max_steps > 0) ||
-        !(o->max_step > 0))
-        return 0;
-    if (!m->adaptive && !(o->h > 0 && tmax + o->h > tmax)) return 0;
-    return 1;
+    return method && o->n_eval > 0 && !o->dense && !o->n_events &&
+           mp_ode_span_ok(m, t0, tf, o) == MP_OK;
 }
 
 /* Contract: the lane driver built for this processor: AVX2+FMA when it has

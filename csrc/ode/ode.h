@@ -213,6 +213,12 @@ int mp_ode_finish_fnew_hermite(mp_ode_ws *w, double t, double h, int need_dense)
 extern const mp_ode_method *const mp_ode_methods[];
 const mp_ode_method *mp_ode_method_find(const char *name);
 
+/* MP_OK when a solve of m from t0 to tf (either way) with options o is in the
+ * domain every solve checks at its start: t0 != tf finite, rtol > 0, a budget,
+ * max_step > 0, for a fixed-step method h > 0 large enough to advance t; else
+ * MP_EDOM.  (The state's checks - n, y0, atol - are the solve's own.) */
+int mp_ode_span_ok(const mp_ode_method *m, double t0, double tf, const mp_ode_options *o);
+
 /* Integrate from t0 to tf (tf < t0 integrates backwards: the driver solves
  * dy/ds = -f(-s, y) for s = -t from -t0 to -tf, maps t_eval, events and the
  * Jacobian, and returns times t; dense segments stay in s, r->backward = 1).
