@@ -583,6 +583,40 @@ def test_fixed_step_non_finite_found_where_the_plain_loop_finds_it(method, t_eva
                  h=1.0)
 
 
+# every right-hand side with fixed-step blocks of its own (ode/fixed.h: the
+# scene's rhs inlined) and some without (the generic block, f behind its
+# pointer); y0 and whether the symplectic methods apply
+_S = mp.scenes
+FIXED_BLOCK_CASES = {
+    "Pendulum": (_S.Pendulum(), [2.5, 0.0], True),
+    "Pendulum damped": (_S.Pendulum(damping=0.3), [2.5, 0.0], False),
+    "Pendulum driven": (_S.Pendulum(drive_amplitude=0.5, drive_frequency=1.2), [2.5, 0.0], True),
+    "Duffing": (_S.Duffing(alpha=-1.0, beta=1.0), [1.0, 0.0], True),
+    "Duffing driven": (_S.Duffing(alpha=-1.0, beta=1.0, gamma=0.3, omega=1.2), [1.0, 0.0], True),
+    "VanDerPol": (_S.VanDerPol(mu=2.0), [2.0, 0.0], False),
+    "Kepler": (_S.Kepler(), [1.0, 0.0, 0.0, 1.1], True),
+    # generic blocks
+    "SpringChain": (_S.SpringChain(masses=[1.0, 2.0, 1.0], alpha=0.25), [0.1, 0.0, -0.1, 0, 0, 0],
+                    True),
+    "Foucault": (_S.Foucault(latitude=45.0, length=10.0), [0.1, 0.0, 0.0, 0.0], False),
+}
+
+
+@pytest.mark.parametrize("method", ["rk4", "verlet", "yoshida4", "yoshida6"])
+@pytest.mark.parametrize("name", sorted(FIXED_BLOCK_CASES))
+def test_fixed_step_blocks_equal_the_checked_loop(name, method):
+    # the fast blocks (a scene's own, or the generic one) against the checked
+    # loop every step of which is a method row's step (dense output keeps the
+    # driver out of the blocks): the same states and counts, bit for bit
+    scene, y0, separable = FIXED_BLOCK_CASES[name]
+    if method != "rk4" and not separable:
+        pytest.skip("not separable")
+    fast = mp.solve(scene, (0, 12.345), y0, method=method, h=0.01)
+    checked = mp.solve(scene, (0, 12.345), y0, method=method, h=0.01, dense_output=True)
+    assert fast.nsteps == checked.nsteps == 1235 and fast.nfev == checked.nfev
+    assert np.array_equal(fast.t, checked.t) and np.array_equal(fast.y, checked.y)
+
+
 def test_scalar_atol_is_the_same_as_n_copies():
     # solve hands a scalar atol to the C core, which spreads it over the states
     p = mp.scenes.Kepler()

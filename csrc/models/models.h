@@ -18,6 +18,7 @@
 #include <stddef.h>
 
 #include "mp_status.h"
+#include "ode/fixed.h"
 #include "ode/lanes.h"
 #include "ode/ode.h"
 #include "variational.h"
@@ -121,6 +122,16 @@ static inline void mp_model_set(mp_ode_problem *prob, size_t n, mp_ode_rhs rhs, 
     prob->jac = jac;
     prob->data = (void *)params;
     prob->nq = nq;
+    prob->blocks = NULL;
+}
+
+/* mp_model_set for a right-hand side with its own fixed-step blocks
+ * (ode/fixed.h's MP_ODE_BLOCKS): rhs is blocks->rhs. */
+static inline void mp_model_set_blocks(mp_ode_problem *prob, size_t n, const mp_ode_blocks *b,
+                                       mp_ode_jac jac, const double *params, size_t nq)
+{
+    mp_model_set(prob, n, b->rhs, jac, params, nq);
+    prob->blocks = b;
 }
 
 #endif

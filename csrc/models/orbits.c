@@ -36,9 +36,11 @@ static int kepler_jac(double t, const double *y, double *J, void *d)
     return MP_OK;
 }
 
+MP_ODE_BLOCKS(kepler_blocks, kepler_rhs, 4, 2);
+
 static void kepler_bind(const double *p, mp_ode_problem *prob)
 {
-    mp_model_set(prob, 4, kepler_rhs, kepler_jac, p, 2);
+    mp_model_set_blocks(prob, 4, &kepler_blocks, kepler_jac, p, 2);
 }
 
 /* specific energy |v|^2/2 - mu/r */

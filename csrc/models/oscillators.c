@@ -50,11 +50,18 @@ static int pendulum_jac(double t, const double *y, double *J, void *d)
     return MP_OK;
 }
 
+/* the fixed-step blocks of each (the driven one is separable when undamped) */
+MP_ODE_BLOCKS(pendulum_free_blocks, pendulum_free, 2, 1);
+MP_ODE_BLOCKS(pendulum_damped_blocks, pendulum_damped, 2, 0);
+MP_ODE_BLOCKS(pendulum_driven_blocks, pendulum_driven, 2, 1);
+
 static void pendulum_bind(const double *p, mp_ode_problem *prob)
 {
-    mp_model_set(prob, 2,
-                 p[PA] != 0.0 ? pendulum_driven : p[PB] != 0.0 ? pendulum_damped : pendulum_free,
-                 pendulum_jac, p, p[PB] == 0.0 ? 1 : 0); /* separable unless damped */
+    mp_model_set_blocks(prob, 2,
+                        p[PA] != 0.0   ? &pendulum_driven_blocks
+                        : p[PB] != 0.0 ? &pendulum_damped_blocks
+                                       : &pendulum_free_blocks,
+                        pendulum_jac, p, p[PB] == 0.0 ? 1 : 0); /* separable unless damped */
 }
 
 /* energy per unit mass: L^2 theta'^2 / 2 + g L (1 - cos theta)  [J/kg] */
@@ -153,9 +160,11 @@ static int vdp_jac(double t, const double *y, double *J, void *d)
     return MP_OK;
 }
 
+MP_ODE_BLOCKS(vdp_blocks, vdp_rhs, 2, 0);
+
 static void vdp_bind(const double *p, mp_ode_problem *prob)
 {
-    mp_model_set(prob, 2, vdp_rhs, vdp_jac, p, 0); /* the friction term depends on x' */
+    mp_model_set_blocks(prob, 2, &vdp_blocks, vdp_jac, p, 0); /* friction depends on x' */
 }
 
 /* the harmonic part's energy (x^2 + x'^2) / 2 */
@@ -218,10 +227,14 @@ static int duffing_jac(double t, const double *y, double *J, void *d)
     return MP_OK;
 }
 
+/* separable when undamped (delta = 0) */
+MP_ODE_BLOCKS(duffing_free_blocks, duffing_free, 2, 1);
+MP_ODE_BLOCKS(duffing_driven_blocks, duffing_driven, 2, 1);
+
 static void duffing_bind(const double *p, mp_ode_problem *prob)
 {
-    mp_model_set(prob, 2, p[DG] != 0.0 ? duffing_driven : duffing_free, duffing_jac, p,
-                 p[DD] == 0.0 ? 1 : 0);
+    mp_model_set_blocks(prob, 2, p[DG] != 0.0 ? &duffing_driven_blocks : &duffing_free_blocks,
+                        duffing_jac, p, p[DD] == 0.0 ? 1 : 0);
 }
 
 /* x'^2/2 + alpha x^2/2 + beta x^4/4 */

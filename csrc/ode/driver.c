@@ -679,11 +679,9 @@ static void fixed_block(ode_run *s)
     long nfev0 = w->nfev;
     memcpy(s->save, w->y, n * sizeof(double));
     memcpy(s->save + n, w->f, n * sizeof(double));
-    w->unchecked = 1;
     w->discarded = 0.0;
     int rc = s->cur->block(w, s->t, h, k, every ? r->t + r->m : NULL,
                            every ? r->y + r->m * n : NULL);
-    w->unchecked = 0;
     int bad = rc != MP_OK || !isfinite(w->discarded);
     for (size_t i = 0; i < n && !bad; i++) bad = !isfinite(w->y[i]) || !isfinite(w->f[i]);
     if (bad) { /* back to the block's start: the checked loop runs it, and the failing step */

@@ -3,6 +3,7 @@
  * separable systems q'' = a(t, q), and the two-stage Gauss-Legendre method
  * (order 4, implicit, symplectic, keeps quadratic invariants). */
 #include "ode/ode.h"
+#include "ode/fixed.h"
 
 #include <float.h>
 #include <math.h>
@@ -17,65 +18,27 @@ static int separable_alloc(mp_ode_ws *w)
     return (nq > 0 && 2 * nq == w->n) ? MP_OK : MP_EDOM;
 }
 
-/* One kick-drift-kick step of size h on y = (q, v), with f = f(t, y) on
- * entry and f(t + h, y) on exit; one right-hand side evaluation.  Unchecked
- * (the fast path), the first half of f(t + h, y), which v replaces, leaves
- * its trace in w->discarded, so that the driver's check of the state sees a
- * non-finite value there too. */
-static int kdk(mp_ode_ws *w, double t, double h, double *y, double *f)
-{
-    size_t nq = w->p->nq;
-    double *q = y, *v = y + nq;
-    for (size_t i = 0; i < nq; i++) v[i] += 0.5 * h * f[nq + i];
-    for (size_t i = 0; i < nq; i++) q[i] += h * v[i];
-    int rc = mp_ode_ws_rhs(w, t + h, y, f); /* its second half is a(t + h, q) */
-    if (rc != MP_OK) return rc;
-    for (size_t i = 0; i < nq; i++) v[i] += 0.5 * h * f[nq + i];
-    if (w->unchecked) {
-        double z = 0.0;
-        for (size_t i = 0; i < nq; i++) z += 0.0 * f[i];
-        w->discarded += z;
-    }
-    memcpy(f, v, nq * sizeof(double)); /* q' = v at the new state */
-    return MP_OK;
-}
-
-/* The composition c[0..ns) of kick-drift-kick steps over one step h from
- * (t, y, f), in place. */
-static inline __attribute__((always_inline)) int
-compose_in_place(mp_ode_ws *w, double t, double h, const double *c, int ns, double *y, double *f)
-{
-    for (int i = 0; i < ns; i++) {
-        int rc = kdk(w, t, c[i] * h, y, f);
-        if (rc != MP_OK) return rc;
-        t += c[i] * h;
-    }
-    return MP_OK;
-}
-
+/* The composition c[0..ns) over one step h from (t, y, f) into (ynew, fnew),
+ * checked. */
 static int compose(mp_ode_ws *w, double t, double h, const double *c, int ns)
 {
     memcpy(w->ynew, w->y, w->n * sizeof(double));
     memcpy(w->fnew, w->f, w->n * sizeof(double));
-    return compose_in_place(w, t, h, c, ns, w->ynew, w->fnew);
+    return mp_ode_compose(mp_ode_ws_eval, w, w->p->nq, t, h, c, ns, w->ynew, w->fnew, NULL);
 }
 
 /* Contract: the block of ode.h's method row for the composition c[0..ns):
- * k steps in place, each as compose makes it. */
+ * k steps in place, each as compose makes it; the problem's own blocks when
+ * it has them. */
 static int compose_block(mp_ode_ws *w, double t, double h, long k, double *ts, double *ys,
                          const double *c, int ns)
 {
-    size_t n = w->n;
-    for (long j = 0; j < k; j++) {
-        int rc = compose_in_place(w, t, h, c, ns, w->y, w->f);
-        if (rc != MP_OK) return rc;
-        t += h;
-        if (ys) {
-            memcpy(ys + (size_t)j * n, w->y, n * sizeof(double));
-            ts[j] = t;
-        }
-    }
-    return MP_OK;
+    const mp_ode_problem *p = w->p;
+    w->nfev += ns * k;
+    if (p->blocks && p->blocks->rhs == p->rhs && p->blocks->compose)
+        return p->blocks->compose(p->data, t, h, c, ns, k, w->y, w->f, ts, ys, &w->discarded);
+    return mp_ode_compose_steps(p->rhs, p->data, p->nq, t, h, c, ns, k, w->y, w->f, ts, ys,
+                                &w->discarded);
 }
 
 static const double verlet_c[1] = {1.0};

@@ -22,6 +22,20 @@ typedef int (*mp_ode_events)(double t, const double *y, double *g, void *data);
 /* Interrupt check, called every few hundred steps; non-zero stops the solve. */
 typedef int (*mp_ode_interrupt)(void *ctx);
 
+/* A scene's own fixed-step blocks (ode/fixed.h's MP_ODE_BLOCKS): the
+ * method rows' blocks with `rhs` inlined.  They serve a problem only while
+ * its rhs is this one (a wrapper that replaces rhs leaves them unused). */
+typedef struct mp_ode_blocks {
+    mp_ode_rhs rhs;
+    /* k rk4 steps in place, as ode/fixed.h's mp_ode_rk4_steps */
+    int (*rk4)(void *data, double t, double h, long k, double *y, double *f, double *ts,
+               double *ys);
+    /* k steps of the composition c[0..ns), as mp_ode_compose_steps (NULL: rhs
+     * is not separable) */
+    int (*compose)(void *data, double t, double h, const double *c, int ns, long k, double *y,
+                   double *f, double *ts, double *ys, double *discarded);
+} mp_ode_blocks;
+
 typedef struct mp_ode_problem {
     size_t n;         /* dimension */
     mp_ode_rhs rhs;
@@ -39,6 +53,8 @@ typedef struct mp_ode_problem {
      * fixed-step fast path may run a block of steps unchecked and replay it
      * checked.  0: every stage is checked as it comes. */
     int replayable;
+    /* optional: the scene's own fixed-step blocks (used while rhs is theirs) */
+    const mp_ode_blocks *blocks;
 } mp_ode_problem;
 
 typedef struct mp_ode_options {
@@ -131,7 +147,10 @@ typedef struct mp_ode_method {
      * ... accumulated step by step, ending with f = f(t_k, y_k); the same
      * arithmetic as k calls of step and finish.  The state after step j is
      * written to ys + j n and its time to ts[j] when ys is not NULL.  The
-     * driver's fast path runs it with the stage checks off (w->unchecked). */
+     * stages are not checked (the driver's fast path checks the state after
+     * the block; values a step computes and drops leave their trace in
+     * w->discarded); f is called directly (ode/fixed.h), or inlined in the
+     * problem's own blocks; nfev counts k times the row's evaluations. */
     int (*block)(mp_ode_ws *w, double t, double h, long k, double *ts, double *ys);
     /* Optional: forget history (a switching row changed method). */
     void (*restart)(mp_ode_ws *w);
@@ -158,8 +177,7 @@ struct mp_ode_ws {
     double jnorm;                /* implicit methods: ||J||_inf of their last Jacobian */
     size_t ncoef;                /* vectors in coef (the row's, padded with zeros) */
     long nfev, njev, nlu, nreject_inner;
-    int unchecked;               /* the fixed-step fast path: stages are not checked finite */
-    double discarded;            /* ... and 0 * (values a step computes and drops): NaN when
+    double discarded;            /* a block's 0 * (values it computes and drops): NaN when
                                     one was not finite (else 0) */
     int bad_what;                /* the last non-finite value found (see mp_ode_result) */
     size_t bad_index;
@@ -175,14 +193,14 @@ int mp_ode_ws_bad_rhs(mp_ode_ws *w, size_t i);
  * offending component in w->bad_index) when a value is NaN or inf.  Every
  * evaluation of f goes through here.  The one pass over dydt is the only
  * check of a stage: a non-finite value in a trial stage makes the driver
- * reject the step; at an accepted state it ends the solve.  In the driver's
- * fixed-step fast path (w->unchecked) there is no pass: the driver checks the
- * state.  Inline: it is called for every stage of every step. */
+ * reject the step; at an accepted state it ends the solve.  (The fixed-step
+ * blocks alone call f directly: the driver checks their state afterwards.)
+ * Inline: it is called for every stage of every step. */
 static inline int mp_ode_ws_rhs(mp_ode_ws *w, double t, const double *y, double *dydt)
 {
     int rc = w->p->rhs(t, y, dydt, w->p->data);
     w->nfev++;
-    if (rc != MP_OK || w->unchecked) return rc;
+    if (rc != MP_OK) return rc;
     for (size_t i = 0; i < w->n; i++)
         if (!isfinite(dydt[i])) return mp_ode_ws_bad_rhs(w, i);
     return MP_OK;

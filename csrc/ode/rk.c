@@ -2,6 +2,7 @@
  * 5(4) with Shampine's 4th-order dense output, and Hairer's DOP853 8(5,3)
  * with 7th-order dense output.  Step-size control lives in driver.c. */
 #include "ode/ode.h"
+#include "ode/fixed.h"
 
 #include <math.h>
 #include <string.h>
@@ -40,47 +41,22 @@ static double stiffness_ratio(size_t n, double h, const double *fa, const double
 
 /* ---- classical RK4 ------------------------------------------------------- */
 
-/* One rk4 step from (t, y) with k1 = f(t, y) into ynew (which may be y):
- * three evaluations of f. */
-static inline __attribute__((always_inline)) int
-rk4_stages(mp_ode_ws *w, double t, double h, const double *y, const double *k1, double *ynew)
-{
-    size_t n = w->n;
-    double *k2 = w->k, *k3 = k2 + n, *k4 = k3 + n, *yt = k4 + n;
-    int rc;
-    for (size_t i = 0; i < n; i++) yt[i] = y[i] + 0.5 * h * k1[i];
-    if ((rc = mp_ode_ws_rhs(w, t + 0.5 * h, yt, k2)) != MP_OK) return rc;
-    for (size_t i = 0; i < n; i++) yt[i] = y[i] + 0.5 * h * k2[i];
-    if ((rc = mp_ode_ws_rhs(w, t + 0.5 * h, yt, k3)) != MP_OK) return rc;
-    for (size_t i = 0; i < n; i++) yt[i] = y[i] + h * k3[i];
-    if ((rc = mp_ode_ws_rhs(w, t + h, yt, k4)) != MP_OK) return rc;
-    for (size_t i = 0; i < n; i++)
-        ynew[i] = y[i] + (h / 6.0) * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i]);
-    return MP_OK;
-}
-
 static int rk4_step(mp_ode_ws *w, double t, double h, double *err)
 {
     *err = 0.0;
-    return rk4_stages(w, t, h, w->y, w->f, w->ynew);
+    return mp_ode_rk4_stages(mp_ode_ws_eval, w, w->n, t, h, w->y, w->f, w->ynew, w->k);
 }
 
 /* Contract: the block of ode.h's method row: k steps in place, each one's
- * four evaluations as rk4_step and the finish make them. */
+ * four evaluations as rk4_step and the finish make them; the problem's own
+ * blocks when it has them. */
 static int rk4_block(mp_ode_ws *w, double t, double h, long k, double *ts, double *ys)
 {
-    size_t n = w->n;
-    for (long j = 0; j < k; j++) {
-        int rc = rk4_stages(w, t, h, w->y, w->f, w->y);
-        if (rc != MP_OK) return rc;
-        t += h;
-        if ((rc = mp_ode_ws_rhs(w, t, w->y, w->f)) != MP_OK) return rc;
-        if (ys) {
-            memcpy(ys + (size_t)j * n, w->y, n * sizeof(double));
-            ts[j] = t;
-        }
-    }
-    return MP_OK;
+    const mp_ode_problem *p = w->p;
+    w->nfev += 4 * k;
+    if (p->blocks && p->blocks->rhs == p->rhs)
+        return p->blocks->rk4(p->data, t, h, k, w->y, w->f, ts, ys);
+    return mp_ode_rk4_steps(p->rhs, p->data, w->n, t, h, k, w->y, w->f, w->k, ts, ys);
 }
 
 const mp_ode_method mp_ode_rk4 = {

@@ -1,0 +1,157 @@
+/* The fixed-step methods' arithmetic, written once: classical rk4 and the
+ * kick-drift-kick compositions (velocity Verlet, Yoshida), as always-inline
+ * templates over the right-hand side F.
+ *
+ * The method rows (rk.c, geometric.c) instantiate them twice: for a checked
+ * step with F the workspace's counted, checked evaluation, and for the
+ * driver's fast blocks with the problem's rhs behind its pointer.  A scene
+ * instantiates the blocks once more with its own rhs (MP_ODE_BLOCKS): a call
+ * through a constant pointer into an always-inline body is a direct call the
+ * compiler inlines, and a fixed dimension unrolls the loops, so that a block
+ * of steps runs as a plain C loop with f written in it would.  Every
+ * instantiation does the same operations in the same order: the results are
+ * equal bit for bit whichever runs. */
+#ifndef MP_ODE_FIXED_H
+#define MP_ODE_FIXED_H
+
+#include <string.h>
+
+#include "ode/ode.h"
+
+#define MP_ODE_INLINE static inline __attribute__((always_inline))
+
+/* The checked, counted evaluation (mp_ode_ws_rhs) as an F over ctx = the
+ * workspace: the templates' checked steps. */
+static inline int mp_ode_ws_eval(double t, const double *y, double *f, void *w)
+{
+    return mp_ode_ws_rhs(w, t, y, f);
+}
+
+/* Contract: one rk4 step from (t, y) with k1 = f(t, y) into ynew (which may
+ * be y); three evaluations of F (data ctx); s: 4n doubles of scratch.
+ * Returns the first status of F that is not MP_OK. */
+MP_ODE_INLINE int mp_ode_rk4_stages(mp_ode_rhs F, void *ctx, size_t n, double t, double h,
+                                    const double *y, const double *k1, double *ynew, double *s)
+{
+    double *k2 = s, *k3 = k2 + n, *k4 = k3 + n, *yt = k4 + n;
+    int rc;
+    for (size_t i = 0; i < n; i++) yt[i] = y[i] + 0.5 * h * k1[i];
+    if ((rc = F(t + 0.5 * h, yt, k2, ctx)) != MP_OK) return rc;
+    for (size_t i = 0; i < n; i++) yt[i] = y[i] + 0.5 * h * k2[i];
+    if ((rc = F(t + 0.5 * h, yt, k3, ctx)) != MP_OK) return rc;
+    for (size_t i = 0; i < n; i++) yt[i] = y[i] + h * k3[i];
+    if ((rc = F(t + h, yt, k4, ctx)) != MP_OK) return rc;
+    for (size_t i = 0; i < n; i++)
+        ynew[i] = y[i] + (h / 6.0) * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i]);
+    return MP_OK;
+}
+
+/* Contract: k rk4 steps of size h from (t, y, f = f(t, y)) in place, the
+ * times accumulated step by step, ending with f = f(t_k, y_k): four
+ * evaluations a step, unchecked (the driver checks the state after the
+ * block).  The state after step j goes to ys + j n and its time to ts[j]
+ * when ys is not NULL.  s: 4n doubles of scratch. */
+MP_ODE_INLINE int mp_ode_rk4_steps(mp_ode_rhs F, void *ctx, size_t n, double t, double h,
+                                   long k, double *y, double *f, double *s, double *ts,
+                                   double *ys)
+{
+    for (long j = 0; j < k; j++) {
+        int rc = mp_ode_rk4_stages(F, ctx, n, t, h, y, f, y, s);
+        if (rc != MP_OK) return rc;
+        t += h;
+        if ((rc = F(t, y, f, ctx)) != MP_OK) return rc;
+        if (ys) {
+            memcpy(ys + (size_t)j * n, y, n * sizeof(double));
+            ts[j] = t;
+        }
+    }
+    return MP_OK;
+}
+
+/* Contract: one kick-drift-kick step of size h on y = (q, v) (nq each), with
+ * f = f(t, y) on entry and f(t + h, y) on exit; one evaluation of F, whose
+ * second half is a(t + h, q) (a separable problem).  When discarded is not
+ * NULL (unchecked), the first half of that evaluation, which v replaces,
+ * leaves its trace there (0 * value: NaN when one was not finite), so that
+ * the driver's check of the state sees it too. */
+MP_ODE_INLINE int mp_ode_kdk(mp_ode_rhs F, void *ctx, size_t nq, double t, double h, double *y,
+                             double *f, double *discarded)
+{
+    double *q = y, *v = y + nq;
+    for (size_t i = 0; i < nq; i++) v[i] += 0.5 * h * f[nq + i];
+    for (size_t i = 0; i < nq; i++) q[i] += h * v[i];
+    int rc = F(t + h, y, f, ctx);
+    if (rc != MP_OK) return rc;
+    for (size_t i = 0; i < nq; i++) v[i] += 0.5 * h * f[nq + i];
+    if (discarded) {
+        double z = 0.0;
+        for (size_t i = 0; i < nq; i++) z += 0.0 * f[i];
+        *discarded += z;
+    }
+    memcpy(f, v, nq * sizeof(double)); /* q' = v at the new state */
+    return MP_OK;
+}
+
+/* Contract: the composition c[0..ns) of kick-drift-kick steps over one step
+ * h from (t, y, f), in place (discarded as for mp_ode_kdk). */
+MP_ODE_INLINE int mp_ode_compose(mp_ode_rhs F, void *ctx, size_t nq, double t, double h,
+                                 const double *c, int ns, double *y, double *f, double *discarded)
+{
+    for (int i = 0; i < ns; i++) {
+        int rc = mp_ode_kdk(F, ctx, nq, t, c[i] * h, y, f, discarded);
+        if (rc != MP_OK) return rc;
+        t += c[i] * h;
+    }
+    return MP_OK;
+}
+
+/* Contract: k steps of the composition c[0..ns) from (t, y, f) in place, as
+ * mp_ode_rk4_steps does them (ns evaluations a step, unchecked, the dropped
+ * values' trace added to *discarded, samples to ts/ys when ys is given). */
+MP_ODE_INLINE int mp_ode_compose_steps(mp_ode_rhs F, void *ctx, size_t nq, double t, double h,
+                                       const double *c, int ns, long k, double *y, double *f,
+                                       double *ts, double *ys, double *discarded)
+{
+    for (long j = 0; j < k; j++) {
+        int rc = mp_ode_compose(F, ctx, nq, t, h, c, ns, y, f, discarded);
+        if (rc != MP_OK) return rc;
+        t += h;
+        if (ys) {
+            memcpy(ys + (size_t)j * 2 * nq, y, 2 * nq * sizeof(double));
+            ts[j] = t;
+        }
+    }
+    return MP_OK;
+}
+
+/* A scene's blocks for one of its right-hand sides, with NQ > 0 for a
+ * separable one: rhs evaluated with its data as the problem's, sizes known
+ * when compiled, the state in locals for the block (registers: no store
+ * to memory the compiler must assume the parameters share). */
+#define MP_ODE_BLOCKS(name, rhs, N, NQ)                                                          \
+    static int name##_rk4(void *d, double t, double h, long k, double *y, double *f,           \
+                          double *ts, double *ys)                                              \
+    {                                                                                          \
+        double s[4 * (N)], yl[N], fl[N];                                                       \
+        memcpy(yl, y, sizeof yl);                                                              \
+        memcpy(fl, f, sizeof fl);                                                              \
+        int rc = mp_ode_rk4_steps(rhs, d, (N), t, h, k, yl, fl, s, ts, ys);                    \
+        memcpy(y, yl, sizeof yl);                                                              \
+        memcpy(f, fl, sizeof fl);                                                              \
+        return rc;                                                                             \
+    }                                                                                          \
+    static int name##_compose(void *d, double t, double h, const double *c, int ns, long k,   \
+                              double *y, double *f, double *ts, double *ys, double *discarded) \
+    {                                                                                          \
+        double yl[N], fl[N], dl = 0.0;                                                         \
+        memcpy(yl, y, sizeof yl);                                                              \
+        memcpy(fl, f, sizeof fl);                                                              \
+        int rc = mp_ode_compose_steps(rhs, d, (NQ), t, h, c, ns, k, yl, fl, ts, ys, &dl);      \
+        memcpy(y, yl, sizeof yl);                                                              \
+        memcpy(f, fl, sizeof fl);                                                              \
+        *discarded += dl;                                                                      \
+        return rc;                                                                             \
+    }                                                                                          \
+    static const mp_ode_blocks name = {rhs, name##_rk4, (NQ) > 0 ? name##_compose : NULL}
+
+#endif
