@@ -415,7 +415,8 @@ def _lanes_equations(ir):
     loop = _lane_loop(ir, [(ir.blocks["f"], "f")], "f at each lane's (t, y, p)")
     if loop is None:
         return ""
-    return (_LANE_DOC + f"MP_LANE_FN void mp_gen_lanes({_LANE_ARGS})\n{{\n{loop}\n"
+    return (_LANE_DOC + f"MP_LANE_FN void mp_gen_lanes({_LANE_ARGS})\n{{\n"
+            f"    (void)p;\n{loop}\n"
             "    MP_LANE_LOOP status[l] = MP_OK;\n}\n")
 
 
@@ -427,7 +428,8 @@ def _lanes_lagrangian(ir):
     if loop is None:
         return ""
     return (_LANE_DOC + f"MP_LANE_FN void mp_gen_lanes({_LANE_ARGS})\n{{\n"
-            "    double A[NA * NA * MP_LANES], b[NA * MP_LANES];\n" + loop + r"""
+            "    double A[NA * NA * MP_LANES], b[NA * MP_LANES];\n    (void)p;\n" + loop
+            + r"""
 #if NA == 1
     MP_LANE_LOOP {
         const double a = A[l];
