@@ -502,8 +502,11 @@ def _lagrangian_source(ir, status):
                  "__attribute__((visibility(\"hidden\")))\n#else\n#define MP_HIDDEN\n#endif\n"
                  f"MP_HIDDEN void gen_D({_ARGS_Z});", build.UNIT, _dims(ir),
                  RUNTIME] + blocks
-        tail = [build.UNIT, jac]
+        # and so does the lane rhs (with its own copy of the inlined solver)
+        lanes = _lanes_lagrangian(ir)
+        tail = [build.UNIT, jac] + ([build.UNIT, RUNTIME, lanes] if lanes else [])
     else:
+        lanes = None
         parts = [_header(ir, status), _dims(ir), RUNTIME, jac.replace("\nvoid gen_D(",
                                                                         "\nstatic void gen_D(")]
         parts += blocks
@@ -600,7 +603,8 @@ int mp_gen_lagrangian(size_t m, const double *t, const double *q, const double *
     return MP_OK;
 }
 """)
-    parts.append(_lanes_lagrangian(ir))
+    if lanes is None:
+        parts.append(_lanes_lagrangian(ir))
     if k:
         parts.append(_block("gen_g", B["g"], ir, _ARGS, "the constraints"))
         parts.append(r"""
