@@ -430,6 +430,31 @@ def test_singular_mass_matrix_in_a_compiled_lane(k):
             mp.solve_many(s, (0, 2), y0s, t_eval=te, lanes=True)
 
 
+@pytest.mark.parametrize("method", sorted(METHODS))
+def test_vanishing_mass_of_one_coordinate_in_lanes(method):
+    """L = exp(-c t) q'^2 / 2 at rest: q stays put, b = 0, and the 1 x 1 mass
+    matrix exp(-c t) turns subnormal (its inverse inf, q'' = 0 inf = NaN) past
+    c t = 708.4 and exactly 0 (singular) past 745.1.  Which of the two a lane
+    meets first depends on where its steps land: both paths meet the same."""
+    (q,) = mp.coordinates("q")
+    c = sp.Symbol("c")
+    s = mp.lagrangian(sp.exp(-c * T) * q.diff(T) ** 2 / 2, [q], params=dict(c=1.0))
+    k = 37
+    cs = np.linspace(0.1, 2.0, k)
+    y0s = np.column_stack([np.linspace(-1, 1, k), np.zeros(k)])
+    te = np.linspace(0, 1000, 3)
+    kw = dict(h=0.5) if method == "rk4" else {}
+    a, b = _both(s, (0, 1000), y0s, t_eval=te, errors="status", params={"c": cs},
+                 method=method, **kw)
+    assert np.array_equal(a.status, b.status) and np.array_equal(a.nfev, b.nfev)
+    assert _strip_times(a.message) == _strip_times(b.message)
+    fine = cs * 1000 < 708
+    assert (a.status[fine] == 0).all() and (a.status[~fine] < 0).all()
+    # NonFiniteError, SingularityError: both in one lane group but for rk4's steps
+    assert set(a.status[~fine]) == ({-2} if method == "rk4" else {-2, -3})
+    assert np.array_equal(a.y[fine], np.repeat(y0s[fine, :, None], 3, axis=2))
+
+
 def test_blow_up_of_a_compiled_lagrangian():
     """L = q'^2 / 2 + q^4 / 4: q'' = q^3, and from q(0) = a, q'(0) = a^2 / sqrt(2)
     q = a / (1 - a t / sqrt(2)) leaves every float at t = sqrt(2) / a; the
