@@ -336,6 +336,28 @@ def _scalar_call(s, t, y, p):
     return f, rc
 
 
+def _gcc_on_glibc_x86_64():
+    import platform
+    import subprocess
+
+    from mechpy.symbolic import build
+    if platform.machine() != "x86_64" or platform.libc_ver()[0] != "glibc":
+        return False
+    out = subprocess.run(build.compiler() + ["--version"], capture_output=True, text=True)
+    return "Free Software Foundation" in out.stdout
+
+
+@pytest.mark.skipif(not _gcc_on_glibc_x86_64(), reason="libmvec's variants: GCC, glibc, x86-64")
+def test_lane_rhs_is_vectorised():
+    """The double pendulum's library calls libmvec's 4-wide AVX2 sin (its
+    AVX2+FMA clone) and 2-wide SSE sin (the portable one): the loop over the
+    lanes was vectorised."""
+    s = _compiled("double pendulum")
+    with open(s._path, "rb") as f:
+        data = f.read()
+    assert b"_ZGVdN4v_sin" in data and b"_ZGVbN2v_sin" in data
+
+
 def test_compiled_systems_export_a_lane_rhs():
     s = _compiled("lorenz")
     assert hasattr(s._lib, "mp_gen_lanes") and s._addr_lanes
