@@ -30,10 +30,12 @@ __all__ = ["CompileError", "cache_dir", "compiler", "build", "load_meta", "store
 #: OpenMP runtime); -fno-math-errno: sqrt becomes one instruction (a vector one
 #: in those loops) instead of a call that may set errno; -ffp-contract=fast:
 #: fused multiply-adds where the target has them (only the AVX2+FMA clone of
-#: the lane rhs: the rest is compiled for baseline x86-64).  None of them
-#: changes a comparison or an isfinite test (no -ffast-math).
+#: the lane rhs: the rest is compiled for baseline x86-64); -fno-trapping-math:
+#: no floating-point traps are enabled, so a select between two computed values
+#: vectorises (the lane solver's elimination).  None of them changes a
+#: comparison or an isfinite test (no -ffast-math).
 FLAGS = ("-O2", "-fPIC", "-shared", "-std=c99", "-fopenmp-simd", "-fno-math-errno",
-         "-ffp-contract=fast")
+         "-ffp-contract=fast", "-fno-trapping-math")
 #: Source size (characters) from which -O1 replaces -O2.
 LARGE = 150_000
 LIBS = ("-lm",)

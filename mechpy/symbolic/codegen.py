@@ -24,16 +24,6 @@ SPLIT = 60_000
 
 #: The dense solver, written once.  NA is the size of the linear system.
 RUNTIME = r"""
-/* The solver is inlined where it is called: in the lane rhs's AVX2 clone it
- * is then compiled for AVX2 too (a call from AVX code into SSE code costs
- * more than the solve: measured 2.2 us against 0.19 us for the 8 lanes of a
- * double pendulum). */
-#if defined(__GNUC__)
-#define MP_INLINE inline __attribute__((always_inline))
-#else
-#define MP_INLINE inline
-#endif
-
 /* LU factorisation with partial pivoting of the NA x NA row-major matrix A,
  * in place; piv receives the row exchanges, dinv the inverses of the pivots
  * (the solve multiplies: no division waits on the right-hand side).  Returns
@@ -103,6 +93,15 @@ static MP_INLINE void mp_lu_solve(const double *LU, const int *piv, const double
 #: added are declared only from there.  Elsewhere (clang, another libc, not
 #: x86-64) every name is the plain function and the loop is the scalar one.
 LANE_RUNTIME = r"""
+/* The solvers are inlined where they are called: in the lane rhs's AVX2 clone
+ * they are then compiled for AVX2 too (a call from AVX code into SSE code
+ * costs more than the solve: measured 2.2 us against 0.19 us for the 8 lanes
+ * of a double pendulum). */
+#if defined(__GNUC__)
+#define MP_INLINE inline __attribute__((always_inline))
+#else
+#define MP_INLINE inline
+#endif
 #define MP_LANE_LOOP _Pragma("omp simd") for (int l = 0; l < MP_LANES; l++)
 #if defined(__GNUC__) && !defined(__clang__) && __GNUC__ >= 11 && defined(__x86_64__) && \
     defined(__GLIBC__)
@@ -140,6 +139,87 @@ MP_VEC1(cosh) MP_VEC1(tanh) MP_VEC1(asinh) MP_VEC1(acosh) MP_VEC1(atanh)
 #define mp_lane_asinh asinh
 #define mp_lane_acosh acosh
 #define mp_lane_atanh atanh
+#endif
+"""
+
+#: The solver of mp_lu and mp_lu_solve across the lanes of a lane rhs (A and b
+#: laid out lane by lane): the same operations in the same order for every
+#: lane, the pivot choice and row exchanges as selects (no branch on a lane's
+#: values), so that the loops over the lanes vectorise.
+LANE_SOLVER = r"""
+#if NA > 1
+/* For each lane l: mp_lu on the NA x NA matrix A (entry (i, j) at
+ * A[(i * NA + j) * MP_LANES + l]) in place, then mp_lu_solve on b (entry i at
+ * b[i * MP_LANES + l]) in place; st[l] = mp_lu's status for that lane
+ * (MP_ENONFINITE before MP_ESINGULAR, as mp_lu checks).  A failed lane's
+ * values are computed but meaningless. */
+static MP_INLINE void mp_lu_lanes(double *A, double *b, int *st)
+{
+    double amax[MP_LANES], tol[MP_LANES], best[MP_LANES], piv[MP_LANES], lf[MP_LANES];
+    double bad[MP_LANES], sing[MP_LANES], dinv[NA * MP_LANES];
+    MP_LANE_LOOP { amax[l] = 0.0; bad[l] = 0.0; sing[l] = 0.0; }
+    for (int i = 0; i < NA * NA; i++)
+        MP_LANE_LOOP {
+            const double a = fabs(A[i * MP_LANES + l]);
+            bad[l] = isfinite(a) ? bad[l] : 1.0;
+            amax[l] = a > amax[l] ? a : amax[l];
+        }
+    MP_LANE_LOOP tol[l] = NA * DBL_EPSILON * amax[l];
+    for (int k = 0; k < NA; k++) {
+        MP_LANE_LOOP {
+            piv[l] = k;
+            best[l] = fabs(A[(k * NA + k) * MP_LANES + l]);
+        }
+        for (int i = k + 1; i < NA; i++) {
+            const double di = i; /* (an int in the select stops the vectoriser) */
+            MP_LANE_LOOP {
+                const double a = fabs(A[(i * NA + k) * MP_LANES + l]);
+                piv[l] = a > best[l] ? di : piv[l];
+                best[l] = a > best[l] ? a : best[l];
+            }
+        }
+        MP_LANE_LOOP sing[l] = best[l] > tol[l] ? sing[l] : 1.0;
+        /* rows k and piv[l] exchanged, in A and in b */
+        for (int i = k + 1; i < NA; i++) {
+            const double di = i;
+            for (int j = 0; j < NA; j++) {
+                double *ak = A + (k * NA + j) * MP_LANES, *ai = A + (i * NA + j) * MP_LANES;
+                MP_LANE_LOOP {
+                    const double x = ak[l], y = ai[l];
+                    ak[l] = piv[l] == di ? y : x;
+                    ai[l] = piv[l] == di ? x : y;
+                }
+            }
+            MP_LANE_LOOP {
+                const double x = b[k * MP_LANES + l], y = b[i * MP_LANES + l];
+                b[k * MP_LANES + l] = piv[l] == di ? y : x;
+                b[i * MP_LANES + l] = piv[l] == di ? x : y;
+            }
+        }
+        MP_LANE_LOOP dinv[k * MP_LANES + l] = 1.0 / A[(k * NA + k) * MP_LANES + l];
+        for (int i = k + 1; i < NA; i++) {
+            MP_LANE_LOOP {
+                lf[l] = A[(i * NA + k) * MP_LANES + l] * dinv[k * MP_LANES + l];
+                A[(i * NA + k) * MP_LANES + l] = lf[l];
+            }
+            for (int j = k + 1; j < NA; j++)
+                MP_LANE_LOOP {
+                    const double a = A[(i * NA + j) * MP_LANES + l];
+                    const double u = a - lf[l] * A[(k * NA + j) * MP_LANES + l];
+                    A[(i * NA + j) * MP_LANES + l] = lf[l] != 0.0 ? u : a;
+                }
+        }
+    }
+    for (int i = 1; i < NA; i++)
+        for (int j = 0; j < i; j++)
+            MP_LANE_LOOP b[i * MP_LANES + l] -= A[(i * NA + j) * MP_LANES + l] * b[j * MP_LANES + l];
+    for (int i = NA - 1; i >= 0; i--) {
+        for (int j = i + 1; j < NA; j++)
+            MP_LANE_LOOP b[i * MP_LANES + l] -= A[(i * NA + j) * MP_LANES + l] * b[j * MP_LANES + l];
+        MP_LANE_LOOP b[i * MP_LANES + l] *= dinv[i * MP_LANES + l];
+    }
+    MP_LANE_LOOP st[l] = bad[l] != 0.0 ? MP_ENONFINITE : sing[l] != 0.0 ? MP_ESINGULAR : MP_OK;
+}
 #endif
 """
 
@@ -422,12 +502,13 @@ def _lanes_equations(ir):
 
 def _lanes_lagrangian(ir):
     """mp_gen_lanes of a Lagrangian system, or '' (none: see _lane_loop): A and
-    b vectorised across the lanes, then each lane's solve as gen_solve's."""
+    b vectorised across the lanes, then gen_solve's solve and statuses for
+    every lane at once (LANE_SOLVER)."""
     B = ir.blocks
     loop = _lane_loop(ir, [(B["A"], "A"), (B["b"], "b")], "A and b at each lane's (t, y, p)")
     if loop is None:
         return ""
-    return (_LANE_DOC + f"MP_LANE_FN void mp_gen_lanes({_LANE_ARGS})\n{{\n"
+    return (LANE_SOLVER + _LANE_DOC + f"MP_LANE_FN void mp_gen_lanes({_LANE_ARGS})\n{{\n"
             "    double A[NA * NA * MP_LANES], b[NA * MP_LANES];\n    (void)p;\n" + loop
             + r"""
 #if NA == 1
@@ -437,16 +518,9 @@ def _lanes_lagrangian(ir):
         f[MP_LANES + l] = b[l] * (1.0 / a);
     }
 #else
-    for (int l = 0; l < MP_LANES; l++) {
-        double LU[NA * NA], dinv[NA], z[NA];
-        int piv[NA];
-        for (int i = 0; i < NA * NA; i++) LU[i] = A[i * MP_LANES + l];
-        status[l] = mp_lu(LU, piv, dinv);
-        if (status[l] != MP_OK) continue;
-        for (int i = 0; i < NA; i++) z[i] = b[i * MP_LANES + l];
-        mp_lu_solve(LU, piv, dinv, z);
-        for (int i = 0; i < NC; i++) f[(NC + i) * MP_LANES + l] = z[i];
-    }
+    mp_lu_lanes(A, b, status);
+    for (int i = 0; i < NC; i++)
+        MP_LANE_LOOP f[(NC + i) * MP_LANES + l] = b[i * MP_LANES + l];
 #endif
     for (int i = 0; i < NC; i++)
         MP_LANE_LOOP f[i * MP_LANES + l] = y[(NC + i) * MP_LANES + l];
@@ -502,9 +576,9 @@ def _lagrangian_source(ir, status):
                  "__attribute__((visibility(\"hidden\")))\n#else\n#define MP_HIDDEN\n#endif\n"
                  f"MP_HIDDEN void gen_D({_ARGS_Z});", build.UNIT, _dims(ir),
                  RUNTIME] + blocks
-        # and so does the lane rhs (with its own copy of the inlined solver)
+        # and so does the lane rhs
         lanes = _lanes_lagrangian(ir)
-        tail = [build.UNIT, jac] + ([build.UNIT, RUNTIME, lanes] if lanes else [])
+        tail = [build.UNIT, jac] + ([build.UNIT, lanes] if lanes else [])
     else:
         lanes = None
         parts = [_header(ir, status), _dims(ir), RUNTIME, jac.replace("\nvoid gen_D(",
