@@ -506,7 +506,8 @@ def test_pendulum_on_a_cart_scales_to_ten_coordinates():
     s = mp.lagrangian(T - V, q, params=dict(g=G, M=2.0, m=0.5, l=0.3))
     assert s.dim == 20 and s.cyclic == ["x"]
     from mechpy.symbolic import build
-    assert len(build.units(s.c_source)) == 2     # the Jacobian compiled beside the rest
+    # the Jacobian and the lane rhs compiled beside the rest
+    assert len(build.units(s.c_source)) == 3 and "mp_gen_lanes(" in build.units(s.c_source)[2]
     y0 = np.zeros(20)
     y0[1:N] = np.linspace(0.1, 0.5, N - 1)
     sol = mp.solve(s, (0, 5), y0, rtol=1e-10, atol=1e-12)
@@ -517,6 +518,12 @@ def test_pendulum_on_a_cart_scales_to_ten_coordinates():
     J = s.jacobian(0.0, sol.y[:, -1])
     Jref = fd_jacobian(lambda v: s.rhs(0.0, v), sol.y[:, -1])
     assert np.abs(J - Jref).max() < 3e-10 * np.abs(Jref).max()   # measured 3.1e-11
+    # an ensemble in lanes through the lane rhs of its own translation unit
+    y0s = y0 * (1 + 0.1 * np.linspace(-1, 1, 11))[:, None]
+    a = mp.solve_many(s, (0, 1), y0s, t_eval=[0.0, 1.0], lanes=True)
+    b = mp.solve_many(s, (0, 1), y0s, t_eval=[0.0, 1.0], lanes=False)
+    assert a.lanes and np.array_equal(a.nfev, b.nfev)
+    assert np.abs(a.y - b.y).max() < 5e-13 * np.abs(b.y).max()   # measured 5.0e-14
 
 
 # ---- the cache, processes, pickling ------------------------------------------------

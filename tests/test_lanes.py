@@ -219,3 +219,314 @@ def test_what_lanes_cannot_do_takes_the_scalar_path():
 def test_empty_ensemble_in_lanes():
     e = mp.solve_many(S.Pendulum(), (0, 1), np.zeros((0, 2)), lanes=True)
     assert e.y.shape == (0, 2, 1)
+
+
+# ---- compiled systems: the generated lane right-hand side (mp_gen_lanes) -----------
+
+T = sp.Symbol("t")
+
+
+def _double_pendulum():
+    th1, th2 = mp.coordinates("theta1 theta2")
+    m1, m2, l1, l2, g = sp.symbols("m1 m2 l1 l2 g")
+    x1, y1 = l1 * sp.sin(th1), -l1 * sp.cos(th1)
+    x2, y2 = x1 + l2 * sp.sin(th2), y1 - l2 * sp.cos(th2)
+    K = (m1 * (x1.diff(T) ** 2 + y1.diff(T) ** 2) + m2 * (x2.diff(T) ** 2 + y2.diff(T) ** 2)) / 2
+    return mp.lagrangian(K - g * (m1 * y1 + m2 * y2), [th1, th2],
+                         params=dict(m1=1.3, m2=0.7, l1=1.1, l2=0.8, g=9.81))
+
+
+def _cartesian_pendulum():
+    """A pendulum in (x, y) on the circle x^2 + y^2 = l^2 (a multiplier: NA = 3)."""
+    x, y = mp.coordinates("x y")
+    m, g, l = sp.symbols("m g l")
+    L = m / 2 * (x.diff(T) ** 2 + y.diff(T) ** 2) - m * g * y
+    return mp.lagrangian(L, [x, y], params=dict(m=0.8, g=9.81, l=1.0),
+                         constraints=[x ** 2 + y ** 2 - l ** 2])
+
+
+def _lagrangian_pendulum():
+    """One coordinate, NA = 1: the solve is one division."""
+    (th,) = mp.coordinates("theta")
+    m, l, g = sp.symbols("m l g")
+    return mp.lagrangian(m * l ** 2 / 2 * th.diff(T) ** 2 + m * g * l * sp.cos(th), [th],
+                         params=dict(m=1.0, l=1.0, g=9.81))
+
+
+def _lorenz():
+    x, y, z = mp.coordinates("x y z")
+    s, r, b = sp.symbols("sigma rho beta")
+    return mp.equations([s * (y - x), x * (r - z) - y, x * y - b * z], [x, y, z],
+                        params=dict(sigma=10.0, rho=28.0, beta=8 / 3))
+
+
+def _van_der_pol():
+    x, v = mp.coordinates("x v")
+    mu = sp.Symbol("mu")
+    return mp.equations([v, mu * (1 - x ** 2) * v - x], [x, v], params=dict(mu=1.0))
+
+
+def _decay():
+    """One state."""
+    (y,) = mp.coordinates("y")
+    a = sp.Symbol("a")
+    return mp.equations([-a * y], [y], params=dict(a=0.7))
+
+
+def _elementary():
+    """Every function the lane rhs calls through a vector variant (libmvec),
+    and sqrt, powers: a wrong declaration gives wrong values here."""
+    x, v = mp.coordinates("x v")
+    c = sp.Symbol("c")
+    f1 = (sp.sin(x) + sp.cos(v) + sp.tan(x / 3) + sp.exp(-x ** 2) + sp.log(2 + v ** 2)
+          + (1 + x ** 2) ** c + sp.asin(x / 4) + sp.acos(v / 5) + sp.atan(x)
+          + sp.atan2(v, 1 + x ** 2))
+    f2 = (sp.sinh(x / 3) + sp.cosh(v / 4) + sp.tanh(x) + sp.asinh(v) + sp.acosh(2 + x ** 2)
+          + sp.atanh(v / 6) + sp.sqrt(1 + v ** 2) - c * (2 + x ** 2) ** sp.Rational(5, 2))
+    return mp.equations([f1, f2], [x, v], params=dict(c=1.5))
+
+
+# name: (system, a start, a spread of starts, per-lane parameter rows relative spread)
+COMPILED = {
+    "double pendulum": (_double_pendulum, [1.0, -0.5, 0.0, 0.3], 0.3),
+    "constrained pendulum": (_cartesian_pendulum,
+                             [np.sin(1.0), -np.cos(1.0), np.cos(1.0) * 0.5,
+                              np.sin(1.0) * 0.5], None),
+    "lagrangian pendulum": (_lagrangian_pendulum, [1.0, 0.2], 0.3),
+    "lorenz": (_lorenz, [1.0, 1.0, 20.0], 0.1),
+    "van der pol": (_van_der_pol, [2.0, 0.0], 0.5),
+    "decay": (_decay, [1.0], 0.5),
+    "elementary": (_elementary, [0.3, 0.2], 0.1),
+}
+_MADE = {}
+
+
+def _compiled(name):
+    if name not in _MADE:
+        _MADE[name] = COMPILED[name][0]()
+    return _MADE[name]
+
+
+def _lane_call(s, t, Y, P):
+    """mp_gen_lanes on LANES states Y (LANES, n) with parameter rows P
+    (LANES, np) -> f (LANES, n), status (LANES,)."""
+    import ctypes
+    dp = ctypes.POINTER(ctypes.c_double)
+    fn = ctypes.CFUNCTYPE(None, dp, dp, dp, dp, ctypes.POINTER(ctypes.c_int))(s._addr_lanes)
+    tl = np.ascontiguousarray(np.broadcast_to(t, (LANES,)), dtype=float)
+    y = np.ascontiguousarray(Y.T)
+    p = np.ascontiguousarray(P.T) if P.size else np.zeros(1)
+    f = np.full_like(y, np.nan)
+    st = np.full(LANES, -99, dtype=np.intc)
+    fn(tl.ctypes.data_as(dp), y.ctypes.data_as(dp), f.ctypes.data_as(dp), p.ctypes.data_as(dp),
+       st.ctypes.data_as(ctypes.POINTER(ctypes.c_int)))
+    return f.T, st
+
+
+def _scalar_call(s, t, y, p):
+    """mp_gen_rhs at one state -> (f, status)."""
+    import ctypes
+    dp = ctypes.POINTER(ctypes.c_double)
+    fn = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_double, dp, dp, ctypes.c_void_p)(
+        s._addr["rhs"])
+    y = np.ascontiguousarray(y, dtype=float)
+    p = np.ascontiguousarray(p, dtype=float)
+    f = np.full_like(y, np.nan)
+    rc = fn(float(t), y.ctypes.data_as(dp), f.ctypes.data_as(dp), p.ctypes.data if p.size else None)
+    return f, rc
+
+
+def _gcc_on_glibc_x86_64():
+    import platform
+    import subprocess
+
+    from mechpy.symbolic import build
+    if platform.machine() != "x86_64" or platform.libc_ver()[0] != "glibc":
+        return False
+    out = subprocess.run(build.compiler() + ["--version"], capture_output=True, text=True)
+    return "Free Software Foundation" in out.stdout
+
+
+@pytest.mark.skipif(not _gcc_on_glibc_x86_64(), reason="libmvec's variants: GCC, glibc, x86-64")
+def test_lane_rhs_is_vectorised():
+    """The double pendulum's library calls libmvec's 4-wide AVX2 sin (its
+    AVX2+FMA clone) and 2-wide SSE sin (the portable one): the loop over the
+    lanes was vectorised."""
+    s = _compiled("double pendulum")
+    with open(s._path, "rb") as f:
+        data = f.read()
+    assert b"_ZGVdN4v_sin" in data and b"_ZGVbN2v_sin" in data
+
+
+def test_compiled_systems_export_a_lane_rhs():
+    s = _compiled("lorenz")
+    assert hasattr(s._lib, "mp_gen_lanes") and s._addr_lanes
+    assert f"#define MP_LANES {mp._core.LANES}" in s.c_source
+    assert mp._core.LANES == LANES
+    e = mp.solve_many(s, (0, 1), _starts([1.0, 1.0, 20.0], 0.1, 9), t_eval=[0, 1])
+    assert e.lanes
+
+
+@pytest.mark.parametrize("name", sorted(COMPILED))
+def test_lane_rhs_equals_eight_scalar_calls(name, rng):
+    s = _compiled(name)
+    y0 = np.asarray(COMPILED[name][1])
+    Y = y0 * (1 + 0.2 * rng.uniform(-1, 1, (LANES, y0.size)))
+    if name == "constrained pendulum":   # the rhs holds off the constraint too
+        Y = y0 + 0.1 * rng.uniform(-1, 1, (LANES, y0.size))
+    P = s._vector() * (1 + 0.3 * rng.uniform(-1, 1, (LANES, s._vector().size)))
+    t = rng.uniform(0, 2, LANES)
+    f, st = _lane_call(s, t, Y, P)
+    assert (st == 0).all()
+    worst = 0.0
+    for l in range(LANES):
+        g, rc = _scalar_call(s, t[l], Y[l], P[l])
+        assert rc == 0
+        worst = max(worst, np.max(np.abs(f[l] - g)) / np.max(np.abs(g)))
+    # measured: at most 7e-16 (vector sin/cos/... and fused multiply-adds
+    # against the scalar functions)
+    assert worst < 5e-15
+
+
+def _lane_params(s, k, spread):
+    """Parameter rows of k trajectories around the scene's, as a dict."""
+    names = list(s.params)
+    vec = s._vector()
+    rows = vec * (1 + spread * np.linspace(-1, 1, k)[:, None] * np.linspace(1, 0.5, vec.size))
+    return {n: rows[:, j] for j, n in enumerate(names)}
+
+
+@pytest.mark.parametrize("method", sorted(METHODS))
+@pytest.mark.parametrize("name", sorted(set(COMPILED) - {"elementary"}))
+def test_compiled_lanes_agree_with_scalar_path(name, method):
+    s = _compiled(name)
+    _, y0, spread = COMPILED[name]
+    k = 21
+    y0s = (_starts(y0, 0.2, k) if name != "constrained pendulum"
+           else np.array([[np.sin(a), -np.cos(a), np.cos(a) * 0.5, np.sin(a) * 0.5]
+                          for a in np.linspace(0.5, 1.5, k)]))
+    params = _lane_params(s, k, spread) if spread else None
+    te = np.linspace(0, 1, 5)
+    a, b = _both(s, (0, 1), y0s, t_eval=te, method=method, params=params, **METHODS[method])
+    # measured: at most 1.3e-12 (double pendulum, dopri5), mostly below 1e-14
+    assert _rel_diff(a, b) < 1e-11
+    assert np.array_equal(a.status, b.status) and a.success.all()
+    assert np.array_equal(a.nfev, b.nfev)
+    if params is not None:   # each lane ran with its own parameters
+        for i in (0, k // 2, k - 1):
+            one = s.replace(**{n: float(v[i]) for n, v in params.items()})
+            sol = mp.solve(one, (0, 1), y0s[i], t_eval=te, method=method, **METHODS[method])
+            # measured: at most 3.2e-13 (double pendulum, dopri5)
+            assert np.max(np.abs(sol.y - a.y[i])) < 3e-12 * np.max(np.abs(sol.y))
+
+
+def _degenerate():
+    """M = [[1, 1], [1, 1 + exp(-q1)]], positive definite, with q1 = q1(0) + v t,
+    q2 = q2(0) while q2' = 0: the pivot exp(-q1) falls below the solver's
+    NA eps max|A| once q1 > 35.1, and the solve reports a singular matrix (at
+    the first stage that reaches it: q1 <= 2 v on the span [0, 2])."""
+    q1, q2 = mp.coordinates("q1 q2")
+    d1, d2 = q1.diff(T), q2.diff(T)
+    return mp.lagrangian((d1 ** 2 + 2 * d1 * d2 + (1 + sp.exp(-q1)) * d2 ** 2) / 2, [q1, q2])
+
+
+@pytest.mark.parametrize("k", [1, LANES - 1, LANES + 1, 37])
+def test_singular_mass_matrix_in_a_compiled_lane(k):
+    s = _degenerate()
+    v = np.linspace(5.0, 50.0, k)
+    y0s = np.column_stack([np.zeros(k), np.zeros(k), v, np.zeros(k)])
+    te = np.linspace(0, 2, 5)
+    a, b = _both(s, (0, 2), y0s, t_eval=te, errors="status")
+    assert np.array_equal(a.status, b.status) and np.array_equal(a.nfev, b.nfev)
+    bad = v * 2 > 35.1
+    assert (a.status[bad] == -3).all() and (a.status[~bad] == 0).all()
+    assert _strip_times(a.message) == _strip_times(b.message)
+    assert np.array_equal(np.isnan(a.y), np.isnan(b.y))
+    # until the failure q1 = v t exactly as far as rounding goes
+    ok = ~np.isnan(a.y[:, 0, :])
+    exact = v[:, None] * te[None, :]
+    # measured 2.2e-15
+    assert np.max(np.abs(a.y[:, 0, :][ok] - exact[ok])) < 3e-14 * np.max(exact)
+    if bad.any():
+        with pytest.raises(mp.SingularityError):
+            mp.solve_many(s, (0, 2), y0s, t_eval=te, lanes=True)
+
+
+@pytest.mark.parametrize("method", sorted(METHODS))
+def test_vanishing_mass_of_one_coordinate_in_lanes(method):
+    """L = exp(-c t) q'^2 / 2 at rest: q stays put, b = 0, and the 1 x 1 mass
+    matrix exp(-c t) turns subnormal (its inverse inf, q'' = 0 inf = NaN) past
+    c t = 708.4 and exactly 0 (singular) past 745.1.  Which of the two a lane
+    meets first depends on where its steps land: both paths meet the same."""
+    (q,) = mp.coordinates("q")
+    c = sp.Symbol("c")
+    s = mp.lagrangian(sp.exp(-c * T) * q.diff(T) ** 2 / 2, [q], params=dict(c=1.0))
+    k = 37
+    cs = np.linspace(0.1, 2.0, k)
+    y0s = np.column_stack([np.linspace(-1, 1, k), np.zeros(k)])
+    te = np.linspace(0, 1000, 3)
+    kw = dict(h=0.5) if method == "rk4" else {}
+    a, b = _both(s, (0, 1000), y0s, t_eval=te, errors="status", params={"c": cs},
+                 method=method, **kw)
+    assert np.array_equal(a.status, b.status) and np.array_equal(a.nfev, b.nfev)
+    assert _strip_times(a.message) == _strip_times(b.message)
+    fine = cs * 1000 < 708
+    assert (a.status[fine] == 0).all() and (a.status[~fine] < 0).all()
+    # NonFiniteError, SingularityError: both in one lane group but for rk4's steps
+    assert set(a.status[~fine]) == ({-2} if method == "rk4" else {-2, -3})
+    assert np.array_equal(a.y[fine], np.repeat(y0s[fine, :, None], 3, axis=2))
+
+
+def test_blow_up_of_a_compiled_lagrangian():
+    """L = q'^2 / 2 + q^4 / 4: q'' = q^3, and from q(0) = a, q'(0) = a^2 / sqrt(2)
+    q = a / (1 - a t / sqrt(2)) leaves every float at t = sqrt(2) / a; the
+    lanes that start above a = 0.943 fail within (0, 1.5) as the scalar path
+    fails them."""
+    (q,) = mp.coordinates("q")
+    s = mp.lagrangian(q.diff(T) ** 2 / 2 + q ** 4 / 4, [q])
+    a = np.linspace(0.5, 4.0, 19)
+    y0s = np.column_stack([a, a ** 2 / np.sqrt(2)])
+    te = np.linspace(0, 1.5, 4)
+    r, b = _both(s, (0, 1.5), y0s, t_eval=te, errors="status")
+    assert np.array_equal(r.status, b.status) and np.array_equal(r.nfev, b.nfev)
+    blows = a * 1.5 > np.sqrt(2)
+    assert (r.status[blows] < 0).all() and (r.status[~blows] == 0).all()
+    assert _strip_times(r.message) == _strip_times(b.message)
+    assert np.array_equal(np.isnan(r.y), np.isnan(b.y))
+    with np.errstate(divide="ignore"):
+        exact = a[:, None] / (1 - a[:, None] * te[None, :] / np.sqrt(2))
+    ok = ~np.isnan(r.y[:, 0, :]) & np.isfinite(exact)
+    rel = np.abs(r.y[:, 0, :][ok] - exact[ok]) / np.maximum(np.abs(exact[ok]), 1.0)
+    assert np.max(rel) < 1e-7   # measured 7.9e-9 (the samples nearest the pole)
+
+
+def test_compiled_lanes_refill_across_groups():
+    """53 trajectories of very different lengths in one thread's lane group:
+    each slot takes the next trajectory as its own ends."""
+    s = _compiled("double pendulum")
+    k = 53
+    y0s = _starts([1.0, -0.5, 0.0, 0.3], 0.5, k)
+    te = np.linspace(0, 3, 4)
+    params = {"l1": np.geomspace(0.05, 5.0, k)}   # short ones take many more steps
+    params = {n: np.full(k, v) for n, v in s.params.items()} | params
+    a, b = _both(s, (0, 3), y0s, t_eval=te, params=params)
+    assert np.ptp(a.nfev) > 100
+    assert np.array_equal(a.nfev, b.nfev)
+    assert _rel_diff(a, b) < 3e-11   # measured 3.6e-12
+    two = mp.solve_many(s, (0, 3), y0s, t_eval=te, params=params, threads=2, lanes=True)
+    assert np.array_equal(two.y, a.y) and np.array_equal(two.nfev, a.nfev)
+
+
+def test_no_lane_rhs_for_a_huge_system(monkeypatch, tmp_path):
+    """Above codegen.LANE_MAX the library has no mp_gen_lanes; ensembles run
+    in lanes through the generic wrapper, as before."""
+    from mechpy.symbolic import codegen
+    monkeypatch.setenv("MECHPY_CACHE_DIR", str(tmp_path))
+    monkeypatch.setattr(codegen, "LANE_MAX", 10)
+    s = _lorenz()
+    assert "mp_gen_lanes" not in s.c_source.split("*/", 1)[1]
+    assert s._addr_lanes is None and not hasattr(s._lib, "mp_gen_lanes")
+    y0s = _starts([1.0, 1.0, 20.0], 0.1, 11)
+    a, b = _both(s, (0, 1), y0s, t_eval=[0.0, 1.0])
+    assert np.array_equal(a.nfev, b.nfev)
+    assert _rel_diff(a, b) < 3e-13   # measured 2.3e-14 (the lane driver's own rounding)

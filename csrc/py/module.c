@@ -3,6 +3,8 @@
 #define MP_PY_MODULE_C
 #include "mp_py.h"
 
+#include "ode/lanes.h"
+
 #include <gsl/gsl_errno.h>
 #include <gsl/gsl_version.h>
 
@@ -29,6 +31,8 @@ PyMODINIT_FUNC PyInit__core(void)
     }
     if (mp_py_errors_init(m) < 0) goto fail; /* classes, STATUS, STATUS_TABLE */
     if (PyModule_AddStringConstant(m, "gsl_version", GSL_VERSION) < 0) goto fail;
+    /* the ensembles' lane count: generated lane right-hand sides are built for it */
+    if (PyModule_AddIntConstant(m, "LANES", MP_LANES) < 0) goto fail;
     return m;
 fail:
     Py_DECREF(m);

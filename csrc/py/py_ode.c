@@ -232,7 +232,8 @@ static int const_jac_jac(double t, const double *y, double *jac, void *data)
 /* ---- a system described by the Python layer --------------------------------
  * ("scene", name, params) | ("python", fun, args) | ("cfunc", address, user_data)
  * and the second-order ("python2", accel, args) | ("cfunc2", address, user_data),
- * or a generated library ("compiled", (rhs, jac or None, nq), params);
+ * or a generated library ("compiled", (rhs, jac or None, nq[, lanes or None]), params)
+ * with lanes its mp_lane_rhs (lanes.h; None: ensembles wrap rhs lane by lane);
  * a RigidBody scene may carry a C torque: ("scene", name, params, (address, user_data)) */
 
 typedef struct {
@@ -242,6 +243,7 @@ typedef struct {
     py_fn fn;
     c_fn2 cfn;
     mp_rigid_torque torque;   /* a scene's C torque callback (fn NULL: none) */
+    mp_lane_rhs lanes;        /* a compiled system's lane rhs (NULL: none) */
 } py_system;
 
 static int c_address(PyObject *a, PyObject *b, c_fn *out)
@@ -335,14 +337,17 @@ static int py_system_parse(PyObject *spec, size_t n, py_system *s)
         s->prob.data = second ? (void *)&s->cfn : (void *)&s->cfn.fn;
         s->prob.nq = s->cfn.nq;
     } else if (strcmp(kind, "compiled") == 0) {
-        /* a generated library (mechpy.symbolic): ((rhs, jac or None, nq), params);
-         * its functions take the parameter vector as data */
-        PyObject *ra, *ja;
+        /* a generated library (mechpy.symbolic): ((rhs, jac or None, nq[, lanes
+         * or None]), params); its functions take the parameter vector as data */
+        PyObject *ra, *ja, *la = Py_None;
         Py_ssize_t nq;
-        if (!PyArg_ParseTuple(a, "OOn", &ra, &ja, &nq)) return -1;
-        c_fn rf, jf = {0};
+        if (!PyArg_ParseTuple(a, "OOn|O", &ra, &ja, &nq, &la)) return -1;
+        c_fn rf, jf = {0}, lf = {0};
         if (c_address(ra, Py_None, &rf) < 0) return -1;
         if (ja != Py_None && c_address(ja, Py_None, &jf) < 0) return -1;
+        if (la != Py_None && c_address(la, Py_None, &lf) < 0) return -1;
+        /* the lane rhs was handed over as an address too (see c_address) */
+        if (lf.f) *(void **)&s->lanes = *(void **)&lf.f;
         if (nq < 0 || (size_t)nq * 2 > n) {
             PyErr_SetString(PyExc_ValueError, "compiled system: bad second-order split nq");
             return -1;
@@ -753,8 +758,9 @@ static void many_progress(size_t done, size_t total, void *ctx)
 }
 
 /* Contract: the lane system of an ensemble (lanes.h) of a scene or compiled
- * system: the scene row's lane rhs for these parameter rows (NULL: the
- * generic wrapper of each trajectory's scalar problem) and the rows. */
+ * system: the scene row's lane rhs for these parameter rows, or the compiled
+ * system's (NULL: the generic wrapper of each trajectory's scalar problem),
+ * and the rows. */
 static void many_lane_system(const py_system *sys, const char *kind, PyObject *spec,
                              PyArrayObject *par, size_t k, mp_lane_system *ls)
 {
@@ -767,6 +773,7 @@ static void many_lane_system(const py_system *sys, const char *kind, PyObject *s
         ls->np = (size_t)PyArray_SIZE(sys->params);
         k = 1;
     }
+    if (strcmp(kind, "compiled") == 0 && ls->params) ls->rhs = sys->lanes;
     if (strcmp(kind, "scene") != 0 || sys->torque.fn) return;
     const mp_model *mod = mp_model_find(PyUnicode_AsUTF8(PyTuple_GET_ITEM(spec, 1)));
     if (mod && mod->lanes && ls->params) ls->rhs = mod->lanes(ls->params, k, ls->pstride);

@@ -11,12 +11,18 @@
   built with ``sympy.physics.mechanics.KanesMethod`` (derivation, code
   generation, compilation and integration timed apart; both errors against a
   tight reference).
+* Ensembles (``solve_many``, 1 thread, dop853 at rtol 1e-8): compiled double
+  pendulums in SIMD lanes (the generated lane right-hand side) against the
+  scalar path and a Python loop of ``solve_ivp`` on the lambdified equations
+  (goals: >= 2x, >= 100x as for one solve); the compiled pendulum against ``Pendulum``, both
+  in lanes (goal: within 1.25x).
 * Building: the double pendulum's first build in an empty cache folder
   (derive, print C, compile; goal < 2 s) and its build from the cache in a new
   process (goal < 50 ms).
 
 Rows carry ``path`` ("lagrangian" for the compiled scene, "scene" for the
-hand-written one, "sympy" for lambdify + ``solve_ivp``, "pydy", "build-*")
+hand-written one, "sympy" for lambdify + ``solve_ivp``, "pydy", "build-*",
+"own-ensemble-*" and "*-pendulum-lanes" for the ensembles)
 and :func:`targets` turns them into the report's overhead-budget lines.
 """
 from __future__ import annotations
@@ -353,6 +359,69 @@ def _double_pendulum_rows(rtols):
     return rows
 
 
+def _ensemble_rows(quick):
+    """Ensembles of compiled systems, 1 thread, dop853 at rtol 1e-8: the double
+    pendulum in SIMD lanes (its generated lane rhs), on the scalar path, and a
+    Python loop of ``solve_ivp`` on the lambdified equations (a subset, scaled);
+    the compiled pendulum beside the C scene ``Pendulum``, both in lanes."""
+    from scipy.integrate import solve_ivp
+
+    import mechpy as mp
+    from mechpy._timing import median_time
+    k = 1000 if quick else 4000
+    rtol, atol = 1e-8, 1e-10
+    te = np.linspace(0, DP_T, 11)
+    L, q = double_pendulum_lagrangian()
+    own = mp.lagrangian(L, q, params=DP_PARAMS)
+    y0s = np.column_stack([np.linspace(-1.5, 1.5, k), np.linspace(1.0, -1.0, k),
+                           np.zeros(k), np.zeros(k)])
+    ref = mp.solve_many(own, (0, DP_T), y0s, t_eval=te, rtol=1e-13, atol=1e-15,
+                        lanes=False).y[:, :, -1]
+    problem = (f"{k} double pendulums, t=10, rtol=1e-8, dop853, 1 thread: compiled "
+               "Lagrangian in lanes vs scalar vs SymPy lambdify + solve_ivp")
+    rows = []
+    for lanes, tag in ((True, "lanes"), (False, "scalar")):
+        def fn(lanes=lanes):
+            return mp.solve_many(own, (0, DP_T), y0s, t_eval=te, rtol=rtol, atol=atol,
+                                 threads=1, lanes=lanes)
+        rows.append(dict(problem=problem, impl=f"mechpy solve_many, {tag} (compiled Lagrangian)",
+                         path=f"own-ensemble-{tag}", method="dop853", rtol=rtol,
+                         time=median_time(fn, repeat=5),
+                         error=_err(fn().y[:, :, -1], ref)))
+    f = double_pendulum_sympy()
+    sub = 10 if quick else 40
+    idx = np.linspace(0, k - 1, sub).astype(int)
+
+    def loop():
+        return [solve_ivp(f, (0, DP_T), y0s[i], method="DOP853", rtol=rtol, atol=atol,
+                          t_eval=te).y[:, -1] for i in idx]
+    t0 = time.perf_counter()
+    ends = loop()
+    rows.append(dict(problem=problem, impl="Python loop of lambdify + solve_ivp DOP853",
+                     path="own-ensemble-loop", method="dop853", rtol=rtol,
+                     time=(time.perf_counter() - t0) * k / sub, error=_err(ends, ref[idx]),
+                     note=f"{sub} trajectories timed, scaled to {k}"))
+
+    Lp, qp = pendulum_lagrangian()
+    pend = mp.lagrangian(Lp, qp, params={"g": G, "l": 1.0})
+    hand = mp.scenes.Pendulum(g=G, length=1.0)
+    y0p = np.column_stack([np.linspace(0.1, 3.0, k), np.zeros(k)])
+    problem = f"{k} pendulums, t=10, rtol=1e-8, dop853, 1 thread, in lanes: compiled vs C scene"
+    refp = mp.solve_many(hand, (0, DP_T), y0p, t_eval=te, rtol=1e-13, atol=1e-15,
+                         lanes=False).y[:, :, -1]
+    fns = [lambda sc=sc: mp.solve_many(sc, (0, DP_T), y0p, t_eval=te, rtol=rtol, atol=atol,
+                                       threads=1, lanes=True) for sc in (pend, hand)]
+    times = _paired_times(fns, repeat=9 if quick else 21)
+    for (impl, path), fn, t in zip((("mechpy solve_many, lanes (compiled Lagrangian)",
+                                     "own-pendulum-lanes"),
+                                    ("mechpy solve_many, lanes (Pendulum, hand-written C)",
+                                     "scene-pendulum-lanes")), fns, times):
+        rows.append(dict(problem=problem, impl=impl, path=path, method="dop853", rtol=rtol,
+                         time=t, error=_err(fn().y[:, :, -1], refp),
+                         note="timed in alternation with the other row"))
+    return rows
+
+
 def _build_rows():
     """First build of the double pendulum in an empty cache folder, in this
     process, by stage; the build from the cache in a new process and again in
@@ -473,6 +542,7 @@ def run(quick: bool) -> list[dict]:
     rtols = [1e-4, 1e-7, 1e-10] if quick else [1e-3, 1e-5, 1e-7, 1e-9, 1e-11, 1e-13]
     rows = _pendulum_rows(rtols)
     rows += _double_pendulum_rows(rtols)
+    rows += _ensemble_rows(quick)
     rows += _build_rows()
     try:
         import pydy  # noqa: F401
@@ -500,6 +570,8 @@ def targets(rows) -> list[dict]:
     * compiled scene against lambdify + ``solve_ivp`` and against PyDy at equal
       error: for each of their runs the fastest compiled-scene run of the same
       problem with no larger error (ratio of their time to ours);
+    * the ensembles: lanes against the scalar path and against the Python loop
+      (time ratios), the compiled pendulum against ``Pendulum`` in lanes;
     * first build and build from the cache (seconds).
     """
     out = []
@@ -527,6 +599,19 @@ def targets(rows) -> list[dict]:
             if pairs:
                 out.append(dict(target=label, problem=p, goal=goal, worst=pairs[0],
                                 median=pairs[len(pairs) // 2], n=len(pairs)))
+    by = {r.get("path"): r for r in rows if r.get("path")}
+    for a, b, label, goal in (
+            ("own-ensemble-scalar", "own-ensemble-lanes",
+             "compiled ensemble in lanes vs one solve per trajectory, 1 thread", ">= 2x"),
+            ("own-ensemble-loop", "own-ensemble-lanes",
+             "compiled ensemble vs a Python loop of lambdify + solve_ivp", ">= 100x"),
+            ("own-pendulum-lanes", "scene-pendulum-lanes",
+             "compiled pendulum / hand-written scene, ensemble in lanes (time ratio)",
+             "<= 1.25x")):
+        if a in by and b in by:
+            v = by[a]["time"] / by[b]["time"]
+            out.append(dict(target=label, problem=by[b]["problem"], goal=goal, worst=v,
+                            median=v, n=1))
     for path, label, goal in (("build-first", "first build, empty cache (seconds)", "< 2 s"),
                               ("build-cache", "build from the cache, new process (seconds)",
                                "< 0.05 s")):

@@ -1,8 +1,8 @@
 """Compile generated C into a shared library, cached on disk, and load it.
 
 The compiler is the one Python was built with (``sysconfig``'s ``CC``), with
-``-O2 -fPIC -shared`` and no ``-march`` (the library runs wherever Python
-does); sources over :data:`LARGE` characters take ``-O1``, which compiles the
+:data:`FLAGS` and no ``-march`` (the library runs wherever Python does; the
+lane right-hand side is compiled for AVX2+FMA too and picks at load time); sources over :data:`LARGE` characters take ``-O1``, which compiles the
 10-link pendulum on a cart in about 17% less time at the same integration
 speed (within 1%).  The cache folder is ``MECHPY_CACHE_DIR``, else
 ``$XDG_CACHE_HOME/mechpy``, else ``~/.cache/mechpy``; a library's file name is
@@ -22,11 +22,20 @@ import threading
 
 #: Version of the generated libraries' interface (function set, signatures,
 #: mp_gen_dims); part of every library's cache key.
-ABI_VERSION = 1
+ABI_VERSION = 2
 
 __all__ = ["CompileError", "cache_dir", "compiler", "build", "load_meta", "store_meta"]
 
-FLAGS = ("-O2", "-fPIC", "-shared", "-std=c99")
+#: -fopenmp-simd: the lane right-hand side's ``#pragma omp simd`` loops (no
+#: OpenMP runtime); -fno-math-errno: sqrt becomes one instruction (a vector one
+#: in those loops) instead of a call that may set errno; -ffp-contract=fast:
+#: fused multiply-adds where the target has them (only the AVX2+FMA clone of
+#: the lane rhs: the rest is compiled for baseline x86-64); -fno-trapping-math:
+#: no floating-point traps are enabled, so a select between two computed values
+#: vectorises (the lane solver's elimination).  None of them changes a
+#: comparison or an isfinite test (no -ffast-math).
+FLAGS = ("-O2", "-fPIC", "-shared", "-std=c99", "-fopenmp-simd", "-fno-math-errno",
+         "-ffp-contract=fast", "-fno-trapping-math")
 #: Source size (characters) from which -O1 replaces -O2.
 LARGE = 150_000
 LIBS = ("-lm",)

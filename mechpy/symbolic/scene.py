@@ -116,6 +116,10 @@ class CompiledScene(Scene):
                           for w, (sym, _) in _FUNCS.items()
                           if w != "constraints" or self._k}
             self._addr_lag = ctypes.cast(self._lib.mp_gen_lagrangian, ctypes.c_void_p).value
+            # the lane rhs of ensembles (absent for very large systems)
+            lanes = getattr(self._lib, "mp_gen_lanes", None)
+            self._addr_lanes = (None if lanes is None
+                                else ctypes.cast(lanes, ctypes.c_void_p).value)
             self._np = None
         elif backend == "numpy":
             if numpy_fns is None:
@@ -145,10 +149,12 @@ class CompiledScene(Scene):
         return CompiledScene(self._meta, p, self._backend, self._np)
 
     def _spec(self, method: str) -> tuple:
-        """The system spec for _core: the generated library's functions."""
+        """The system spec for _core: the generated library's functions (the
+        scalar rhs, the Jacobian, the second-order split, the lane rhs or None)."""
         nq = int(self._meta["nq"])
         if self._backend == "c":
-            return ("compiled", (self._addr["rhs"], self._addr["jac"], nq), self._vector())
+            return ("compiled", (self._addr["rhs"], self._addr["jac"], nq, self._addr_lanes),
+                    self._vector())
         if nq:
             return ("python2", self._py_accel, ())
         return ("python", self._py_rhs, ())
