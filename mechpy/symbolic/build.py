@@ -2,9 +2,10 @@
 
 The compiler is the one Python was built with (``sysconfig``'s ``CC``), with
 :data:`FLAGS` and no ``-march`` (the library runs wherever Python does; the
-lane right-hand side is compiled for AVX2+FMA too and picks at load time); sources over :data:`LARGE` characters take ``-O1``, which compiles the
-10-link pendulum on a cart in about 17% less time at the same integration
-speed (within 1%).  The cache folder is ``MECHPY_CACHE_DIR``, else
+lane right-hand side is compiled for AVX2+FMA too and picks at load time);
+sources over :data:`LARGE` characters take ``-O1``, which compiles the 10-link
+pendulum on a cart in about 17% less time at the same integration speed
+(within 1%).  The cache folder is ``MECHPY_CACHE_DIR``, else
 ``$XDG_CACHE_HOME/mechpy``, else ``~/.cache/mechpy``; a library's file name is
 the sha256 of its source, the compiler command, the flags and the ABI
 version, so a second build of the same system loads the file without
