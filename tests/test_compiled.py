@@ -259,6 +259,43 @@ def test_pendulum_from_lagrangian_equals_builtin(pendulum):
     assert pendulum.dim == 2 and pendulum._meta["nq"] == 1   # separable
 
 
+@pytest.mark.parametrize("method", ["rk4", "verlet", "yoshida4", "yoshida6"])
+@pytest.mark.parametrize("system", ["pendulum", "double_pendulum", "lotka_volterra"])
+def test_fixed_step_blocks_of_a_compiled_system(system, method, request, monkeypatch):
+    # the generated library's own fixed-step blocks (the engine's templates
+    # with mp_gen_rhs inlined, mp_gen_rk4 / mp_gen_compose) against the checked
+    # loop, every step a method row's step (dense output keeps the driver out
+    # of the blocks), and against the engine's generic blocks (the spec without
+    # them): the same states and counts, bit for bit
+    if system == "lotka_volterra":
+        x, y = mp.coordinates("x y")
+        s = mp.equations([1.1 * x - 0.4 * x * y, 0.1 * x * y - 0.4 * y], [x, y])
+        y0 = [10.0, 5.0]
+    else:
+        s = request.getfixturevalue(system)
+        y0 = [2.5, 0.0] if system == "pendulum" else [2.0, -1.0, 0.0, 0.5]
+    separable = s._meta["nq"] > 0     # pendulum yes; the double pendulum's mass matrix varies
+    if method != "rk4" and not separable:
+        pytest.skip("not separable")
+    fns = s._spec(method)[1]
+    assert fns[4] is not None and (fns[5] is not None) == separable
+    fast = mp.solve(s, (0, 12.345), y0, method=method, h=0.01)
+    checked = mp.solve(s, (0, 12.345), y0, method=method, h=0.01, dense_output=True)
+    assert fast.nsteps == checked.nsteps == 1235 and fast.nfev == checked.nfev
+    assert np.array_equal(fast.t, checked.t) and np.array_equal(fast.y, checked.y)
+    monkeypatch.setattr(s, "_addr_blocks", (None, None))
+    generic = mp.solve(s, (0, 12.345), y0, method=method, h=0.01)
+    assert generic.nfev == fast.nfev and np.array_equal(generic.y, fast.y)
+
+
+def test_generated_blocks_are_the_engines_template():
+    # the text generated systems instantiate is csrc/ode/fixed.h as built
+    from pathlib import Path
+    header = Path(__file__).resolve().parents[1] / "csrc" / "ode" / "fixed.h"
+    assert mp._core.FIXED_STEPS_C == header.read_text()
+    assert "MP_ODE_BLOCK_FNS" in mp._core.FIXED_STEPS_C
+
+
 def test_damped_pendulum_through_forces():
     L, q = pendulum_L()
     b = sp.Symbol("b")

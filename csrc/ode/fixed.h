@@ -14,23 +14,24 @@
 #ifndef MP_ODE_FIXED_H
 #define MP_ODE_FIXED_H
 
+/* Self-contained (standard headers and MP_OK, defined before it is included):
+ * generated systems (mechpy.symbolic) take this text too, from
+ * mechpy._core.FIXED_STEPS_C, and instantiate the blocks with their rhs. */
 #include <string.h>
 
-#include "ode/ode.h"
-
+#if defined(__GNUC__)
 #define MP_ODE_INLINE static inline __attribute__((always_inline))
+#else
+#define MP_ODE_INLINE static inline
+#endif
 
-/* The checked, counted evaluation (mp_ode_ws_rhs) as an F over ctx = the
- * workspace: the templates' checked steps. */
-static inline int mp_ode_ws_eval(double t, const double *y, double *f, void *w)
-{
-    return mp_ode_ws_rhs(w, t, y, f);
-}
+/* F's signature: ode.h's mp_ode_rhs. */
+typedef int (*mp_ode_fixed_rhs)(double t, const double *y, double *dydt, void *data);
 
 /* Contract: one rk4 step from (t, y) with k1 = f(t, y) into ynew (which may
  * be y); three evaluations of F (data ctx); s: 4n doubles of scratch.
  * Returns the first status of F that is not MP_OK. */
-MP_ODE_INLINE int mp_ode_rk4_stages(mp_ode_rhs F, void *ctx, size_t n, double t, double h,
+MP_ODE_INLINE int mp_ode_rk4_stages(mp_ode_fixed_rhs F, void *ctx, size_t n, double t, double h,
                                     const double *y, const double *k1, double *ynew, double *s)
 {
     double *k2 = s, *k3 = k2 + n, *k4 = k3 + n, *yt = k4 + n;
@@ -51,7 +52,7 @@ MP_ODE_INLINE int mp_ode_rk4_stages(mp_ode_rhs F, void *ctx, size_t n, double t,
  * evaluations a step, unchecked (the driver checks the state after the
  * block).  The state after step j goes to ys + j n and its time to ts[j]
  * when ys is not NULL.  s: 4n doubles of scratch. */
-MP_ODE_INLINE int mp_ode_rk4_steps(mp_ode_rhs F, void *ctx, size_t n, double t, double h,
+MP_ODE_INLINE int mp_ode_rk4_steps(mp_ode_fixed_rhs F, void *ctx, size_t n, double t, double h,
                                    long k, double *y, double *f, double *s, double *ts,
                                    double *ys)
 {
@@ -74,7 +75,7 @@ MP_ODE_INLINE int mp_ode_rk4_steps(mp_ode_rhs F, void *ctx, size_t n, double t, 
  * NULL (unchecked), the first half of that evaluation, which v replaces,
  * leaves its trace there (0 * value: NaN when one was not finite), so that
  * the driver's check of the state sees it too. */
-MP_ODE_INLINE int mp_ode_kdk(mp_ode_rhs F, void *ctx, size_t nq, double t, double h, double *y,
+MP_ODE_INLINE int mp_ode_kdk(mp_ode_fixed_rhs F, void *ctx, size_t nq, double t, double h, double *y,
                              double *f, double *discarded)
 {
     double *q = y, *v = y + nq;
@@ -94,7 +95,7 @@ MP_ODE_INLINE int mp_ode_kdk(mp_ode_rhs F, void *ctx, size_t nq, double t, doubl
 
 /* Contract: the composition c[0..ns) of kick-drift-kick steps over one step
  * h from (t, y, f), in place (discarded as for mp_ode_kdk). */
-MP_ODE_INLINE int mp_ode_compose(mp_ode_rhs F, void *ctx, size_t nq, double t, double h,
+MP_ODE_INLINE int mp_ode_compose(mp_ode_fixed_rhs F, void *ctx, size_t nq, double t, double h,
                                  const double *c, int ns, double *y, double *f, double *discarded)
 {
     for (int i = 0; i < ns; i++) {
@@ -108,7 +109,7 @@ MP_ODE_INLINE int mp_ode_compose(mp_ode_rhs F, void *ctx, size_t nq, double t, d
 /* Contract: k steps of the composition c[0..ns) from (t, y, f) in place, as
  * mp_ode_rk4_steps does them (ns evaluations a step, unchecked, the dropped
  * values' trace added to *discarded, samples to ts/ys when ys is given). */
-MP_ODE_INLINE int mp_ode_compose_steps(mp_ode_rhs F, void *ctx, size_t nq, double t, double h,
+MP_ODE_INLINE int mp_ode_compose_steps(mp_ode_fixed_rhs F, void *ctx, size_t nq, double t, double h,
                                        const double *c, int ns, long k, double *y, double *f,
                                        double *ts, double *ys, double *discarded)
 {
@@ -124,13 +125,14 @@ MP_ODE_INLINE int mp_ode_compose_steps(mp_ode_rhs F, void *ctx, size_t nq, doubl
     return MP_OK;
 }
 
-/* A scene's blocks for one of its right-hand sides, with NQ > 0 for a
- * separable one: rhs evaluated with its data as the problem's, sizes known
- * when compiled, the state in locals for the block (registers: no store
+/* The blocks of rhs (dimension N, NQ > 0 for a separable one), as
+ * `link` functions name##_rk4 and name##_compose with the signatures of
+ * ode.h's mp_ode_blocks: rhs evaluated with its data as the problem's, sizes
+ * known when compiled, the state in locals for the block (registers: no store
  * to memory the compiler must assume the parameters share). */
-#define MP_ODE_BLOCKS(name, rhs, N, NQ)                                                          \
-    static int name##_rk4(void *d, double t, double h, long k, double *y, double *f,           \
-                          double *ts, double *ys)                                              \
+#define MP_ODE_BLOCK_FNS(link, name, rhs, N, NQ)                                               \
+    link int name##_rk4(void *d, double t, double h, long k, double *y, double *f,            \
+                        double *ts, double *ys)                                                \
     {                                                                                          \
         double s[4 * (N)], yl[N], fl[N];                                                       \
         memcpy(yl, y, sizeof yl);                                                              \
@@ -140,8 +142,8 @@ MP_ODE_INLINE int mp_ode_compose_steps(mp_ode_rhs F, void *ctx, size_t nq, doubl
         memcpy(f, fl, sizeof fl);                                                              \
         return rc;                                                                             \
     }                                                                                          \
-    static int name##_compose(void *d, double t, double h, const double *c, int ns, long k,   \
-                              double *y, double *f, double *ts, double *ys, double *discarded) \
+    link int name##_compose(void *d, double t, double h, const double *c, int ns, long k,     \
+                            double *y, double *f, double *ts, double *ys, double *discarded)   \
     {                                                                                          \
         double yl[N], fl[N], dl = 0.0;                                                         \
         memcpy(yl, y, sizeof yl);                                                              \
@@ -151,7 +153,12 @@ MP_ODE_INLINE int mp_ode_compose_steps(mp_ode_rhs F, void *ctx, size_t nq, doubl
         memcpy(f, fl, sizeof fl);                                                              \
         *discarded += dl;                                                                      \
         return rc;                                                                             \
-    }                                                                                          \
+    }
+
+/* A scene's blocks for one of its right-hand sides: MP_ODE_BLOCK_FNS and the
+ * mp_ode_blocks row `name` (ode.h) that binds them (mp_model_set_blocks). */
+#define MP_ODE_BLOCKS(name, rhs, N, NQ)                                                          \
+    MP_ODE_BLOCK_FNS(static, name, rhs, N, NQ)                                                 \
     static const mp_ode_blocks name = {rhs, name##_rk4, (NQ) > 0 ? name##_compose : NULL}
 
 #endif

@@ -206,6 +206,13 @@ static inline int mp_ode_ws_rhs(mp_ode_ws *w, double t, const double *y, double 
     return MP_OK;
 }
 
+/* mp_ode_ws_rhs as an rhs over data = the workspace: the checked steps of
+ * the fixed-step templates (ode/fixed.h). */
+static inline int mp_ode_ws_eval(double t, const double *y, double *dydt, void *w)
+{
+    return mp_ode_ws_rhs(w, t, y, dydt);
+}
+
 /* Jacobian df/dy (row-major) at (t, y): the problem's own when it has one,
  * else forward differences with increments sqrt(eps) * max(|y_j|, atol_j/rtol);
  * f0 = f(t, y) must be given for the differences.  Counts njev. */

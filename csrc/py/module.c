@@ -5,6 +5,8 @@
 
 #include "ode/lanes.h"
 
+extern const char mp_fixed_steps_text[]; /* fixed_text.c, made from ode/fixed.h */
+
 #include <gsl/gsl_errno.h>
 #include <gsl/gsl_version.h>
 
@@ -33,6 +35,8 @@ PyMODINIT_FUNC PyInit__core(void)
     if (PyModule_AddStringConstant(m, "gsl_version", GSL_VERSION) < 0) goto fail;
     /* the ensembles' lane count: generated lane right-hand sides are built for it */
     if (PyModule_AddIntConstant(m, "LANES", MP_LANES) < 0) goto fail;
+    /* ode/fixed.h's text: generated systems build their fixed-step blocks from it */
+    if (PyModule_AddStringConstant(m, "FIXED_STEPS_C", mp_fixed_steps_text) < 0) goto fail;
     return m;
 fail:
     Py_DECREF(m);

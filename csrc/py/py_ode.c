@@ -232,8 +232,9 @@ static int const_jac_jac(double t, const double *y, double *jac, void *data)
 /* ---- a system described by the Python layer --------------------------------
  * ("scene", name, params) | ("python", fun, args) | ("cfunc", address, user_data)
  * and the second-order ("python2", accel, args) | ("cfunc2", address, user_data),
- * or a generated library ("compiled", (rhs, jac or None, nq[, lanes or None]), params)
- * with lanes its mp_lane_rhs (lanes.h; None: ensembles wrap rhs lane by lane);
+ * or a generated library ("compiled", (rhs, jac, nq[, lanes, rk4, compose]), params)
+ * with lanes its mp_lane_rhs (lanes.h; None: ensembles wrap rhs lane by lane) and
+ * rk4/compose its fixed-step blocks (ode.h's mp_ode_blocks; None: the generic ones);
  * a RigidBody scene may carry a C torque: ("scene", name, params, (address, user_data)) */
 
 typedef struct {
@@ -244,6 +245,7 @@ typedef struct {
     c_fn2 cfn;
     mp_rigid_torque torque;   /* a scene's C torque callback (fn NULL: none) */
     mp_lane_rhs lanes;        /* a compiled system's lane rhs (NULL: none) */
+    mp_ode_blocks blocks;     /* ... and its fixed-step blocks (prob.blocks) */
 } py_system;
 
 static int c_address(PyObject *a, PyObject *b, c_fn *out)
@@ -337,27 +339,35 @@ static int py_system_parse(PyObject *spec, size_t n, py_system *s)
         s->prob.data = second ? (void *)&s->cfn : (void *)&s->cfn.fn;
         s->prob.nq = s->cfn.nq;
     } else if (strcmp(kind, "compiled") == 0) {
-        /* a generated library (mechpy.symbolic): ((rhs, jac or None, nq[, lanes
-         * or None]), params); its functions take the parameter vector as data */
-        PyObject *ra, *ja, *la = Py_None;
+        /* a generated library (mechpy.symbolic): ((rhs, jac, nq[, lanes, rk4,
+         * compose]), params), each function an address or None (rhs: never);
+         * its functions take the parameter vector as data */
+        enum { RHS, JAC, LANES, RK4, COMPOSE, NFN };
+        PyObject *fa[NFN] = {NULL, NULL, Py_None, Py_None, Py_None};
+        c_fn fn[NFN] = {{0}};
         Py_ssize_t nq;
-        if (!PyArg_ParseTuple(a, "OOn|O", &ra, &ja, &nq, &la)) return -1;
-        c_fn rf, jf = {0}, lf = {0};
-        if (c_address(ra, Py_None, &rf) < 0) return -1;
-        if (ja != Py_None && c_address(ja, Py_None, &jf) < 0) return -1;
-        if (la != Py_None && c_address(la, Py_None, &lf) < 0) return -1;
-        /* the lane rhs was handed over as an address too (see c_address) */
-        if (lf.f) *(void **)&s->lanes = *(void **)&lf.f;
+        if (!PyArg_ParseTuple(a, "OOn|OOO", &fa[RHS], &fa[JAC], &nq, &fa[LANES], &fa[RK4],
+                              &fa[COMPOSE]))
+            return -1;
+        for (int i = 0; i < NFN; i++) /* each handed over as an address (see c_address) */
+            if ((i == RHS || fa[i] != Py_None) && c_address(fa[i], Py_None, &fn[i]) < 0) return -1;
         if (nq < 0 || (size_t)nq * 2 > n) {
             PyErr_SetString(PyExc_ValueError, "compiled system: bad second-order split nq");
             return -1;
         }
         s->params = mp_py_array(b, "scene parameters", 1);
         if (!s->params) return -1;
-        *(void **)&s->prob.rhs = *(void **)&rf.f;
-        if (jf.f) *(void **)&s->prob.jac = *(void **)&jf.f;
+        *(void **)&s->prob.rhs = *(void **)&fn[RHS].f;
+        *(void **)&s->prob.jac = *(void **)&fn[JAC].f;
+        *(void **)&s->lanes = *(void **)&fn[LANES].f;
         s->prob.data = PyArray_DATA(s->params);
         s->prob.nq = (size_t)nq;
+        if (fn[RK4].f) { /* its fixed-step blocks, with its rhs inlined */
+            s->blocks.rhs = s->prob.rhs;
+            *(void **)&s->blocks.rk4 = *(void **)&fn[RK4].f;
+            *(void **)&s->blocks.compose = *(void **)&fn[COMPOSE].f;
+            s->prob.blocks = &s->blocks;
+        }
     } else {
         PyErr_Format(PyExc_ValueError, "unknown system kind %s", kind);
         return -1;

@@ -79,6 +79,18 @@ def _plain_fixed(nsteps, h):
     return out
 
 
+def _compiled_pendulum():
+    """The plain loops' pendulum, theta'' = -9.81 sin(theta), as a compiled
+    Lagrangian (mp.lagrangian): its fixed-step blocks are the engine's with the
+    generated rhs inlined.  None without a C compiler."""
+    import sympy as sp
+    th, = mp.coordinates("theta")
+    try:
+        return mp.lagrangian(th.diff() ** 2 / 2 + sp.Float(9.81) * sp.cos(th), [th])
+    except mp.symbolic.CompileError:
+        return None
+
+
 def _numbalsoda_many():
     """numbalsoda's dop853 inside a numba ``prange`` loop over the trajectories,
     with a numba ``cfunc`` pendulum: the fastest ensemble a user writes today
@@ -161,6 +173,7 @@ def run(quick: bool):
     nsteps, h = (200_000 if quick else 2_000_000), 1e-4
     T = nsteps * h
     plain = _plain_fixed(nsteps, h)
+    own = _compiled_pendulum()
     for meth in FIXED:
         name = f"{meth}, h=1e-4, {nsteps} steps, pendulum (C scene)"
         fn = lambda meth=meth: mp.solve(p, (0, T), [1.0, 0.0], method=meth, h=h,  # noqa: E731
@@ -168,6 +181,13 @@ def run(quick: bool):
         ours = fn().y[:, -1]
         rows.append(dict(problem=name, impl=f"mechpy solve {meth} (C scene)", path=meth,
                          time=median_time(fn), error=float("nan")))
+        if own is not None:
+            fn = lambda meth=meth: mp.solve(own, (0, T), [1.0, 0.0], method=meth,  # noqa: E731
+                                            h=h, t_eval=[T])
+            rows.append(dict(problem=name, impl=f"mechpy solve {meth} (compiled Lagrangian)",
+                             path=f"{meth}-compiled", time=median_time(fn),
+                             error=float(np.max(np.abs(fn().y[:, -1] - ours))),
+                             note="error = difference from the C scene's result"))
         if plain is not None:
             rows.append(dict(problem=name, impl="plain C loop (cc -O2)", path=f"plain-c-{meth}",
                              time=plain[meth][0],

@@ -34,9 +34,11 @@ __all__ = ["CompileError", "cache_dir", "compiler", "build", "load_meta", "store
 #: the lane rhs: the rest is compiled for baseline x86-64); -fno-trapping-math:
 #: no floating-point traps are enabled, so a select between two computed values
 #: vectorises (the lane solver's elimination).  None of them changes a
-#: comparison or an isfinite test (no -ffast-math).
+#: comparison or an isfinite test (no -ffast-math).  -fno-semantic-interposition:
+#: the exported mp_gen_rhs may be inlined into the fixed-step blocks beside it
+#: (nothing interposes the library's own functions).
 FLAGS = ("-O2", "-fPIC", "-shared", "-std=c99", "-fopenmp-simd", "-fno-math-errno",
-         "-ffp-contract=fast", "-fno-trapping-math")
+         "-ffp-contract=fast", "-fno-trapping-math", "-fno-semantic-interposition")
 #: Source size (characters) from which -O1 replaces -O2.
 LARGE = 150_000
 LIBS = ("-lm",)

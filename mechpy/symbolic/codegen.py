@@ -528,6 +528,19 @@ def _lanes_lagrangian(ir):
 """)
 
 
+def _fixed_blocks(ir):
+    """The engine's fixed-step blocks (csrc/ode/fixed.h, as the C core was
+    built with it) instantiated with mp_gen_rhs: mp_gen_rk4 and mp_gen_compose
+    (meaningful when ir.nq > 0), with the signatures of the engine's
+    mp_ode_blocks, so that rk4 and the symplectic methods run a compiled system
+    as the engine runs its own scenes (mp_gen_rhs inlined where the compiler
+    finds it worth it: build.FLAGS has -fno-semantic-interposition)."""
+    from .. import _core
+    return ("\n/* ---- fixed-step blocks: mechpy._core.FIXED_STEPS_C ---- */\n"
+            + _core.FIXED_STEPS_C
+            + f"\nMP_ODE_BLOCK_FNS(, mp_gen, mp_gen_rhs, NS, {ir.nq})\n")
+
+
 def _header(ir, status):
     from .. import _core
     n, nc, k = ir.n, ir.nc, ir.k
@@ -679,6 +692,7 @@ int mp_gen_lagrangian(size_t m, const double *t, const double *q, const double *
 """)
     if lanes is None:
         parts.append(_lanes_lagrangian(ir))
+    parts.append(_fixed_blocks(ir))
     if k:
         parts.append(_block("gen_g", B["g"], ir, _ARGS, "the constraints"))
         parts.append(r"""
@@ -753,6 +767,7 @@ int mp_gen_jac(double t, const double *y, double *jac, void *params)
 }
 """)
     parts.append(_lanes_equations(ir))
+    parts.append(_fixed_blocks(ir))
     if "energy" in B:
         parts.append(_block("gen_energy", B["energy"], ir, _ARGS, "the energy"))
         parts.append(r"""

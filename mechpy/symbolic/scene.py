@@ -120,6 +120,11 @@ class CompiledScene(Scene):
             lanes = getattr(self._lib, "mp_gen_lanes", None)
             self._addr_lanes = (None if lanes is None
                                 else ctypes.cast(lanes, ctypes.c_void_p).value)
+            # the fixed-step blocks with the rhs inlined (compose: separable only)
+            self._addr_blocks = (
+                ctypes.cast(self._lib.mp_gen_rk4, ctypes.c_void_p).value,
+                ctypes.cast(self._lib.mp_gen_compose, ctypes.c_void_p).value
+                if int(meta["nq"]) else None)
             self._np = None
         elif backend == "numpy":
             if numpy_fns is None:
@@ -150,11 +155,12 @@ class CompiledScene(Scene):
 
     def _spec(self, method: str) -> tuple:
         """The system spec for _core: the generated library's functions (the
-        scalar rhs, the Jacobian, the second-order split, the lane rhs or None)."""
+        scalar rhs, the Jacobian, the second-order split, the lane rhs or None,
+        the fixed-step blocks rk4 and compose or None)."""
         nq = int(self._meta["nq"])
         if self._backend == "c":
-            return ("compiled", (self._addr["rhs"], self._addr["jac"], nq, self._addr_lanes),
-                    self._vector())
+            return ("compiled", (self._addr["rhs"], self._addr["jac"], nq, self._addr_lanes,
+                                 *self._addr_blocks), self._vector())
         if nq:
             return ("python2", self._py_accel, ())
         return ("python", self._py_rhs, ())
