@@ -78,28 +78,28 @@ static void lane_eval_generic(lane_group *g, const double *t, const double *y, d
 static inline void lane_eval(lane_group *g, const double *s, const double *y, double *f,
                              int *on, int *rc)
 {
-    double tp[W], probe[W] = {0.0};
-    int st[W];
+    double tn[W], probe[W] = {0.0};
+    const double *t = s; /* t = dir s: s itself forwards */
+    int st[W], fails = 0, nonfinite = 0;
     size_t n = g->n;
-    MP_LANE_LOOP {
-        tp[l] = g->dir * s[l];
-        st[l] = MP_OK;
+    MP_LANE_LOOP st[l] = MP_OK;
+    if (g->dir < 0) {
+        MP_LANE_LOOP tn[l] = -s[l];
+        t = tn;
     }
-    if (g->ls->rhs) g->ls->rhs(tp, y, f, g->par, st);
-    else lane_eval_generic(g, tp, y, f, on, st);
+    if (g->ls->rhs) g->ls->rhs(t, y, f, g->par, st);
+    else lane_eval_generic(g, t, y, f, on, st);
     if (g->dir < 0)
         for (size_t i = 0; i < g->nW; i++) f[i] = -f[i];
     for (size_t c = 0; c < g->nW; c += W) /* x - x: 0 when finite, NaN otherwise */
         MP_LANE_LOOP probe[l] += f[c + l] - f[c + l];
-    int fails = 0;
     MP_LANE_LOOP {
         g->nfev[l] += on[l];
         rc[l] = on[l] ? st[l] : rc[l];
         fails |= st[l];
+        nonfinite |= probe[l] != 0.0;
     }
-    double psum = 0.0;
-    for (int l = 0; l < W; l++) psum += probe[l];
-    if (fails == 0 && psum == 0.0) return; /* all well */
+    if (fails == 0 && !nonfinite) return; /* all well */
     for (int l = 0; l < W; l++) {
         if (!on[l]) continue;
         if (st[l] == MP_OK && probe[l] != 0.0)
@@ -312,17 +312,23 @@ static void lane_start(lane_group *g, int *fresh)
 
 /* ---- the methods' steps -------------------------------------------------------- */
 
-/* Hairer's stiffness estimate h |lambda| of lane l from two stages at one time. */
-static double lane_rho(const lane_group *g, int l, double h, const double *fa, const double *fb,
-                       const double *a, const double *b)
+/* Hairer's stiffness estimate h |lambda| from two stages at one time, for the
+ * lanes in on (rho of the others is left as it is): rk.c's stiffness_ratio,
+ * the same sums in the same order, every lane at once. */
+static void lanes_rho(const lane_group *g, const int *on, const double *fa, const double *fb,
+                      const double *a, const double *b, double *rho)
 {
-    double num = 0.0, den = 0.0;
-    for (size_t c = 0; c < g->n; c++) {
-        size_t i = c * W + (size_t)l;
-        num += (fa[i] - fb[i]) * (fa[i] - fb[i]);
-        den += (a[i] - b[i]) * (a[i] - b[i]);
+    double num[W] = {0.0}, den[W] = {0.0};
+    for (size_t c = 0; c < g->nW; c += W)
+        MP_LANE_LOOP {
+            double df = fa[c + l] - fb[c + l], dy = a[c + l] - b[c + l];
+            num[l] += df * df;
+            den[l] += dy * dy;
+        }
+    MP_LANE_LOOP {
+        double r = den[l] > 0.0 ? fabs(g->h[l]) * sqrt(num[l] / den[l]) : 0.0;
+        rho[l] = on[l] ? r : rho[l];
     }
-    return den > 0.0 ? fabs(h) * sqrt(num / den) : 0.0;
 }
 
 /* Contract (every lane step): one attempt of the lanes in on from (t, y, f)
@@ -380,8 +386,7 @@ static void dopri5_lanes(lane_group *g, int *on, int *rc, double *err, double *r
     lane_stage(nW, g->y, g->h, dp_a[6], K, 6, g->ynew);
     for (int l = 0; l < W; l++) ts[l] = g->t[l] + g->h[l];
     lane_eval(g, ts, g->ynew, K[6], on, rc); /* FSAL */
-    for (int l = 0; l < W; l++) /* stages 6, 7 both at t + h */
-        if (on[l]) rho[l] = lane_rho(g, l, g->h[l], K[6], K[5], g->ynew, yt);
+    lanes_rho(g, on, K[6], K[5], g->ynew, yt, rho); /* stages 6, 7 both at t + h */
     for (size_t c = 0; c < nW; c += W) {
         double e[W];
         lane_dot(dp_e, K, 7, c, e);
@@ -417,7 +422,10 @@ static void dop853_lanes(lane_group *g, int *on, int *rc, double *err, double *r
         lane_dot(mp_dop853_e5, K, 12, c * W, e5);
         lane_dot(mp_dop853_e3, K, 12, c * W, e3);
         MP_LANE_LOOP {
-            double sk = at + rtol * fmax(fabs(y[l]), fabs(y1[l]));
+            /* fmax(|y|, |y1|) as a select (fmax is a call the loop cannot
+             * vectorise): the same value, y being finite in a running lane */
+            double a0 = fabs(y[l]), a1 = fabs(y1[l]);
+            double sk = at + rtol * (a1 > a0 ? a1 : a0);
             double r = 1.0 / sk, q5 = e5[l] * r, q3 = e3[l] * r;
             e5s[l] += q5 * q5;
             e3s[l] += q3 * q3;
@@ -483,8 +491,7 @@ static void finish_lanes(lane_group *g, int *on, const int *dense, int *rc, doub
     for (int s = 1; s < 12; s++) K[s] = g->kbuf + (size_t)(s - 1) * nW;
     K[12] = g->fnew;
     for (int s = 13; s < 16; s++) K[s] = g->kbuf + (size_t)(s - 2) * nW;
-    for (int l = 0; l < W; l++)
-        if (on[l]) rho[l] = lane_rho(g, l, g->h[l], K[12], K[11], g->ynew, yt);
+    lanes_rho(g, on, K[12], K[11], g->ynew, yt, rho);
     any_dense = 0;
     for (int l = 0; l < W; l++) {
         dn[l] = on[l] && dense[l];
