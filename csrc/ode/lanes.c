@@ -368,21 +368,42 @@ static double lane_err_norm(const lane_group *g, int l, const double *e)
     return sqrt(s / (double)g->n);
 }
 
+/* The stage vectors of a dopri5 or dop853 step (kind) in kbuf: K[0] = f,
+ * the FSAL stage (dopri5's 7th, dop853's 13th) fnew, dop853's three dense
+ * output stages after it.  Inlined with a constant kind. */
+static inline __attribute__((always_inline)) void lane_K(const lane_group *g, int kind,
+                                                          double **K)
+{
+    int dp = kind == LANE_DOPRI5;
+    size_t nW = g->nW, last = dp ? 6 : 12, all = dp ? 7 : 16;
+    K[0] = g->f;
+    for (size_t s = 1; s < all; s++) K[s] = g->kbuf + (s < last ? s - 1 : s - 2) * nW;
+    K[last] = g->fnew;
+}
+
+/* Contract: stage s of a tableau (row a, node c) for the lanes in on: yt =
+ * y + h sum_j a[j] K[j], then K[s] = f(t + c h, yt).  Always inlined: with a
+ * constant row the zero tests of lane_stage fold. */
+static inline __attribute__((always_inline)) void
+lane_rk_stage(lane_group *g, const double *a, double c, double *const *K, size_t s, double *yt,
+              int *on, int *rc)
+{
+    double ts[W];
+    lane_stage(g->nW, g->y, g->h, a, K, s, yt);
+    for (int l = 0; l < W; l++) ts[l] = g->t[l] + c * g->h[l];
+    lane_eval(g, ts, yt, K[s], on, rc);
+}
+
 static void dopri5_lanes(lane_group *g, int *on, int *rc, double *err, double *rho)
 {
     size_t nW = g->nW;
     double *K[7], *yt = g->kbuf + 5 * nW, ts[W];
-    K[0] = g->f;
-    for (int s = 1; s < 6; s++) K[s] = g->kbuf + (size_t)(s - 1) * nW;
-    K[6] = g->fnew;
-#define DP_LANE_STAGE(s)                                                   \
-    do {                                                                   \
-        lane_stage(nW, g->y, g->h, dp_a[s], K, (s), yt);                   \
-        for (int l = 0; l < W; l++) ts[l] = g->t[l] + dp_c[s] * g->h[l];   \
-        lane_eval(g, ts, yt, K[s], on, rc);                                \
-    } while (0)
-    DP_LANE_STAGE(1); DP_LANE_STAGE(2); DP_LANE_STAGE(3); DP_LANE_STAGE(4); DP_LANE_STAGE(5);
-#undef DP_LANE_STAGE
+    lane_K(g, LANE_DOPRI5, K);
+    lane_rk_stage(g, dp_a[1], dp_c[1], K, 1, yt, on, rc);
+    lane_rk_stage(g, dp_a[2], dp_c[2], K, 2, yt, on, rc);
+    lane_rk_stage(g, dp_a[3], dp_c[3], K, 3, yt, on, rc);
+    lane_rk_stage(g, dp_a[4], dp_c[4], K, 4, yt, on, rc);
+    lane_rk_stage(g, dp_a[5], dp_c[5], K, 5, yt, on, rc);
     lane_stage(nW, g->y, g->h, dp_a[6], K, 6, g->ynew);
     for (int l = 0; l < W; l++) ts[l] = g->t[l] + g->h[l];
     lane_eval(g, ts, g->ynew, K[6], on, rc); /* FSAL */
@@ -399,21 +420,11 @@ static void dopri5_lanes(lane_group *g, int *on, int *rc, double *err, double *r
 static void dop853_lanes(lane_group *g, int *on, int *rc, double *err, double *rho)
 {
     size_t nW = g->nW, n = g->n;
-    double *K[16], *yt = g->kbuf + 14 * nW, ts[W];
-    K[0] = g->f;
-    for (int s = 1; s < 12; s++) K[s] = g->kbuf + (size_t)(s - 1) * nW;
-    K[12] = g->fnew;
-    for (int s = 13; s < 16; s++) K[s] = g->kbuf + (size_t)(s - 2) * nW;
-#define D8_LANE_STAGE(s)                                                       \
-    do {                                                                       \
-        lane_stage(nW, g->y, g->h, mp_dop853_a[s], K, (s), yt);                \
-        for (int l = 0; l < W; l++) ts[l] = g->t[l] + mp_dop853_c[s] * g->h[l]; \
-        lane_eval(g, ts, yt, K[s], on, rc);                                    \
-    } while (0)
-    D8_LANE_STAGE(1); D8_LANE_STAGE(2); D8_LANE_STAGE(3); D8_LANE_STAGE(4); D8_LANE_STAGE(5);
-    D8_LANE_STAGE(6); D8_LANE_STAGE(7); D8_LANE_STAGE(8); D8_LANE_STAGE(9); D8_LANE_STAGE(10);
-    D8_LANE_STAGE(11);
-#undef D8_LANE_STAGE
+    double *K[16], *yt = g->kbuf + 14 * nW;
+    lane_K(g, LANE_DOP853, K);
+#define D8(s) lane_rk_stage(g, mp_dop853_a[s], mp_dop853_c[s], K, s, yt, on, rc)
+    D8(1); D8(2); D8(3); D8(4); D8(5); D8(6); D8(7); D8(8); D8(9); D8(10); D8(11);
+#undef D8
     lane_stage(nW, g->y, g->h, mp_dop853_b, K, 12, g->ynew);
     double e5s[W] = {0.0}, e3s[W] = {0.0}, rtol = g->o->rtol;
     for (size_t c = 0; c < n; c++) {
@@ -456,9 +467,7 @@ static void finish_lanes(lane_group *g, int *on, const int *dense, int *rc, doub
     if (g->kind == LANE_DOPRI5) { /* fnew is stage 7 */
         if (!any_dense) return;
         double *K[7];
-        K[0] = g->f;
-        for (int s = 1; s < 6; s++) K[s] = g->kbuf + (size_t)(s - 1) * nW;
-        K[6] = g->fnew;
+        lane_K(g, LANE_DOPRI5, K);
         for (size_t b = 0; b < nW; b += W) {
             double d[W];
             lane_dot(dp_d, K, 7, b, d);
@@ -487,10 +496,7 @@ static void finish_lanes(lane_group *g, int *on, const int *dense, int *rc, doub
         return;
     }
     double *K[16], *yt = g->kbuf + 14 * nW;
-    K[0] = g->f;
-    for (int s = 1; s < 12; s++) K[s] = g->kbuf + (size_t)(s - 1) * nW;
-    K[12] = g->fnew;
-    for (int s = 13; s < 16; s++) K[s] = g->kbuf + (size_t)(s - 2) * nW;
+    lane_K(g, LANE_DOP853, K);
     lanes_rho(g, on, K[12], K[11], g->ynew, yt, rho);
     any_dense = 0;
     for (int l = 0; l < W; l++) {
@@ -498,11 +504,8 @@ static void finish_lanes(lane_group *g, int *on, const int *dense, int *rc, doub
         any_dense |= dn[l];
     }
     if (!any_dense) return;
-    for (int s = 13; s < 16; s++) {
-        lane_stage(nW, g->y, g->h, mp_dop853_a[s], K, (size_t)s, yt);
-        for (int l = 0; l < W; l++) ts[l] = g->t[l] + mp_dop853_c[s] * g->h[l];
-        lane_eval(g, ts, yt, K[s], dn, rc);
-    }
+    for (size_t s = 13; s < 16; s++)
+        lane_rk_stage(g, mp_dop853_a[s], mp_dop853_c[s], K, s, yt, dn, rc);
     for (size_t b = 0; b < nW; b += W) {
         MP_LANE_LOOP {
             size_t i = b + (size_t)l;
