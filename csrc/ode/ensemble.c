@@ -175,7 +175,6 @@ int mp_ode_solve_many(const mp_ode_method *m, const mp_ode_problem *probs,
 {
     if (k == 0) return MP_OK;
     ens_ctx e = {0};
-    memset(&e, 0, sizeof e);
     e.m = m;
     e.probs = probs;
     e.lanes = lanes;
