@@ -17,6 +17,7 @@ import ctypes
 import functools
 import inspect
 import re
+from typing import NamedTuple
 
 import numpy as np
 
@@ -27,6 +28,16 @@ from .modes import chain, normal_modes
 
 __all__ = ["Scene", "Pendulum", "VanDerPol", "Duffing", "Kepler", "RestrictedThreeBody", "Foucault",
            "RigidBody", "HeavyTop", "SpringChain", "Rocket"]
+
+
+class SymbolicField(NamedTuple):
+    """A system's right-hand side in SymPy: dy/dt = f(t, y) with ``params``
+    ({symbol: value}) substituted for its parameters (:meth:`Scene.symbolic`)."""
+
+    f: list
+    y: list
+    t: object
+    params: dict
 
 
 @functools.lru_cache(maxsize=None)
@@ -211,6 +222,38 @@ class Scene:
     def energy(self, y):
         """The scene's energy for states y of shape (dim, ...) -> shape (...)."""
         return self._eval("energy", 0.0, y)
+
+    def symbolic(self) -> "SymbolicField":
+        """The right-hand side as SymPy expressions, from the scene's C row.
+
+        Returns
+        -------
+        SymbolicField
+            ``f`` (dim expressions), ``y`` (the state symbols ``y0, y1, ...``),
+            ``t`` (the time symbol) and ``params`` ({symbol: value}, the scene's
+            parameters): dy/dt = f(t, y, params), the same right-hand side the C
+            engine evaluates (a test checks them against each other).  The live
+            views print it to GLSL and JavaScript.
+
+        Raises
+        ------
+        ValueError
+            When the scene has no symbolic form (a variable-size chain, a torque
+            given as a callable).
+        """
+        row = _row(self._model) if self._model else None
+        if not row or row["field"] is None or getattr(self, "_torque_fn", None) is not None:
+            raise ValueError(f"{type(self).__name__} has no symbolic form (its right-hand "
+                             "side is not a fixed set of expressions)")
+        import sympy as sp
+        y = sp.symbols(f"y0:{self._dim}")
+        t = sp.Symbol("t")
+        names = list(row["params"])
+        syms = {nm: sp.Symbol(nm) for nm in names}
+        local = dict(syms, t=t, **{str(s): s for s in y})
+        f = [sp.sympify(e, locals=local) for e in row["field"]]
+        values = dict(zip(names, self._vector().tolist()))
+        return SymbolicField(f, list(y), t, {syms[nm]: values[nm] for nm in names})
 
     def _lagrangian_spec(self):
         """The C spec of the scene's Lagrangian for :mod:`mechpy.variational`

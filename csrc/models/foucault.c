@@ -80,8 +80,16 @@ MP_LANE_FN static void foucault_lanes_rhs(const double *t, const double *y, doub
 }
 MP_MODEL_ONE_LANE_RHS(foucault_lanes, foucault_lanes_rhs)
 
+static const char *const foucault_field[] = {
+    "y2",
+    "y3",
+    "-(g/length)*y0 + 2*omega*sin(latitude*pi/180)*y3",
+    "-(g/length)*y1 - 2*omega*sin(latitude*pi/180)*y2"
+};
+
 const mp_model mp_model_foucault = {
     .name = "Foucault", .dim = 4, .nparams = FN, .params = foucault_params,
     .bind = foucault_bind, .energy = foucault_energy,
     .lanes = foucault_lanes,
+    .field = foucault_field,
 };

@@ -75,6 +75,12 @@ typedef struct mp_model {
      * serves them all (as bind picks for one row).  NULL (the field or its
      * result): the lanes run bind's scalar rhs through the generic wrapper. */
     mp_lane_rhs (*lanes)(const double *params, size_t k, size_t stride);
+    /* The right-hand side as text, one expression per state component, in
+     * the state y0, y1, ..., the time t and the parameters by name (SymPy's
+     * syntax; Piecewise for a switch): the symbolic form that the live views
+     * print to GLSL and JavaScript.  A test checks it against rhs at random
+     * states and parameters.  NULL: none (a variable-size scene). */
+    const char *const *field;
 } mp_model;
 
 extern const mp_model *const mp_models[];

@@ -68,10 +68,18 @@ MP_LANE_FN static void kepler_lanes_rhs(const double *t, const double *y, double
 
 MP_MODEL_ONE_LANE_RHS(kepler_lanes, kepler_lanes_rhs)
 
+static const char *const kepler_field[] = {
+    "y2",
+    "y3",
+    "-mu*y0/(y0**2 + y1**2)**(3/2)",
+    "-mu*y1/(y0**2 + y1**2)**(3/2)"
+};
+
 const mp_model mp_model_kepler = {
     .name = "Kepler", .dim = 4, .nparams = 1, .params = kepler_params,
     .separable = MP_SEPARABLE_ALWAYS, .bind = kepler_bind, .energy = kepler_energy,
     .lanes = kepler_lanes,
+    .field = kepler_field,
 };
 
 /* ---- restricted three-body problem, rotating frame -------------------------
@@ -145,7 +153,15 @@ MP_LANE_FN static void r3b_lanes_rhs(const double *t, const double *y, double *f
 }
 MP_MODEL_ONE_LANE_RHS(r3b_lanes, r3b_lanes_rhs)
 
+static const char *const r3b_field[] = {
+    "y2",
+    "y3",
+    "y0 + 2*y3 - (1 - mu)*(y0 + mu)/((y0 + mu)**2 + y1**2)**(3/2) - mu*(y0 - 1 + mu)/((y0 - 1 + mu)**2 + y1**2)**(3/2)",
+    "y1 - 2*y2 - (1 - mu)*y1/((y0 + mu)**2 + y1**2)**(3/2) - mu*y1/((y0 - 1 + mu)**2 + y1**2)**(3/2)"
+};
+
 const mp_model mp_model_r3b = {
     .name = "RestrictedThreeBody", .dim = 4, .nparams = 1, .params = r3b_params,
     .bind = r3b_bind, .energy = r3b_energy, .lanes = r3b_lanes,
+    .field = r3b_field,
 };

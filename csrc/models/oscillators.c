@@ -131,10 +131,16 @@ static mp_lane_rhs pendulum_lanes(const double *p, size_t k, size_t stride)
                                            : pendulum_lanes_free;
 }
 
+static const char *const pendulum_field[] = {
+    "y1",
+    "-(g/length)*sin(y0) - damping*y1 + drive_amplitude*cos(drive_frequency*t)"
+};
+
 const mp_model mp_model_pendulum = {
     .name = "Pendulum", .dim = 2, .nparams = 5, .params = pendulum_params,
     .separable = "damping = 0", .bind = pendulum_bind, .energy = pendulum_energy,
     .lagrangian = pendulum_lagrangian, .lanes = pendulum_lanes,
+    .field = pendulum_field,
 };
 
 /* ---- Van der Pol: x'' - mu (1 - x^2) x' + x = 0 ------------------------------ */
@@ -187,9 +193,15 @@ MP_LANE_FN static void vdp_lanes_rhs(const double *t, const double *y, double *f
 
 MP_MODEL_ONE_LANE_RHS(vdp_lanes, vdp_lanes_rhs)
 
+static const char *const vdp_field[] = {
+    "y1",
+    "mu*(1 - y0**2)*y1 - y0"
+};
+
 const mp_model mp_model_vanderpol = {
     .name = "VanDerPol", .dim = 2, .nparams = 1, .params = vdp_params, .bind = vdp_bind,
     .energy = vdp_energy, .lanes = vdp_lanes,
+    .field = vdp_field,
 };
 
 /* ---- Duffing: x'' + delta x' + alpha x + beta x^3 = gamma cos(omega t) ------- */
@@ -289,8 +301,14 @@ static mp_lane_rhs duffing_lanes(const double *p, size_t k, size_t stride)
     return mp_model_any_nonzero(p, k, stride, DG) ? duffing_lanes_driven : duffing_lanes_free;
 }
 
+static const char *const duffing_field[] = {
+    "y1",
+    "-alpha*y0 - beta*y0**3 - delta*y1 + gamma*cos(omega*t)"
+};
+
 const mp_model mp_model_duffing = {
     .name = "Duffing", .dim = 2, .nparams = 5, .params = duffing_params,
     .separable = "delta = 0", .bind = duffing_bind, .energy = duffing_energy,
     .lagrangian = duffing_lagrangian, .lanes = duffing_lanes,
+    .field = duffing_field,
 };

@@ -144,13 +144,31 @@ static double rigid_energy(const double *p, const double *y)
     return 0.5 * (p[0] * y[0] * y[0] + p[1] * y[1] * y[1] + p[2] * y[2] * y[2]);
 }
 
+static const char *const rigid_field[] = {
+    "(I2 - I3)/I1*y1*y2 + tau1/I1",
+    "(I3 - I1)/I2*y2*y0 + tau2/I2",
+    "(I1 - I2)/I3*y0*y1 + tau3/I3"
+};
+
 const mp_model mp_model_rigid = {
     .name = "RigidBody", .dim = 3, .nparams = 6, .params = rigid_params, .check = rigid_check,
     .bind = rigid_bind, .energy = rigid_energy,
+    .field = rigid_field,
 };
+static const char *const rigid_q_field[] = {
+    "(I2 - I3)/I1*y1*y2 + tau1/I1",
+    "(I3 - I1)/I2*y2*y0 + tau2/I2",
+    "(I1 - I2)/I3*y0*y1 + tau3/I3",
+    "(y6*y0 + y4*y2 - y5*y1)/2",
+    "(y6*y1 + y5*y0 - y3*y2)/2",
+    "(y6*y2 + y3*y1 - y4*y0)/2",
+    "-(y3*y0 + y4*y1 + y5*y2)/2"
+};
+
 const mp_model mp_model_rigid_q = {
     .name = "RigidBodyOriented", .dim = 7, .nparams = 6, .params = rigid_params,
     .check = rigid_check, .bind = rigid_bind_q, .energy = rigid_energy,
+    .field = rigid_q_field,
 };
 
 /* a torque callback: the free part, then tau / I (tau is NaN before the call, so
@@ -328,10 +346,20 @@ MP_LANE_FN static void top_lanes_rhs(const double *t, const double *y, double *f
 }
 MP_MODEL_ONE_LANE_RHS(top_lanes, top_lanes_rhs)
 
+static const char *const top_field[] = {
+    "y3",
+    "y4",
+    "y5",
+    "y4*(I3/I1*(y5 + y3*cos(y1)) - 2*y3*cos(y1))/sin(y1)",
+    "y3**2*sin(y1)*cos(y1) - I3/I1*(y5 + y3*cos(y1))*y3*sin(y1) + mass*g*l/I1*sin(y1)",
+    "-(y4*(I3/I1*(y5 + y3*cos(y1)) - 2*y3*cos(y1))/sin(y1))*cos(y1) + y3*y4*sin(y1)"
+};
+
 const mp_model mp_model_heavy_top = {
     .name = "HeavyTop", .dim = 6, .nparams = 5, .params = top_params, .bind = top_bind,
     .energy = top_energy, .lagrangian = top_lagrangian,
     .lanes = top_lanes,
+    .field = top_field,
 };
 
 /* ---- the exact torque-free motion ------------------------------------------

@@ -79,7 +79,14 @@ static double rocket_energy(const double *p, const double *y)
     return y[2] * (0.5 * y[1] * y[1] + p[RG] * y[0]);
 }
 
+static const char *const rocket_field[] = {
+    "y1",
+    "(Piecewise((exhaust_speed*burn_rate, y2 > m_dry), (0, True)) - drag*y1*Abs(y1))/y2 - g",
+    "Piecewise((-burn_rate, y2 > m_dry), (0, True))"
+};
+
 const mp_model mp_model_rocket = {
     .name = "Rocket", .dim = 3, .nparams = RN, .params = rocket_params, .check = rocket_check,
     .bind = rocket_bind, .energy = rocket_energy,
+    .field = rocket_field,
 };

@@ -32,7 +32,8 @@ static PyObject *scene_param(const mp_model_param *p)
 
 /* scene_info(name) -> the row: {"dim" (0: variable), "params" (names),
  * "param_info" (one dict each, see scene_param), "separable" (None: never,
- * "always" or a condition), "lagrangian" (bool)}. */
+ * "always" or a condition), "lagrangian" (bool), "field" (the right-hand
+ * side as dim expression strings, or None)}. */
 static PyObject *py_scene_info(PyObject *self, PyObject *args)
 {
     (void)self;
@@ -53,9 +54,24 @@ static PyObject *py_scene_info(PyObject *self, PyObject *args)
         PyTuple_SET_ITEM(names, (Py_ssize_t)i, s);
         PyTuple_SET_ITEM(info, (Py_ssize_t)i, d);
     }
-    return Py_BuildValue("{s:n,s:N,s:N,s:z,s:O}", "dim", (Py_ssize_t)m->dim, "params", names,
+    PyObject *field = Py_None;
+    Py_INCREF(field);
+    if (m->field) {
+        Py_DECREF(field);
+        field = PyTuple_New((Py_ssize_t)m->dim);
+        if (!field) goto fail;
+        for (size_t i = 0; i < m->dim; i++) {
+            PyObject *e = PyUnicode_FromString(m->field[i]);
+            if (!e) {
+                Py_DECREF(field);
+                goto fail;
+            }
+            PyTuple_SET_ITEM(field, (Py_ssize_t)i, e);
+        }
+    }
+    return Py_BuildValue("{s:n,s:N,s:N,s:z,s:O,s:N}", "dim", (Py_ssize_t)m->dim, "params", names,
                          "param_info", info, "separable", m->separable, "lagrangian",
-                         m->lagrangian ? Py_True : Py_False);
+                         m->lagrangian ? Py_True : Py_False, "field", field);
 fail:
     Py_XDECREF(names);
     Py_XDECREF(info);

@@ -299,6 +299,41 @@ class CompiledScene(Scene):
         """The generated C source."""
         return self._meta["source"]
 
+    def symbolic(self):
+        """The right-hand side as SymPy expressions: a
+        :class:`mechpy.scenes.SymbolicField` (``f``, ``y``, ``t``, ``params``),
+        from the equations of motion this system was built from (for a
+        Lagrangian, M(q) q'' = F solved for q'' symbolically: meant for the few
+        coordinates a live view shows).  A system with constraints has none
+        (its accelerations carry the multipliers): ValueError."""
+        import sympy as sp
+
+        from ..scenes import SymbolicField
+        eqs = self.equations
+        n, nc = self._dim, self._nc
+        y = list(sp.symbols(f"y0:{n}"))
+        t = sp.Symbol("t")
+        if self._meta["kind"] == "lagrangian":
+            if self._k:
+                raise ValueError("a system with constraints has no symbolic field of its own "
+                                 "(its accelerations carry the Lagrange multipliers)")
+            q = [sp.Function(nm)(t) for nm in self._meta["names"]]
+            a = sp.symbols(f"mp_a0:{nc}")
+            sub = {qi.diff(t, 2): ai for qi, ai in zip(q, a)}
+            sub2 = {qi.diff(t): y[nc + i] for i, qi in enumerate(q)}
+            sub3 = {qi: y[i] for i, qi in enumerate(q)}
+            rows = [(e.lhs - e.rhs).subs(sub).subs(sub2).subs(sub3) for e in eqs]
+            M, b = sp.linear_eq_to_matrix(rows, a)
+            acc = list(M.LUsolve(b)) if nc > 1 else [b[0] / M[0, 0]]
+            f = y[nc:] + [sp.simplify(e) if nc <= 2 else e for e in acc]
+        else:
+            states = [e.lhs.args[0] for e in eqs]
+            sub = dict(zip(states, y))
+            f = [e.rhs.xreplace(sub) for e in eqs]
+        byname = {str(s): s for e in f for s in e.free_symbols}
+        params = {byname.get(nm, sp.Symbol(nm)): v for nm, v in self._params.items()}
+        return SymbolicField(f, y, t, params)
+
     @property
     def equations(self) -> list:
         """The equations of motion as SymPy ``Eq``: M q'' = F + Q + C^T lambda
