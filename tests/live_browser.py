@@ -62,7 +62,9 @@ def wait_for(driver, script: str, timeout: float = 30.0):
 
 
 def open_page(driver, path, timeout: float = 60.0):
-    """Load a saved page and wait for its live view."""
+    """Load a saved page and wait for its live view (the request log starts
+    afresh: network_requests then tells this page's own)."""
+    driver.get_log("performance")
     driver.get(f"file://{os.path.abspath(path)}")
     wait_for(driver, "window.mechpyLive && window.mechpyLive.ready", timeout)
 

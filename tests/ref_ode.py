@@ -29,3 +29,19 @@ def pendulum_rhs(t, y, g=9.81, length=1.0, b=0.0, A=0.0, w=0.0):
 
 def vdp_rhs(t, y, mu=1.0):
     return np.array([y[1], mu * (1 - y[0] ** 2) * y[1] - y[0]])
+
+
+def rk4_fixed(f, t0, y0, h, n):
+    """n classical RK4 steps of h in float64 from (t0, y0), y0 of shape (m, dim)
+    (m states at once; f(t, y) -> (m, dim)); the state after them."""
+    import numpy as np
+    y = np.array(y0, dtype=float)
+    t = float(t0)
+    for _ in range(n):
+        k1 = f(t, y)
+        k2 = f(t + h / 2, y + h / 2 * k1)
+        k3 = f(t + h / 2, y + h / 2 * k2)
+        k4 = f(t + h, y + h * k3)
+        y = y + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        t += h
+    return y

@@ -1,0 +1,602 @@
+// mechpy live phase portrait: particles advected through a system's field on the GPU.
+//
+// States live in RGBA32F textures (one texel a particle: up to 4 state components), two of
+// them in turn: a fragment shader takes one RK4 step of dt for every particle at once, the
+// field printed from the system's symbolic form (mp_field, mechpy.live._field.glsl) with the
+// parameters as a uniform array, so a slider changes a uniform and never the program.  The
+// points are drawn from the same texture into a trail texture that fades each frame, coloured
+// by speed in the plane shown.  A 2D canvas on top draws the axes, the overlays (fixed points,
+// nullclines, limit cycle) and the trajectories a click drops.
+
+const MP_VS_FULL = `#version 300 es
+void main() {
+  vec2 v = vec2(float((gl_VertexID << 1) & 2), float(gl_VertexID & 2));
+  gl_Position = vec4(v * 2.0 - 1.0, 0.0, 1.0);
+}`;
+
+// sin, cos, exp and log to about one float32 ulp (Cephes' sinf, cosf, expf, logf): GLSL ES
+// leaves the built-ins' precision open, and software WebGL's sin is off by 2e-4.
+const MP_GLSL_MATH = `
+float mp_sincos(float x, bool wantCos) {
+  float sgn = 1.0;
+  if (x < 0.0) { x = -x; if (!wantCos) sgn = -1.0; }
+  int j = int(x * 1.27323954473516);
+  j += j & 1;
+  float y = float(j);
+  x = ((x - y * 0.78515625) - y * 2.4187564849853515625e-4) - y * 3.77489497744594108e-8;
+  j &= 7;
+  if (wantCos) { if (j > 3) { j -= 4; sgn = -sgn; } if (j > 1) sgn = -sgn; }
+  else if (j > 3) { j -= 4; sgn = -sgn; }
+  float z = x * x;
+  float c = ((2.443315711809948e-5 * z - 1.388731625493765e-3) * z + 4.166664568298827e-2) * z * z
+            - 0.5 * z + 1.0;
+  float s = ((-1.9515295891e-4 * z + 8.3321608736e-3) * z - 1.6666654611e-1) * z * x + x;
+  // octants 1 and 2 (after the shift) take the other polynomial
+  bool swap = j == 1 || j == 2;
+  return sgn * ((wantCos != swap) ? c : s);
+}
+float mp_sin(float x) { return mp_sincos(x, false); }
+float mp_cos(float x) { return mp_sincos(x, true); }
+float mp_tan(float x) { return mp_sin(x) / mp_cos(x); }
+float mp_exp(float x) {
+  if (x > 88.72283) return intBitsToFloat(0x7f800000);
+  if (x < -103.97) return 0.0;
+  float fx = floor(1.44269504088896341 * x + 0.5);
+  x = x - fx * 0.693359375 - fx * -2.12194440e-4;
+  float z = x * x;
+  float y = (((((1.9875691500e-4 * x + 1.3981999507e-3) * x + 8.3334519073e-3) * x
+             + 4.1665795894e-2) * x + 1.6666665459e-1) * x + 5.0000001201e-1) * z + x + 1.0;
+  int n = int(fx);
+  // 2^n in two halves (n may reach -150, below the smallest normal exponent)
+  int h = n / 2;
+  return y * intBitsToFloat((h + 127) << 23) * intBitsToFloat((n - h + 127) << 23);
+}
+float mp_log(float x) {
+  if (!(x > 0.0)) return x == 0.0 ? intBitsToFloat(int(0xff800000u)) : intBitsToFloat(0x7fc00000);
+  if (isinf(x)) return x;
+  int b = floatBitsToInt(x);
+  int e = ((b >> 23) & 255) - 126;
+  float m = intBitsToFloat((b & 0x7fffff) | 0x3f000000);
+  if (m < 0.707106781186547524) { e -= 1; m = m + m - 1.0; } else { m = m - 1.0; }
+  float z = m * m;
+  float y = ((((((((7.0376836292e-2 * m - 1.1514610310e-1) * m + 1.1676998740e-1) * m
+              - 1.2420140846e-1) * m + 1.4249322787e-1) * m - 1.6668057665e-1) * m
+              + 2.0000714765e-1) * m - 2.4999993993e-1) * m + 3.3333331174e-1) * m * z;
+  float fe = float(e);
+  y += -2.12194440e-4 * fe;
+  y += -0.5 * z;
+  return m + y + 0.693359375 * fe;
+}
+float mp_pow(float b, float x) { return mp_exp(x * mp_log(b)); }
+`;
+
+function mpFieldGlsl(spec) {
+  const np = Math.max(1, spec.params.length);
+  return `${MP_GLSL_MATH}
+uniform float p[${np}];
+vec4 mp_field(vec4 s, float t) {
+  vec4 f = vec4(0.0);
+${spec.glsl}
+  return f;
+}`;
+}
+
+// One RK4 step of dt for every particle; in play, a particle that left the region kept, whose
+// state is not finite, or that the drop draw picks, starts again at a random seed state.
+function mpUpdateFs(spec) {
+  const [ax, ay] = spec.axes;
+  return `#version 300 es
+precision highp float;
+precision highp int;
+uniform highp sampler2D u_state;
+uniform float u_t, u_dt, u_drop;
+uniform int u_respawn, u_w;
+uniform uint u_frame;
+uniform vec4 u_lo, u_hi, u_keep;
+out vec4 o;
+${mpFieldGlsl(spec)}
+uint mp_hash(uint x) {
+  x ^= x >> 16; x *= 0x7feb352du; x ^= x >> 15; x *= 0x846ca68bu; x ^= x >> 16; return x;
+}
+float mp_rnd(uint id, uint k) {
+  return float(mp_hash(id * 5u + k + mp_hash(u_frame))) / 4294967296.0;
+}
+void main() {
+  ivec2 ij = ivec2(gl_FragCoord.xy);
+  vec4 s = texelFetch(u_state, ij, 0);
+  float h = u_dt, t = u_t;
+  vec4 k1 = mp_field(s, t);
+  vec4 k2 = mp_field(s + (0.5 * h) * k1, t + 0.5 * h);
+  vec4 k3 = mp_field(s + (0.5 * h) * k2, t + 0.5 * h);
+  vec4 k4 = mp_field(s + h * k3, t + h);
+  vec4 n = s + (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
+  if (u_respawn == 1) {
+    uint id = uint(ij.y * u_w + ij.x);
+    float x = n[${ax}], y = n[${ay}];
+    bool lost = any(isnan(n)) || any(isinf(n)) || x < u_keep.x || x > u_keep.y ||
+                y < u_keep.z || y > u_keep.w;
+    if (lost || mp_rnd(id, 0u) < u_drop) {
+      vec4 r = vec4(mp_rnd(id, 1u), mp_rnd(id, 2u), mp_rnd(id, 3u), mp_rnd(id, 4u));
+      n = u_lo + r * (u_hi - u_lo);
+    }
+  }
+  o = n;
+}`;
+}
+
+function mpPointsVs(spec) {
+  const [ax, ay] = spec.axes;
+  return `#version 300 es
+precision highp float;
+precision highp int;
+uniform highp sampler2D u_state;
+uniform int u_w;
+uniform float u_t, u_speed, u_size;
+uniform vec4 u_view;
+out float v_speed;
+${mpFieldGlsl(spec)}
+void main() {
+  ivec2 ij = ivec2(gl_VertexID % u_w, gl_VertexID / u_w);
+  vec4 s = texelFetch(u_state, ij, 0);
+  vec4 f = mp_field(s, u_t);
+  float sp = length(vec2(f[${ax}], f[${ay}]));
+  v_speed = sp / (sp + u_speed);
+  vec2 q = vec2(s[${ax}], s[${ay}]);
+  vec2 c = (q - u_view.xz) / (u_view.yw - u_view.xz) * 2.0 - 1.0;
+  gl_Position = vec4(c, 0.0, 1.0);
+  gl_PointSize = u_size;
+}`;
+}
+
+const MP_POINTS_FS = `#version 300 es
+precision highp float;
+in float v_speed;
+out vec4 o;
+vec3 mp_viridis(float x) {
+  const vec3 c0 = vec3(0.2777, 0.0054, 0.3340), c1 = vec3(0.1051, 1.4046, 1.3846);
+  const vec3 c2 = vec3(-0.3309, 0.2148, 0.0951), c3 = vec3(-4.6342, -5.7991, -19.3324);
+  const vec3 c4 = vec3(6.2283, 14.1799, 56.6906), c5 = vec3(4.7764, -13.7451, -65.3530);
+  const vec3 c6 = vec3(-5.4355, 4.6459, 26.3124);
+  return c0 + x * (c1 + x * (c2 + x * (c3 + x * (c4 + x * (c5 + x * c6)))));
+}
+void main() { o = vec4(mp_viridis(clamp(0.15 + 0.85 * v_speed, 0.0, 1.0)), 1.0); }`;
+
+const MP_FADE_FS = `#version 300 es
+precision highp float;
+uniform sampler2D u_prev;
+uniform float u_fade;
+out vec4 o;
+void main() {
+  vec4 c = texelFetch(u_prev, ivec2(gl_FragCoord.xy), 0);
+  o = vec4(c.rgb * u_fade, 1.0);
+}`;
+
+const MP_SHOW_FS = `#version 300 es
+precision highp float;
+uniform sampler2D u_img;
+out vec4 o;
+void main() {
+  vec3 bg = vec3(0.043, 0.051, 0.09);
+  vec4 c = texelFetch(u_img, ivec2(gl_FragCoord.xy), 0);
+  o = vec4(max(c.rgb, bg), 1.0);
+}`;
+
+function mpProgram(gl, vs, fs) {
+  const sh = (type, src) => {
+    const s = gl.createShader(type);
+    gl.shaderSource(s, src);
+    gl.compileShader(s);
+    if (!gl.getShaderParameter(s, gl.COMPILE_STATUS))
+      throw new Error("shader: " + gl.getShaderInfoLog(s) + "\n" + src);
+    return s;
+  };
+  const p = gl.createProgram();
+  gl.attachShader(p, sh(gl.VERTEX_SHADER, vs));
+  gl.attachShader(p, sh(gl.FRAGMENT_SHADER, fs));
+  gl.linkProgram(p);
+  if (!gl.getProgramParameter(p, gl.LINK_STATUS)) throw new Error("link: " + gl.getProgramInfoLog(p));
+  const u = {};
+  const n = gl.getProgramParameter(p, gl.ACTIVE_UNIFORMS);
+  for (let i = 0; i < n; i++) {
+    const name = gl.getActiveUniform(p, i).name.replace(/\[0\]$/, "");
+    u[name] = gl.getUniformLocation(p, name);
+  }
+  return {p, u};
+}
+
+function mpTexture(gl, w, h, float, data) {
+  const t = gl.createTexture();
+  gl.bindTexture(gl.TEXTURE_2D, t);
+  gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MIN_FILTER, gl.NEAREST);
+  gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MAG_FILTER, gl.NEAREST);
+  gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_WRAP_S, gl.CLAMP_TO_EDGE);
+  gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_WRAP_T, gl.CLAMP_TO_EDGE);
+  if (float) gl.texImage2D(gl.TEXTURE_2D, 0, gl.RGBA32F, w, h, 0, gl.RGBA, gl.FLOAT, data || null);
+  else gl.texImage2D(gl.TEXTURE_2D, 0, gl.RGBA8, w, h, 0, gl.RGBA, gl.UNSIGNED_BYTE, null);
+  const fb = gl.createFramebuffer();
+  gl.bindFramebuffer(gl.FRAMEBUFFER, fb);
+  gl.framebufferTexture2D(gl.FRAMEBUFFER, gl.COLOR_ATTACHMENT0, gl.TEXTURE_2D, t, 0);
+  if (gl.checkFramebufferStatus(gl.FRAMEBUFFER) !== gl.FRAMEBUFFER_COMPLETE)
+    throw new Error("this browser cannot render to a " + (float ? "float " : "") + "texture");
+  gl.bindFramebuffer(gl.FRAMEBUFFER, null);
+  return {t, fb};
+}
+
+// The page's own RK4 in double precision (a dropped trajectory without a kernel).
+function mpRk4Path(f, y0, t0, dt, nsteps, p, keep, ax, ay) {
+  const n = y0.length, out = [[y0[ax], y0[ay]]];
+  let y = y0.slice(), t = t0;
+  const add = (a, b, c) => a.map((v, i) => v + c * b[i]);
+  for (let k = 0; k < nsteps; k++) {
+    const k1 = f(y, t, p), k2 = f(add(y, k1, dt / 2), t + dt / 2, p);
+    const k3 = f(add(y, k2, dt / 2), t + dt / 2, p), k4 = f(add(y, k3, dt), t + dt, p);
+    for (let i = 0; i < n; i++) y[i] += (dt / 6) * (k1[i] + 2 * k2[i] + 2 * k3[i] + k4[i]);
+    t += dt;
+    if (!y.every(Number.isFinite)) break;
+    out.push([y[ax], y[ay]]);
+    if (y[ax] < keep[0] || y[ax] > keep[1] || y[ay] < keep[2] || y[ay] > keep[3]) break;
+  }
+  return out;
+}
+
+function render({model, el}) {
+  const spec = model.get("spec");
+  const offline = !!model.get("_offline");
+  const dim = spec.dim, [ax, ay] = spec.axes, N = spec.particles;
+  const W = Math.ceil(Math.sqrt(N)), H = Math.ceil(N / W);
+  const width = spec.width, height = spec.height;
+  const pvals = new Float32Array(Math.max(1, spec.params.length));
+  spec.params.forEach((q, j) => { pvals[j] = q.value; });
+  const jsField = new Function("s", "t", "p", spec.js);
+  let view = [spec.xlim[0], spec.xlim[1], spec.ylim[0], spec.ylim[1]];
+  let t = spec.t0, frameNo = 0, playing = !!spec.play, disposed = false;
+  const fps = mpFps();
+
+  // the page
+  const root = mpEl("div", {class: "mechpy-live mechpy-phase", style: "font-family:system-ui,sans-serif;color:#222"});
+  const stage = mpEl("div", {style: `position:relative;width:${width}px;height:${height}px`});
+  const canvas = mpEl("canvas", {width: String(width), height: String(height),
+    style: `position:absolute;left:0;top:0;width:${width}px;height:${height}px`});
+  const over = mpEl("canvas", {width: String(width), height: String(height),
+    style: `position:absolute;left:0;top:0;width:${width}px;height:${height}px;cursor:crosshair`});
+  stage.append(canvas, over);
+  const status = mpEl("span", {style: "font-size:12px;color:#555;margin-left:8px"});
+  const playBtn = mpButton(playing ? "pause" : "play", () => (playing ? api.pause() : api.play()));
+  const controls = mpEl("div", {style: "margin:6px 0;display:flex;flex-wrap:wrap;gap:4px 16px;align-items:center"},
+    mpEl("span", {}, playBtn, mpButton("reset view", () => setView(spec.xlim.concat(spec.ylim))),
+      mpButton("clear paths", () => { paths.length = 0; drawOverlay(); })), status);
+  const sliders = {};
+  for (const q of spec.params) {
+    if (q.min === null || q.max === null) continue;
+    const step = (q.max - q.min) / 500;
+    sliders[q.name] = mpSlider(q.name, q.min, q.max, q.value, step, (v) => api.setParam(q.name, v));
+    controls.append(sliders[q.name]);
+  }
+  root.append(stage, controls);
+  el.append(root);
+
+  const gl = canvas.getContext("webgl2", {antialias: false, preserveDrawingBuffer: true});
+  if (!gl || !gl.getExtension("EXT_color_buffer_float")) {
+    root.prepend(mpEl("p", {style: "color:#a00"}, "This browser has no WebGL2 with float render targets."));
+    return;
+  }
+  const upd = mpProgram(gl, MP_VS_FULL, mpUpdateFs(spec));
+  const pts = mpProgram(gl, mpPointsVs(spec), MP_POINTS_FS);
+  const fade = mpProgram(gl, MP_VS_FULL, MP_FADE_FS);
+  const show = mpProgram(gl, MP_VS_FULL, MP_SHOW_FS);
+  const vao = gl.createVertexArray();
+  gl.bindVertexArray(vao);
+
+  // seeds: the shown axes uniform over the view, the other components over their ranges
+  const rnd = mpRandom(spec.seed);
+  const seedBox = () => {
+    const lo = [0, 0, 0, 0], hi = [0, 0, 0, 0];
+    for (let i = 0; i < dim; i++) { lo[i] = spec.hidden[i][0]; hi[i] = spec.hidden[i][1]; }
+    lo[ax] = view[0]; hi[ax] = view[1]; lo[ay] = view[2]; hi[ay] = view[3];
+    return [lo, hi];
+  };
+  const seeds = new Float32Array(W * H * 4);
+  {
+    const [lo, hi] = seedBox();
+    for (let k = 0; k < W * H; k++)
+      for (let i = 0; i < 4; i++) seeds[4 * k + i] = i < dim ? lo[i] + rnd() * (hi[i] - lo[i]) : 0;
+  }
+  let cur = mpTexture(gl, W, H, true, seeds), nxt = mpTexture(gl, W, H, true, null);
+  let trailA = mpTexture(gl, width, height, false), trailB = mpTexture(gl, width, height, false);
+
+  // colour scale: the median speed in the plane over the seeds
+  let speedScale = 1;
+  const setSpeedScale = () => {
+    const sp = [];
+    for (let k = 0; k < Math.min(N, 2000); k++) {
+      const s = Array.from(seeds.subarray(4 * k, 4 * k + dim));
+      const f = jsField(s, t, pvals);
+      const v = Math.hypot(f[ax], f[ay]);
+      if (Number.isFinite(v)) sp.push(v);
+    }
+    sp.sort((a, b) => a - b);
+    speedScale = sp.length ? Math.max(sp[Math.floor(sp.length / 2)], 1e-12) : 1;
+  };
+  setSpeedScale();
+
+  function advance(respawn) {
+    gl.bindFramebuffer(gl.FRAMEBUFFER, nxt.fb);
+    gl.viewport(0, 0, W, H);
+    gl.useProgram(upd.p);
+    gl.activeTexture(gl.TEXTURE0);
+    gl.bindTexture(gl.TEXTURE_2D, cur.t);
+    gl.uniform1i(upd.u.u_state, 0);
+    gl.uniform1f(upd.u.u_t, t);
+    gl.uniform1f(upd.u.u_dt, spec.dt);
+    gl.uniform1f(upd.u.u_drop, spec.drop);
+    gl.uniform1i(upd.u.u_respawn, respawn ? 1 : 0);
+    gl.uniform1i(upd.u.u_w, W);
+    gl.uniform1ui(upd.u.u_frame, frameNo >>> 0);
+    const [lo, hi] = seedBox();
+    gl.uniform4fv(upd.u.u_lo, lo);
+    gl.uniform4fv(upd.u.u_hi, hi);
+    const mx = 0.25 * (view[1] - view[0]), my = 0.25 * (view[3] - view[2]);
+    gl.uniform4f(upd.u.u_keep, view[0] - mx, view[1] + mx, view[2] - my, view[3] + my);
+    gl.uniform1fv(upd.u.p, pvals);
+    gl.drawArrays(gl.TRIANGLES, 0, 3);
+    [cur, nxt] = [nxt, cur];
+    t += spec.dt;
+    frameNo++;
+  }
+
+  function draw() {
+    // fade the trails, draw the points over them, show
+    gl.viewport(0, 0, width, height);
+    gl.bindFramebuffer(gl.FRAMEBUFFER, trailB.fb);
+    gl.useProgram(fade.p);
+    gl.activeTexture(gl.TEXTURE0);
+    gl.bindTexture(gl.TEXTURE_2D, trailA.t);
+    gl.uniform1i(fade.u.u_prev, 0);
+    gl.uniform1f(fade.u.u_fade, spec.fade);
+    gl.drawArrays(gl.TRIANGLES, 0, 3);
+    gl.useProgram(pts.p);
+    gl.bindTexture(gl.TEXTURE_2D, cur.t);
+    gl.uniform1i(pts.u.u_state, 0);
+    gl.uniform1i(pts.u.u_w, W);
+    gl.uniform1f(pts.u.u_t, t);
+    gl.uniform1f(pts.u.u_speed, speedScale);
+    gl.uniform1f(pts.u.u_size, spec.point_size);
+    gl.uniform4f(pts.u.u_view, view[0], view[1], view[2], view[3]);
+    gl.uniform1fv(pts.u.p, pvals);
+    gl.drawArrays(gl.POINTS, 0, N);
+    gl.bindFramebuffer(gl.FRAMEBUFFER, null);
+    gl.useProgram(show.p);
+    gl.bindTexture(gl.TEXTURE_2D, trailB.t);
+    gl.uniform1i(show.u.u_img, 0);
+    gl.drawArrays(gl.TRIANGLES, 0, 3);
+    [trailA, trailB] = [trailB, trailA];
+    fps.tick(performance.now());
+  }
+
+  function clearTrails() {
+    for (const tr of [trailA, trailB]) {
+      gl.bindFramebuffer(gl.FRAMEBUFFER, tr.fb);
+      gl.clearColor(0, 0, 0, 1);
+      gl.clear(gl.COLOR_BUFFER_BIT);
+    }
+    gl.bindFramebuffer(gl.FRAMEBUFFER, null);
+  }
+  clearTrails();
+
+  // overlays: the set for the current parameters (the kernel's answer, or the nearest
+  // precomputed one in a saved page)
+  let shown = spec.overlays ? spec.overlays.sets[spec.overlays.initial] : null;
+  const paths = [];
+  const toPx = (x, y) => [(x - view[0]) / (view[1] - view[0]) * width,
+                          (1 - (y - view[2]) / (view[3] - view[2])) * height];
+  const ctx = over.getContext("2d");
+  const KIND_STYLE = {
+    "stable node": ["#2ca02c", true], "stable focus": ["#2ca02c", true], "centre": ["#ffffff", false],
+    "saddle": ["#ff7f0e", false], "unstable node": ["#d62728", false], "unstable focus": ["#d62728", false],
+  };
+  function drawOverlay() {
+    ctx.clearRect(0, 0, width, height);
+    ctx.lineWidth = 1;
+    ctx.strokeStyle = "rgba(255,255,255,0.35)";
+    ctx.fillStyle = "rgba(255,255,255,0.75)";
+    ctx.font = "11px system-ui,sans-serif";
+    // ticks
+    const ticks = (a, b) => {
+      const span = b - a, m = Math.pow(10, Math.floor(Math.log10(span / 5)));
+      const st = [1, 2, 5, 10].map((k) => k * m).find((s) => span / s <= 8);
+      const out = [];
+      for (let v = Math.ceil(a / st) * st; v <= b; v += st) out.push(Math.abs(v) < st * 1e-9 ? 0 : v);
+      return out;
+    };
+    for (const v of ticks(view[0], view[1])) {
+      const [px] = toPx(v, view[2]);
+      ctx.beginPath(); ctx.moveTo(px, height); ctx.lineTo(px, height - 6); ctx.stroke();
+      ctx.fillText(String(+v.toPrecision(6)), px + 2, height - 8);
+    }
+    for (const v of ticks(view[2], view[3])) {
+      const [, py] = toPx(view[0], v);
+      ctx.beginPath(); ctx.moveTo(0, py); ctx.lineTo(6, py); ctx.stroke();
+      ctx.fillText(String(+v.toPrecision(6)), 8, py - 2);
+    }
+    ctx.fillText(`${spec.names[ax]} →`, width - 70, height - 22);
+    ctx.fillText(`↑ ${spec.names[ay]}`, 8, 14);
+    const line = (pts2, color, w, dash) => {
+      if (!pts2 || pts2.length < 2) return;
+      ctx.strokeStyle = color; ctx.lineWidth = w; ctx.setLineDash(dash || []);
+      ctx.beginPath();
+      pts2.forEach(([x, y], i) => { const [px, py] = toPx(x, y); if (i) ctx.lineTo(px, py); else ctx.moveTo(px, py); });
+      ctx.stroke(); ctx.setLineDash([]);
+    };
+    if (shown) {
+      for (const c of shown.nullclines || []) line(c.points, c.which === 0 ? "#9ecae1" : "#fdae6b", 1.2, [5, 4]);
+      line(shown.limit_cycle, "#ffffff", 2.5);
+      for (const [x, y, kind] of shown.fixed_points || []) {
+        const [px, py] = toPx(x, y), [col, filled] = KIND_STYLE[kind] || ["#fff", false];
+        ctx.beginPath(); ctx.arc(px, py, 5, 0, 2 * Math.PI);
+        ctx.lineWidth = 2; ctx.strokeStyle = col; ctx.stroke();
+        if (filled) { ctx.fillStyle = col; ctx.fill(); }
+      }
+    }
+    for (const pth of paths) line(pth, "#ff4fd8", 1.8);
+  }
+
+  function nearestSet(name) {
+    if (!spec.overlays) return null;
+    let best = null, bd = Infinity;
+    for (const s of spec.overlays.sets) {
+      let d = 0;
+      spec.params.forEach((q, j) => {
+        const span = (q.max !== null && q.max > q.min) ? q.max - q.min : 1;
+        d += ((s.values[q.name] - pvals[j]) / span) ** 2;
+      });
+      if (d < bd) { bd = d; best = s; }
+    }
+    return best;
+  }
+
+  // requests to the kernel (none in a saved page): id -> resolve
+  let reqId = 0;
+  const pending = {};
+  model.on("msg:custom", (msg) => {
+    const f = pending[msg.id];
+    if (f) { delete pending[msg.id]; f(msg); }
+  });
+  const ask = (content, timeoutMs) => new Promise((resolve) => {
+    if (offline) return resolve(null);
+    const id = ++reqId;
+    pending[id] = resolve;
+    model.send(Object.assign({id}, content));
+    setTimeout(() => { if (pending[id]) { delete pending[id]; resolve(null); } }, timeoutMs);
+  });
+  const paramDict = () => Object.fromEntries(spec.params.map((q, j) => [q.name, pvals[j]]));
+
+  let overlayTimer = null;
+  function refreshOverlays() {
+    if (!spec.overlays) return;
+    shown = nearestSet();
+    drawOverlay();
+    clearTimeout(overlayTimer);
+    if (offline) return;
+    overlayTimer = setTimeout(async () => {
+      const reply = await ask({type: "overlays", params: paramDict()}, 20000);
+      if (reply && reply.type === "overlays") { shown = reply.data; drawOverlay(); }
+    }, 150);
+  }
+
+  async function dropPath(x, y) {
+    const y0 = new Array(dim).fill(0);
+    for (let i = 0; i < dim; i++) y0[i] = 0.5 * (spec.hidden[i][0] + spec.hidden[i][1]);
+    y0[ax] = x; y0[ay] = y;
+    const reply = await ask({type: "trajectory", y0, t0: t, params: paramDict()}, 20000);
+    let path;
+    if (reply && reply.type === "trajectory") path = reply.points;
+    else {
+      const mx = view[1] - view[0], my = view[3] - view[2];
+      path = mpRk4Path(jsField, y0, t, spec.dt, spec.path_steps, Array.from(pvals),
+        [view[0] - mx, view[1] + mx, view[2] - my, view[3] + my], ax, ay);
+    }
+    paths.push(path);
+    drawOverlay();
+  }
+
+  function setView(v) {
+    view = v.slice();
+    clearTrails();
+    drawOverlay();
+    draw();
+  }
+
+  // pan (drag), zoom (wheel), click: a trajectory
+  let drag = null;
+  over.addEventListener("mousedown", (e) => { drag = {x: e.offsetX, y: e.offsetY, v: view.slice(), moved: false}; });
+  over.addEventListener("mousemove", (e) => {
+    if (!drag) return;
+    const dx = e.offsetX - drag.x, dy = e.offsetY - drag.y;
+    if (Math.abs(dx) + Math.abs(dy) > 3) drag.moved = true;
+    if (!drag.moved) return;
+    const sx = (drag.v[1] - drag.v[0]) / width, sy = (drag.v[3] - drag.v[2]) / height;
+    setView([drag.v[0] - dx * sx, drag.v[1] - dx * sx, drag.v[2] + dy * sy, drag.v[3] + dy * sy]);
+  });
+  over.addEventListener("mouseup", (e) => {
+    if (drag && !drag.moved) {
+      const x = view[0] + (e.offsetX / width) * (view[1] - view[0]);
+      const y = view[2] + (1 - e.offsetY / height) * (view[3] - view[2]);
+      dropPath(x, y);
+    }
+    drag = null;
+  });
+  over.addEventListener("mouseleave", () => { drag = null; });
+  over.addEventListener("wheel", (e) => {
+    e.preventDefault();
+    const k = Math.exp(0.0015 * e.deltaY);
+    const x = view[0] + (e.offsetX / width) * (view[1] - view[0]);
+    const y = view[2] + (1 - e.offsetY / height) * (view[3] - view[2]);
+    setView([x + (view[0] - x) * k, x + (view[1] - x) * k, y + (view[2] - y) * k, y + (view[3] - y) * k]);
+  }, {passive: false});
+
+  function loop() {
+    if (disposed) return;
+    if (playing) {
+      for (let k = 0; k < spec.steps_per_frame; k++) advance(true);
+      draw();
+      status.textContent = `t = ${t.toFixed(2)}   ${N} particles   ${fps.value().toFixed(0)} fps`;
+    }
+    requestAnimationFrame(loop);
+  }
+
+  const api = {
+    kind: "phase_portrait",
+    ready: false,
+    pause() { playing = false; playBtn.textContent = "play"; },
+    play() { playing = true; playBtn.textContent = "pause"; },
+    // n RK4 steps of dt for every particle, no respawning, then one frame drawn
+    step(n) {
+      for (let k = 0; k < (n === undefined ? 1 : n); k++) advance(false);
+      draw();
+      return t;
+    },
+    particles() {
+      const buf = new Float32Array(W * H * 4);
+      gl.bindFramebuffer(gl.FRAMEBUFFER, cur.fb);
+      gl.readPixels(0, 0, W, H, gl.RGBA, gl.FLOAT, buf);
+      gl.bindFramebuffer(gl.FRAMEBUFFER, null);
+      const out = new Float32Array(N * dim);
+      for (let k = 0; k < N; k++) for (let i = 0; i < dim; i++) out[k * dim + i] = buf[4 * k + i];
+      return out;
+    },
+    seeds() {
+      const out = new Float32Array(N * dim);
+      for (let k = 0; k < N; k++) for (let i = 0; i < dim; i++) out[k * dim + i] = seeds[4 * k + i];
+      return out;
+    },
+    setParam(name, value) {
+      const j = spec.params.findIndex((q) => q.name === name);
+      if (j < 0) throw new Error(`no parameter ${name}; the parameters are ${spec.params.map((q) => q.name).join(", ")}`);
+      pvals[j] = value;
+      if (sliders[name]) sliders[name].set(value);
+      refreshOverlays();
+      if (!playing) draw();
+    },
+    params() { return paramDict(); },
+    overlays() { return shown ? JSON.parse(JSON.stringify(shown)) : {fixed_points: [], nullclines: [], limit_cycle: []}; },
+    paths() { return JSON.parse(JSON.stringify(paths)); },
+    dropPath(x, y) { return dropPath(x, y); },
+    fps() { return fps.value(); },
+    time() { return t; },
+    view() { return view.slice(); },
+    setView(v) { setView(v); },
+  };
+  const unregister = mpRegister(api);
+  drawOverlay();
+  draw();
+  api.ready = true;
+  requestAnimationFrame(loop);
+  return () => {
+    disposed = true;
+    unregister();
+    const lose = gl.getExtension("WEBGL_lose_context");
+    if (lose) lose.loseContext();
+  };
+}
+
+export default {render};
