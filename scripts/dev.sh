@@ -30,6 +30,8 @@ say() { printf 'mechpy setup: %s\n' "$*"; }
 debs=(libgsl-dev libopenblas-dev pkg-config)
 # the bench compares with numbalsoda, built from source with a Fortran compiler
 [ "$job" = bench ] && debs+=(gfortran)
+# the live views' tests and their bench run in headless Chromium (software WebGL2)
+case "$job" in test|bench|docs) debs+=(chromium chromium-driver) ;; esac
 missing=()
 if command -v dpkg-query >/dev/null 2>&1; then
     for p in "${debs[@]}"; do

@@ -51,6 +51,7 @@ def test_trajectory3d_and_bad_input():
     plt.close("all")
 
 
+@pytest.mark.filterwarnings("ignore::DeprecationWarning")
 def test_animate_field_advects_particles(tmp_path):
     anim = mp.plot.animate_field(mp.scenes.Pendulum(), particles=50, frames=3, trail=4,
                                  path=tmp_path / "field.html")
@@ -61,6 +62,7 @@ def test_animate_field_advects_particles(tmp_path):
     plt.close("all")
 
 
+@pytest.mark.filterwarnings("ignore::DeprecationWarning")
 def test_animate_field_param_slider_renders_each_value():
     widgets = pytest.importorskip("ipywidgets")
     vdp = mp.scenes.VanDerPol()
@@ -78,6 +80,7 @@ def test_animate_field_param_slider_renders_each_value():
     assert plt.get_fignums() == []          # the rendered figures are closed
 
 
+@pytest.mark.filterwarnings("ignore::DeprecationWarning")
 def test_animate_field_param_without_ipywidgets(monkeypatch):
     import builtins
     real_import = builtins.__import__
@@ -105,6 +108,7 @@ def test_animate_field_param_without_ipywidgets(monkeypatch):
     (dict(param=3, values=[1.0]), TypeError, "param"),
     (dict(param="mu", values=[1.0], path="x.html"), ValueError, "path"),
 ])
+@pytest.mark.filterwarnings("ignore::DeprecationWarning")
 def test_animate_field_bad_param(kw, exc, match):
     with pytest.raises(exc, match=match):
         mp.plot.animate_field(mp.scenes.VanDerPol(), **kw)
@@ -444,4 +448,10 @@ def test_to_jshtml_draws_each_frame_once(monkeypatch):
         # 9 frames in the page; matplotlib's own save draws each three times (27)
         assert html.count("data:image/png;base64") == 9
         assert count[0] == 9, count[0]
+    plt.close("all")
+
+
+def test_animate_field_is_deprecated_for_the_live_view():
+    with pytest.warns(DeprecationWarning, match="mp.live.phase_portrait"):
+        mp.plot.animate_field(mp.scenes.VanDerPol(), particles=5, frames=1, trail=2)
     plt.close("all")

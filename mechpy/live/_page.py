@@ -106,6 +106,29 @@ class LiveWidget(anywidget.AnyWidget):
     def _answer(self, content: dict):
         return None
 
+    def _repr_mimebundle_(self, **kwargs):
+        """The widget for a live kernel, and beside it the saved page in an
+        iframe (``text/html``) for what shows a notebook without one: the docs
+        site, nbviewer, an exported notebook.  Jupyter front ends prefer the
+        widget."""
+        data = super()._repr_mimebundle_(**kwargs)
+        if isinstance(data, tuple):
+            data = data[0]
+        if data is None:
+            data = {}
+        data = dict(data)
+        data["text/html"] = self.iframe()
+        return data
+
+    def iframe(self) -> str:
+        """The saved page (:meth:`html`) as an ``<iframe srcdoc=...>``, sized to the view."""
+        w, h = self._frame_size()
+        return (f'<iframe title="{_escape(self._view)}" style="border:0;width:{w}px;'
+                f'max-width:100%;height:{h}px" srcdoc="{_escape(self.html())}"></iframe>')
+
+    def _frame_size(self):
+        return (int(self.spec.get("width", 720)) + 40, int(self.spec.get("height", 480)) + 110)
+
     def html(self, title: str = "mechpy live view") -> str:
         """The page as one self-contained HTML string (see :meth:`save`)."""
         state = {"spec": self.spec, "_offline": True}
