@@ -166,19 +166,11 @@ precision highp float;
 uniform sampler2D u_prev;
 uniform float u_fade;
 out vec4 o;
+const vec3 bg = vec3(0.043, 0.051, 0.09);
 void main() {
   vec4 c = texelFetch(u_prev, ivec2(gl_FragCoord.xy), 0);
-  o = vec4(c.rgb * u_fade, 1.0);
-}`;
-
-const MP_SHOW_FS = `#version 300 es
-precision highp float;
-uniform sampler2D u_img;
-out vec4 o;
-void main() {
-  vec3 bg = vec3(0.043, 0.051, 0.09);
-  vec4 c = texelFetch(u_img, ivec2(gl_FragCoord.xy), 0);
-  o = vec4(max(c.rgb, bg), 1.0);
+  // the extra 1.5/255 lets an 8-bit trail reach the background (rounding would hold it)
+  o = vec4(bg + max((c.rgb - bg) * u_fade - 1.5 / 255.0, 0.0), 1.0);
 }`;
 
 function mpProgram(gl, vs, fs) {
@@ -275,7 +267,7 @@ function render({model, el}) {
   root.append(stage, controls);
   el.append(root);
 
-  const gl = canvas.getContext("webgl2", {antialias: false, preserveDrawingBuffer: true});
+  const gl = canvas.getContext("webgl2", {antialias: false, preserveDrawingBuffer: false});
   if (!gl || !gl.getExtension("EXT_color_buffer_float")) {
     root.prepend(mpEl("p", {style: "color:#a00"}, "This browser has no WebGL2 with float render targets."));
     return;
@@ -283,7 +275,6 @@ function render({model, el}) {
   const upd = mpProgram(gl, MP_VS_FULL, mpUpdateFs(spec));
   const pts = mpProgram(gl, mpPointsVs(spec), MP_POINTS_FS);
   const fade = mpProgram(gl, MP_VS_FULL, MP_FADE_FS);
-  const show = mpProgram(gl, MP_VS_FULL, MP_SHOW_FS);
   const vao = gl.createVertexArray();
   gl.bindVertexArray(vao);
 
@@ -364,11 +355,11 @@ function render({model, el}) {
     gl.uniform4f(pts.u.u_view, view[0], view[1], view[2], view[3]);
     gl.uniform1fv(pts.u.p, pvals);
     gl.drawArrays(gl.POINTS, 0, N);
+    // show: a copy, no shader
+    gl.bindFramebuffer(gl.READ_FRAMEBUFFER, trailB.fb);
+    gl.bindFramebuffer(gl.DRAW_FRAMEBUFFER, null);
+    gl.blitFramebuffer(0, 0, width, height, 0, 0, width, height, gl.COLOR_BUFFER_BIT, gl.NEAREST);
     gl.bindFramebuffer(gl.FRAMEBUFFER, null);
-    gl.useProgram(show.p);
-    gl.bindTexture(gl.TEXTURE_2D, trailB.t);
-    gl.uniform1i(show.u.u_img, 0);
-    gl.drawArrays(gl.TRIANGLES, 0, 3);
     [trailA, trailB] = [trailB, trailA];
     fps.tick(performance.now());
   }
@@ -376,7 +367,7 @@ function render({model, el}) {
   function clearTrails() {
     for (const tr of [trailA, trailB]) {
       gl.bindFramebuffer(gl.FRAMEBUFFER, tr.fb);
-      gl.clearColor(0, 0, 0, 1);
+      gl.clearColor(0.043, 0.051, 0.09, 1);
       gl.clear(gl.COLOR_BUFFER_BIT);
     }
     gl.bindFramebuffer(gl.FRAMEBUFFER, null);
