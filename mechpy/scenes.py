@@ -27,7 +27,7 @@ from ._validate import as_array, as_int, as_scalar
 from .modes import chain, normal_modes
 
 __all__ = ["Scene", "Pendulum", "VanDerPol", "Duffing", "Kepler", "RestrictedThreeBody", "Foucault",
-           "RigidBody", "HeavyTop", "SpringChain", "Rocket"]
+           "RigidBody", "HeavyTop", "SpringChain", "Rocket", "SymbolicField"]
 
 
 class SymbolicField(NamedTuple):

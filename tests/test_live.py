@@ -242,3 +242,39 @@ def test_saved_page_is_self_contained(driver, tmp_path):
     assert "<script src" not in html and "http://" not in html.split("mechpy-esm")[0]
     assert network_requests(driver) == []
     assert path.stat().st_size < 1e6
+
+
+def test_kernel_answers_the_page():
+    """What the kernel sends a page: the overlays at a slider's value (the limit
+    cycle of mu = 2 through mechpy.phase's amplitude), a clicked trajectory
+    (mp.solve's), and an error message, never an exception, for a bad request."""
+    vdp = mp.scenes.VanDerPol(mu=1.0)
+    w = mp.live.phase_portrait(vdp, (-4, 4), (-6, 6), params={"mu": (0.5, 3.0)}, play=False,
+                               path_steps=200)
+    ov = w._answer({"type": "overlays", "params": {"mu": 2.0}})["data"]
+    period, amp = mp.phase.limit_cycle(vdp.replace(mu=2.0), [2.0, 0.0])
+    assert ov["amplitude"] == pytest.approx(amp, rel=1e-7)
+    assert ov["period"] == pytest.approx(period, rel=1e-7)
+    tr = w._answer({"type": "trajectory", "y0": [1.0, 0.5], "t0": 1.0, "params": {"mu": 2.0}})
+    pts = np.array(tr["points"])
+    ref = mp.solve(vdp.replace(mu=2.0), (1.0, 3.0), [1.0, 0.5], rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(pts[-1], ref.y[:, -1], atol=1e-7)
+    sent = []
+    w.send = sent.append
+    w._on_page_message(w, {"type": "trajectory", "id": 7, "y0": "nonsense"}, [])
+    assert sent and sent[0]["type"] == "error" and sent[0]["id"] == 7
+
+
+def test_elementary_functions_in_the_shader(driver, tmp_path):
+    """exp, log, tan, a fractional power and sqrt as the page evaluates them
+    (its own float32 sin/cos/exp/log), against the compiled system's C rhs."""
+    x, y = sp.symbols("x y")
+    s = mp.equations([sp.log(1 + y**2) - x / 2 + sp.sqrt(1 + x**2) / 4,
+                      sp.exp(-x**2 / 4) * sp.cos(y) - y**3 / 10 + sp.tan(x / 4)
+                      + (2 + sp.sin(x))**sp.Rational(3, 2) / 8], [x, y])
+    w = mp.live.phase_portrait(s, (-2, 2), (-2, 2), particles=1000, play=False, overlays=False)
+    _page(driver, tmp_path, w, "elementary")
+    seeds = _states(driver, "seeds").reshape(-1, 2)
+    driver.execute_script("window.mechpyLive.step(100)")
+    _close(_states(driver, "particles").reshape(-1, 2), lambda t, z: s.rhs(t, z.T).T, 0.0,
+           seeds, 0.01, 100, "elementary functions")
