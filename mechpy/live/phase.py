@@ -29,6 +29,23 @@ def _range(v, what):
     return lo, hi
 
 
+#: the state's names of the built-in scenes a portrait can show (as ../API.md's table)
+_STATES = {"Pendulum": ["θ", "θ'"], "VanDerPol": ["x", "x'"], "Duffing": ["x", "x'"],
+           "Kepler": ["x", "y", "vx", "vy"], "RestrictedThreeBody": ["x", "y", "vx", "vy"],
+           "Foucault": ["x", "y", "vx", "vy"], "RigidBody": ["ω1", "ω2", "ω3"],
+           "Rocket": ["height", "speed", "mass"]}
+
+
+def _state_names(system, dim: int) -> list:
+    meta = getattr(system, "_meta", None)
+    if isinstance(meta, dict) and meta.get("names"):
+        q = list(meta["names"])
+        names = q + [f"{n}'" for n in q] if meta.get("kind") == "lagrangian" else q
+    else:
+        names = _STATES.get(type(system).__name__, [])
+    return names if len(names) == dim else [f"y[{i}]" for i in range(dim)]
+
+
 class PhasePortrait(LiveWidget):
     """A live phase portrait (see :func:`phase_portrait`)."""
 
@@ -292,13 +309,7 @@ def phase_portrait(system, xlim, ylim, *, params=None, particles: int = 10_000,
         for i, (a, b) in enumerate(hid):
             if not (math.isfinite(a) and math.isfinite(b) and a <= b):
                 raise ValueError(f"hidden[{i}] must be finite with min <= max, got ({a}, {b})")
-    names = list(getattr(system, "_meta", {}).get("names", [])) if hasattr(system, "_meta") \
-        else []
-    if len(names) != dim:
-        names = [f"y[{i}]" for i in range(dim)]
-    if hasattr(system, "_meta") and system._meta.get("kind") == "lagrangian":
-        q = system._meta["names"]
-        names = list(q) + [f"{n}'" for n in q]
+    names = _state_names(system, dim)
     plist = []
     for nm, v in zip(fd.names, fd.values):
         lo, hi = sliders.get(nm, (None, None))

@@ -381,10 +381,10 @@ function render({model, el}) {
   const toPx = (x, y) => [(x - view[0]) / (view[1] - view[0]) * width,
                           (1 - (y - view[2]) / (view[3] - view[2])) * height];
   const ctx = over.getContext("2d");
-  const KIND_STYLE = {
-    "stable node": ["#2ca02c", true], "stable focus": ["#2ca02c", true], "centre": ["#ffffff", false],
-    "saddle": ["#ff7f0e", false], "unstable node": ["#d62728", false], "unstable focus": ["#d62728", false],
-  };
+  // mechpy.phase's kinds: a saddle orange, a centre white, others green when stable
+  // (filled) and red when not (hollow)
+  const kindStyle = (kind, stable) => kind === "saddle" ? ["#ff7f0e", false]
+    : kind === "centre" ? ["#ffffff", false] : stable ? ["#2ca02c", true] : ["#d62728", false];
   function drawOverlay() {
     ctx.clearRect(0, 0, width, height);
     ctx.lineWidth = 1;
@@ -421,8 +421,8 @@ function render({model, el}) {
     if (shown) {
       for (const c of shown.nullclines || []) line(c.points, c.which === 0 ? "#9ecae1" : "#fdae6b", 1.2, [5, 4]);
       line(shown.limit_cycle, "#ffffff", 2.5);
-      for (const [x, y, kind] of shown.fixed_points || []) {
-        const [px, py] = toPx(x, y), [col, filled] = KIND_STYLE[kind] || ["#fff", false];
+      for (const [x, y, kind, stable] of shown.fixed_points || []) {
+        const [px, py] = toPx(x, y), [col, filled] = kindStyle(kind, stable);
         ctx.beginPath(); ctx.arc(px, py, 5, 0, 2 * Math.PI);
         ctx.lineWidth = 2; ctx.strokeStyle = col; ctx.stroke();
         if (filled) { ctx.fillStyle = col; ctx.fill(); }
