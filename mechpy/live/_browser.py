@@ -43,7 +43,9 @@ def browser():
     for a in FLAGS:
         opts.add_argument(a)
     opts.set_capability("goog:loggingPrefs", {"performance": "ALL", "browser": "ALL"})
-    return webdriver.Chrome(service=Service(DRIVER), options=opts)
+    # the browser is not under test: none of the sanitizers' preloads (scripts/sanitize.sh)
+    env = {k: v for k, v in os.environ.items() if k not in ("LD_PRELOAD", "ASAN_OPTIONS")}
+    return webdriver.Chrome(service=Service(DRIVER, env=env), options=opts)
 
 
 def wait_for(driver, script: str, timeout: float = 30.0):
