@@ -117,8 +117,10 @@ def _foucault(system, Y):
 def _top(system, Y):
     R = _motion.top_rotation(Y)                                    # (frames, 3, 3)
     ell = float(system.params["l"])
-    P = (ell * R[:, :, 2])[:, None, :]
-    bodies = [_body("centre of mass", _BLUE, 0.06 * ell, local=[0.0, 0.0, ell])]
+    mark = np.array([0.3 * ell, 0.0, ell])           # on the body's side, beside the centre of mass
+    P = np.stack([ell * R[:, :, 2], R @ mark], axis=1)
+    bodies = [_body("centre of mass", _BLUE, 0.06 * ell, local=[0.0, 0.0, ell]),
+              _body("mark on the side (spin)", _RED, 0.07 * ell, local=mark)]
     phi = np.linspace(0.0, 2 * np.pi, 121)
     lines = []
     for th, what in zip(_motion.top_bounds(system, Y[:, 0]), ("theta_min", "theta_max")):
@@ -201,7 +203,9 @@ def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0,
         :class:`~mechpy.scenes.HeavyTop`: the top's body turned by its ZXZ
         Euler angles (phi, theta, psi), its centre of mass
         :math:`l e_3` and its path, the nutation bounds of
-        :func:`mechpy.rigid.nutation_bounds` as two circles of latitude.
+        :func:`mechpy.rigid.nutation_bounds` as two circles of latitude;
+        the bodies placed are the centre of mass :math:`l e_3` and a mark on
+        the body's side, :math:`0.3\,l\,e_1 + l e_3`, which shows the spin.
     ``"rigid"``
         :class:`~mechpy.scenes.RigidBody`: a box with the body's principal
         moments in proportion (the uniform box of 1 kg has sides

@@ -124,15 +124,13 @@ export default {
         solid.add(box, new THREE.LineSegments(new THREE.EdgesGeometry(g),
           new THREE.LineBasicMaterial({color: 0x555555})));
       } else {
-        const l = spec.solid.l, h = (4 / 3) * l, r = 0.35 * l;
+        const l = spec.solid.l, h = (4 / 3) * l, r = 0.4 * l;
         const g = new THREE.ConeGeometry(r, h, 40);
         g.rotateX(-Math.PI / 2);
-        g.translate(0, 0, h / 2);            // apex at the pivot, the base up the axis: centroid at l
-        const mark = new THREE.Mesh(new THREE.SphereGeometry(0.09 * l, 16, 12), solidMat("#d62728"));
-        mark.position.set(0.92 * r, 0, h);    // on the rim: the spin psi shows
+        g.translate(0, 0, h / 2);   // apex at the pivot, base up the axis: centroid at l, radius 0.3 l there
         const body = new THREE.Mesh(g, new THREE.MeshStandardMaterial({color: color(spec.solid.color),
           roughness: 0.55, transparent: true, opacity: 0.55, depthWrite: false}));
-        solid.add(body, mark);   // see-through: the centre of mass and its path show inside
+        solid.add(body);   // see-through: the centre of mass and its path show inside
       }
       scene.add(solid);
     }
