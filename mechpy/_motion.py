@@ -91,9 +91,11 @@ def resample(system, t, y, times):
         return np.repeat(y, len(times), axis=1)
     if t[0] > t[-1]:
         t, y = t[::-1], y[:, ::-1]
-    f = np.column_stack([system.rhs(float(tk), y[:, j]) for j, tk in enumerate(t)])
     times = np.clip(times, t[0], t[-1])
     k = np.clip(np.searchsorted(t, times, side="right") - 1, 0, t.size - 2)
+    f = np.zeros_like(y)
+    for j in np.unique(np.concatenate([k, k + 1])):      # only where an interval is used
+        f[:, j] = system.rhs(float(t[j]), y[:, j])
     h = t[k + 1] - t[k]
     s = (times - t[k]) / h
     h00, h10 = (1 + 2 * s) * (1 - s) ** 2, s * (1 - s) ** 2
@@ -163,8 +165,8 @@ def rigid_oriented(system, t, y):
     from .integrate import solve
     oriented = system.replace(orientation=True)
     y0 = oriented.initial_state(y[:, 0])
-    if t.size == 1:
-        return y0[:, None]
+    if t[0] == t[-1]:                                  # one sample, or one instant
+        return np.repeat(y0[:, None], t.size, axis=1)
     return solve(oriented, (t[0], t[-1]), y0, t_eval=t, rtol=1e-11, atol=1e-12).y
 
 
