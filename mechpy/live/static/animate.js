@@ -178,14 +178,19 @@ export default {
       }
       clock.textContent = `t = ${T[k].toFixed(3)} s`;
       slider.set(k);
+      slider.lastChild.textContent = String(k);
       shown = k;
+      stale = true;
     }
+    // drawn only when something changed (a frame, the camera, the trails): an idle page rests
     const fps = mpFps();
+    let stale = true;
     function draw(now) {
-      controls.update();
       renderer.render(scene, camera);
       fps.tick(now);
+      stale = false;
     }
+    controls.addEventListener("change", () => { stale = true; });
     function tick(now) {
       if (dead) return;
       if (playing && last !== null) {
@@ -194,7 +199,8 @@ export default {
         if (k !== shown) show(k);
       }
       last = now;
-      draw(now);
+      controls.update();
+      if (stale) draw(now);
       if (!api.ready) api.ready = true;
       raf = requestAnimationFrame(tick);
     }
@@ -204,7 +210,7 @@ export default {
     const slider = mpSlider("frame", 0, n - 1, 0, 1, (i) => { api.pause(); show(i); head = i; });
     const speedRow = mpSlider("speed", 0.1, 10, speed, 0.1, (v) => { speed = v; });
     const trailBox = mpEl("input", {type: "checkbox", checked: "", "aria-label": "trails",
-      onchange: () => trails.forEach((tr) => { tr.line.visible = trailBox.checked; })});
+      onchange: () => { trails.forEach((tr) => { tr.line.visible = trailBox.checked; }); stale = true; }});
     const bar = mpEl("div", {style: "display:flex;flex-wrap:wrap;gap:12px;align-items:center;margin-top:6px"},
       playBtn, slider, speedRow,
       ...(trails.length ? [mpEl("label", {style: "font-size:13px"}, trailBox, " trails")] : []));
@@ -229,6 +235,7 @@ export default {
       bodies: () => spec.bodies.map((b) => b.name),
       // the places of the drawn bodies at the shown frame: x, y, z each, in the system's units
       positions: () => meshes.flatMap((m) => [m.position.x, m.position.y, m.position.z]),
+      // frames drawn per second over the last second (a paused, untouched page draws none)
       fps: () => fps.value(),
     };
     const unregister = mpRegister(api);
