@@ -91,7 +91,8 @@ export default {
       const g = new THREE.BufferGeometry();
       g.setAttribute("position", new THREE.BufferAttribute(new Float32Array(pts), 3));
       const mat = ln.dashed
-        ? new THREE.LineDashedMaterial({color: color(ln.color), dashSize: 0.04 * ext, gapSize: 0.025 * ext})
+        ? new THREE.LineDashedMaterial({color: color(ln.color), dashSize: 0.04 * ext,
+          gapSize: 0.025 * ext})
         : new THREE.LineBasicMaterial({color: color(ln.color)});
       const line = new THREE.Line(g, mat);
       if (ln.dashed) line.computeLineDistances();
@@ -99,11 +100,10 @@ export default {
     }
     // trails: the whole path of a body, drawn from the window's first frame to the shown one
     const trails = spec.trails.map((tr) => {
-      const arr = new Float32Array(3 * n), v = new THREE.Vector3(), all = where.map(() => new THREE.Vector3());
+      const arr = new Float32Array(3 * n), all = where.map(() => new THREE.Vector3());
       for (let k = 0; k < n; k++) {
         place(k, all);
-        v.copy(all[tr.body]);
-        arr[3 * k] = v.x; arr[3 * k + 1] = v.y; arr[3 * k + 2] = v.z;
+        all[tr.body].toArray(arr, 3 * k);
       }
       const g = new THREE.BufferGeometry();
       g.setAttribute("position", new THREE.BufferAttribute(arr, 3));
@@ -119,17 +119,19 @@ export default {
       if (spec.solid.shape === "box") {
         const s = spec.solid.size;
         const g = new THREE.BoxGeometry(s[0], s[1], s[2]);
-        const box = new THREE.Mesh(g, new THREE.MeshStandardMaterial({color: color(spec.solid.color),
-          roughness: 0.6, transparent: true, opacity: 0.75}));
+        const box = new THREE.Mesh(g, new THREE.MeshStandardMaterial({
+          color: color(spec.solid.color), roughness: 0.6, transparent: true, opacity: 0.75}));
         solid.add(box, new THREE.LineSegments(new THREE.EdgesGeometry(g),
           new THREE.LineBasicMaterial({color: 0x555555})));
       } else {
         const l = spec.solid.l, h = (4 / 3) * l, r = 0.4 * l;
         const g = new THREE.ConeGeometry(r, h, 40);
         g.rotateX(-Math.PI / 2);
-        g.translate(0, 0, h / 2);   // apex at the pivot, base up the axis: centroid at l, radius 0.3 l there
-        const body = new THREE.Mesh(g, new THREE.MeshStandardMaterial({color: color(spec.solid.color),
-          roughness: 0.55, transparent: true, opacity: 0.55, depthWrite: false}));
+        // apex at the pivot, base up the axis: centroid at l, radius 0.3 l there
+        g.translate(0, 0, h / 2);
+        const body = new THREE.Mesh(g, new THREE.MeshStandardMaterial({
+          color: color(spec.solid.color), roughness: 0.55, transparent: true, opacity: 0.55,
+          depthWrite: false}));
         solid.add(body);   // see-through: the centre of mass and its path show inside
       }
       scene.add(solid);
@@ -151,15 +153,16 @@ export default {
     const entry = (c, text) => {
       if (!text || seen.has(text)) return;
       seen.add(text);
-      legend.append(mpEl("div", {}, mpEl("span", {style: `display:inline-block;width:10px;height:10px;`
-        + `background:${c};margin-right:4px`}), text));
+      legend.append(mpEl("div", {}, mpEl("span", {style: "display:inline-block;width:10px;"
+        + `height:10px;background:${c};margin-right:4px`}), text));
     };
     spec.bodies.forEach((b) => { if (spec.kind !== "chain") entry(b.color, b.name); });
     if (spec.kind === "chain") entry(spec.bodies[0].color, `${nb} masses`);
     spec.lines.forEach((l) => entry(l.color, l.label));
 
     // ---- frames
-    let shown = -1, playing = true, head = 0, last = null, speed = spec.speed, raf = 0, dead = false;
+    let shown = -1, playing = true, head = 0, last = null, speed = spec.speed;
+    let raf = 0, dead = false;
     function show(k) {
       const q = place(k, where);
       meshes.forEach((m, i) => {
@@ -210,8 +213,12 @@ export default {
     const slider = mpSlider("frame", 0, n - 1, 0, 1, (i) => { api.pause(); show(i); head = i; });
     const speedRow = mpSlider("speed", 0.1, 10, speed, 0.1, (v) => { speed = v; });
     const trailBox = mpEl("input", {type: "checkbox", checked: "", "aria-label": "trails",
-      onchange: () => { trails.forEach((tr) => { tr.line.visible = trailBox.checked; }); stale = true; }});
-    const bar = mpEl("div", {style: "display:flex;flex-wrap:wrap;gap:12px;align-items:center;margin-top:6px"},
+      onchange: () => {
+        trails.forEach((tr) => { tr.line.visible = trailBox.checked; });
+        stale = true;
+      }});
+    const bar = mpEl("div", {style: "display:flex;flex-wrap:wrap;gap:12px;align-items:center;"
+      + "margin-top:6px"},
       playBtn, slider, speedRow,
       ...(trails.length ? [mpEl("label", {style: "font-size:13px"}, trailBox, " trails")] : []));
     el.append(mpEl("div", {class: "mechpy-live mechpy-animate"}, title, stage, bar));
