@@ -112,6 +112,17 @@ def test_top_axis_and_spin_from_euler_angles(driver, tmp_path):
         # the centre of mass l e3 and the side mark 0.3 l e1 + l e3 (m): measured 4e-17
         np.testing.assert_allclose(pos[0], 0.1 * R.apply([0, 0, 1]), rtol=0, atol=1e-12)
         np.testing.assert_allclose(pos[1], R.apply([0.03, 0, 0.1]), rtol=0, atol=1e-12)
+    # the nutation bounds: circles of radius l sin(theta) at height l cos(theta), theta the
+    # extremes the solution itself reaches (a fine sampling of sol.sol); measured 1.9e-12 m
+    th = sol.sol(np.linspace(0, 2, 20001))[1]
+    lines = driver.execute_script("return window.mechpyLive.lines()")
+    circles = [np.array(ln["points"]).reshape(-1, 3) for ln in lines
+               if ln["label"].startswith("nutation bound")]
+    assert len(circles) == 2
+    for c, th_ref in zip(circles, (th.min(), th.max())):
+        np.testing.assert_allclose(c[:, 2], 0.1 * np.cos(th_ref), rtol=0, atol=2e-11)
+        np.testing.assert_allclose(np.hypot(c[:, 0], c[:, 1]), 0.1 * np.sin(th_ref), rtol=0,
+                                   atol=2e-11)
 
 
 def test_rigid_body_axes_from_the_quaternion(driver, tmp_path):
@@ -129,6 +140,12 @@ def test_rigid_body_axes_from_the_quaternion(driver, tmp_path):
         A = Rotation.from_quat(sol.sol(t)[3:]).as_matrix()      # SciPy, scalar last
         # rows of positions(): the principal axes in space, the columns of R; measured 2.5e-16
         np.testing.assert_allclose(pos, A.T, rtol=0, atol=1e-12)
+    # the dashed line of L: along L = R(q0) I omega0 with q0 the identity
+    (L,) = [np.array(ln["points"]).reshape(-1, 3) for ln in
+            driver.execute_script("return window.mechpyLive.lines()")
+            if ln["label"].startswith("angular momentum")]
+    d = (L[1] - L[0]) / np.linalg.norm(L[1] - L[0])
+    np.testing.assert_allclose(d, I * w0 / np.linalg.norm(I * w0), rtol=0, atol=1e-15)  # 1e-16
 
 
 def test_rigid_body_without_orientation_keeps_L_fixed(driver, tmp_path):

@@ -226,7 +226,8 @@ def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0,
     camera, play/pause, a time slider and a speed slider, and exposes
     ``window.mechpyLive``: ``play()``, ``pause()``, ``frame(i)``, ``frames()``,
     ``time()``, ``positions()`` (the places of :attr:`Motion.bodies` at the
-    frame shown, x, y, z each, in the system's units), ``fps()``.
+    frame shown, x, y, z each, in the system's units), ``lines()`` (the fixed
+    lines: nutation bounds, L, walls), ``fps()``.
 
     Parameters
     ----------

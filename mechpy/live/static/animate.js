@@ -242,6 +242,8 @@ export default {
       bodies: () => spec.bodies.map((b) => b.name),
       // the places of the drawn bodies at the shown frame: x, y, z each, in the system's units
       positions: () => meshes.flatMap((m) => [m.position.x, m.position.y, m.position.z]),
+      // the fixed lines drawn (nutation bounds, L, walls, ...): [{label, points: [x, y, z, ...]}]
+      lines: () => spec.lines.map((l) => ({label: l.label, points: Array.from(mpUnpack(l.pts))})),
       // frames drawn per second over the last second (a paused, untouched page draws none)
       fps: () => fps.value(),
     };
