@@ -9,6 +9,7 @@ import warnings
 
 import numpy as np
 
+from . import _motion
 from ._validate import as_array, as_int, as_scalar
 
 __all__ = ["phase_portrait", "work_precision", "modes", "trajectory3d", "animate_field", "animate"]
@@ -458,70 +459,7 @@ def _animate_field(system, xlim, ylim, *, particles, frames, dt, trail, respawn,
 
 # ---------------------------------------------------------------- the motion itself
 
-_KINDS = ("pendulum", "double_pendulum", "foucault", "top", "rigid", "chain")
-_TYPED = {"foucault": "Foucault", "top": "HeavyTop", "rigid": "RigidBody", "chain": "SpringChain"}
-_DEFAULT_TRAIL = {"pendulum": 0.2, "double_pendulum": 0.2, "foucault": np.inf, "top": np.inf,
-                  "rigid": 0.25, "chain": 0.0}   # fractions of the time span
-
-
-def _kind_of(system, kind, dim):
-    """The kind of drawing for ``system``: ``kind`` checked against the scene,
-    or chosen from the scene's type."""
-    from . import scenes as S
-    if not isinstance(system, S.Scene):
-        raise TypeError("system must be a mechpy scene (the one that made sol), "
-                        f"got {type(system).__name__}")
-    if kind is None:
-        for k, cls in _TYPED.items():
-            if isinstance(system, getattr(S, cls)):
-                return k
-        if isinstance(system, S.Pendulum):
-            return "pendulum"
-        names = system.params
-        if dim == 4 and {"l1", "l2"} <= set(names):
-            return "double_pendulum"
-        if dim == 2 and ({"length"} & set(names) or {"l"} & set(names)):
-            return "pendulum"
-        raise TypeError(f"animate cannot tell what to draw for a {type(system).__name__}: "
-                        f"give kind, one of {_KINDS}")
-    if not isinstance(kind, str) or kind not in _KINDS:
-        raise ValueError(f"kind must be one of {_KINDS}, got {kind!r}")
-    if kind in _TYPED and not isinstance(system, getattr(S, _TYPED[kind])):
-        raise TypeError(f"kind={kind!r} draws a mp.scenes.{_TYPED[kind]}, "
-                        f"got {type(system).__name__}")
-    need = {"pendulum": 2, "double_pendulum": 4}.get(kind)
-    if need is not None and dim != need:
-        raise TypeError(f"kind={kind!r} needs a system of {need} states (angles from the "
-                        f"downward vertical and their rates), got {dim}")
-    return kind
-
-
-def _samples(system, sol, t):
-    """(t (m,), y (n, m)) from a Solution or an array (n, m) with times t."""
-    if hasattr(sol, "t") and hasattr(sol, "y"):
-        if t is not None:
-            raise ValueError("t is given with a Solution: it carries its own times sol.t")
-        tt, y = sol.t, sol.y
-    elif isinstance(sol, (np.ndarray, list, tuple)):
-        if t is None:
-            raise ValueError("sol is an array (n, m): give its times t (m,)")
-        tt, y = t, sol
-    else:
-        raise TypeError("sol must be a Solution of mp.solve or an array of states (n, m), "
-                        f"got {type(sol).__name__}")
-    y = as_array(y, "sol.y", ndim=2, allow_empty=True)
-    tt = as_array(tt, "t", ndim=1, allow_empty=True)
-    if y.shape[1] == 0 or tt.size == 0:
-        raise ValueError("sol is empty: it has no samples to draw (integrate with t_eval)")
-    if tt.size != y.shape[1]:
-        raise ValueError(f"t has {tt.size} times but sol.y has {y.shape[1]} samples (n, m)")
-    if y.shape[0] != system.dim:
-        raise ValueError(f"sol.y has {y.shape[0]} rows but a {type(system).__name__} has "
-                         f"{system.dim} states: the state axis comes first, (n, m)")
-    dt = np.diff(tt)
-    if not (np.all(dt > 0) or np.all(dt < 0)):
-        raise ValueError("t must be strictly monotonic")
-    return tt, y
+_KINDS, _DEFAULT_TRAIL = _motion.KINDS, _motion.DEFAULT_TRAIL
 
 
 def _square_view(ax, r, xlabel, ylabel):
@@ -572,17 +510,8 @@ def _window(t, trail):
 def _planar_pendulum(ax, system, t, y, trail, lengths):
     """Rods from the pivot through the bobs; a fading trail of the last bob."""
     two = y.shape[0] == 4
-    p = system.params
-    if lengths is None:
-        keys = ("l1", "l2") if two else ("length",) if "length" in p else ("l",)
-        if not set(keys) <= set(p):
-            raise ValueError("lengths is needed: the system has no length parameters "
-                             f"{keys}")
-        lengths = [p[k] for k in keys]
-    ls = as_array(lengths, "lengths", shape=(2 if two else 1,), positive=True)
-    # x to the right, y up, angles from the downward vertical
-    xs = np.cumsum(ls[:, None] * np.sin(y[:ls.size]), axis=0)
-    ys = np.cumsum(-ls[:, None] * np.cos(y[:ls.size]), axis=0)
+    ls = _motion.pendulum_lengths(system, two, lengths)
+    xs, ys = _motion.pendulum_bobs(y, ls)
     _square_view(ax, ls.sum() * 1.12, "x (m)", "y, up (m)")
     ax.set_title("double pendulum: rods, bobs, lower bob's trail" if two
                  else "pendulum: rod, bob and its trail")
@@ -630,18 +559,11 @@ def _sphere_axes(ax, label):
 def _top(ax, system, t, y, trail, lengths):
     """The symmetry axis e3 of a heavy top on the unit sphere, its tip's path,
     and the nutation bounds as two circles of latitude."""
-    from .rigid import nutation_bounds
-    from .rotation import euler_matrix
-    e3 = euler_matrix(y[0], y[1], y[2])[:, 2, :]        # passive lambda: row 3 is e3
-    p = system.params
+    e3 = _motion.top_rotation(y)[:, :, 2]                # column 3 of R is e3
     _sphere_axes(ax, "z, up")
     ax.set_title("heavy top: symmetry axis and its tip")
     phi = np.linspace(0.0, 2 * np.pi, 121)
-    try:
-        bounds = nutation_bounds(p["I1"], p["I3"], p["mass"], p["g"], p["l"], y[1, 0],
-                                 y[4, 0], y[3, 0], y[5, 0])
-    except ValueError:       # upright or inverted start: Euler angles are singular there
-        bounds = ()
+    bounds = _motion.top_bounds(system, y[:, 0])
     for th, ls in zip(bounds, ("--", ":")):
         ax.plot(np.sin(th) * np.cos(phi), np.sin(th) * np.sin(phi), np.full_like(phi, np.cos(th)),
                 ls, color="0.4", lw=1, gid="bound",
@@ -665,15 +587,9 @@ def _top(ax, system, t, y, trail, lengths):
 def _rigid(ax, system, t, y, trail, lengths):
     """The body axes of a free rigid body in space (columns of R(q)), the tips'
     fading paths and the fixed angular momentum direction."""
-    from .integrate import solve
-    from .rotation import matrix_from_quat
-    if y.shape[0] == 3:      # no orientation in the state: integrate it alongside
-        oriented = system.replace(orientation=True)
-        y = solve(oriented, (t[0], t[-1]), oriented.initial_state(y[:, 0]), t_eval=t,
-                  rtol=1e-11, atol=1e-12).y if t.size > 1 else \
-            oriented.initial_state(y[:, 0])[:, None]
-    R = matrix_from_quat(y[3:7].T)                          # (m, 3, 3), body to space
-    L = np.einsum("mij,jm->mi", R, system.moments[:, None] * y[:3])
+    y = _motion.rigid_oriented(system, t, y)   # without orientation: integrated alongside
+    R = _motion.rigid_rotation(y)                           # (m, 3, 3), body to space
+    L = _motion.angular_momentum_space(system, R, y)
     Lhat = L[0] / (np.linalg.norm(L[0]) or 1.0)
     _sphere_axes(ax, "z")
     ax.set_title("free rigid body: body axes in space")
@@ -706,8 +622,8 @@ def _chain(ax, system, t, y, trail, lengths):
     idx = np.arange(1, N + 1)
     A = np.max(np.abs(x)) or 1.0
     row = -1.6 * A
-    scale = 0.4 / A                       # the largest displacement: 0.4 of the spacing
-    walls = [0, N + 1] if system.params["ends"] == "fixed" else []
+    spacing = _motion.chain_spacing(x)    # the largest displacement: 0.4 of the spacing
+    walls = _motion.chain_walls(system)
     lo, hi = (0.5 if not walls else -0.3), (N + 0.5 if not walls else N + 1.3)
     ax.set_xlim(lo, hi)
     ax.set_ylim(row - 0.6 * A, 1.25 * A)
@@ -731,7 +647,7 @@ def _chain(ax, system, t, y, trail, lengths):
 
     def update(k):
         dots.set_data(idx, x[:, k])
-        pos = idx + scale * x[:, k]
+        pos = _motion.chain_positions(x[:, k:k + 1], spacing)[:, 0] / spacing
         masses.set_data(pos, np.full(N, row))
         spring.set_data(np.r_[walls[:1], pos, walls[1:]], np.full(N + len(walls), row))
         out = [dots, masses, spring]
@@ -859,8 +775,8 @@ def animate(system, sol, *, kind=None, t=None, frames=None, fps=20, trail=None, 
     [0, 2, 4, 6]
     """
     plt = _plt()
-    kind = _kind_of(system, kind, getattr(system, "dim", 0))
-    tt, y = _samples(system, sol, t)
+    kind = _motion.kind_of(system, kind)
+    tt, y = _motion.samples(system, sol, t)
     m = tt.size
     frames = min(m, 200) if frames is None else as_int(frames, "frames", minimum=1)
     fps = as_scalar(fps, "fps", positive=True)

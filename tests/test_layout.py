@@ -651,6 +651,8 @@ TABLE = {
     "mechpy.plot.animate": (STATE, _animate_case),
     **{f"mechpy.plot.{n}": (NONE, None) for n in (
         "phase_portrait", "work_precision", "modes", "animate_field")},
+    # live views: widgets (their pages are exercised in test_live_*.py)
+    **{f"mechpy.live.{n}": (NONE, None) for n in ("animate", "Motion")},
     # exceptions
     **{f"mechpy.errors.{n}": (NONE, None) for n in mp.errors.__all__},
 }

@@ -1,0 +1,209 @@
+"""What an animation of the motion draws, in NumPy: the kind of drawing for a
+scene, the samples of a solution, and the places of the bodies.
+
+:func:`mechpy.plot.animate` draws these with matplotlib and
+:func:`mechpy.live.animate` with three.js; both take their geometry from here.
+Frames: x to the right and y up for the planar pendulums (angles from the
+downward vertical); x east, y north, z up for the Foucault pendulum; the
+space frame of the top (z up) and of the free body.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ._validate import as_array
+
+KINDS = ("pendulum", "double_pendulum", "foucault", "top", "rigid", "chain")
+#: the kinds that draw one scene class
+TYPED = {"foucault": "Foucault", "top": "HeavyTop", "rigid": "RigidBody", "chain": "SpringChain"}
+#: the default trail of each kind, as a fraction of the time span
+DEFAULT_TRAIL = {"pendulum": 0.2, "double_pendulum": 0.2, "foucault": np.inf, "top": np.inf,
+                 "rigid": 0.25, "chain": 0.0}
+
+
+def kind_of(system, kind) -> str:
+    """The kind of drawing for ``system``: ``kind`` checked against the scene,
+    or chosen from the scene's type."""
+    from . import scenes as S
+    if not isinstance(system, S.Scene):
+        raise TypeError("system must be a mechpy scene (the one that made sol), "
+                        f"got {type(system).__name__}")
+    dim = system.dim
+    if kind is None:
+        for k, cls in TYPED.items():
+            if isinstance(system, getattr(S, cls)):
+                return k
+        if isinstance(system, S.Pendulum):
+            return "pendulum"
+        names = system.params
+        if dim == 4 and {"l1", "l2"} <= set(names):
+            return "double_pendulum"
+        if dim == 2 and ({"length"} & set(names) or {"l"} & set(names)):
+            return "pendulum"
+        raise TypeError(f"animate cannot tell what to draw for a {type(system).__name__}: "
+                        f"give kind, one of {KINDS}")
+    if not isinstance(kind, str) or kind not in KINDS:
+        raise ValueError(f"kind must be one of {KINDS}, got {kind!r}")
+    if kind in TYPED and not isinstance(system, getattr(S, TYPED[kind])):
+        raise TypeError(f"kind={kind!r} draws a mp.scenes.{TYPED[kind]}, "
+                        f"got {type(system).__name__}")
+    need = {"pendulum": 2, "double_pendulum": 4}.get(kind)
+    if need is not None and dim != need:
+        raise TypeError(f"kind={kind!r} needs a system of {need} states (angles from the "
+                        f"downward vertical and their rates), got {dim}")
+    return kind
+
+
+def samples(system, sol, t):
+    """(t (m,), y (n, m)) from a Solution or an array (n, m) with times t."""
+    if hasattr(sol, "t") and hasattr(sol, "y"):
+        if t is not None:
+            raise ValueError("t is given with a Solution: it carries its own times sol.t")
+        tt, y = sol.t, sol.y
+    elif isinstance(sol, (np.ndarray, list, tuple)):
+        if t is None:
+            raise ValueError("sol is an array (n, m): give its times t (m,)")
+        tt, y = t, sol
+    else:
+        raise TypeError("sol must be a Solution of mp.solve or an array of states (n, m), "
+                        f"got {type(sol).__name__}")
+    y = as_array(y, "sol.y", ndim=2, allow_empty=True)
+    tt = as_array(tt, "t", ndim=1, allow_empty=True)
+    if y.shape[1] == 0 or tt.size == 0:
+        raise ValueError("sol is empty: it has no samples to draw (integrate with t_eval)")
+    if tt.size != y.shape[1]:
+        raise ValueError(f"t has {tt.size} times but sol.y has {y.shape[1]} samples (n, m)")
+    if y.shape[0] != system.dim:
+        raise ValueError(f"sol.y has {y.shape[0]} rows but a {type(system).__name__} has "
+                         f"{system.dim} states: the state axis comes first, (n, m)")
+    dt = np.diff(tt)
+    if not (np.all(dt > 0) or np.all(dt < 0)):
+        raise ValueError("t must be strictly monotonic")
+    return tt, y
+
+
+def resample(system, t, y, times):
+    """States at ``times`` (within [t[0], t[-1]]) from samples ``(t, y)``: the
+    cubic Hermite interpolant through the states and the system's own
+    derivatives ``system.rhs`` at the samples (4th order in the spacing);
+    exact at the samples themselves.  One sample: that state."""
+    if t.size == 1:
+        return np.repeat(y, len(times), axis=1)
+    if t[0] > t[-1]:
+        t, y = t[::-1], y[:, ::-1]
+    times = np.clip(times, t[0], t[-1])
+    k = np.clip(np.searchsorted(t, times, side="right") - 1, 0, t.size - 2)
+    f = np.zeros_like(y)
+    for j in np.unique(np.concatenate([k, k + 1])):      # only where an interval is used
+        f[:, j] = system.rhs(float(t[j]), y[:, j])
+    h = t[k + 1] - t[k]
+    s = (times - t[k]) / h
+    h00, h10 = (1 + 2 * s) * (1 - s) ** 2, s * (1 - s) ** 2
+    h01, h11 = s * s * (3 - 2 * s), s * s * (s - 1)
+    return (h00 * y[:, k] + h10 * h * f[:, k] + h01 * y[:, k + 1] + h11 * h * f[:, k + 1])
+
+
+# ---------------------------------------------------------------- the bodies
+
+def pendulum_lengths(system, two: bool, lengths):
+    """Rod lengths (1,) or (2,) (m): ``lengths``, else the scene's ``l1, l2``,
+    ``length`` or ``l``."""
+    p = system.params
+    if lengths is None:
+        keys = ("l1", "l2") if two else ("length",) if "length" in p else ("l",)
+        if not set(keys) <= set(p):
+            raise ValueError(f"lengths is needed: the system has no length parameters {keys}")
+        lengths = [p[k] for k in keys]
+    return as_array(lengths, "lengths", shape=(2 if two else 1,), positive=True)
+
+
+def pendulum_bobs(y, ls):
+    r"""The bobs of a planar (double) pendulum, x right and y up, pivot at the
+    origin: :math:`x_k = \sum_{j\le k} l_j\sin\theta_j`,
+    :math:`y_k = -\sum_{j\le k} l_j\cos\theta_j`; two arrays (bobs, m) (m)."""
+    xs = np.cumsum(ls[:, None] * np.sin(y[:ls.size]), axis=0)
+    ys = np.cumsum(-ls[:, None] * np.cos(y[:ls.size]), axis=0)
+    return xs, ys
+
+
+def foucault_bob(system, y):
+    r"""The Foucault bob (3, m): x east, y north (the state) and its height
+    above the lowest point, :math:`z = L - \sqrt{L^2 - x^2 - y^2}` (m); the
+    pivot is at (0, 0, L)."""
+    L = system.params["length"]
+    r2 = np.minimum(y[0] ** 2 + y[1] ** 2, L * L)
+    return np.stack([y[0], y[1], L - np.sqrt(L * L - r2)])
+
+
+def top_rotation(y):
+    """Body-to-space rotation matrices (m, 3, 3) of a heavy top from its ZXZ
+    Euler angles (the active matrix: column 3 is the symmetry axis e3)."""
+    from .rotation import euler_matrix
+    return euler_matrix(y[0], y[1], y[2], passive=False)
+
+
+def top_bounds(system, y0) -> tuple:
+    """The nutation bounds (theta_min, theta_max) of the top started at
+    ``y0`` (:func:`mechpy.rigid.nutation_bounds`); () for an upright or
+    inverted start, where Euler angles are singular."""
+    from .rigid import nutation_bounds
+    p = system.params
+    try:
+        return tuple(nutation_bounds(p["I1"], p["I3"], p["mass"], p["g"], p["l"], y0[1],
+                                     y0[4], y0[3], y0[5]))
+    except ValueError:
+        return ()
+
+
+def rigid_oriented(system, t, y):
+    """States (7, m) with the orientation: ``y`` itself when it has one, else
+    omega integrated again with the quaternion alongside,
+    ``system.replace(orientation=True)`` from the identity at ``t[0]``, at the
+    times ``t`` (rtol 1e-11)."""
+    if y.shape[0] == 7:
+        return y
+    from .integrate import solve
+    oriented = system.replace(orientation=True)
+    y0 = oriented.initial_state(y[:, 0])
+    if t[0] == t[-1]:                                  # one sample, or one instant
+        return np.repeat(y0[:, None], t.size, axis=1)
+    return solve(oriented, (t[0], t[-1]), y0, t_eval=t, rtol=1e-11, atol=1e-12).y
+
+
+def rigid_rotation(y7):
+    """Body-to-space rotation matrices (m, 3, 3) of oriented rigid-body states
+    (7, m): columns are the principal axes in space."""
+    from .rotation import matrix_from_quat
+    return matrix_from_quat(y7[3:7].T)
+
+
+def angular_momentum_space(system, R, y):
+    """The angular momentum in space L = R (I omega), (m, 3) (kg m^2/s)."""
+    return np.einsum("mij,jm->mi", R, system.moments[:, None] * y[:3])
+
+
+def box_sides(moments, mass: float = 1.0):
+    r"""Sides (a, b, c) (m) of the uniform box of ``mass`` (kg) whose principal
+    moments are ``moments`` (kg m^2): :math:`I_1 = M(b^2 + c^2)/12` (cyclic),
+    so :math:`a^2 = 6(I_2 + I_3 - I_1)/M`; 0 for a side of a flat body."""
+    I = np.asarray(moments, dtype=float)
+    sq = 6.0 * (I.sum() - 2 * I) / mass
+    return np.sqrt(np.maximum(sq, 0.0))
+
+
+def chain_spacing(x) -> float:
+    """The spacing of the masses that makes the largest displacement 0.4 of it
+    (1 when nothing moves)."""
+    A = float(np.max(np.abs(x))) if x.size else 0.0
+    return A / 0.4 if A > 0 else 1.0
+
+
+def chain_positions(x, spacing):
+    """Places of the masses along the chain (N, m): mass i (from 1) at
+    ``i * spacing + x_i`` (units of x)."""
+    return np.arange(1, x.shape[0] + 1)[:, None] * spacing + x
+
+
+def chain_walls(system) -> list:
+    """The walls' mass indices: 0 and N + 1 for fixed ends, none otherwise."""
+    return [0, system.N + 1] if system.params["ends"] == "fixed" else []

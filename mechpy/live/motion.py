@@ -1,0 +1,328 @@
+"""The motion of a solution in 3D, in the browser (three.js): :func:`animate`.
+
+The frames are computed here, in NumPy, from the solution's dense output (or
+from its samples); the page only places the bodies, draws the trails and
+plays.  The geometry of each kind is :mod:`mechpy._motion`'s, the same as
+:func:`mechpy.plot.animate`'s.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .. import _motion
+from .._validate import as_array, as_scalar
+from ._page import LiveWidget, pack
+
+__all__ = ["animate", "Motion"]
+
+#: the most frames a page holds (a minute at 60 frames per second)
+MAX_FRAMES = 3600
+
+_RED, _GREEN, _BLUE = "#d62728", "#2ca02c", "#1f77b4"
+_ORANGE, _GREY, _DARK = "#ff7f0e", "#7f7f7f", "#333333"
+
+
+class Motion(LiveWidget):
+    """The 3D view made by :func:`animate` (an ``anywidget.AnyWidget``).
+
+    Attributes
+    ----------
+    kind : str
+        What is drawn (one of the kinds of :func:`animate`).
+    times : ndarray, shape (frames,)
+        The time of each frame (time units of the solution).
+    bodies : list of str
+        The bodies whose places ``window.mechpyLive.positions()`` gives, in
+        that order.
+    """
+
+    _view = "animate"
+    _three = True
+
+    def __init__(self, spec: dict, kind: str, times: np.ndarray, bodies: list):
+        super().__init__(spec)
+        self.kind = kind
+        self.times = times
+        self.bodies = bodies
+
+    def __repr__(self):
+        return (f"<mechpy.live.Motion {self.kind}: {self.times.size} frames, "
+                f"t in [{self.times[0]:g}, {self.times[-1]:g}]>")
+
+
+def _frame_times(t, fps, duration):
+    """The frames' times: evenly spread over [t[0], t[-1]], ``duration * fps``
+    intervals (duration: the span itself, at most 60 s, by default)."""
+    span = abs(float(t[-1] - t[0]))
+    if duration is None:
+        duration = min(span, 60.0) if span > 0 else 1.0
+    else:
+        duration = as_scalar(duration, "duration", positive=True)
+    n = int(round(duration * fps)) + 1
+    if n > MAX_FRAMES:
+        raise ValueError(f"duration * fps = {duration:g} s * {fps:g} /s gives {n} frames, more "
+                         f"than {MAX_FRAMES}: give a shorter duration or a lower fps")
+    return np.linspace(t[0], t[-1], max(n, 2)), duration
+
+
+def _states(system, sol, t, times):
+    """The states (n, frames) at ``times``: the solution's dense output when it
+    has one, else the Hermite interpolant through its samples."""
+    dense = getattr(sol, "sol", None)
+    if dense is not None and t is None:
+        return np.asarray(dense(times), dtype=float).reshape(system.dim, times.size)
+    tt, y = _motion.samples(system, sol, t)
+    return _motion.resample(system, tt, y, times)
+
+
+def _body(name, color, radius, local=None, shape="sphere"):
+    return {"name": name, "color": color, "radius": float(radius), "shape": shape,
+            "local": None if local is None else [float(v) for v in local]}
+
+
+def _polyline(pts, color, label=None, dashed=False):
+    return {"pts": pack(np.asarray(pts, dtype=float).reshape(-1, 3)), "color": color,
+            "label": label, "dashed": bool(dashed)}
+
+
+def _pendulum(system, Y, lengths):
+    two = Y.shape[0] == 4
+    ls = _motion.pendulum_lengths(system, two, lengths)
+    xs, ys = _motion.pendulum_bobs(Y, ls)
+    P = np.stack([xs.T, ys.T, np.zeros_like(xs.T)], axis=-1)        # (frames, bobs, 3)
+    r = float(ls.sum())
+    names = ["bob 1", "bob 2"] if two else ["bob"]
+    bodies = [_body(nm, _BLUE, 0.05 * r) for nm in names]
+    rods = [[[0.0, 0.0, 0.0], 0, _DARK]] + ([[0, 1, _DARK]] if two else [])
+    lines = [_polyline([[-0.15 * r, 0, 0], [0.15 * r, 0, 0]], _DARK, "pivot")]
+    return dict(P=P, bodies=bodies, rods=rods, lines=lines, up=[0, 1, 0], trail=[len(names) - 1],
+                center=[0.0, -0.3 * r, 0.0], extent=1.15 * r, camera=[0.0, 0.0, 1.0],
+                title="double pendulum: rods, bobs and the lower bob's trail (x right, y up; m)"
+                if two else "pendulum: rod, bob and its trail (x right, y up; m)")
+
+
+def _foucault(system, Y):
+    B = _motion.foucault_bob(system, Y)                            # (3, frames)
+    L = float(system.params["length"])
+    A = float(np.max(np.hypot(B[0], B[1]))) or 0.1 * L
+    bodies = [_body("bob", _RED, 0.06 * A)]
+    lines = [_polyline([[-A, 0, 0], [A, 0, 0]], _GREY, "x: east"),
+             _polyline([[0, -A, 0], [0, A, 0]], _GREY, "y: north")]
+    return dict(P=B.T[:, None, :], bodies=bodies, rods=[[[0.0, 0.0, L], 0, _DARK]], lines=lines,
+                up=[0, 0, 1], trail=[0], center=[0.0, 0.0, 0.0], extent=1.3 * A,
+                camera=[0.35, -0.6, 1.0],
+                title="Foucault pendulum: the bob and its rosette (x east, y north, z up; m)")
+
+
+def _top(system, Y):
+    R = _motion.top_rotation(Y)                                    # (frames, 3, 3)
+    ell = float(system.params["l"])
+    mark = np.array([0.3 * ell, 0.0, ell])           # on the body's side, beside the centre of mass
+    P = np.stack([ell * R[:, :, 2], R @ mark], axis=1)
+    bodies = [_body("centre of mass", _BLUE, 0.06 * ell, local=[0.0, 0.0, ell]),
+              _body("mark on the side (spin)", _RED, 0.07 * ell, local=mark)]
+    phi = np.linspace(0.0, 2 * np.pi, 121)
+    lines = []
+    for th, what in zip(_motion.top_bounds(system, Y[:, 0]), ("theta_min", "theta_max")):
+        c = ell * np.stack([np.sin(th) * np.cos(phi), np.sin(th) * np.sin(phi),
+                            np.full_like(phi, np.cos(th))], axis=-1)
+        lines.append(_polyline(c, _GREY, f"nutation bound {what} = {th:.4f} rad", dashed=True))
+    lines.append(_polyline([[0, 0, 0], [0, 0, 1.3 * ell]], _GREY, "vertical z"))
+    return dict(P=P, R=R, bodies=bodies, rods=[[[0.0, 0.0, 0.0], 0, _DARK]], lines=lines,
+                up=[0, 0, 1], trail=[0], center=[0.0, 0.0, 0.3 * ell], extent=1.5 * ell,
+                camera=[1.0, -1.2, 0.6], solid={"shape": "top", "l": ell, "color": _ORANGE},
+                title="heavy top: its body, the centre of mass's path and the nutation bounds "
+                      "(z up; m)")
+
+
+def _rigid(system, times, Y):
+    Y = _motion.rigid_oriented(system, times, Y)
+    R = _motion.rigid_rotation(Y)                                  # (frames, 3, 3)
+    P = np.transpose(R, (0, 2, 1))                                 # rows: the axes in space
+    I = system.moments
+    bodies = [_body(f"principal axis {j + 1} (I{j + 1} = {I[j]:.4g} kg m^2)", c, 0.04,
+                    local=np.eye(3)[j], shape="cone")
+              for j, c in enumerate((_RED, _GREEN, _BLUE))]
+    rods = [[[0.0, 0.0, 0.0], j, c] for j, c in enumerate((_RED, _GREEN, _BLUE))]
+    L = _motion.angular_momentum_space(system, R[:1], Y[:, :1])[0]
+    nL = float(np.linalg.norm(L))
+    lines = []
+    if nL > 0:
+        Lh = L / nL
+        lines.append(_polyline([-1.3 * Lh, 1.3 * Lh], "#000000",
+                               f"angular momentum L, fixed (|L| = {nL:.4g} kg m^2/s)",
+                               dashed=True))
+    sides = _motion.box_sides(I)                                   # a 1 kg box, m
+    sides = np.maximum(sides, 0.02 * sides.max())                  # a flat body: a thin plate
+    sides = 1.2 * sides / np.linalg.norm(sides)                    # its diagonal 1.2 (display)
+    return dict(P=P, R=R, bodies=bodies, rods=rods, lines=lines, up=[0, 0, 1], trail=[0, 1, 2],
+                center=[0.0, 0.0, 0.0], extent=1.4, camera=[1.0, -1.4, 0.8],
+                solid={"shape": "box", "size": sides.tolist(), "color": "#c8b28a"},
+                title="free rigid body: the box of its moments, its principal axes (unit "
+                      "vectors) and L")
+
+
+def _chain(system, Y, spacing):
+    N = system.N
+    X = Y[:N]
+    sp = _motion.chain_spacing(X) if spacing is None else as_scalar(spacing, "spacing",
+                                                                    positive=True)
+    pos = _motion.chain_positions(X, sp)                            # (N, frames)
+    P = np.stack([pos.T, np.zeros_like(pos.T), np.zeros_like(pos.T)], axis=-1)
+    bodies = [_body(f"mass {i + 1}", _RED, 0.15 * sp, shape="cube") for i in range(N)]
+    walls = _motion.chain_walls(system)
+    rods = [[i, i + 1, _GREY] for i in range(N - 1)]
+    lines = []
+    if walls:
+        w0, w1 = [0.0, 0.0, 0.0], [(N + 1) * sp, 0.0, 0.0]
+        rods = [[w0, 0, _GREY]] + rods + [[N - 1, w1, _GREY]]
+        for w in (w0, w1):
+            lines.append(_polyline([[w[0], -0.4 * sp, 0], [w[0], 0.4 * sp, 0]], "#000000", "wall"))
+    half = 0.5 * (N + 1) * sp
+    return dict(P=P, bodies=bodies, rods=rods, lines=lines, up=[0, 1, 0], trail=[],
+                center=[half, 0.0, 0.0], extent=1.1 * half, camera=[0.0, 0.5, 1.0],
+                title=f"spring chain of {N} masses along x (units of x; spacing {sp:.4g})")
+
+
+def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0, trail=None,
+            lengths=None, spacing=None) -> Motion:
+    r"""The motion of a solution in 3D, in the browser (three.js).
+
+    What is drawn depends on ``kind`` (by default chosen from the scene's
+    type), as in :func:`mechpy.plot.animate`:
+
+    ``"pendulum"``, ``"double_pendulum"``
+        rods and bobs at :math:`(l\sin\theta, -l\cos\theta, 0)` (x right, y
+        up; the second bob adds :math:`l_2(\sin\theta_2, -\cos\theta_2)`), the
+        last bob's trail.
+    ``"foucault"``
+        :class:`~mechpy.scenes.Foucault`: the bob at (x east, y north, z up)
+        with z its height :math:`L - \sqrt{L^2 - x^2 - y^2}` above the lowest
+        point, hung from (0, 0, L); its trail is the rosette.
+    ``"top"``
+        :class:`~mechpy.scenes.HeavyTop`: the top's body turned by its ZXZ
+        Euler angles (phi, theta, psi), its centre of mass
+        :math:`l e_3` and its path, the nutation bounds of
+        :func:`mechpy.rigid.nutation_bounds` as two circles of latitude;
+        the bodies placed are the centre of mass :math:`l e_3` and a mark on
+        the body's side, :math:`0.3\,l\,e_1 + l e_3`, which shows the spin.
+    ``"rigid"``
+        :class:`~mechpy.scenes.RigidBody`: a box with the body's principal
+        moments in proportion (the uniform box of 1 kg has sides
+        :math:`a^2 = 6(I_2 + I_3 - I_1)` m^2, cyclic; shown at a fixed size),
+        turned by the orientation quaternion; its principal axes (unit
+        vectors, the columns of :math:`R(q)`) with trails, and the fixed
+        direction of the angular momentum.  A state without orientation is
+        integrated again with it, ``system.replace(orientation=True)`` from
+        the identity at the frames' times (rtol 1e-11).
+    ``"chain"``
+        :class:`~mechpy.scenes.SpringChain`: mass i (from 1) at
+        :math:`i\,s + x_i` along x, with springs and, for fixed ends, walls.
+
+    The frames are the states at ``duration * fps + 1`` times evenly spread
+    over the solution's span: from ``sol.sol`` (dense output) when the
+    solution has it, else the cubic Hermite interpolant through the samples
+    and the system's derivatives there.  The page plays them with an orbit
+    camera, play/pause, a time slider and a speed slider, and exposes
+    ``window.mechpyLive``: ``play()``, ``pause()``, ``frame(i)``, ``frames()``,
+    ``time()``, ``positions()`` (the places of :attr:`Motion.bodies` at the
+    frame shown, x, y, z each, in the system's units), ``lines()`` (the fixed
+    lines: nutation bounds, L, walls), ``fps()``.
+
+    Parameters
+    ----------
+    system : Scene
+        The scene that made ``sol``.
+    sol : Solution or array_like, shape (n, m)
+        A result of :func:`mechpy.solve` (with ``dense_output=True`` the
+        frames come from its interpolant), or states (n, m) with ``t``.
+    kind : str, optional
+        One of ``"pendulum"``, ``"double_pendulum"``, ``"foucault"``,
+        ``"top"``, ``"rigid"``, ``"chain"``.
+    t : array_like, shape (m,), optional
+        The times of an array ``sol``; strictly monotonic.
+    fps : float
+        Frames per second of the playback at speed 1 (at most 120).
+    duration : float, optional
+        Seconds the playback lasts at speed 1; default the solution's time
+        span (real time), at most 60 s.  At most 3600 frames in all.
+    speed : float
+        The initial playback speed (the page's slider: 0.1 to 10).
+    trail : float, optional
+        Length of the trails in time units of the solution: ``0`` for none,
+        ``np.inf`` for the whole path.  Default: the whole path for the
+        Foucault pendulum and the top, a fifth (a quarter for a rigid body)
+        of the span otherwise.
+    lengths : array_like, shape (1,) or (2,), optional
+        Rod lengths (m) of the pendulum kinds, when the scene's parameters
+        do not name them.
+    spacing : float, optional
+        The chain's spacing at rest, in the units of x; default the largest
+        displacement over 0.4.
+
+    Returns
+    -------
+    Motion
+        The widget; ``save(path)`` writes one HTML file that runs offline.
+
+    Raises
+    ------
+    TypeError
+        ``system`` is not a scene, its kind cannot be told, ``kind`` names a
+        scene of another type, or ``sol`` is neither a Solution nor an array.
+    ValueError
+        ``kind`` is unknown; ``sol`` is empty, not finite or does not hold
+        the scene's states (n, m); ``t`` is missing, of another length or not
+        monotonic; bad ``fps``, ``duration``, ``speed``, ``trail``,
+        ``lengths`` or ``spacing``; more than 3600 frames.
+
+    Examples
+    --------
+    >>> import numpy as np, mechpy as mp
+    >>> p = mp.scenes.Pendulum(length=1.5)
+    >>> sol = mp.solve(p, (0, 4), [2.0, 0.0], dense_output=True)
+    >>> w = mp.live.animate(p, sol, fps=25)
+    >>> w.times.size, w.bodies
+    (101, ['bob'])
+    """
+    kind = _motion.kind_of(system, kind)
+    tt, y = _motion.samples(system, sol, t)                        # checks sol's shape
+    fps = as_scalar(fps, "fps", positive=True, hi=120.0)
+    speed = as_scalar(speed, "speed", lo=0.1, hi=10.0)
+    times, duration = _frame_times(tt, fps, duration)
+    span = abs(float(tt[-1] - tt[0]))
+    trail = (_motion.DEFAULT_TRAIL[kind] * span if trail is None
+             else as_scalar(trail, "trail", nonnegative=True, finite=False))
+    if np.isnan(trail):
+        raise ValueError("trail must be a non-negative time or np.inf, got nan")
+    if kind not in ("pendulum", "double_pendulum") and lengths is not None:
+        raise ValueError(f"lengths is for the pendulum kinds, not kind={kind!r}")
+    if kind != "chain" and spacing is not None:
+        raise ValueError(f"spacing is for kind='chain', not kind={kind!r}")
+    Y = _states(system, sol, t, times)
+    if not np.all(np.isfinite(Y)):
+        raise ValueError("the solution is not finite over its span (sol.sol or sol.y)")
+    if kind in ("pendulum", "double_pendulum"):
+        d = _pendulum(system, Y, lengths)
+    elif kind == "foucault":
+        d = _foucault(system, Y)
+    elif kind == "top":
+        d = _top(system, Y)
+    elif kind == "rigid":
+        d = _rigid(system, times, Y)
+    else:
+        d = _chain(system, Y, spacing)
+    n, nb = d["P"].shape[:2]
+    dt = span / (n - 1)
+    window = n if not np.isfinite(trail) else int(np.ceil(trail / dt - 1e-9)) if dt > 0 else 0
+    spec = {
+        "kind": kind, "title": d["title"], "n": n, "nb": nb, "fps": fps, "speed": speed,
+        "duration": duration, "t": pack(times), "pos": pack(d["P"].reshape(n, nb * 3)),
+        "rot": pack(d["R"].reshape(n, 9)) if "R" in d else None,
+        "bodies": d["bodies"], "rods": d["rods"], "lines": d["lines"],
+        "trails": [{"body": b, "color": d["bodies"][b]["color"], "window": window}
+                   for b in d["trail"]] if window > 0 else [],
+        "solid": d.get("solid"), "up": d["up"], "center": d["center"],
+        "extent": float(d["extent"]), "camera": d["camera"],
+    }
+    return Motion(spec, kind, times, [b["name"] for b in d["bodies"]])

@@ -1,0 +1,261 @@
+// mechpy.live.animate: the motion of a solution in 3D (three.js).  Every frame is computed
+// in Python (spec.pos: the bodies' places, spec.rot: the body-to-space matrix of a top or a
+// rigid body); the page places the bodies, draws rods, trails and fixed lines, and plays.
+
+function mpMotionFrame(THREE, spec) {
+  const n = spec.n, nb = spec.nb;
+  const P = mpUnpack(spec.pos), R = spec.rot ? mpUnpack(spec.rot) : null;
+  const m4 = new THREE.Matrix4(), q = new THREE.Quaternion();
+  // the places of the bodies at frame k (world coordinates, the system's units)
+  return function (k, out) {
+    if (R) {
+      const r = R.subarray(9 * k, 9 * k + 9);
+      m4.set(r[0], r[1], r[2], 0, r[3], r[4], r[5], 0, r[6], r[7], r[8], 0, 0, 0, 0, 1);
+      q.setFromRotationMatrix(m4);
+    }
+    for (let i = 0; i < nb; i++) {
+      const b = spec.bodies[i];
+      if (R && b.local) out[i].set(b.local[0], b.local[1], b.local[2]).applyQuaternion(q);
+      else out[i].set(P[3 * (k * nb + i)], P[3 * (k * nb + i) + 1], P[3 * (k * nb + i) + 2]);
+    }
+    return R ? q : null;
+  };
+}
+
+export default {
+  async render({model, el}) {
+    const spec = model.get("spec");
+    const {THREE, OrbitControls} = await mpThree();
+    const n = spec.n, nb = spec.nb, ext = spec.extent;
+    const T = mpUnpack(spec.t);
+    const place = mpMotionFrame(THREE, spec);
+
+    // ---- page
+    const W = Math.max(360, Math.min(el.clientWidth || 760, 960)), H = Math.round(0.62 * W);
+    const renderer = new THREE.WebGLRenderer({antialias: true});
+    renderer.setPixelRatio(Math.min(window.devicePixelRatio || 1, 2));
+    renderer.setSize(W, H);
+    renderer.setClearColor(0xffffff, 1);
+    const clock = mpEl("div", {style: "position:absolute;right:8px;top:6px;font:13px monospace;"
+      + "background:rgba(255,255,255,.8);padding:1px 4px"});
+    const legend = mpEl("div", {style: "position:absolute;left:8px;top:6px;font-size:12px;"
+      + "background:rgba(255,255,255,.8);padding:2px 4px;max-width:60%"});
+    const stage = mpEl("div", {style: `position:relative;width:${W}px;height:${H}px;`
+      + "border:1px solid #ddd"}, renderer.domElement, clock, legend);
+    const title = mpEl("div", {style: "font-size:13px;margin:2px 0 4px"}, spec.title);
+
+    // ---- scene
+    const scene = new THREE.Scene();
+    scene.add(new THREE.HemisphereLight(0xffffff, 0x667788, 2.2));
+    const sun = new THREE.DirectionalLight(0xffffff, 1.6);
+    sun.position.set(spec.up[0] + 0.6, spec.up[1] + 0.8, spec.up[2] + 1.0).multiplyScalar(10 * ext);
+    scene.add(sun);
+    const color = (c) => new THREE.Color(c);
+    const solidMat = (c) => new THREE.MeshStandardMaterial({color: color(c), roughness: 0.55,
+      metalness: 0.05});
+    const V = (a) => new THREE.Vector3(a[0], a[1], a[2]);
+
+    // bodies
+    const where = Array.from({length: nb}, () => new THREE.Vector3());
+    const meshes = spec.bodies.map((b) => {
+      let g;
+      if (b.shape === "cube") g = new THREE.BoxGeometry(2 * b.radius, 2 * b.radius, 2 * b.radius);
+      else if (b.shape === "cone") g = new THREE.ConeGeometry(b.radius, 3 * b.radius, 20);
+      else g = new THREE.SphereGeometry(b.radius, 28, 18);
+      const mesh = new THREE.Mesh(g, solidMat(b.color));
+      scene.add(mesh);
+      return mesh;
+    });
+    // rods: thin cylinders between two bodies or a body and a fixed point
+    const Y = new THREE.Vector3(0, 1, 0), tmp = new THREE.Vector3();
+    const rods = spec.rods.map(([a, b, c]) => {
+      const mesh = new THREE.Mesh(new THREE.CylinderGeometry(0.008 * ext, 0.008 * ext, 1, 12),
+        solidMat(c));
+      scene.add(mesh);
+      return {a, b, mesh};
+    });
+    const end = (e) => (typeof e === "number" ? where[e] : V(e));
+    function placeRod(r) {
+      const a = end(r.a), b = end(r.b);
+      tmp.subVectors(b, a);
+      const len = tmp.length();
+      r.mesh.visible = len > 0;
+      if (!len) return;
+      r.mesh.position.addVectors(a, b).multiplyScalar(0.5);
+      r.mesh.quaternion.setFromUnitVectors(Y, tmp.divideScalar(len));
+      r.mesh.scale.set(1, len, 1);
+    }
+    // fixed lines (nutation bounds, L, walls, compass)
+    for (const ln of spec.lines) {
+      const pts = mpUnpack(ln.pts);
+      const g = new THREE.BufferGeometry();
+      g.setAttribute("position", new THREE.BufferAttribute(new Float32Array(pts), 3));
+      const mat = ln.dashed
+        ? new THREE.LineDashedMaterial({color: color(ln.color), dashSize: 0.04 * ext,
+          gapSize: 0.025 * ext})
+        : new THREE.LineBasicMaterial({color: color(ln.color)});
+      const line = new THREE.Line(g, mat);
+      if (ln.dashed) line.computeLineDistances();
+      scene.add(line);
+    }
+    // trails: the whole path of a body, drawn from the window's first frame to the shown one
+    const trails = spec.trails.map((tr) => {
+      const arr = new Float32Array(3 * n), all = where.map(() => new THREE.Vector3());
+      for (let k = 0; k < n; k++) {
+        place(k, all);
+        all[tr.body].toArray(arr, 3 * k);
+      }
+      const g = new THREE.BufferGeometry();
+      g.setAttribute("position", new THREE.BufferAttribute(arr, 3));
+      const line = new THREE.Line(g, new THREE.LineBasicMaterial({color: color(tr.color),
+        transparent: true, opacity: 0.85}));
+      scene.add(line);
+      return {line, window: tr.window};
+    });
+    // a solid turned by spec.rot: the top (a cone, apex at the pivot) or the box of the moments
+    let solid = null;
+    if (spec.solid) {
+      solid = new THREE.Group();
+      if (spec.solid.shape === "box") {
+        const s = spec.solid.size;
+        const g = new THREE.BoxGeometry(s[0], s[1], s[2]);
+        const box = new THREE.Mesh(g, new THREE.MeshStandardMaterial({
+          color: color(spec.solid.color), roughness: 0.6, transparent: true, opacity: 0.75}));
+        solid.add(box, new THREE.LineSegments(new THREE.EdgesGeometry(g),
+          new THREE.LineBasicMaterial({color: 0x555555})));
+      } else {
+        const l = spec.solid.l, h = (4 / 3) * l, r = 0.4 * l;
+        const g = new THREE.ConeGeometry(r, h, 40);
+        g.rotateX(-Math.PI / 2);
+        // apex at the pivot, base up the axis: centroid at l, radius 0.3 l there
+        g.translate(0, 0, h / 2);
+        const body = new THREE.Mesh(g, new THREE.MeshStandardMaterial({
+          color: color(spec.solid.color), roughness: 0.55, transparent: true, opacity: 0.55,
+          depthWrite: false}));
+        solid.add(body);   // see-through: the centre of mass and its path show inside
+      }
+      scene.add(solid);
+    }
+
+    // ---- camera
+    const camera = new THREE.PerspectiveCamera(40, W / H, 0.005 * ext, 200 * ext);
+    camera.up.copy(V(spec.up));
+    const center = V(spec.center);
+    const dir = V(spec.camera).normalize();
+    camera.position.copy(center).addScaledVector(dir, ext / Math.tan((20 * Math.PI) / 180));
+    const controls = new OrbitControls(camera, renderer.domElement);
+    controls.target.copy(center);
+    controls.enableDamping = true;
+    controls.update();
+
+    // ---- legend
+    const seen = new Set();
+    const entry = (c, text) => {
+      if (!text || seen.has(text)) return;
+      seen.add(text);
+      legend.append(mpEl("div", {}, mpEl("span", {style: "display:inline-block;width:10px;"
+        + `height:10px;background:${c};margin-right:4px`}), text));
+    };
+    spec.bodies.forEach((b) => { if (spec.kind !== "chain") entry(b.color, b.name); });
+    if (spec.kind === "chain") entry(spec.bodies[0].color, `${nb} masses`);
+    spec.lines.forEach((l) => entry(l.color, l.label));
+
+    // ---- frames
+    let shown = -1, playing = true, head = 0, last = null, speed = spec.speed;
+    let raf = 0, dead = false;
+    function show(k) {
+      const q = place(k, where);
+      meshes.forEach((m, i) => {
+        m.position.copy(where[i]);
+        if (spec.bodies[i].shape === "cone") {     // an arrowhead along its axis
+          tmp.copy(where[i]);
+          const len = tmp.length();
+          if (len > 0) m.quaternion.setFromUnitVectors(Y, tmp.divideScalar(len));
+        }
+      });
+      if (solid && q) solid.quaternion.copy(q);
+      rods.forEach(placeRod);
+      for (const tr of trails) {
+        const first = Math.max(0, k - tr.window);
+        tr.line.geometry.setDrawRange(first, k - first + 1);
+      }
+      clock.textContent = `t = ${T[k].toFixed(3)} s`;
+      slider.set(k);
+      slider.lastChild.textContent = String(k);
+      shown = k;
+      stale = true;
+    }
+    // drawn only when something changed (a frame, the camera, the trails): an idle page rests
+    const fps = mpFps();
+    let stale = true;
+    function draw(now) {
+      renderer.render(scene, camera);
+      fps.tick(now);
+      stale = false;
+    }
+    controls.addEventListener("change", () => { stale = true; });
+    function tick(now) {
+      if (dead) return;
+      if (playing && last !== null) {
+        head = (head + ((now - last) / 1000) * spec.fps * speed) % n;
+        const k = Math.floor(head);
+        if (k !== shown) show(k);
+      }
+      last = now;
+      controls.update();
+      if (stale) draw(now);
+      if (!api.ready) api.ready = true;
+      raf = requestAnimationFrame(tick);
+    }
+
+    // ---- controls
+    const playBtn = mpButton("pause", () => (playing ? api.pause() : api.play()));
+    const slider = mpSlider("frame", 0, n - 1, 0, 1, (i) => { api.pause(); show(i); head = i; });
+    const speedRow = mpSlider("speed", 0.1, 10, speed, 0.1, (v) => { speed = v; });
+    const trailBox = mpEl("input", {type: "checkbox", checked: "", "aria-label": "trails",
+      onchange: () => {
+        trails.forEach((tr) => { tr.line.visible = trailBox.checked; });
+        stale = true;
+      }});
+    const bar = mpEl("div", {style: "display:flex;flex-wrap:wrap;gap:12px;align-items:center;"
+      + "margin-top:6px"},
+      playBtn, slider, speedRow,
+      ...(trails.length ? [mpEl("label", {style: "font-size:13px"}, trailBox, " trails")] : []));
+    el.append(mpEl("div", {class: "mechpy-live mechpy-animate"}, title, stage, bar));
+
+    const api = {
+      ready: false,
+      kind: spec.kind,
+      play() { playing = true; last = null; playBtn.textContent = "pause"; },
+      pause() { playing = false; playBtn.textContent = "play"; },
+      frame(i) {
+        const k = Math.min(Math.max(Math.round(Number(i)) || 0, 0), n - 1);
+        api.pause();
+        head = k;
+        show(k);
+        draw(performance.now());
+        return T[k];
+      },
+      frames: () => n,
+      time: () => T[shown],
+      shown: () => shown,
+      bodies: () => spec.bodies.map((b) => b.name),
+      // the places of the drawn bodies at the shown frame: x, y, z each, in the system's units
+      positions: () => meshes.flatMap((m) => [m.position.x, m.position.y, m.position.z]),
+      // the fixed lines drawn (nutation bounds, L, walls, ...): [{label, points: [x, y, z, ...]}]
+      lines: () => spec.lines.map((l) => ({label: l.label, points: Array.from(mpUnpack(l.pts))})),
+      // frames drawn per second over the last second (a paused, untouched page draws none)
+      fps: () => fps.value(),
+    };
+    const unregister = mpRegister(api);
+    show(0);
+    raf = requestAnimationFrame(tick);
+    return () => {
+      dead = true;
+      cancelAnimationFrame(raf);
+      controls.dispose();
+      renderer.dispose();
+      unregister();
+    };
+  },
+};
