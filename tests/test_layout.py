@@ -652,7 +652,9 @@ TABLE = {
     **{f"mechpy.plot.{n}": (NONE, None) for n in (
         "phase_portrait", "work_precision", "modes", "animate_field")},
     # live views: widgets (their pages are exercised in test_live_*.py)
-    **{f"mechpy.live.{n}": (NONE, None) for n in ("animate", "Motion")},
+    **{f"mechpy.live.{n}": (NONE, None) for n in ("animate", "Motion", "phase_portrait",
+                                                  "PhasePortrait")},
+    "mechpy.scenes.SymbolicField": (NONE, None),
     # exceptions
     **{f"mechpy.errors.{n}": (NONE, None) for n in mp.errors.__all__},
 }
@@ -665,7 +667,9 @@ _SCENE, _CHAIN, _RB = "mechpy.scenes.Pendulum", "mechpy.scenes.SpringChain", "me
 _LAG, _BODY, _MODES = "mechpy.symbolic.lagrangian", "mechpy.inertia.Body", "mechpy.modes.Modes"
 METHODS = {
     **{f"Scene.{n}": _SCENE for n in ("replace", "ensemble_params", "rhs", "jacobian", "energy")},
-    "Scene.dim": None, "Scene.params": None,
+    "Scene.dim": None, "Scene.params": None, "Scene.symbolic": None,
+    "CompiledScene.symbolic": None,
+    **{f"PhasePortrait.{n}": None for n in ("html", "precompute", "save")},
     "Solution.raise_for_status": None, "EnsembleSolution.raise_for_status": None,
     "Pendulum.period": _SCENE, "Kepler.initial_state": _SCENE,
     "Foucault.precession_rate": _SCENE,
