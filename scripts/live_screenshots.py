@@ -32,6 +32,21 @@ def views():
         hidden=[(0, 0), (0, 0), (-0.5, 0.5), (-0.5, 0.5)], overlays=False)
 
 
+def motion():
+    body = mp.scenes.RigidBody([1.0, 2.0, 3.0], orientation=True)
+    w0 = [0.02, 1.0, 0.01]
+    T = mp.rigid.flip_period(body.moments, w0)
+    sol = mp.solve(body, (0, 2 * T), body.initial_state(w0), dense_output=True, rtol=1e-11,
+                   atol=1e-12)
+    yield "live-rigid", mp.live.animate(body, sol, duration=12), 0.3
+    top = mp.scenes.HeavyTop(I1=0.5, I3=0.2, mass=1.0, g=9.81, l=0.1)
+    sol = mp.solve(top, (0, 4), [0.0, 0.8, 0.0, 0.0, 0.0, 15.0], rtol=1e-10, dense_output=True)
+    yield "live-top", mp.live.animate(top, sol), 0.9
+    fou = mp.scenes.Foucault(latitude=48.85, length=67.0, omega=7.2921159e-5 * 400)
+    sol = mp.solve(fou, (0, 600), [1.0, 0.0, 0.0, 0.0], rtol=1e-10, dense_output=True)
+    yield "live-foucault", mp.live.animate(fou, sol, duration=20), 0.95
+
+
 def main():
     why = _browser.available()
     if why:
@@ -44,6 +59,13 @@ def main():
             time.sleep(2.5)
             el = d.find_element("css selector", ".mechpy-live")
             el.screenshot(str(OUT / f"{name}.png"))
+            print("wrote", OUT / f"{name}.png")
+        for name, w, frac in motion():
+            _browser.open_page(d, w.save(tmp / f"{name}.html"))
+            n = d.execute_script("return window.mechpyLive.frames()")
+            d.execute_script(f"window.mechpyLive.frame({int(frac * (n - 1))})")
+            time.sleep(1.0)
+            d.find_element("css selector", ".mechpy-live").screenshot(str(OUT / f"{name}.png"))
             print("wrote", OUT / f"{name}.png")
     finally:
         d.quit()
