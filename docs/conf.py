@@ -44,7 +44,12 @@ numpydoc_xref_param_type = False
 # ---- notebooks: executed at build time, cached ------------------------------
 nb_execution_mode = "cache"
 nb_execution_cache_path = str(HERE / "_build" / ".jupyter_cache")
-nb_execution_timeout = 600
+# A cell's own limit, in seconds: the notebooks run top to bottom in under a minute
+# (tests/test_notebooks.py; docs/course.md lists their times), so a cell still busy
+# after 120 s is stalled, not slow: nbclient stops it with CellTimeoutError naming
+# the notebook and the cell, and the build fails (nb_execution_raise_on_error) at
+# once instead of waiting the default 600 s per stalled cell.
+nb_execution_timeout = 120
 nb_execution_raise_on_error = True
 nb_execution_show_tb = True
 nb_merge_streams = True
