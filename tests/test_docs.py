@@ -2,11 +2,18 @@
 
 Every module of the public face is walked; each docstring with ``>>>``
 examples is one test.  An example that needs an optional package (SciPy,
-matplotlib) is skipped when that package is missing.
+matplotlib) is skipped when that package is missing.  As in NumPy's own
+docstrings, the examples take ``import numpy as np`` and ``import mechpy as mp``
+as done; matplotlib draws with the Agg backend.
+
+Every public function and class (``mechpy.__all__`` and each public module's
+``__all__``) has an Examples section: ``test_every_entry_point_has_examples``.
 """
 import doctest
 import importlib
+import inspect
 import pkgutil
+import re
 
 import numpy as np
 import pytest
@@ -34,7 +41,9 @@ def _doctests():
         module = importlib.import_module(name)
         for test in finder.find(module, name):
             # re-exported objects are found again under their importer: keep the first
-            key = (test.filename, test.lineno)
+            # (the docstring is part of the key: the scenes' docstrings are assembled at
+            # import, so their line is unknown and would make them all look the same)
+            key = (test.filename, test.lineno, test.docstring)
             if test.examples and key not in seen:
                 seen.add(key)
                 yield test
@@ -52,13 +61,60 @@ def test_examples_are_collected():
     assert {"rotation", "inertia", "modes", "scenes"} <= mods
 
 
+def _public_entry_points():
+    """(dotted name, object) of every function and class in ``mechpy.__all__`` and in
+    the ``__all__`` of each public module.  Not entry points: the modules themselves,
+    constants (numbers, tuples, dicts) and the exception classes of
+    :mod:`mechpy.errors`, whose docstrings are the C status table's messages (the
+    module's docstring shows when each is raised)."""
+    seen = set()
+    # the public modules are those mechpy.__all__ lists; the defining modules come
+    # first, so that a re-exported name is named where it lives
+    modnames = [f"mechpy.{n}" for n in mechpy.__all__
+                if inspect.ismodule(getattr(mechpy, n))] + ["mechpy"]
+    for modname in modnames:
+        module = importlib.import_module(modname)
+        for name in getattr(module, "__all__", ()):
+            obj = getattr(module, name)
+            if inspect.ismodule(obj) or not callable(obj):
+                continue
+            if inspect.isclass(obj) and issubclass(obj, mechpy.MechpyError):
+                continue
+            if id(obj) in seen:
+                continue
+            seen.add(id(obj))
+            yield f"{modname}.{name}", obj
+
+
+_ENTRY_POINTS = list(_public_entry_points())
+
+
+def test_entry_points_are_found():
+    names = {n for n, _ in _ENTRY_POINTS}
+    assert {"mechpy.integrate.solve", "mechpy.integrate.solve_many", "mechpy.symbolic.lagrangian",
+            "mechpy.plot.animate", "mechpy.scenes.Pendulum", "mechpy.phase.limit_cycle"} <= names
+    assert len(names) >= 100
+
+
+@pytest.mark.parametrize("name,obj", _ENTRY_POINTS, ids=[n for n, _ in _ENTRY_POINTS])
+def test_every_entry_point_has_examples(name, obj):
+    """Each public function and class shows its use in a numpydoc Examples section
+    with ``>>>`` lines (run by test_docstring_examples): a new public name without
+    one fails here."""
+    doc = inspect.getdoc(obj) or ""
+    section = re.search(r"^Examples\n-{8,}\n(.*?)(?=^\w[\w ]*\n-{3,}$|\Z)", doc,
+                        flags=re.M | re.S)
+    assert section, f"{name} has no Examples section in its docstring"
+    assert ">>> " in section.group(1), f"{name}: its Examples section has no >>> example"
+
+
 @pytest.mark.parametrize("test", _TESTS, ids=[t.name for t in _TESTS])
 def test_docstring_examples(test):
     source = "\n".join(ex.source for ex in test.examples)
     if "scipy" in source:
         pytest.importorskip("scipy")
     if "matplotlib" in source or "mp.plot" in source:
-        pytest.importorskip("matplotlib")
+        pytest.importorskip("matplotlib").use("Agg")
     globs = {"np": np, "mp": mechpy}
     globs.update(test.globs)
     test.globs = globs
