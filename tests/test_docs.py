@@ -123,3 +123,42 @@ def test_docstring_examples(test):
     runner.run(test, out=report.append)
     if runner.failures:
         pytest.fail("".join(report), pytrace=False)
+
+
+def _conf_value(name):
+    """A top-level constant of docs/conf.py (read, not imported: Sphinx need not be installed)."""
+    import ast
+    from pathlib import Path
+
+    tree = ast.parse((Path(__file__).resolve().parent.parent / "docs" / "conf.py").read_text())
+    for node in tree.body:
+        if (isinstance(node, ast.Assign) and len(node.targets) == 1
+                and getattr(node.targets[0], "id", None) == name):
+            return ast.literal_eval(node.value)
+    raise AssertionError(f"docs/conf.py does not set {name}")
+
+
+def test_a_stalled_notebook_cell_fails_the_docs_build_fast():
+    """A cold build once waited 626 s on a widget cell of phase_portraits (nbclient's
+    wait for the reply of a cell whose Output widget it answers on the same shell
+    channel; the notebook runs in about 20 s).  Each cell's time is bounded well below
+    nbclient's 600 s, above the slowest notebook's whole run (under 60 s:
+    tests/test_notebooks.py), and a timeout fails the build."""
+    timeout = _conf_value("nb_execution_timeout")
+    assert isinstance(timeout, int) and 60 <= timeout <= 180, timeout
+    assert _conf_value("nb_execution_raise_on_error") is True
+
+
+def test_the_docs_extra_caps_the_notebook_execution_chain():
+    """The packages that execute the notebooks at build time are capped below their
+    next release series, so that a new one cannot change how a widget cell ends
+    without a change here."""
+    from pathlib import Path
+
+    text = (Path(__file__).resolve().parent.parent / "pyproject.toml").read_text()
+    block = re.search(r"^docs = \[(.*?)^\]", text, flags=re.M | re.S).group(1)
+    reqs = dict(re.findall(r'"([A-Za-z0-9_.\-]+)(?:\[[^\]]*\])?([^"]*)"', block))
+    for name in ("sphinx", "myst-nb", "myst-parser", "jupyter-cache", "nbclient", "ipykernel",
+                 "ipywidgets"):
+        assert name in reqs, f"{name} is not in the docs extra"
+        assert "<" in reqs[name], f"the docs extra does not cap {name}: {reqs[name]!r}"
