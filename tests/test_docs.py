@@ -162,3 +162,48 @@ def test_the_docs_extra_caps_the_notebook_execution_chain():
                  "ipywidgets"):
         assert name in reqs, f"{name} is not in the docs extra"
         assert "<" in reqs[name], f"the docs extra does not cap {name}: {reqs[name]!r}"
+
+
+@pytest.mark.parametrize("name,obj", _ENTRY_POINTS, ids=[n for n, _ in _ENTRY_POINTS])
+def test_docstring_renders_without_docutils_warnings(name, obj):
+    """What ``bash scripts/dev.sh docs`` (``-W``) would stop on, per docstring and in
+    a fraction of a second: numpydoc's reStructuredText of the docstring parsed by
+    docutils, Sphinx's roles and directives standing in as literals (needs the docs
+    extra)."""
+    pytest.importorskip("numpydoc")
+    import io
+
+    import docutils.core
+    from docutils import nodes
+    from docutils.parsers.rst import Directive, directives, roles
+    from numpydoc.docscrape_sphinx import get_doc_object
+
+    def role(name, rawtext, text, lineno, inliner, options=None, content=None):
+        return [nodes.literal(rawtext, text)], []
+
+    class AnyOptions(dict):
+        def __getitem__(self, key):
+            return directives.unchanged
+
+        def __contains__(self, key):
+            return True
+
+    class Quiet(Directive):
+        has_content = True
+        optional_arguments = 10
+        final_argument_whitespace = True
+        option_spec = AnyOptions()
+
+        def run(self):
+            return []
+
+    for r in ("func", "class", "meth", "mod", "data", "attr", "math", "exc", "obj", "ref", "doc"):
+        roles.register_local_role(r, role)
+    for d in ("math", "autosummary", "plot", "rubric", "versionadded", "seealso", "only",
+              "index"):
+        directives.register_directive(d, Quiet)
+    rst = str(get_doc_object(obj, config={"show_class_members": False}))
+    err = io.StringIO()
+    docutils.core.publish_doctree(rst, settings_overrides={"warning_stream": err,
+                                                           "report_level": 2, "halt_level": 5})
+    assert not err.getvalue().strip(), f"{name}: {err.getvalue()}"

@@ -40,8 +40,8 @@ def constraint_forces(mass, force, jac, bias):
     Examples
     --------
     A bob of mass 2 at rest at the bottom of a rod, the constraint
-    g = (x^2 + y^2 - l^2)/2 (J = (x, y), b = |v|^2 = 0): the rod holds it up
-    with m g.
+    ``g = (x^2 + y^2 - l^2)/2`` (``J = (x, y)``, ``b = |v|^2 = 0``): the rod holds
+    it up with m g.
 
     >>> lam, f = mp.variational.constraint_forces(2.0, [0.0, -2.0 * 9.81], [[0.0, -1.0]], [0.0])
     >>> lam, f
