@@ -207,3 +207,38 @@ def test_docstring_renders_without_docutils_warnings(name, obj):
     docutils.core.publish_doctree(rst, settings_overrides={"warning_stream": err,
                                                            "report_level": 2, "halt_level": 5})
     assert not err.getvalue().strip(), f"{name}: {err.getvalue()}"
+
+
+def test_a_notebook_that_ran_too_long_fails_the_docs_build():
+    """A widget cell's stall can end at the cell limit without an error (the reply was
+    there, nbclient had missed it): docs/_ext/notebook_time.py turns a notebook run
+    longer than mechpy_notebook_max_seconds into a warning, an error under -W; a
+    notebook taken from the execution cache is not checked again."""
+    pytest.importorskip("sphinx")
+    import importlib.util
+    import time
+    from pathlib import Path
+    from types import SimpleNamespace
+
+    path = Path(__file__).resolve().parent.parent / "docs" / "_ext" / "notebook_time.py"
+    spec = importlib.util.spec_from_file_location("notebook_time", path)
+    ext = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(ext)
+    assert 60 <= _conf_value("mechpy_notebook_max_seconds") < _conf_value("nb_execution_timeout")
+
+    warned = []
+    ext.logger = SimpleNamespace(warning=lambda msg, **kw: warned.append(msg))
+    ext._BUILD_START[0] = time.time() - 1000.0
+
+    def app(runtime, mtime):
+        env = SimpleNamespace(docname="notebooks/phase_portraits", nb_metadata={
+            "notebooks/phase_portraits": {"exec_data": {"runtime": runtime, "mtime": mtime}}})
+        return SimpleNamespace(env=env, config=SimpleNamespace(mechpy_notebook_max_seconds=90))
+
+    now = time.time()
+    ext.check_notebook_time(app(18.0, now), None)               # the notebook's own time
+    assert warned == []
+    ext.check_notebook_time(app(626.0, now), None)              # the stalled cold build
+    assert len(warned) == 1 and "notebooks/phase_portraits" in warned[0] and "626 s" in warned[0]
+    ext.check_notebook_time(app(626.0, now - 2000.0), None)     # from the cache: not again
+    assert len(warned) == 1
