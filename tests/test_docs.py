@@ -125,12 +125,23 @@ def test_docstring_examples(test):
         pytest.fail("".join(report), pytrace=False)
 
 
+def _source_root():
+    """The source tree with docs/ (tests/test_docs_math.py's source_root); the test is
+    skipped where there is none."""
+    from test_docs_math import source_root
+
+    root = source_root()
+    if root is None:
+        pytest.skip("no docs/ beside or above the tests")
+    return root
+
+
 def _conf_value(name):
     """A top-level constant of docs/conf.py (read, not imported: Sphinx need not be installed)."""
     import ast
-    from pathlib import Path
 
-    tree = ast.parse((Path(__file__).resolve().parent.parent / "docs" / "conf.py").read_text())
+    root = _source_root()
+    tree = ast.parse((root / "docs" / "conf.py").read_text())
     for node in tree.body:
         if (isinstance(node, ast.Assign) and len(node.targets) == 1
                 and getattr(node.targets[0], "id", None) == name):
@@ -153,9 +164,7 @@ def test_the_docs_extra_caps_the_notebook_execution_chain():
     """The packages that execute the notebooks at build time are capped below their
     next release series, so that a new one cannot change how a widget cell ends
     without a change here."""
-    from pathlib import Path
-
-    text = (Path(__file__).resolve().parent.parent / "pyproject.toml").read_text()
+    text = (_source_root() / "pyproject.toml").read_text()
     block = re.search(r"^docs = \[(.*?)^\]", text, flags=re.M | re.S).group(1)
     reqs = dict(re.findall(r'"([A-Za-z0-9_.\-]+)(?:\[[^\]]*\])?([^"]*)"', block))
     for name in ("sphinx", "myst-nb", "myst-parser", "jupyter-cache", "nbclient", "ipykernel",
@@ -217,10 +226,9 @@ def test_a_notebook_that_ran_too_long_fails_the_docs_build():
     pytest.importorskip("sphinx")
     import importlib.util
     import time
-    from pathlib import Path
     from types import SimpleNamespace
 
-    path = Path(__file__).resolve().parent.parent / "docs" / "_ext" / "notebook_time.py"
+    path = _source_root() / "docs" / "_ext" / "notebook_time.py"
     spec = importlib.util.spec_from_file_location("notebook_time", path)
     ext = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(ext)
