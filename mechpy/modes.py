@@ -504,7 +504,7 @@ def dispersion(mass, spring, spacing, q) -> np.ndarray:
 
     >>> print(mp.modes.dispersion(1.0, 4.0, 0.5, np.pi / 0.5))
     4.0
-    >>> np.round(mp.modes.dispersion(1.0, 1.0, 1.0, [0.0, 1e-3]), 9)   # sound: omega = a sqrt(kappa/m) q
+    >>> np.round(mp.modes.dispersion(1.0, 1.0, 1.0, [0.0, 1e-3]), 9)   # sound: a sqrt(k/m) q
     array([0.   , 0.001])
     """
     m = as_array(mass, "mass", positive=True)

@@ -294,7 +294,7 @@ class VariationalTrajectory(NamedTuple):
     ...                                          (0.0, 1.0), 0.5, 0.0, 0.01)
     >>> tr.t.shape, tr.q.shape, tr.energy.shape
     ((101,), (101,), (101,))
-    >>> round(float(tr.energy[0]), 6), round(9.81 * (1 - float(np.cos(0.5))), 6)   # g L (1 - cos theta0)
+    >>> round(float(tr.energy[0]), 6), round(9.81 * (1 - float(np.cos(0.5))), 6)   # g L (1 - cos)
     (1.200915, 1.200915)
     """
     t: np.ndarray

@@ -215,9 +215,9 @@ class Catenary(NamedTuple):
     Examples
     --------
     >>> ch = mp.variational.catenary(-1.0, 1.0, 3.0, n=200)
-    >>> round(float(ch.length), 6), round(float(ch.x0), 12), round(float(ch.y.min()), 4)   # lowest at x0 = 0
+    >>> round(float(ch.length), 6), round(float(ch.x0), 12), round(float(ch.y.min()), 4)
     (3.0, 0.0, -1.0053)
-    >>> round(float(ch.a + ch.c), 4)                                               # y_exact(x0) = a + c
+    >>> round(float(ch.a + ch.c), 4)          # the lowest point, at x0 = 0: y_exact(x0) = a + c
     -1.0053
     """
     x: np.ndarray

@@ -82,7 +82,8 @@ def pendulum_tension(scene, y, mass: float = 1.0) -> np.ndarray:
     1 * (9.81 + 1 * 4); hanging horizontally at rest, 0:
 
     >>> pend = mp.scenes.Pendulum(g=9.81, length=1.0)
-    >>> np.round(mp.variational.pendulum_tension(pend, np.array([[0.0, np.pi / 2], [2.0, 0.0]])), 10)
+    >>> y = np.array([[0.0, np.pi / 2], [2.0, 0.0]])                # two states (theta, theta_dot)
+    >>> np.round(mp.variational.pendulum_tension(pend, y), 10)
     array([13.81,  0.  ])
     """
     if not isinstance(scene, Pendulum):

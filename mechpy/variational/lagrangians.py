@@ -197,7 +197,7 @@ def generalized_momenta(L: Callable, q, qdot) -> np.ndarray:
     >>> round(float(p), 6)
     6.0
     >>> cf = mp.variational.CentralForce(m=2.0)
-    >>> np.round(mp.variational.generalized_momenta(cf, [3.0, 0.0], [0.5, 0.1]), 6)   # (m r', m r^2 phi')
+    >>> np.round(mp.variational.generalized_momenta(cf, [3.0, 0.0], [0.5, 0.1]), 6)
     array([1. , 1.8])
     """
     if _has_lagrangian(L) and _spec_dim(_scene_spec(L)) == 1:  # one coordinate: any shape
