@@ -11,6 +11,7 @@ from pathlib import Path
 import mechpy
 
 HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE / "_ext"))
 
 project = "mechpy"
 author = "the mechpy developers"
@@ -25,6 +26,7 @@ extensions = [
     "numpydoc",
     "myst_nb",
     "sphinx_copybutton",
+    "notebook_time",          # docs/_ext: a notebook that ran too long fails the build
 ]
 
 source_suffix = {".rst": "restructuredtext", ".md": "myst-nb", ".ipynb": "myst-nb"}
@@ -44,7 +46,16 @@ numpydoc_xref_param_type = False
 # ---- notebooks: executed at build time, cached ------------------------------
 nb_execution_mode = "cache"
 nb_execution_cache_path = str(HERE / "_build" / ".jupyter_cache")
-nb_execution_timeout = 600
+# A cell's own limit, in seconds: the notebooks run top to bottom in under a minute
+# (tests/test_notebooks.py; docs/course.md lists their times), so a cell still busy
+# after 120 s is stalled, not slow: nbclient stops it with CellTimeoutError naming
+# the notebook and the cell, and the build fails (nb_execution_raise_on_error),
+# instead of waiting 600 s per stalled cell.  A wait for a reply nbclient missed
+# ends at this limit too (docs/_ext/notebook_time.py).
+nb_execution_timeout = 120
+# ...and a notebook executed by the build that took longer than this fails it, named
+# (docs/_ext/notebook_time.py: a widget cell's stall ends at the cell limit without an error)
+mechpy_notebook_max_seconds = 90
 nb_execution_raise_on_error = True
 nb_execution_show_tb = True
 nb_merge_streams = True

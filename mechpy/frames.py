@@ -52,6 +52,16 @@ def fictitious(omega, r, v, omega_dot=(0.0, 0.0, 0.0)) -> dict:
         :math:`-\omega\times(\omega\times r)`, ``"euler"``
         :math:`-\dot\omega\times r` and their sum ``"total"``, each (..., 3)
         in m/s^2 (per unit mass), broadcast over leading axes.
+
+    Examples
+    --------
+    A body at rest 2 m from the axis of a frame turning at 3 rad/s: the centrifugal
+    acceleration omega^2 r = 18 m/s^2 points outward; moving at 1 m/s along y it
+    also feels the Coriolis -2 omega x v = (6, 0, 0).
+
+    >>> a = mp.frames.fictitious([0.0, 0.0, 3.0], [2.0, 0.0, 0.0], [0.0, 1.0, 0.0])
+    >>> a["centrifugal"] + 0.0, a["coriolis"] + 0.0, a["total"] + 0.0   # + 0.0: no -0.0
+    (array([18.,  0.,  0.]), array([6., 0., 0.]), array([24.,  0.,  0.]))
     """
     w = as_vector3(omega, "omega")
     r = as_vector3(r, "r")
@@ -100,6 +110,15 @@ def to_rotating(r, v, omega, t):
     -------
     r_rot, v_rot : ndarray, shape (..., 3)
         Components on the rotating axes.
+
+    Examples
+    --------
+    A point at rest in the inertial frame, seen from a frame turning at 1 rad/s,
+    after a quarter turn, sits at -90 degrees and moves backwards at omega r:
+
+    >>> r, v = mp.frames.to_rotating([1.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 1.0], np.pi / 2)
+    >>> np.round(r, 12), np.round(v, 12)
+    (array([ 0., -1.,  0.]), array([-1., -0.,  0.]))
     """
     r = as_vector3(r, "r")
     v = as_vector3(v, "v")
@@ -113,6 +132,14 @@ def from_rotating(r_rot, v_rot, omega, t):
     :func:`to_rotating`: :math:`r = R r'`, :math:`v = R v' + \omega\times r`.
 
     Units as in :func:`to_rotating`.
+
+    Examples
+    --------
+    >>> r0, v0, w = [1.0, 2.0, 0.5], [0.3, -0.1, 0.2], [0.0, 0.0, 0.7]
+    >>> r1, v1 = mp.frames.to_rotating(r0, v0, w, 1.3)
+    >>> r2, v2 = mp.frames.from_rotating(r1, v1, w, 1.3)
+    >>> np.round(r2, 12), np.round(v2, 12)
+    (array([1. , 2. , 0.5]), array([ 0.3, -0.1,  0.2]))
     """
     rr = as_vector3(r_rot, "r_rot")
     vr = as_vector3(v_rot, "v_rot")
@@ -149,6 +176,16 @@ def foucault_period(latitude, omega=OMEGA_EARTH):
     -------
     float or ndarray
         Period in seconds (31.78 h at Paris, 48.857 N).
+
+    Examples
+    --------
+    At the pole the plane turns once a sidereal day, 2 pi / Omega = 86164 s; at
+    Paris (48.857 N) in about 31.8 h:
+
+    >>> round(mp.frames.foucault_period(90.0)), round(2 * np.pi / 7.2921159e-05)
+    (86164, 86164)
+    >>> round(mp.frames.foucault_period(48.857) / 3600, 2)
+    31.78
     """
     lat = _latitude(latitude)
     om = as_scalar(omega, "omega", positive=True)
@@ -160,7 +197,13 @@ def foucault_period(latitude, omega=OMEGA_EARTH):
 
 def earth_omega(latitude, omega=OMEGA_EARTH) -> np.ndarray:
     r"""The planet's angular velocity in the local frame (east, north, up):
-    :math:`\Omega(0, \cos\lambda, \sin\lambda)` [rad/s]; latitude in degrees."""
+    :math:`\Omega(0, \cos\lambda, \sin\lambda)` [rad/s]; latitude in degrees.
+
+    Examples
+    --------
+    >>> np.round(mp.frames.earth_omega(30.0) / 7.2921159e-05, 12)   # (0, cos 30, sin 30)
+    array([0.       , 0.8660254, 0.5      ])
+    """
     lat = np.radians(_latitude(latitude))
     om = as_scalar(omega, "omega", nonnegative=True)
     return om * np.stack([np.zeros_like(lat), np.cos(lat), np.sin(lat)], axis=-1)
@@ -174,6 +217,14 @@ def eastward_deflection(height, latitude, g=9.81, omega=OMEGA_EARTH):
     to first order in :math:`\Omega`, no air drag.  ``height`` h in m,
     ``latitude`` in degrees, ``g`` in m/s^2, ``omega`` in rad/s; returns m
     (positive: east).
+
+    Examples
+    --------
+    A drop of 100 m at the equator lands about 2.2 cm to the east:
+
+    >>> d = mp.frames.eastward_deflection(100.0, 0.0)
+    >>> round(d, 6), round(7.2921159e-05 / 3 * (8 * 100.0**3 / 9.81) ** 0.5, 6)
+    (0.02195, 0.02195)
     """
     h = _arr(height, "height", nonnegative=True)
     lat = np.radians(_latitude(latitude))
@@ -233,7 +284,19 @@ def drop(height, latitude, g=9.81, omega=OMEGA_EARTH, *, rtol=1e-11,
 
     ``max_steps`` (default :data:`FLIGHT_MAX_STEPS`) bounds the integration:
     a flight that needs more raises :class:`mechpy.StepBudgetError` (an absurd
-    height ran for hours); Ctrl-C raises ``KeyboardInterrupt``."""
+    height ran for hours); Ctrl-C raises ``KeyboardInterrupt``.
+
+    Examples
+    --------
+    The full Coriolis term agrees with the first-order closed form of
+    :func:`eastward_deflection` (to O(Omega^2)), and the fall time with sqrt(2h/g):
+
+    >>> (east, north, up), t = mp.frames.drop(100.0, 45.0)
+    >>> round(float(east), 6), round(mp.frames.eastward_deflection(100.0, 45.0), 6)
+    (0.015521, 0.015521)
+    >>> round(t, 4), round((2 * 100.0 / 9.81) ** 0.5, 4)
+    (4.5152, 4.5152)
+    """
     h = as_scalar(height, "height", positive=True)
     g = as_scalar(g, "g", positive=True)
     return _coriolis_flight(np.array([0.0, 0.0, h]), np.zeros(3), latitude, g, omega, rtol,
@@ -250,6 +313,14 @@ def projectile_drift(v0, t, latitude, g=9.81, omega=OMEGA_EARTH) -> np.ndarray:
     :math:`\mathbf v_0 t + \mathbf g t^2/2`.  ``v0`` (3,) in m/s on (east,
     north, up); ``t`` in s (array-like, broadcast); latitude in degrees.
     Returns (..., 3) in m.
+
+    Examples
+    --------
+    A shell fired north at 45 N drifts east (to the right in the northern hemisphere):
+
+    >>> drift = mp.frames.projectile_drift([0.0, 100.0, 100.0], 10.0, 45.0)
+    >>> np.round(drift, 4) + 0.0
+    array([0.1686, 0.    , 0.    ])
     """
     v0 = as_vector3(v0, "v0")
     t = _arr(t, "t")[..., None]
@@ -265,7 +336,20 @@ def projectile(v0, latitude, g=9.81, omega=OMEGA_EARTH, *, rtol=1e-11,
     return its landing point (m) and flight time (s).  Its offset from the
     vacuum range ``v0_h * 2 v0_z / g`` is the Coriolis drift of
     :func:`projectile_drift`.  ``max_steps`` bounds the integration as in
-    :func:`drop`."""
+    :func:`drop`.
+
+    Examples
+    --------
+    Its landing point against the vacuum range v0_h 2 v0_z / g plus the drift of
+    :func:`projectile_drift` at the flight time:
+
+    >>> v0 = [0.0, 100.0, 100.0]
+    >>> landing, t = mp.frames.projectile(v0, 45.0)
+    >>> round(float(landing[1]), 2), round(100.0 * 2 * 100.0 / 9.81, 2)
+    (2038.74, 2038.74)
+    >>> round(float(landing[0]), 3), round(float(mp.frames.projectile_drift(v0, t, 45.0)[0]), 3)
+    (1.429, 1.429)
+    """
     v0 = as_vector3(v0, "v0")
     if v0.shape != (3,) or not v0[2] > 0:
         raise ValueError("v0 must be one 3-vector with a positive upward component")

@@ -150,6 +150,17 @@ def shift(I, mass, a, to: str = "point") -> np.ndarray:
         that point (its moments about the point are at least those of M
         concentrated at its centre of mass).  Typical causes: ``I`` is about
         the centre of mass already, or ``a`` or ``mass`` is too large.
+
+    Examples
+    --------
+    A uniform rod of mass 3 and length 2 along x: about its centre I = M L^2/12 = 1;
+    about its end M L^2/3 = 4.
+
+    >>> I_cm = np.diag([0.0, 1.0, 1.0])
+    >>> np.diag(mp.inertia.shift(I_cm, 3.0, [1.0, 0.0, 0.0]))
+    array([0., 4., 4.])
+    >>> np.diag(mp.inertia.shift(np.diag([0.0, 4.0, 4.0]), 3.0, [1.0, 0.0, 0.0], to="com"))
+    array([0., 1., 1.])
     """
     if to not in ("point", "com"):
         raise ValueError(f'to must be "point" or "com", got {to!r}')
@@ -211,6 +222,15 @@ def principal_axes(I):
         (``det = +1``, right-handed): ``axes[..., :, k]`` belongs to
         ``moments[..., k]``.  Columns 0 and 1 have their largest-magnitude
         component positive; column 2 is their cross product.
+
+    Examples
+    --------
+    >>> I = np.array([[2.0, 1.0, 0.0], [1.0, 2.0, 0.0], [0.0, 0.0, 5.0]])
+    >>> moments, axes = mp.inertia.principal_axes(I)
+    >>> np.round(moments, 12)    # 2 -+ 1 in the xy plane, 5 about z
+    array([1., 3., 5.])
+    >>> np.round(axes[:, 1] * np.sqrt(2), 12)    # the axis of 3 is (1, 1, 0)/sqrt(2)
+    array([1., 1., 0.])
     """
     I = _as_inertia(I)
     w, v = _eigh(I)
@@ -235,6 +255,17 @@ def classify(I, rtol: float = 1e-9) -> str:
         Inertia tensor [M L^2] (about the centre of mass for the body's type).
     rtol : float
         Relative tolerance on the moments.
+
+    Examples
+    --------
+    >>> mp.inertia.classify(np.eye(3))
+    'spherical'
+    >>> mp.inertia.classify(np.diag([1.0, 1.0, 2.0]))
+    'symmetric'
+    >>> mp.inertia.classify(np.diag([1.0, 2.0, 3.0]))
+    'asymmetric'
+    >>> mp.inertia.classify(np.diag([0.0, 1.0, 1.0]))
+    'rotor'
     """
     rtol = as_scalar(rtol, "rtol", nonnegative=True)
     w, _ = principal_axes(_as_inertia(I, batch=False))
@@ -260,6 +291,11 @@ def angular_momentum(I, omega) -> np.ndarray:
         Inertia tensor about the fixed point or the centre of mass [M L^2].
     omega : array_like, shape (..., 3)
         Angular velocity [rad/T] in the same frame.
+
+    Examples
+    --------
+    >>> mp.inertia.angular_momentum(np.diag([1.0, 2.0, 3.0]), [1.0, 1.0, 1.0])
+    array([1., 2., 3.])
     """
     I = _as_inertia(I)
     w = as_vector3(omega, "omega")
@@ -275,6 +311,11 @@ def kinetic_energy(I, omega) -> np.ndarray | float:
         Inertia tensor [M L^2].
     omega : array_like, shape (..., 3)
         Angular velocity [rad/T].
+
+    Examples
+    --------
+    >>> print(mp.inertia.kinetic_energy(np.diag([1.0, 2.0, 3.0]), [0.0, 0.0, 2.0]))  # 3 * 2**2 / 2
+    6.0
     """
     I = _as_inertia(I)
     w = as_vector3(omega, "omega")
@@ -303,6 +344,21 @@ class Body:
     Notes
     -----
     ``body1 + body2`` is the composite body; ``sum(bodies)`` works too.
+
+    Examples
+    --------
+    Two unit point masses 2 apart, as bodies, added: the dumbbell's moment about
+    a perpendicular axis through the centre is 2 m (d/2)^2 = 2.
+
+    >>> a = mp.inertia.Body(1.0, com=[-1.0, 0.0, 0.0], inertia=np.zeros((3, 3)))
+    >>> b = mp.inertia.Body(1.0, com=[1.0, 0.0, 0.0], inertia=np.zeros((3, 3)))
+    >>> d = a + b
+    >>> d.mass, d.com
+    (2.0, array([0., 0., 0.]))
+    >>> np.diag(d.inertia)
+    array([0., 2., 2.])
+    >>> np.diag(d.inertia_about([0.0, 0.0, 1.0]))   # Steiner: + M |a|^2 off the axis
+    array([2., 4., 2.])
     """
 
     __slots__ = ("mass", "com", "inertia", "volume")
@@ -584,6 +640,20 @@ def mesh(vertices, faces, density=None, mass=None) -> Body:
     -------
     Body
         With ``volume`` set.
+
+    Examples
+    --------
+    The unit cube from 12 triangles: mass 1 and I = M (1 + 1) / 12 about each axis
+    through the centre (exact for a polyhedron).
+
+    >>> v = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], float)
+    >>> f = [[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1],
+    ...      [2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]]
+    >>> cube = mp.inertia.mesh(v, f, density=1.0)
+    >>> round(cube.volume, 12), np.round(cube.com, 12)
+    (1.0, array([0.5, 0.5, 0.5]))
+    >>> np.round(np.diag(cube.inertia), 9), round(2 / 12, 9)
+    (array([0.16666667, 0.16666667, 0.16666667]), 0.166666667)
     """
     V = as_array(vertices, "vertices", ndim=2)
     if V.shape[1] != 3:
@@ -620,6 +690,17 @@ def uv_sphere(radius: float = 1.0, n_lat: int = 32, n_lon: int = 64):
     -------
     vertices : ndarray, shape (n_lon (n_lat - 1) + 2, 3)
     faces : ndarray of int64, shape (2 n_lon (n_lat - 1), 3)
+
+    Examples
+    --------
+    The inscribed polyhedron's volume approaches the ball's 4 pi / 3 as O(1/n^2).
+
+    >>> v, f = mp.inertia.uv_sphere(1.0, n_lat=64, n_lon=128)
+    >>> v.shape, f.shape
+    ((8066, 3), (16128, 3))
+    >>> ball = mp.inertia.mesh(v, f, density=1.0)
+    >>> round(ball.volume, 4), round(4 * np.pi / 3, 4)
+    (4.1846, 4.1888)
     """
     from ._validate import as_int
     R = as_scalar(radius, "radius", positive=True)
@@ -675,6 +756,17 @@ def density_grid(rho, spacing, origin=(0.0, 0.0, 0.0)) -> Body:
     Returns
     -------
     Body
+
+    Examples
+    --------
+    A 10 x 10 x 10 block of unit-density voxels of side 0.1 is the unit cube:
+    exact, I = M (1 + 1) / 12 = 1/6 about each axis through its centre.
+
+    >>> cube = mp.inertia.density_grid(np.ones((10, 10, 10)), 0.1, origin=[0.05] * 3)
+    >>> round(cube.mass, 12), np.round(cube.com, 12)
+    (1.0, array([0.5, 0.5, 0.5]))
+    >>> np.round(np.diag(cube.inertia), 9)
+    array([0.16666667, 0.16666667, 0.16666667])
     """
     r = as_array(rho, "rho", ndim=3, nonnegative=True)
     h = as_array(spacing, "spacing", positive=True).reshape(np.shape(spacing))
@@ -699,6 +791,15 @@ class EnergySplit(NamedTuple):
     (the rigid rotation that carries the system's angular momentum about the
     centre of mass).  For a rigid motion ``deformation`` is 0 and
     ``T = T_trans + T_rot``.
+
+    Examples
+    --------
+    >>> e = mp.inertia.kinetic_energy_split([1.0, 1.0], [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]],
+    ...                                     [[0.0, 0.0, 0.0], [2.0, 0.0, 0.0]])
+    >>> float(e.total), float(e.translational), float(e.internal)   # 2 = 1 + 1
+    (2.0, 1.0, 1.0)
+    >>> float(e.deformation)   # the pair stretches: its internal energy is not a rotation
+    1.0
     """
     total: np.ndarray
     translational: np.ndarray
@@ -724,7 +825,13 @@ def _particles(masses, positions, velocities=None):
 def center_of_mass(masses, positions) -> np.ndarray:
     """Centre of mass ``R = sum m_a x_a / M`` [L] of point masses.
 
-    masses (..., n) [M], positions (..., n, 3) [L] -> (..., 3)."""
+    masses (..., n) [M], positions (..., n, 3) [L] -> (..., 3).
+
+    Examples
+    --------
+    >>> mp.inertia.center_of_mass([1.0, 3.0], [[0.0, 0.0, 0.0], [4.0, 0.0, 0.0]])
+    array([3., 0., 0.])
+    """
     m, x, _ = _particles(masses, positions)
     return np.einsum("...n,...nk->...k", m, x) / m.sum(axis=-1)[..., None]
 
@@ -732,7 +839,13 @@ def center_of_mass(masses, positions) -> np.ndarray:
 def total_momentum(masses, velocities) -> np.ndarray:
     """Total linear momentum ``P = sum m_a v_a`` [M L / T] (equal to ``M V_cm``).
 
-    masses (..., n) [M], velocities (..., n, 3) [L/T] -> (..., 3)."""
+    masses (..., n) [M], velocities (..., n, 3) [L/T] -> (..., 3).
+
+    Examples
+    --------
+    >>> mp.inertia.total_momentum([1.0, 3.0], [[2.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+    array([2., 3., 0.])
+    """
     m, v, _ = _particles(masses, velocities)
     return np.einsum("...n,...nk->...k", m, v)
 
@@ -741,7 +854,19 @@ def angular_momentum_about(masses, positions, velocities, point=(0.0, 0.0, 0.0))
     """Angular momentum of point masses about ``point``:
     ``L = sum m_a (x_a - point) x v_a`` [M L^2 / T].
 
-    masses (..., n), positions and velocities (..., n, 3), point (..., 3) -> (..., 3)."""
+    masses (..., n), positions and velocities (..., n, 3), point (..., 3) -> (..., 3).
+
+    Examples
+    --------
+    A unit mass at (1, 0, 0) moving with (0, 2, 0): L = r x p = (0, 0, 2) about the
+    origin, 0 about a point on its line of motion.
+
+    >>> mp.inertia.angular_momentum_about([1.0], [[1.0, 0.0, 0.0]], [[0.0, 2.0, 0.0]])
+    array([0., 0., 2.])
+    >>> mp.inertia.angular_momentum_about([1.0], [[1.0, 0.0, 0.0]], [[0.0, 2.0, 0.0]],
+    ...                                   point=[1.0, 5.0, 0.0])
+    array([0., 0., 0.])
+    """
     m, x, v = _particles(masses, positions, velocities)
     p = as_vector3(point, "point")
     r = x - p[..., None, :]
@@ -770,6 +895,19 @@ def kinetic_energy_split(masses, positions, velocities) -> EnergySplit:
         ``deformation`` [M L^2 / T^2] and ``omega`` [rad/T] (NaN components
         are never produced: for a collinear system the pseudo-inverse of
         ``I_cm`` is used).
+
+    Examples
+    --------
+    Two unit masses at (+-1, 0, 0) spinning at omega = 3 about z while their centre
+    moves at 2 along x: T_trans = M V^2 / 2 = 4, T_rot = I omega^2 / 2 = 9.
+
+    >>> x = [[-1.0, 0.0, 0.0], [1.0, 0.0, 0.0]]
+    >>> v = [[2.0, -3.0, 0.0], [2.0, 3.0, 0.0]]
+    >>> e = mp.inertia.kinetic_energy_split([1.0, 1.0], x, v)
+    >>> float(e.total), float(e.translational), round(float(e.rotational), 12)
+    (13.0, 4.0, 9.0)
+    >>> round(float(e.deformation), 12), np.round(e.omega, 12)
+    (0.0, array([0., 0., 3.]))
     """
     m, x, v = _particles(masses, positions, velocities)
     if m.ndim != 1:

@@ -68,6 +68,24 @@ class Modes:
 
     with ``sin(omega t)/omega -> t`` for a zero mode (free motion
     ``eta = eta0 + eta0' t``).
+
+    Examples
+    --------
+    Two unit masses between walls, three unit springs: the in-phase mode at
+    omega = 1, the out-of-phase one at sqrt(3).
+
+    >>> m = mp.modes.normal_modes([[2.0, -1.0], [-1.0, 2.0]])
+    >>> np.round(m.omega, 12), round(3 ** 0.5, 12)
+    (array([1.        , 1.73205081]), 1.732050807569)
+    >>> np.round(m.vectors * 2 ** 0.5, 12)                       # (1, 1) and (1, -1), M-normalised
+    array([[ 1.,  1.],
+           [ 1., -1.]])
+    >>> q = m.evolve([1.0, 1.0], [0.0, 0.0], [0.0, np.pi])       # the in-phase mode alone: cos t
+    >>> np.round(q, 12) + 0.0
+    array([[ 1.,  1.],
+           [-1., -1.]])
+    >>> np.round(m.energy([1.0, 1.0], [0.0, 0.0]), 12)          # all in mode 0: omega^2 |q|^2 / 2
+    array([1., 0.])
     """
 
     omega: np.ndarray
@@ -479,6 +497,15 @@ def dispersion(mass, spring, spacing, q) -> np.ndarray:
     omega : ndarray
         Angular frequency (rad/s).  A periodic chain of N masses has exactly
         the modes ``q = 2 pi j / (N a)``, j = 0 .. N-1.
+
+    Examples
+    --------
+    At the zone boundary q = pi / a the frequency is the largest, 2 sqrt(kappa/m):
+
+    >>> print(mp.modes.dispersion(1.0, 4.0, 0.5, np.pi / 0.5))
+    4.0
+    >>> np.round(mp.modes.dispersion(1.0, 1.0, 1.0, [0.0, 1e-3]), 9)   # sound: a sqrt(k/m) q
+    array([0.   , 0.001])
     """
     m = as_array(mass, "mass", positive=True)
     k = as_array(spring, "spring", nonnegative=True)
@@ -512,6 +539,18 @@ def dispersion_diatomic(mass1, mass2, spring, spacing, q):
     -------
     acoustic, optical : ndarray
         Angular frequencies (rad/s) of the two branches, shape of ``q``.
+
+    Examples
+    --------
+    At q = 0 the optical branch is at sqrt(2 kappa (1/m1 + 1/m2)); at the zone
+    boundary q = pi/a the branches are sqrt(2 kappa / m2) and sqrt(2 kappa / m1)
+    (m1 < m2):
+
+    >>> ac, op = mp.modes.dispersion_diatomic(1.0, 4.0, 2.0, 1.0, [0.0, np.pi])
+    >>> np.round(ac, 12), np.round(op, 12)
+    (array([0., 1.]), array([2.23606798, 2.        ]))
+    >>> round((2 * 2.0 * (1 + 1 / 4)) ** 0.5, 8)
+    2.23606798
     """
     m1 = as_scalar(mass1, "mass1", positive=True)
     m2 = as_scalar(mass2, "mass2", positive=True)
@@ -558,6 +597,14 @@ class TriatomicModes:
     labels : tuple of str
         Name of each vibrational mode: ``"bend"`` (twice, degenerate),
         ``"symmetric stretch"``, ``"antisymmetric stretch"``.
+
+    Examples
+    --------
+    >>> co2 = mp.modes.linear_triatomic()
+    >>> co2.modes.n, len(co2.zero), len(co2.vibrational)          # 3N, 3 + 2 zero modes, 3N - 5
+    (9, 5, 4)
+    >>> bool(np.all(co2.modes.omega[co2.zero] == 0))
+    True
     """
 
     modes: Modes
@@ -609,6 +656,20 @@ def linear_triatomic(mass_end: float = 15.999 * AMU, mass_center: float = 12.011
     TriatomicModes
         The modes, the zero modes identified, the vibrational ones labelled;
         ``.wavenumbers`` in cm^-1 (defaults: about 667 (twice), 1335, 2556).
+
+    Examples
+    --------
+    CO2 (the defaults): the bend twice near 667 cm^-1, the symmetric stretch at
+    sqrt(k/m_O) and the antisymmetric one at sqrt(k (1/m_O + 2/m_C)):
+
+    >>> co2 = mp.modes.linear_triatomic()
+    >>> co2.labels
+    ('bend', 'bend', 'symmetric stretch', 'antisymmetric stretch')
+    >>> np.round(co2.wavenumbers)
+    array([ 667.,  667., 1335., 2555.])
+    >>> k, mO, mC = 1680.0, 2.65669645265334e-26, 1.99447347289326e-26
+    >>> round(float(co2.omega[2] / (k / mO) ** 0.5), 12)
+    1.0
     """
     mA = as_scalar(mass_end, "mass_end", positive=True)
     mB = as_scalar(mass_center, "mass_center", positive=True)

@@ -186,6 +186,13 @@ def from_cm(V, u):
     -------
     ndarray, the shape of ``u``
         Lab-frame velocities (m/s).
+
+    Examples
+    --------
+    >>> u = np.array([[1.0, 0.0, 0.0], [-1.0, 0.0, 0.0]])   # equal masses, opposite velocities
+    >>> mp.particles.from_cm([0.5, 2.0, 0.0], u)
+    array([[ 1.5,  2. ,  0. ],
+           [-0.5,  2. ,  0. ]])
     """
     V = as_array(V, "V")
     u = as_array(u, "u", min_ndim=1)

@@ -31,7 +31,21 @@ __all__ = ["FixedPoint", "vector_field", "fixed_points", "FIXED_POINT_STARTS",
 
 class LyapunovFloorWarning(UserWarning):
     """The neighbour method's separation fell to the integration error: the
-    exponent it reports is a floor set by the tolerances, not a measurement."""
+    exponent it reports is a floor set by the tolerances, not a measurement.
+
+    Examples
+    --------
+    Following a neighbour on a contracting system, the separation falls to the
+    integration error, and the exponent is only a floor:
+
+    >>> import warnings
+    >>> osc = mp.scenes.Duffing(1.0, 0.0, delta=2.0)
+    >>> with warnings.catch_warnings(record=True) as w:
+    ...     warnings.simplefilter("always")
+    ...     lam = mp.phase.lyapunov(osc, [1.0, 0.0], 100.0, dt=10.0, method="neighbours")
+    >>> w[0].category.__name__
+    'LyapunovFloorWarning'
+    """
 
 
 def _is_scene(system) -> bool:
@@ -80,6 +94,18 @@ def vector_field(system, X, Y, t: float = 0.0, *, vectorized: bool = False):
     -------
     U, V : ndarray, shape of X
         dx/dt and dy/dt (units of the state per unit time).
+
+    Examples
+    --------
+    The pendulum's field (theta_dot, -(g/L) sin theta):
+
+    >>> X, Y = np.meshgrid([0.0, np.pi / 2], [1.0])
+    >>> U, V = mp.phase.vector_field(mp.scenes.Pendulum(g=1.0, length=1.0), X, Y)
+    >>> U, np.round(V, 12)
+    (array([[1., 1.]]), array([[-0., -1.]]))
+    >>> U, V = mp.phase.vector_field(lambda t, y: [y[1], -y[0]], X, Y)   # a Python callable
+    >>> U, np.round(V, 12) + 0.0
+    (array([[1., 1.]]), array([[ 0.        , -1.57079633]]))
     """
     f = _callable(system)
     X = as_array(X, "X").reshape(np.shape(X))
@@ -115,7 +141,16 @@ class FixedPoint(NamedTuple):
     ``"hyperbolic"``/``"non-hyperbolic"`` in higher dimension; ``stable`` is
     True when no eigenvalue of the Jacobian has a positive real part (a centre
     counts as stable: neutrally, in the linear approximation);
-    ``eigenvalues`` are the Jacobian's."""
+    ``eigenvalues`` are the Jacobian's.
+
+    Examples
+    --------
+    >>> (p,) = mp.phase.fixed_points(mp.scenes.VanDerPol(1.0), [(-1, 1), (-1, 1)])
+    >>> p.kind, p.stable                         # eigenvalues (mu -+ sqrt(mu^2 - 4)) / 2
+    ('focus', False)
+    >>> np.round(p.eigenvalues, 9)
+    array([0.5+0.8660254j, 0.5-0.8660254j])
+    """
     x: np.ndarray
     kind: str
     stable: bool
@@ -187,6 +222,17 @@ def fixed_points(system, bounds, *, t: float = 0.0, seeds: int = 15, tol: float 
     -------
     list of FixedPoint
         Sorted by their coordinates.
+
+    Examples
+    --------
+    The pendulum: centres at 2 pi n (eigenvalues +-i sqrt(g/L)), saddles at
+    pi + 2 pi n (+-sqrt(g/L)):
+
+    >>> fps = mp.phase.fixed_points(mp.scenes.Pendulum(g=4.0, length=1.0), [(-4, 4), (-2, 2)])
+    >>> [(round(float(p.x[0]), 9), p.kind) for p in fps]
+    [(-3.141592654, 'saddle'), (0.0, 'centre'), (3.141592654, 'saddle')]
+    >>> np.round(fps[1].eigenvalues.imag, 12), np.round(fps[0].eigenvalues.real, 12)
+    (array([ 2., -2.]), array([ 2., -2.]))
     """
     f = _callable(system)
     b = as_array(bounds, "bounds", ndim=2)
@@ -340,6 +386,15 @@ def limit_cycle(system, y0, *, component: int = 0, tol: float = 1e-9, t_max: flo
     mechpy.ConvergenceError
         When a budget (``t_max``, ``max_periods``, ``stall``) runs out; the
         message gives the spread reached.  Ctrl-C raises ``KeyboardInterrupt``.
+
+    Examples
+    --------
+    The Van der Pol cycle at mu = 1: period 6.6632868593 and amplitude 2.00861986
+    (published values):
+
+    >>> T, A = mp.phase.limit_cycle(mp.scenes.VanDerPol(1.0), [0.5, 0.0], tol=1e-10)
+    >>> round(T, 10), round(A, 8)
+    (6.6632868593, 2.00861986)
     """
     f = _callable(system)
     y = as_array(y0, "y0", ndim=1).copy()
@@ -426,6 +481,24 @@ def poincare(system, y0, period, n, skip: int = 0, *, t0: float = 0.0, rtol: flo
     -------
     ndarray, shape (n, dim)
         The section points (angles are not wrapped: use ``np.angle(np.exp(1j*theta))``).
+
+    Examples
+    --------
+    A damped, driven linear oscillator (Duffing with beta = 0) settles on its
+    steady state; sampled once a drive period, it is one point, the closed form
+    x = gamma (alpha - w^2) / D, v = gamma delta w^2 / D,
+    D = (alpha - w^2)^2 + (delta w)^2:
+
+    >>> a, d, g, w = 1.0, 0.5, 0.3, 2.0
+    >>> osc = mp.scenes.Duffing(a, 0.0, delta=d, gamma=g, omega=w)
+    >>> pts = mp.phase.poincare(osc, [1.0, 0.0], 2 * np.pi / w, 3, skip=60)
+    >>> np.round(pts, 9)
+    array([[-0.09,  0.06],
+           [-0.09,  0.06],
+           [-0.09,  0.06]])
+    >>> D = (a - w**2) ** 2 + (d * w) ** 2
+    >>> round(g * (a - w**2) / D, 9), round(g * d * w**2 / D, 9)
+    (-0.09, 0.06)
     """
     _callable(system)
     y0 = as_array(y0, "y0", ndim=1)
@@ -490,6 +563,19 @@ def bifurcation(scene, param: str, values, y0, period, n: int, skip: int, *, t0:
     -------
     ndarray, shape (m, n, dim)
         Section points per value.
+
+    Examples
+    --------
+    For the linear oscillator of :func:`poincare` the section point grows in
+    proportion to the drive (no bifurcation):
+
+    >>> osc = mp.scenes.Duffing(1.0, 0.0, delta=0.5, omega=2.0)
+    >>> pts = mp.phase.bifurcation(osc, "gamma", [0.3, 0.6], [0.0, 0.0], np.pi, 1, 60)
+    >>> pts.shape
+    (2, 1, 2)
+    >>> np.round(pts[:, 0, :], 9)
+    array([[-0.09,  0.06],
+           [-0.18,  0.12]])
     """
     if not _is_scene(scene):
         raise TypeError("bifurcation needs a scene (its parameters are varied)")
@@ -571,6 +657,16 @@ def lyapunov(system, y0, t, *, dt: float = 1.0, method: str = "variational", d0:
     float
         The exponent (1/time units); with ``return_history``,
         ``(lam, times, running)``.
+
+    Examples
+    --------
+    Along y' = c y neighbouring solutions separate (or approach) as exp(c t): the
+    exponent is c.
+
+    >>> round(mp.phase.lyapunov(lambda t, y: 0.3 * y, [1.0], 20.0), 8)
+    0.3
+    >>> round(mp.phase.lyapunov(lambda t, y: -0.5 * y, [1.0], 20.0), 8)
+    -0.5
     """
     f = _callable(system)
     y = as_array(y0, "y0", ndim=1).copy()

@@ -122,6 +122,19 @@ def phase_portrait(system, xlim=(-2 * np.pi, 2 * np.pi), ylim=(-4.0, 4.0), *, t=
     Returns
     -------
     matplotlib.axes.Axes
+
+    Examples
+    --------
+    >>> import matplotlib
+    >>> matplotlib.use("Agg")
+    >>> import matplotlib.pyplot as plt
+    >>> ax = mp.plot.phase_portrait(mp.scenes.Pendulum(), (-np.pi, np.pi), (-7, 7),
+    ...                             trajectories=[(1.0, 0.0)], t_max=3, grid=15)
+    >>> ax.get_xlabel().endswith("(rad)"), ax.get_ylabel().endswith("(rad/s)")   # from the scene
+    (True, True)
+    >>> ax.get_xlim() == (-np.pi, np.pi)
+    True
+    >>> plt.close("all")
     """
     plt = _plt()
     from matplotlib.colors import PowerNorm
@@ -188,6 +201,20 @@ def work_precision(rows, problem=None, *, ax=None):
 
     Rows without a positive finite error are left out; ``problem`` picks one
     problem when the rows hold several (default: the first).  Returns the Axes.
+
+    Examples
+    --------
+    >>> import matplotlib
+    >>> matplotlib.use("Agg")
+    >>> import matplotlib.pyplot as plt
+    >>> rows = [dict(problem="pendulum", impl="mechpy", time=t, error=e)
+    ...         for t, e in [(1e-3, 1e-6), (2e-3, 1e-9)]]
+    >>> rows += [dict(problem="pendulum", impl="scipy", time=t, error=e)
+    ...          for t, e in [(1e-2, 1e-6), (3e-2, 1e-9)]]
+    >>> ax = mp.plot.work_precision(rows)
+    >>> len(ax.get_lines()), ax.get_xscale(), ax.get_yscale()
+    (2, 'log', 'log')
+    >>> plt.close("all")
     """
     plt = _plt()
     rows = list(rows)
@@ -228,7 +255,19 @@ def modes(m, which=None, *, positions=None, ax=None, position_unit="m"):
     labelled with its angular frequency (rad/s).  ``positions`` places the
     coordinates along the horizontal axis (default 1..n, in units of
     ``position_unit``).  The shapes are M-normalised (:math:`a^T M a = 1`: in
-    kg^-1/2 for masses in kg).  Returns the Axes."""
+    kg^-1/2 for masses in kg).  Returns the Axes.
+
+    Examples
+    --------
+    >>> import matplotlib
+    >>> matplotlib.use("Agg")
+    >>> import matplotlib.pyplot as plt
+    >>> m = mp.modes.normal_modes(*mp.modes.chain(4))      # 4 unit masses, fixed ends
+    >>> ax = mp.plot.modes(m)
+    >>> len(ax.get_lines()) >= 4             # one shape per mode
+    True
+    >>> plt.close("all")
+    """
     plt = _plt()
     V = np.asarray(m.vectors)
     n = V.shape[0]
@@ -251,7 +290,20 @@ def modes(m, which=None, *, positions=None, ax=None, position_unit="m"):
 def trajectory3d(path, *, ax=None, unit="m", **line_kw):
     """A curve in space: ``path`` of shape (3, m) (e.g. ``sol.y[:3]``), or a
     :class:`mechpy.Solution` whose first three components are drawn.  Marks the
-    start; the axes are labelled x, y, z in ``unit``.  Returns the 3-D Axes."""
+    start; the axes are labelled x, y, z in ``unit``.  Returns the 3-D Axes.
+
+    Examples
+    --------
+    >>> import matplotlib
+    >>> matplotlib.use("Agg")
+    >>> import matplotlib.pyplot as plt
+    >>> t = np.linspace(0, 4 * np.pi, 200)
+    >>> helix = np.array([np.cos(t), np.sin(t), t / (2 * np.pi)])
+    >>> ax = mp.plot.trajectory3d(helix, unit="m")
+    >>> ax.name, ax.get_zlabel()
+    ('3d', 'z (m)')
+    >>> plt.close("all")
+    """
     plt = _plt()
     y = path.y if hasattr(path, "y") else path
     y = as_array(y, "path", ndim=2)
@@ -335,6 +387,18 @@ def animate_field(system, xlim=(-2 * np.pi, 2 * np.pi), ylim=(-4.0, 4.0), *, par
         empty or not finite, or ``path`` is combined with ``param``.
     TypeError
         ``param`` was given for a system that is not a scene.
+
+    Examples
+    --------
+    >>> import matplotlib
+    >>> matplotlib.use("Agg")
+    >>> import matplotlib.pyplot as plt
+    >>> anim = mp.plot.animate_field(mp.scenes.VanDerPol(1.0), (-3, 3), (-4, 4),
+    ...                              particles=50, frames=5, dt=0.1)
+    >>> from matplotlib.animation import FuncAnimation
+    >>> isinstance(anim, FuncAnimation)
+    True
+    >>> plt.close("all")
     """
     warnings.warn("mp.plot.animate_field is deprecated: mp.live.phase_portrait advects the "
                   "particles on the GPU in the browser, with sliders that work in a saved page",

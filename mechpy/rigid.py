@@ -56,6 +56,18 @@ def free_rotation(moments, omega0, t) -> np.ndarray:
     -------
     ndarray, shape (n, 3)
         omega(t) in the body frame (rad/s).
+
+    Examples
+    --------
+    A symmetric body (I1 = I2 = 1, I3 = 2) precesses at Omega = omega3 (I3 - I1)/I1
+    in the body frame: omega1 = A cos(Omega t).
+
+    >>> t = np.array([0.0, 0.5, 1.0])
+    >>> w = mp.rigid.free_rotation([1.0, 1.0, 2.0], [0.1, 0.0, 1.0], t)
+    >>> np.round(w[:, 0], 10), np.round(0.1 * np.cos(1.0 * t), 10)
+    (array([0.1       , 0.08775826, 0.05403023]), array([0.1       , 0.08775826, 0.05403023]))
+    >>> np.round(w[:, 2], 12)       # omega3 is constant
+    array([1., 1., 1.])
     """
     m, w = _moments_omega(moments, omega0)
     ta = as_array(t, "t", allow_empty=True)
@@ -75,6 +87,16 @@ def flip_period(moments, omega0) -> float:
     -------
     float
         Period (s).
+
+    Examples
+    --------
+    Far from the separatrix, close to the axis of largest moment, the period tends
+    to that of the linearised wobble, 2 pi / (omega3 sqrt((I3-I1)(I3-I2)/(I1 I2))):
+
+    >>> I = [1.0, 2.0, 3.0]
+    >>> T = mp.rigid.flip_period(I, [1e-6, 0.0, 1.0])
+    >>> round(T, 6), round(2 * np.pi / np.sqrt((3 - 1) * (3 - 2) / (1 * 2)).item(), 6)
+    (6.283185, 6.283185)
     """
     m, w = _moments_omega(moments, omega0)
     return _core.rigid_flip_period(m, w)
@@ -110,6 +132,16 @@ def nutation_bounds(I1, I3, mass, g, l, theta0, theta_dot0, phi_dot0, psi_dot0):
     -------
     (theta_min, theta_max) : tuple of float
         In rad.
+
+    Examples
+    --------
+    Released at theta0 = 1 rad with phi_dot0 = theta_dot0 = 0, the top starts at
+    one bound (the cusps): theta0 is the upper bound of u = cos(theta), i.e.
+    theta_min.
+
+    >>> lo, hi = mp.rigid.nutation_bounds(1.0, 0.5, 1.0, 9.81, 0.3, 1.0, 0.0, 0.0, 20.0)
+    >>> round(lo, 12), round(hi, 6)
+    (1.0, 1.051905)
     """
     I1 = as_scalar(I1, "I1", positive=True)
     I3 = as_scalar(I3, "I3", positive=True)
@@ -268,6 +300,18 @@ def sleeping_top(I1, I3, mass, g, l, omega3) -> bool:
     falls).  Arguments as :func:`steady_precession`; ``l > 0`` puts the
     centre of mass above the pivot (with l <= 0 the upright top hangs and is
     always stable).
+
+    Examples
+    --------
+    The criterion I3^2 omega3^2 > 4 I1 M g l, here 4 * 1 * 1 * 9.81 * 0.3 = 11.772
+    against (0.5 omega3)^2: stable above omega3 = 6.862 rad/s.
+
+    >>> round(2 * (4 * 1.0 * 1.0 * 9.81 * 0.3) ** 0.5, 3)
+    6.862
+    >>> mp.rigid.sleeping_top(1.0, 0.5, 1.0, 9.81, 0.3, 7.0)
+    True
+    >>> mp.rigid.sleeping_top(1.0, 0.5, 1.0, 9.81, 0.3, 6.8)
+    False
     """
     I1, I3, mass, g, l = _top_args(I1, I3, mass, g, l)
     w3 = as_scalar(omega3, "omega3")

@@ -68,6 +68,17 @@ class GimbalLockWarning(UserWarning):
     """The first and third rotation axes coincide; the third angle was set to 0.
 
     Silence it with ``warnings.simplefilter("ignore", GimbalLockWarning)``.
+
+    Examples
+    --------
+    At theta = 0 only phi + psi is determined: psi is set to 0 and phi carries the sum.
+
+    >>> import warnings
+    >>> with warnings.catch_warnings(record=True) as w:
+    ...     warnings.simplefilter("always")
+    ...     angles = mp.rotation.euler_angles(mp.rotation.euler_matrix(0.3, 0.0, 0.4))
+    >>> np.round(angles, 12), w[0].category.__name__
+    (array([0.7, 0. , 0. ]), 'GimbalLockWarning')
     """
 
 
@@ -245,6 +256,17 @@ def euler_angles(R, seq: str = "ZXZ", passive: bool = True, *, degrees: bool = F
     -------
     ndarray, shape (..., 3)
         ``(phi, theta, psi)`` in rad.
+
+    Examples
+    --------
+    The angles come back from the matrix they make:
+
+    >>> R = mp.rotation.euler_matrix(0.3, 1.1, -0.7)           # ZXZ, passive
+    >>> np.round(mp.rotation.euler_angles(R), 12)
+    array([ 0.3,  1.1, -0.7])
+    >>> mp.rotation.euler_angles(mp.rotation.euler_matrix(30, 45, 60, "XYZ", degrees=True),
+    ...                          "XYZ", degrees=True).round(9)
+    array([30., 45., 60.])
     """
     R = _matrices(R)
     out = _angles_of(_core.rotation_euler_angles, R, 2, seq, passive,
@@ -274,6 +296,15 @@ def quat_from_matrix(R, *, orth_tol: float = ORTH_TOL) -> np.ndarray:
     ndarray, shape (..., 4)
         Unit quaternions, scalar last (dimensionless); ``matrix_from_quat``
         of them gives ``R`` back.
+
+    Examples
+    --------
+    A quarter turn about z: q = (0, 0, sin(pi/4), cos(pi/4)).
+
+    >>> R = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+    >>> q = mp.rotation.quat_from_matrix(R)
+    >>> np.round(q, 12), round(float(np.sqrt(0.5)), 12)
+    (array([0.        , 0.        , 0.70710678, 0.70710678]), 0.707106781187)
     """
     R = _matrices(R)
     shape = R.shape[:-2]
@@ -296,6 +327,15 @@ def matrix_from_quat(quat) -> np.ndarray:
     ndarray, shape (..., 3, 3)
         The active rotation matrices (dimensionless), as
         ``Rotation.from_quat(quat).as_matrix()``.
+
+    Examples
+    --------
+    The quaternion (0, 0, 1, 1) (normalised here) is a quarter turn about z:
+
+    >>> np.round(mp.rotation.matrix_from_quat([0.0, 0.0, 1.0, 1.0]), 12)
+    array([[ 0., -1.,  0.],
+           [ 1.,  0.,  0.],
+           [ 0.,  0.,  1.]])
     """
     q = _vectors(quat, "quat", 4)
     shape = q.shape[:-1]
@@ -321,6 +361,14 @@ def quat_multiply(p, q) -> np.ndarray:
     -------
     ndarray, shape (..., 4)
         The products (dimensionless).
+
+    Examples
+    --------
+    Two quarter turns about z make a half turn, (0, 0, 1, 0):
+
+    >>> q = [0.0, 0.0, np.sqrt(0.5), np.sqrt(0.5)]
+    >>> np.round(mp.rotation.quat_multiply(q, q), 12)
+    array([0., 0., 1., 0.])
     """
     p = _vectors(p, "p", 4)
     q = _vectors(q, "q", 4)
@@ -345,6 +393,11 @@ def quat_normalize(quat) -> np.ndarray:
     -------
     ndarray, shape (..., 4)
         Quaternions of unit norm (dimensionless).
+
+    Examples
+    --------
+    >>> mp.rotation.quat_normalize([0.0, 3.0, 0.0, 4.0])
+    array([0. , 0.6, 0. , 0.8])
     """
     q = _vectors(quat, "quat", 4)
     shape = q.shape[:-1]
@@ -377,6 +430,15 @@ def quat_from_euler(phi, theta=None, psi=None, seq: str = "ZXZ", passive: bool =
     -------
     ndarray, shape (..., 4)
         Unit quaternions, scalar last (dimensionless).
+
+    Examples
+    --------
+    The active rotation by phi about z (ZXZ with theta = psi = 0) is
+    (0, 0, sin(phi/2), cos(phi/2)):
+
+    >>> q = mp.rotation.quat_from_euler(1.0, 0.0, 0.0, passive=False)
+    >>> np.round(q, 8), round(float(np.sin(0.5)), 8), round(float(np.cos(0.5)), 8)
+    (array([0.        , 0.        , 0.47942554, 0.87758256]), 0.47942554, 0.87758256)
     """
     return _from_angles(_core.rotation_quat_from_euler, (4,), phi, theta, psi, seq, passive, degrees)
 
@@ -408,6 +470,14 @@ def euler_from_quat(quat, seq: str = "ZXZ", passive: bool = True, *, degrees: bo
     -------
     ndarray, shape (..., 3)
         ``(phi, theta, psi)`` in rad.
+
+    Examples
+    --------
+    >>> q = mp.rotation.quat_from_euler(0.3, 1.1, -0.7)
+    >>> np.round(mp.rotation.euler_from_quat(q), 12)
+    array([ 0.3,  1.1, -0.7])
+    >>> np.round(mp.rotation.euler_from_quat(2.5 * q), 12)     # need not be unit
+    array([ 0.3,  1.1, -0.7])
     """
     q = _vectors(quat, "quat", 4)
     out = _angles_of(_core.rotation_euler_from_quat, q, 1, seq, passive,
@@ -458,6 +528,20 @@ def angular_velocity(angles, rates, seq: str = "ZXZ", frame: str = "body") -> np
     -------
     ndarray, shape (..., 3)
         Angular velocity (rad/s).
+
+    Examples
+    --------
+    Spinning about the body's own axis only (theta fixed, psi_dot = 2): omega is
+    (0, 0, 2) in the body; a pure precession phi_dot = 1 at theta = pi/2 has the
+    body components (sin psi, cos psi, 0).
+
+    >>> mp.rotation.angular_velocity([0.4, 0.9, 0.0], [0.0, 0.0, 2.0])
+    array([0., 0., 2.])
+    >>> psi = 0.5
+    >>> np.round(mp.rotation.angular_velocity([0.0, np.pi / 2, psi], [1.0, 0.0, 0.0]), 12)
+    array([0.47942554, 0.87758256, 0.        ])
+    >>> round(float(np.sin(psi)), 8), round(float(np.cos(psi)), 8)
+    (0.47942554, 0.87758256)
     """
     seq = _seq(seq)
     space = _frame(frame)
@@ -501,6 +585,15 @@ def euler_rates(angles, omega, seq: str = "ZXZ", frame: str = "body", *,
     ------
     mechpy.SingularityError
         At gimbal lock, where the rates are not determined by omega.
+
+    Examples
+    --------
+    The inverse of :func:`angular_velocity`:
+
+    >>> angles, rates = [0.4, 0.9, -1.2], [0.5, -0.25, 2.0]
+    >>> omega = mp.rotation.angular_velocity(angles, rates)
+    >>> np.round(mp.rotation.euler_rates(angles, omega), 12)
+    array([ 0.5 , -0.25,  2.  ])
     """
     seq = _seq(seq)
     space = _frame(frame)

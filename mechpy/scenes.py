@@ -91,6 +91,21 @@ class Scene:
     parameters are packed into the row's vector (``RigidBody``,
     ``SpringChain``) writes ``__init__`` and calls :meth:`_set` with its
     public parameters and the packed vector.
+
+    Examples
+    --------
+    Every scene carries its parameters, its right-hand side and Jacobian in C, and
+    its energy:
+
+    >>> pend = mp.scenes.Pendulum(length=2.0)
+    >>> pend.dim, pend.params
+    (2, {'g': 9.81, 'length': 2.0, 'damping': 0.0, 'drive_amplitude': 0.0, 'drive_frequency': 0.0})
+    >>> pend.rhs(0.0, np.array([np.pi / 2, 0.0]))                # theta'' = -(g/L) sin(theta)
+    array([ 0.   , -4.905])
+    >>> print(pend.energy(np.array([0.0, 1.0])))               # L^2 theta_dot^2 / 2
+    2.0
+    >>> pend.replace(length=1.0).params["length"]
+    1.0
     """
 
     _model: str = ""
@@ -296,6 +311,20 @@ class Pendulum(Scene):
     ``length`` L (m), ``damping`` b (1/s), ``drive_amplitude`` A (rad/s^2),
     ``drive_frequency`` Omega (rad/s).  ``energy`` is per unit mass (J/kg):
     :math:`E = \tfrac12 L^2\dot\theta^2 + gL(1-\cos\theta)`.
+
+    Examples
+    --------
+    The period of a small swing is 2 pi sqrt(L/g); at 90 degrees it is longer by
+    the factor 2 K(1/2) / pi = 1.18034:
+
+    >>> pend = mp.scenes.Pendulum(g=9.81, length=1.0)
+    >>> round(float(pend.period(1e-4)), 6), round(2 * np.pi * (1.0 / 9.81) ** 0.5, 6)
+    (2.006067, 2.006067)
+    >>> round(float(pend.period(np.pi / 2) / pend.period(1e-8)), 5)
+    1.18034
+    >>> s = mp.solve(pend, (0, pend.period(2.0)), [2.0, 0.0], rtol=1e-11, atol=1e-12)
+    >>> round(float(s.y[0, -1]), 8)                              # back at the start
+    2.0
     """
 
     _model = "Pendulum"
@@ -315,6 +344,18 @@ class VanDerPol(Scene):
 
     State ``(x, x_dot)`` (dimensionless); ``mu >= 0``.  ``energy`` is
     :math:`(x^2 + \dot x^2)/2`, the energy of its harmonic part.
+
+    Examples
+    --------
+    For mu = 0 it is the harmonic oscillator (energy conserved); for mu > 0 every
+    start is drawn to the limit cycle of amplitude 2.00862 (mu = 1):
+
+    >>> s = mp.solve(mp.scenes.VanDerPol(0.0), (0, 2 * np.pi), [1.0, 0.0], rtol=1e-10, atol=1e-12)
+    >>> np.round(s.y[:, -1], 8) + 0.0
+    array([1., 0.])
+    >>> T, A = mp.phase.limit_cycle(mp.scenes.VanDerPol(1.0), [0.5, 0.0])
+    >>> round(T, 6), round(A, 5)
+    (6.663287, 2.00862)
     """
 
     _model = "VanDerPol"
@@ -326,6 +367,19 @@ class Duffing(Scene):
 
     State ``(x, x_dot)``.  ``energy`` is
     :math:`\dot x^2/2 + \alpha x^2/2 + \beta x^4/4`.
+
+    Examples
+    --------
+    beta = 0 is the harmonic oscillator x = cos(sqrt(alpha) t); a hardening spring
+    (beta > 0) keeps its energy alpha x^2/2 + beta x^4/4 + v^2/2:
+
+    >>> s = mp.solve(mp.scenes.Duffing(4.0, 0.0), (0, 1), [1.0, 0.0], rtol=1e-10, atol=1e-12)
+    >>> round(float(s.y[0, -1]), 8), round(float(np.cos(2.0)), 8)
+    (-0.41614684, -0.41614684)
+    >>> duff = mp.scenes.Duffing(1.0, 1.0)
+    >>> s = mp.solve(duff, (0, 20), [1.0, 0.0], rtol=1e-10, atol=1e-12)
+    >>> round(float(duff.energy(s.y[:, -1])), 8), 1 / 2 + 1 / 4
+    (0.75, 0.75)
     """
 
     _model = "Duffing"
@@ -337,6 +391,21 @@ class Kepler(Scene):
     State ``(x, y, vx, vy)``; ``mu`` = GM (length^3/time^2).  Separable: the
     symplectic methods apply.  ``energy`` is the specific orbital energy
     :math:`|\mathbf v|^2/2 - \mu/r`.
+
+    Examples
+    --------
+    An orbit of eccentricity 0.5 returns to its pericentre after 2 pi sqrt(a^3/mu),
+    and its energy is -mu / (2a):
+
+    >>> kep = mp.scenes.Kepler(mu=1.0)
+    >>> y0 = kep.initial_state(0.5, a=1.0)
+    >>> y0
+    array([0.5       , 0.        , 0.        , 1.73205081])
+    >>> s = mp.solve(kep, (0, 2 * np.pi), y0, rtol=1e-11, atol=1e-12)
+    >>> np.round(s.y[:, -1] - y0, 7) + 0.0
+    array([0., 0., 0., 0.])
+    >>> round(float(kep.energy(y0)), 12)
+    -0.5
     """
 
     _model = "Kepler"
@@ -360,6 +429,17 @@ class RestrictedThreeBody(Scene):
     the Earth-Moon value of Arenstorf's orbits).  State ``(x, y, vx, vy)``;
     ``energy`` is the Jacobi integral in energy form
     :math:`|\mathbf v|^2/2 - (x^2+y^2)/2 - \mu'/r_1 - \mu/r_2`.
+
+    Examples
+    --------
+    The Jacobi integral is conserved along an orbit in the rotating frame (here a
+    start between the Earth and the Moon):
+
+    >>> r3 = mp.scenes.RestrictedThreeBody()
+    >>> y0 = np.array([0.5, 0.0, 0.0, 0.3])
+    >>> s = mp.solve(r3, (0, 2), y0, rtol=1e-12, atol=1e-12)
+    >>> bool(abs(r3.energy(s.y[:, -1]) - r3.energy(y0)) < 1e-9)
+    True
     """
 
     _model = "RestrictedThreeBody"
@@ -379,6 +459,16 @@ class Foucault(Scene):
     of swing turns clockwise (seen from above) in the north at
     :math:`\Omega\sin\lambda`.  ``energy`` is per unit mass (J/kg),
     :math:`(v_x^2+v_y^2)/2 + (g/L)(x^2+y^2)/2`, conserved (Coriolis does no work).
+
+    Examples
+    --------
+    The plane of swing turns at Omega sin(latitude); at the pole once a sidereal day:
+
+    >>> f = mp.scenes.Foucault(90.0, 67.0)
+    >>> round(2 * np.pi / f.precession_rate), round(2 * np.pi / 7.2921159e-05)
+    (86164, 86164)
+    >>> round(2 * np.pi / mp.scenes.Foucault(48.857, 67.0).precession_rate / 3600, 2)   # Paris
+    31.78
     """
 
     _model = "Foucault"
@@ -417,6 +507,20 @@ class RigidBody(Scene):
     ``"rigid:split"`` (order 2) and ``"rigid:split4"`` (order 4) of
     :func:`mechpy.solve` keep ``|L|`` and ``|q|`` to round-off; they take a constant
     torque, not a callback.
+
+    Examples
+    --------
+    Torque-free, the kinetic energy is conserved and the motion is the exact
+    one of :func:`mechpy.rigid.free_rotation`:
+
+    >>> body = mp.scenes.RigidBody(moments=(1.0, 2.0, 3.0))
+    >>> w0 = np.array([0.1, 0.2, 1.0])
+    >>> s = mp.solve(body, (0, 5), w0, rtol=1e-11, atol=1e-12)
+    >>> exact = mp.rigid.free_rotation((1.0, 2.0, 3.0), w0, [5.0])[0]
+    >>> bool(np.abs(s.y[:, -1] - exact).max() < 1e-9)
+    True
+    >>> round(float(body.energy(s.y[:, -1])), 10), round(float(body.energy(w0)), 10)
+    (1.545, 1.545)
     """
 
     _model = "RigidBody"
@@ -540,6 +644,23 @@ class HeavyTop(Scene):
     ``energy`` :math:`E = \tfrac{I_1}{2}(\dot\theta^2 + \dot\phi^2\sin^2\theta)
     + \tfrac{I_3}{2}\omega_3^2 + Mgl\cos\theta` (J), ``p_phi`` and ``p_psi``.
     Singular at theta = 0 or pi (Euler angles).
+
+    Examples
+    --------
+    Released at theta = 1 rad and spinning at 20 rad/s about its axis, the top
+    nutates between the bounds of :func:`mechpy.rigid.nutation_bounds`; the energy,
+    p_phi and p_psi = I3 omega3 are conserved:
+
+    >>> top = mp.scenes.HeavyTop(1.0, 0.5, 1.0, g=9.81, l=0.3)
+    >>> y0 = np.array([0.0, 1.0, 0.0, 0.0, 0.0, 20.0])     # released at theta = 1 rad, spinning
+    >>> s = mp.solve(top, (0, 2), y0, rtol=1e-11, atol=1e-12)
+    >>> round(float(top.p_psi(s.y[:, -1])), 10), round(float(top.p_psi(y0)), 10)   # I3 omega3
+    (10.0, 10.0)
+    >>> bool(abs(top.energy(s.y[:, -1]) - top.energy(y0)) < 1e-8)
+    True
+    >>> lo, hi = mp.rigid.nutation_bounds(1.0, 0.5, 1.0, 9.81, 0.3, 1.0, 0.0, 0.0, 20.0)
+    >>> bool(lo - 1e-9 <= s.y[1].min() and s.y[1].max() <= hi + 1e-9)   # theta nutates between
+    True
     """
 
     _model = "HeavyTop"

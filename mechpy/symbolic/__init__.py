@@ -188,6 +188,24 @@ def lagrangian(L, q, params=None, constraints=(), forces=None, *, baumgarte=None
         expression SymPy cannot print as C (named).
     CompileError
         No C compiler, or it failed (the command and its first lines).
+
+    Examples
+    --------
+    The plane pendulum from its Lagrangian per unit mass, compiled to C: its small
+    oscillations are at sqrt(g/l), and it moves as the built-in scene:
+
+    >>> import sympy
+    >>> th, = mp.coordinates("theta")
+    >>> g, l = sympy.symbols("g l", positive=True)
+    >>> L = l**2 * th.diff()**2 / 2 + g * l * sympy.cos(th)
+    >>> pend = mp.lagrangian(L, [th], params={"g": 9.81, "l": 1.0})
+    >>> round(float(pend.small_oscillations([0.0]).omega[0]), 10), round(9.81 ** 0.5, 10)
+    (3.1320919527, 3.1320919527)
+    >>> s = mp.solve(pend, (0, 1), [1.0, 0.0], rtol=1e-10, atol=1e-12)
+    >>> ref = mp.solve(mp.scenes.Pendulum(g=9.81, length=1.0), (0, 1), [1.0, 0.0], rtol=1e-10,
+    ...                atol=1e-12)
+    >>> bool(np.abs(s.y[:, -1] - ref.y[:, -1]).max() < 1e-8)
+    True
     """
     from .derive import lagrangian_ir
     import sympy as sp
@@ -224,6 +242,21 @@ def equations(rhs, y, params=None, *, energy=None, backend: str = "c"):
     CompiledScene
         ``rhs``, ``jacobian`` (analytic), ``energy`` (when given),
         ``equations``, ``c_source``.
+
+    Examples
+    --------
+    The harmonic oscillator as a first-order system, with its energy:
+
+    >>> import sympy
+    >>> x, v = sympy.symbols("x v")
+    >>> w = sympy.Symbol("w", positive=True)
+    >>> osc = mp.equations([v, -w**2 * x], [x, v], params={"w": 2.0},
+    ...                    energy=(v**2 + w**2 * x**2) / 2)
+    >>> s = mp.solve(osc, (0, 1), [1.0, 0.0], rtol=1e-10, atol=1e-12)
+    >>> round(float(s.y[0, -1]), 8), round(float(np.cos(2.0)), 8)          # x = cos(w t)
+    (-0.41614684, -0.41614684)
+    >>> round(float(osc.energy(s.y[:, -1])), 8)                            # w^2 x0^2 / 2
+    2.0
     """
     from .derive import equations_ir
     import sympy as sp

@@ -88,6 +88,17 @@ class StationaryPath(NamedTuple):
     action : float
         The discrete action :math:`S_h = \\sum_k h L_d` (units of L times s).
     iterations : int
+
+    Examples
+    --------
+    >>> path = mp.variational.stationary_path(lambda q, v: 0.5 * v**2 - 0.5 * q**2, 0.0, 1.0, 1.0,
+    ...                                       n=100)
+    >>> path.t.shape, path.q.shape
+    ((101,), (101,))
+    >>> round(float(path.qdot[0]), 4), round(float(1 / np.sin(1.0)), 4)   # q'(0) = 1 / sin 1
+    (1.1884, 1.1884)
+    >>> bool(np.allclose(path.p, path.qdot))                              # p = dL/dv = v
+    True
     """
     t: np.ndarray
     q: np.ndarray
@@ -156,6 +167,17 @@ def stationary_path(scene_or_lagrangian, q_a, q_b, T: float, n: int = 200, *,
     :math:`\omega_0 T > k\pi`: at rest and k pairs of swings); Newton's
     method returns the one its ``guess`` leads to, and says nothing of the
     others.  :func:`stationary_paths` looks for them from several starts.
+
+    Examples
+    --------
+    The harmonic oscillator L = v^2/2 - q^2/2 from q(0) = 0 to q(1) = 1: the path
+    q = sin t / sin 1, and the action [q q']/2 = cot(1)/2:
+
+    >>> path = mp.variational.stationary_path(lambda q, v: 0.5 * v**2 - 0.5 * q**2, 0.0, 1.0, 1.0)
+    >>> round(float(path.q[100]), 5), round(float(np.sin(0.5) / np.sin(1.0)), 5)
+    (0.56975, 0.56975)
+    >>> round(path.action, 5), round(float(0.5 / np.tan(1.0)), 5)
+    (0.32105, 0.32105)
     """
     qa, qb = _coords(q_a, "q_a"), _coords(q_b, "q_b")
     spec, d, _, sing_tol = _system(scene_or_lagrangian, qa)
@@ -265,6 +287,15 @@ class VariationalTrajectory(NamedTuple):
         For Pendulum, Duffing and HeavyTop the scene's own ``energy``;
         otherwise the energy function
         :math:`h = \\dot q\\cdot\\partial L/\\partial\\dot q - L`.
+
+    Examples
+    --------
+    >>> tr = mp.variational.variational_integrate(mp.scenes.Pendulum(g=9.81, length=1.0),
+    ...                                          (0.0, 1.0), 0.5, 0.0, 0.01)
+    >>> tr.t.shape, tr.q.shape, tr.energy.shape
+    ((101,), (101,), (101,))
+    >>> round(float(tr.energy[0]), 6), round(9.81 * (1 - float(np.cos(0.5))), 6)   # g L (1 - cos)
+    (1.200915, 1.200915)
     """
     t: np.ndarray
     q: np.ndarray
@@ -314,6 +345,18 @@ def variational_integrate(system, t_span, q0, qdot0, h: float, *,
         not determine the motion, e.g. it is linear in the velocities).
     ConvergenceError
         A step's Newton iteration failed (the step is too large).
+
+    Examples
+    --------
+    The harmonic oscillator from q = 1 at rest: q = cos t to O(h^2), and the energy
+    error stays bounded:
+
+    >>> tr = mp.variational.variational_integrate(lambda q, v: 0.5 * v**2 - 0.5 * q**2,
+    ...                                          (0.0, 10.0), 1.0, 0.0, 0.01)
+    >>> round(float(tr.q[-1]), 4), round(float(np.cos(10.0)), 4)
+    (-0.8391, -0.8391)
+    >>> bool(np.abs(tr.energy - 0.5).max() < 1e-4)
+    True
     """
     q0a, v0a = _coords(q0, "q0"), _coords(qdot0, "qdot0")
     spec, d, energy, sing_tol = _system(system, q0a)

@@ -38,6 +38,14 @@ class Brachistochrone(NamedTuple):
         The cycloid parameter at the end point (rad).
     iterations : int
         Newton iterations.
+
+    Examples
+    --------
+    >>> b = mp.variational.brachistochrone(1.0, 0.5, n=100)
+    >>> round(b.time, 5), round(float(b.time_exact), 5)          # the cycloid's theta_e sqrt(a/g)
+    (0.56962, 0.56962)
+    >>> bool(b.time < b.time_line)                          # faster than the straight line
+    True
     """
     x: np.ndarray
     y: np.ndarray
@@ -203,6 +211,14 @@ class Catenary(NamedTuple):
     length : float
         The polygon's length (m).
     iterations : int
+
+    Examples
+    --------
+    >>> ch = mp.variational.catenary(-1.0, 1.0, 3.0, n=200)
+    >>> round(float(ch.length), 6), round(float(ch.x0), 12), round(float(ch.y.min()), 4)
+    (3.0, 0.0, -1.0053)
+    >>> round(float(ch.a + ch.c), 4)          # the lowest point, at x0 = 0: y_exact(x0) = a + c
+    -1.0053
     """
     x: np.ndarray
     y: np.ndarray
@@ -267,6 +283,19 @@ def catenary(a, b, length: float, n: int = 200, *, tol: float = _TOL,
     -------
     Catenary
         The chain, the exact cosh beside it and the multiplier.
+
+    Examples
+    --------
+    A chain of length 3 between (-1, 0) and (1, 0): the exact catenary
+    a cosh(x/a) + c with 2 a sinh(1/a) = 3, and the multiplier -c:
+
+    >>> ch = mp.variational.catenary(-1.0, 1.0, 3.0, n=200)
+    >>> round(float(2 * ch.a * np.sinh(1 / ch.a)), 10)
+    3.0
+    >>> bool(np.abs(ch.y - ch.y_exact).max() < 1e-4)
+    True
+    >>> round(float(ch.multiplier), 4), round(float(ch.multiplier_exact), 4)
+    (1.6217, 1.6217)
     """
     xa, ya = _end(a, "a")
     xb, yb = _end(b, "b")

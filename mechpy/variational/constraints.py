@@ -36,6 +36,16 @@ def constraint_forces(mass, force, jac, bias):
         Multipliers.
     f : ndarray (..., d)
         Constraint forces :math:`J^T\lambda` (N).
+
+    Examples
+    --------
+    A bob of mass 2 at rest at the bottom of a rod, the constraint
+    ``g = (x^2 + y^2 - l^2)/2`` (``J = (x, y)``, ``b = |v|^2 = 0``): the rod holds
+    it up with m g.
+
+    >>> lam, f = mp.variational.constraint_forces(2.0, [0.0, -2.0 * 9.81], [[0.0, -1.0]], [0.0])
+    >>> lam, f
+    (array([-19.62]), array([ 0.  , 19.62]))
     """
     m = as_array(mass, "mass", positive=True)
     F = as_array(force, "force", min_ndim=1)
@@ -65,6 +75,16 @@ def pendulum_tension(scene, y, mass: float = 1.0) -> np.ndarray:
         States (theta, theta_dot), e.g. ``Solution.y``.
     mass : float
         Bob mass (kg).
+
+    Examples
+    --------
+    T = m (g cos(theta) + l theta_dot^2): at the bottom moving at 2 rad/s,
+    1 * (9.81 + 1 * 4); hanging horizontally at rest, 0:
+
+    >>> pend = mp.scenes.Pendulum(g=9.81, length=1.0)
+    >>> y = np.array([[0.0, np.pi / 2], [2.0, 0.0]])                # two states (theta, theta_dot)
+    >>> np.round(mp.variational.pendulum_tension(pend, y), 10)
+    array([13.81,  0.  ])
     """
     if not isinstance(scene, Pendulum):
         raise TypeError("scene must be a mechpy.scenes.Pendulum")

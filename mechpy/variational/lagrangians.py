@@ -100,6 +100,14 @@ def lagrangian(scene) -> Callable:
     ------
     TypeError
         ``scene`` is not a scene with a Lagrangian.
+
+    Examples
+    --------
+    The pendulum's L = l^2 theta_dot^2 / 2 + g l cos(theta) per unit mass:
+
+    >>> L = mp.variational.lagrangian(mp.scenes.Pendulum(g=9.81, length=2.0))
+    >>> round(float(L(0.0, 1.0)), 10), 2.0**2 * 1.0**2 / 2 + 9.81 * 2.0
+    (21.62, 21.62)
     """
     if not isinstance(scene, Scene) and getattr(scene, "_lagrangian_c", None) is None:
         raise TypeError("scene must be a mechpy scene with a Lagrangian (Pendulum, Duffing, "
@@ -180,6 +188,17 @@ def generalized_momenta(L: Callable, q, qdot) -> np.ndarray:
     -------
     ndarray
         Same shape as q (units of L times s per unit of q).
+
+    Examples
+    --------
+    For the pendulum p = l^2 theta_dot; for a central force p_phi = m r^2 phi_dot:
+
+    >>> p = mp.variational.generalized_momenta(mp.scenes.Pendulum(length=2.0), 0.3, 1.5)
+    >>> round(float(p), 6)
+    6.0
+    >>> cf = mp.variational.CentralForce(m=2.0)
+    >>> np.round(mp.variational.generalized_momenta(cf, [3.0, 0.0], [0.5, 0.1]), 6)
+    array([1. , 1.8])
     """
     if _has_lagrangian(L) and _spec_dim(_scene_spec(L)) == 1:  # one coordinate: any shape
         q, qdot = _split(q, qdot)
@@ -190,7 +209,15 @@ def generalized_momenta(L: Callable, q, qdot) -> np.ndarray:
 def cyclic_coordinates(L: Callable, q, qdot, *, atol: float = 1e-8) -> tuple:
     r"""Indices i of the coordinates that L does not depend on,
     :math:`\partial L/\partial q_i = 0` (so that :math:`p_i` is conserved),
-    tested at the sample states (q, qdot) of shape (d, ...)."""
+    tested at the sample states (q, qdot) of shape (d, ...).
+
+    Examples
+    --------
+    >>> cf = mp.variational.CentralForce()
+    >>> q, qdot = np.array([[1.0, 2.0], [0.3, 0.7]]), np.array([[0.1, 0.2], [1.0, 0.5]])
+    >>> mp.variational.cyclic_coordinates(cf, q, qdot)              # phi: p_phi is conserved
+    (1,)
+    """
     q, qdot = _split(q, qdot)
     if q.ndim == 0:
         q, qdot = q[None], qdot[None]
@@ -217,6 +244,19 @@ class CentralForce:
     Coordinates q = (r, phi): phi is cyclic, so
     :math:`p_\varphi = m r^2\dot\varphi` (the angular momentum) is conserved.
     Units: m (kg), k (J m).
+
+    Examples
+    --------
+    A circular orbit of radius r has phi_dot^2 = k / (m r^3); p_phi stays at
+    m r^2 phi_dot:
+
+    >>> cf = mp.variational.CentralForce(m=1.0, k=1.0)
+    >>> y0 = np.array([1.0, 0.0, 0.0, 1.0])                         # (r, phi, r', phi')
+    >>> s = mp.solve(cf.rhs, (0, 2 * np.pi), y0, rtol=1e-11, atol=1e-12)
+    >>> np.round(s.y[:, -1], 7)                                     # one period later
+    array([1.       , 6.2831853, 0.       , 1.       ])
+    >>> np.round(cf.momenta(s.y[:, -1]), 10) + 0.0
+    array([0., 1.])
     """
 
     def __init__(self, m: float = 1.0, k: float = 1.0):
@@ -250,6 +290,19 @@ class RotatingHoop:
     energy is not conserved, but L has no explicit time, so the energy function
     :math:`h = \tfrac12 mR^2(\dot\theta^2 - \omega^2\sin^2\theta) - mgR\cos\theta`
     (the Jacobi integral) is.  Units: SI.
+
+    Examples
+    --------
+    Above omega^2 = g / R the bottom is unstable and the bead rests at
+    cos(theta) = g / (omega^2 R); the Jacobi integral is conserved:
+
+    >>> hoop = mp.variational.RotatingHoop(R=1.0, omega=5.0)
+    >>> th0 = np.arccos(9.81 / 25.0)
+    >>> np.round(hoop.rhs(0.0, np.array([th0, 0.0])), 12) + 0.0      # at rest there
+    array([0., 0.])
+    >>> s = mp.solve(hoop.rhs, (0, 5), [0.3, 0.0], rtol=1e-11, atol=1e-12)
+    >>> bool(abs(hoop.jacobi_integral(s.y[:, -1]) - hoop.jacobi_integral(s.y[:, 0])) < 1e-8)
+    True
     """
 
     def __init__(self, R: float = 1.0, omega: float = 5.0, g: float = 9.81, m: float = 1.0):
