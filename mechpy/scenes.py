@@ -32,7 +32,17 @@ __all__ = ["Scene", "Pendulum", "VanDerPol", "Duffing", "Kepler", "RestrictedThr
 
 class SymbolicField(NamedTuple):
     """A system's right-hand side in SymPy: dy/dt = f(t, y) with ``params``
-    ({symbol: value}) substituted for its parameters (:meth:`Scene.symbolic`)."""
+    ({symbol: value}) substituted for its parameters (:meth:`Scene.symbolic`).
+
+    Examples
+    --------
+    >>> import mechpy as mp
+    >>> F = mp.scenes.VanDerPol(mu=2.0).symbolic()
+    >>> F.f, F.y, F.params
+    ([y1, mu*y1*(1 - y0**2) - y0], [y0, y1], {mu: 2.0})
+    >>> [float(e.subs(F.params).subs({F.y[0]: 0.5, F.y[1]: 1.0})) for e in F.f]
+    [1.0, 1.0]
+    """
 
     f: list
     y: list

@@ -34,6 +34,16 @@ class Motion(LiveWidget):
     bodies : list of str
         The bodies whose places ``window.mechpyLive.positions()`` gives, in
         that order.
+
+    Examples
+    --------
+    >>> import mechpy as mp
+    >>> pend = mp.scenes.Pendulum(length=1.0)
+    >>> T = pend.period(1.0)                       # 4 sqrt(L/g) K(sin^2(1/2))
+    >>> sol = mp.solve(pend, (0, T), [1.0, 0.0], dense_output=True)
+    >>> w = mp.live.animate(pend, sol, fps=30, duration=2.0)
+    >>> w.kind, w.times.size, round(float(w.times[-1] / T), 12)
+    ('pendulum', 61, 1.0)
     """
 
     _view = "animate"

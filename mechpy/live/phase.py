@@ -47,7 +47,17 @@ def _state_names(system, dim: int) -> list:
 
 
 class PhasePortrait(LiveWidget):
-    """A live phase portrait (see :func:`phase_portrait`)."""
+    """A live phase portrait (see :func:`phase_portrait`): an anywidget whose
+    ``spec`` holds the field printed to GLSL and JavaScript, the sliders and
+    the overlays; ``save(path)`` writes it as one offline page.
+
+    Examples
+    --------
+    >>> import mechpy as mp
+    >>> w = mp.live.phase_portrait(mp.scenes.Pendulum(), (-7, 7), (-8, 8), particles=1000)
+    >>> [(round(x, 6), kind) for x, y, kind, stable in w.spec["overlays"]["sets"][0]["fixed_points"]]
+    [(-6.283185, 'centre'), (-3.141593, 'saddle'), (0.0, 'centre'), (3.141593, 'saddle'), (6.283185, 'centre')]
+    """
 
     _view = "phase"
 
