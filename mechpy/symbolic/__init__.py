@@ -121,7 +121,12 @@ def _make(kind, ir_fn, key_parts, params, backend, constraints=()):
             return CompiledScene(meta, params, "c")
     from . import codegen    # SymPy's C printer: loaded only to derive
     ir = ir_fn()
-    source = codegen.c_source(ir, _core.STATUS)
+    try:
+        source = codegen.c_source(ir, _core.STATUS)
+    except ValueError as exc:
+        if backend == "c":
+            raise
+        source = f"/* not printable as C: {exc} */"    # NumPy evaluates it
     meta = _meta(ir, source, constraints, numpy_blocks=backend == "numpy")
     scene = CompiledScene(meta, params, backend)
     if backend == "c":

@@ -368,6 +368,7 @@ class CompiledScene(Scene):
 
     def __eq__(self, other):
         return (type(other) is CompiledScene and self._meta["source"] == other._meta["source"]
+                and self._meta["equations"] == other._meta["equations"]
                 and self._params == other._params and self._backend == other._backend)
 
     def __hash__(self):
