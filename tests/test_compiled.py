@@ -741,6 +741,146 @@ def test_two_processes_building_at_once(tmp_path):
     assert not [f for f in files if f.startswith(".mp_")]    # no temporaries left
 
 
+#: A system built in a child process (a damaged library must not be loaded by
+#: the test process itself: truncating a mapped file can kill it): prints
+#: whether it compiled and theta'' at (0.4, 0.1).
+_CUBIC = """
+    import sympy as sp, mechpy as mp
+    t = sp.Symbol("t")
+    th, = mp.coordinates("theta")
+    L = th.diff(t)**2 / 2 + sp.cos(th) + sp.Symbol("kappa3") * th**3
+    s = mp.lagrangian(L, [th], params=dict(kappa3=0.25))
+    print(s._compiled, repr(float(s.rhs(0.0, [0.4, 0.1])[1])))
+"""
+_CUBIC_ACC = -np.sin(0.4) + 3 * 0.25 * 0.4 ** 2      # theta'' = -sin(theta) + 3 k theta^2
+
+
+def _damage(path, how):
+    data = path.read_bytes()
+    if how == "truncate":
+        path.write_bytes(data[:len(data) // 2])
+    elif how == "flip":             # bytes of the code, the tables and the headers
+        b = bytearray(data)
+        for i in range(0, len(b), max(1, len(b) // 97)):
+            b[i] ^= 0xFF
+        path.write_bytes(bytes(b))
+    elif how == "empty":
+        path.write_bytes(b"")
+    elif how == "unrecorded":       # a library without its recorded sha256
+        os.unlink(str(path)[:-3] + ".json")
+    elif how == "other":            # another valid library in its place
+        import shutil
+        shutil.copy(mp._core.__file__, path)
+
+
+@pytest.mark.parametrize("how", ["truncate", "flip", "empty", "unrecorded", "other"])
+def test_a_damaged_cached_library_is_rebuilt(how, tmp_path):
+    import hashlib
+    import json
+    env = {"MECHPY_CACHE_DIR": str(tmp_path)}
+    r = _run(_CUBIC, env, tmp_path)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.split()[0] == "True"
+    so, = tmp_path.glob("mp_*.so")
+    _damage(so, how)
+    # a fresh process: the damaged file is detected before it is loaded (no
+    # SIGBUS or SIGSEGV, no OSError), compiled again and replaced
+    r = _run(_CUBIC, env, tmp_path)
+    assert r.returncode == 0, (r.returncode, r.stderr[-2000:])
+    compiled, acc = r.stdout.split()
+    assert compiled == "True"
+    assert float(acc) == pytest.approx(_CUBIC_ACC, rel=1e-15, abs=1e-16)
+    rec = json.loads((tmp_path / (so.name[:-3] + ".json")).read_text())
+    assert rec["sha256"] == hashlib.sha256(so.read_bytes()).hexdigest()
+    # and the repaired cache serves the next process without compiling
+    r = _run(_CUBIC, env, tmp_path)
+    assert r.returncode == 0 and r.stdout.split()[0] == "False", r.stderr
+
+
+def test_a_compiler_that_writes_nothing(tmp_path, monkeypatch):
+    monkeypatch.setenv("MECHPY_CACHE_DIR", str(tmp_path))
+    monkeypatch.setenv("MECHPY_CC", "true")         # exits 0, writes no library
+    x, = mp.coordinates("x")
+    L = x.diff(t) ** 2 / 2 - sp.Symbol("c5") * x ** 5
+    with pytest.raises(mp.CompileError, match="'true .*' exited 0 but wrote no library"):
+        mp.lagrangian(L, [x], params=dict(c5=1.0))
+    assert not list(tmp_path.glob("*.so"))           # nothing left to fail later
+    monkeypatch.delenv("MECHPY_CC")
+    s = mp.lagrangian(L, [x], params=dict(c5=1.0))
+    assert s._compiled and s.rhs(0, [2.0, 0.0])[1] == -5 * 2.0 ** 4
+
+
+def test_a_stored_description_that_is_not_one(tmp_path, monkeypatch):
+    import json
+    monkeypatch.setenv("MECHPY_CACHE_DIR", str(tmp_path))
+    x, = mp.coordinates("x")
+    L = x.diff(t) ** 2 / 2 - sp.Symbol("c6") * x ** 6
+    mp.lagrangian(L, [x], params=dict(c6=1.0))
+    meta, = tmp_path.glob("sys_*.json")
+    for junk in ("[]", "{}", '{"param_names": ["c6"]}', "not json", "null"):
+        meta.write_text(junk)
+        s = mp.lagrangian(L, [x], params=dict(c6=1.0))       # derived again
+        assert s.rhs(0, [2.0, 0.0])[1] == -6 * 2.0 ** 5
+        assert json.loads(meta.read_text())["param_names"] == ["c6"]     # and repaired
+
+
+def test_a_cache_folder_that_is_a_file(tmp_path, monkeypatch):
+    from mechpy.symbolic import build
+    monkeypatch.setattr(build, "_PRIVATE", [], raising=False)         # this test's private folder
+    bad = tmp_path / "not_a_folder"
+    bad.write_text("")
+    monkeypatch.setenv("MECHPY_CACHE_DIR", str(bad))
+    x, = mp.coordinates("x")
+    L = x.diff(t) ** 2 / 2 - sp.Symbol("c7") * x ** 7
+    with pytest.warns(RuntimeWarning, match=f"cache folder '{bad}' cannot be used.*"
+                                            "MECHPY_CACHE_DIR"):
+        s = mp.lagrangian(L, [x], params=dict(c7=1.0))
+    assert s.rhs(0, [1.0, 0.0])[1] == -7.0
+    assert os.path.dirname(s._path) == build._PRIVATE[0]
+    import warnings
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")                   # warned once only
+        s2 = mp.lagrangian(L + x ** 2, [x], params=dict(c7=1.0))
+    assert s2.rhs(0, [1.0, 0.0])[1] == -5.0      # + 2x from the added x**2
+
+
+def test_a_read_only_cache_folder(tmp_path, monkeypatch):
+    import tempfile
+
+    from mechpy.symbolic import build
+    ro = tmp_path / "ro"
+    ro.mkdir()
+    r = _run(_CUBIC, {"MECHPY_CACHE_DIR": str(ro)}, tmp_path)    # built while writable
+    assert r.returncode == 0, r.stderr
+    ro.chmod(0o555)
+    if os.geteuid() == 0:      # root writes anyway: the refusal a user would get
+        real = tempfile.mkstemp
+
+        def mkstemp(*a, dir=None, **kw):
+            if dir is not None and os.path.samefile(dir, ro):
+                raise PermissionError(13, "Permission denied", os.path.join(dir, ".mp_x"))
+            return real(*a, dir=dir, **kw)
+        monkeypatch.setattr(tempfile, "mkstemp", mkstemp)
+    monkeypatch.setattr(build, "_PRIVATE", [], raising=False)
+    monkeypatch.setenv("MECHPY_CACHE_DIR", str(ro))
+    try:
+        # what it holds is loaded from it
+        th, = mp.coordinates("theta")
+        L = th.diff(t) ** 2 / 2 + sp.cos(th) + sp.Symbol("kappa3") * th ** 3
+        s = mp.lagrangian(L, [th], params=dict(kappa3=0.25))
+        assert not s._compiled and os.path.dirname(s._path) == str(ro)
+        assert s.rhs(0.0, [0.4, 0.1])[1] == pytest.approx(_CUBIC_ACC, rel=1e-15, abs=1e-16)
+        # a new system goes to a private folder, with a warning naming the cache
+        with pytest.warns(RuntimeWarning, match=f"'{ro}' cannot be used .*Permission"):
+            s2 = mp.lagrangian(L + th ** 4, [th], params=dict(kappa3=0.25))
+        assert s2._compiled and os.path.dirname(s2._path) == build._PRIVATE[0]
+        assert s2.rhs(0.0, [0.4, 0.1])[1] == pytest.approx(_CUBIC_ACC + 4 * 0.4 ** 3,
+                                                          rel=1e-15, abs=1e-16)
+        assert sorted(p.name[:3] for p in ro.iterdir()) == ["mp_", "mp_", "sys"]
+    finally:
+        ro.chmod(0o755)
+
+
 def test_pickle_loads_in_a_fresh_process(double_pendulum, tmp_path):
     s = double_pendulum.replace(m2=1.1)
     blob = tmp_path / "scene.pkl"

@@ -189,10 +189,21 @@ def lagrangian(L, q, params=None, constraints=(), forces=None, *, baumgarte=None
     ------
     ValueError
         A free symbol without a value (named), a coordinate absent from L, a
-        wrong number of forces, a velocity-dependent constraint, an
-        expression SymPy cannot print as C (named).
+        wrong number of forces, a velocity-dependent constraint, or an
+        expression that cannot be compiled, named with where it is.  The
+        expressions may hold numbers and SymPy's constants (printed as
+        doubles), +, *, powers, ``Piecewise`` and the functions sin, cos, tan,
+        cot, sec, csc, their inverses asin, acos, atan, atan2, the hyperbolic
+        ones and their inverses, exp, log, erf, erfc and
+        ``sympy.codegen.cfunctions``' expm1, log1p, exp2, log2, log10, Cbrt,
+        hypot.  Refused: other functions (Sum, besselj), the imaginary unit,
+        oo or numbers beyond the double range, an ``Eq`` where an expression
+        is expected, two symbols of one name with different assumptions; and,
+        through the Jacobian (their derivatives cannot be printed), Abs, sign,
+        Max, Min, floor, ceiling, gamma, loggamma.
     CompileError
-        No C compiler, or it failed (the command and its first lines).
+        No C compiler, or it failed (the command and its first lines), or it
+        wrote no library.
     """
     from .derive import lagrangian_ir
     import sympy as sp
@@ -229,6 +240,19 @@ def equations(rhs, y, params=None, *, energy=None, backend: str = "c"):
     CompiledScene
         ``rhs``, ``jacobian`` (analytic), ``energy`` (when given),
         ``equations``, ``c_source``.
+
+    Raises
+    ------
+    ValueError
+        A free symbol without a value, a wrong number of expressions, or an
+        expression that cannot be compiled, named: the expressions may hold
+        what :func:`lagrangian` lists (numbers and constants, +, *, powers,
+        Piecewise, the elementary functions, erf, erfc, ...); an ``Eq`` in
+        place of a right-hand side, the imaginary unit, numbers beyond the
+        double range and other functions are refused, and Abs, sign, Max,
+        Min, floor, ceiling, gamma through the Jacobian.
+    CompileError
+        No C compiler, or it failed, or it wrote no library.
     """
     from .derive import equations_ir
     import sympy as sp
