@@ -319,7 +319,11 @@ def _build_into(source: str, cmd: list, path: str, folder: str):
     try:
         _compile(source, cmd, tmp, folder)
         digest = _digest(tmp)
-        lib = _load(tmp)
+        try:
+            lib = _load(tmp)
+        except CompileError as exc:
+            raise CompileError(f"the library {' '.join(cmd)!r} compiled for {path} does not "
+                               f"load: {exc}") from None
         fd_rec, tmp_rec = _mkstemp(folder, ".json")
         with os.fdopen(fd_rec, "w") as f:
             json.dump({"sha256": digest, "abi": ABI_VERSION, "compiler": cmd}, f)
