@@ -230,7 +230,7 @@ static MP_INLINE void mp_lu_lanes(double *A, double *b, int *st)
 LANE_MAX = 100_000
 
 
-class Unprintable(ValueError):
+class _Unprintable(ValueError):
     """An expression the generator cannot print as C: ``culprit`` is the
     sub-expression, ``reason`` what is wrong with it."""
 
@@ -245,24 +245,23 @@ def _constant(x) -> str:
     as pi, E, EulerGamma): the double nearest to it, printed with ``repr``
     (17 significant digits at most, read back exactly).  The build's -std=c99
     declares no M_PI or M_E, and a literal is the same on every compiler.
-    Unprintable for a non-real or non-finite value, or one beyond the range of
+    _Unprintable for a non-real or non-finite value, or one beyond the range of
     double precision."""
     if x.is_Integer and abs(int(x)) < 2 ** 53:
         return f"{int(x)}.0"
     if x.is_Rational and not x.is_Integer and abs(x.p) < 2 ** 53 and x.q < 2 ** 53:
         return f"({x.p}.0/{x.q}.0)"       # one correctly rounded division
-    if x.is_extended_real is False or x.is_real is False and x.is_finite is not False:
-        raise Unprintable(x, "a complex number: the compiled system is real; remove I "
-                          "(the imaginary unit)")
-    if x.is_finite is False or x is sp.S.NaN:
-        raise Unprintable(x, "not a finite number")
+    if x is sp.S.NaN or x.is_finite is False:
+        raise _Unprintable(x, "not a finite number")
+    if x.is_extended_real is False:
+        raise _Unprintable(x, "a complex number: the compiled system is real; remove I "
+                           "(the imaginary unit)")
     try:
         v = float(x)
     except (TypeError, ValueError, OverflowError):
-        raise Unprintable(x, "not a real number") from None
+        raise _Unprintable(x, "not a real number") from None
     if v != v or v in (float("inf"), float("-inf")):
-        raise Unprintable(sp.Float(x, 5), "beyond the range of double precision "
-                          "(about 1.8e308)")
+        raise _Unprintable(x, "beyond the range of double precision (about 1.8e308)")
     return repr(v)
 
 
@@ -360,7 +359,7 @@ class _Emitter:
         except PrintMethodNotImplementedError:
             # the first part that cannot be printed, for the message
             bad = _first_unprintable(x)
-            raise Unprintable(bad if bad is not None else x, _NOT_C) from None
+            raise _Unprintable(bad if bad is not None else x, _NOT_C) from None
 
     def expr(self, x):
         """C text of x; temporaries it needs are appended to ``lines``."""
@@ -369,7 +368,7 @@ class _Emitter:
         if x.is_Atom:
             if x.is_number:
                 return _constant(x)
-            raise Unprintable(x, _NOT_C)
+            raise _Unprintable(x, _NOT_C)
         t = self.temps.get(x)
         if t is not None:
             return t
@@ -468,8 +467,8 @@ class _Emitter:
                 return f"(1.0/{self.funcs[r]}({self.expr(x.args[0])}))"
             if x.is_Piecewise:
                 return self._fallback(x)
-            raise Unprintable(x, _NOT_C)
-        raise Unprintable(x, _NOT_C)
+            raise _Unprintable(x, _NOT_C)
+        raise _Unprintable(x, _NOT_C)
 
 
 #: Why an expression cannot be printed.
@@ -484,7 +483,7 @@ def _first_unprintable(x):
     for a in x.args:
         try:
             pr.doprint(a)
-        except (PrintMethodNotImplementedError, Unprintable, ValueError):
+        except (PrintMethodNotImplementedError, _Unprintable, ValueError):
             return _first_unprintable(a) or a
     return None
 
@@ -510,7 +509,7 @@ def _block(name, exprs, ir, args, what, static=True):
     try:
         for i, e in enumerate(exprs):
             outs.append(f"    out[{i}] = {em.expr(e)};")
-    except Unprintable as exc:
+    except _Unprintable as exc:
         from .derive import explain
         raise ValueError(explain(ir, what, exc.culprit, exc.reason)) from None
     body = "\n".join(em.lines + outs)
@@ -548,7 +547,7 @@ def _lane_loop(ir, outputs, what):
         em.scan(e)
     try:
         outs = [f"    {out}[{i} * MP_LANES + l] = {em.expr(e)};" for e, out, i in flat]
-    except Unprintable:
+    except _Unprintable:
         return None    # the scalar blocks raise the error that names the culprit
     body = "\n".join(em.lines + outs)
     if len(body) > LANE_MAX:

@@ -222,15 +222,15 @@ def explain(ir, what, culprit, reason, numpy_ok=True) -> str:
     be evaluated: where the user wrote it (or a function of the same kind),
     or, when it comes from a derivative, which of the user's functions has no
     usable derivative."""
-    shown = ir.show(culprit)
+    shown = str(sp.Float(culprit, 5)) if culprit.is_Number else ir.show(culprit)
     fix = "; rewrite it" + (" or use backend='numpy'" if numpy_ok else "")
     for name, src in ir.sources.items():
         if src.has(culprit):
             return f"{name} contains {shown}: {reason}{fix}"
     for name, src in ir.sources.items():
         same = [x for x in sp.preorder_traversal(src) if x.func == culprit.func]
-        if same and type(culprit).__name__ not in NONSMOOTH and culprit.func not in (
-                sp.Derivative, sp.Subs):
+        if same and not culprit.is_Atom and type(culprit).__name__ not in NONSMOOTH \
+                and culprit.func not in (sp.Derivative, sp.Subs):
             return f"{name} contains {ir.show(same[0])}: {reason}{fix}"
     rough = {}      # the user's functions whose first or second derivative holds it
     kind = culprit.func
