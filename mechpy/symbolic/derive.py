@@ -24,6 +24,7 @@ g(q, t) = 0 the blocks are
 """
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 
 import sympy as sp
@@ -166,7 +167,7 @@ def _assumptions(s):
 
 
 #: Reserved names of the plain symbols (time, states, unknowns, parameters).
-_RESERVED = __import__("re").compile(r"mp_(t|[ypzc]\d+)$")
+_RESERVED = re.compile(r"mp_(t|[ypzc]\d+)$")
 
 
 def _check_input(e, what):
@@ -211,9 +212,10 @@ def _where(e, a):
     return str(best.xreplace({a: sp.Symbol(str(sp.Float(a, 5)))}) if a.is_Number else best)
 
 
-#: Functions without a derivative that can be printed (their derivatives are
-#: unevaluated, Heaviside or DiracDelta): refused through the Jacobian.
-NONSMOOTH = ("Abs", "sign", "Max", "Min", "floor", "ceiling", "frac", "Heaviside",
+#: Functions whose derivatives cannot be printed (unevaluated, Heaviside,
+#: DiracDelta): a culprit of these kinds is named through the user's function
+#: that leads to it, not as one of the same kind in the input.
+_NONSMOOTH = ("Abs", "sign", "Max", "Min", "floor", "ceiling", "frac", "Heaviside",
              "DiracDelta", "re", "im", "arg")
 
 
@@ -229,7 +231,7 @@ def explain(ir, what, culprit, reason, numpy_ok=True) -> str:
             return f"{name} contains {shown}: {reason}{fix}"
     for name, src in ir.sources.items():
         same = [x for x in sp.preorder_traversal(src) if x.func == culprit.func]
-        if same and not culprit.is_Atom and type(culprit).__name__ not in NONSMOOTH \
+        if same and not culprit.is_Atom and type(culprit).__name__ not in _NONSMOOTH \
                 and culprit.func not in (sp.Derivative, sp.Subs):
             return f"{name} contains {ir.show(same[0])}: {reason}{fix}"
     rough = {}      # the user's functions whose first or second derivative holds it
