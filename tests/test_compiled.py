@@ -7,6 +7,7 @@ frequencies, string tension), conservation laws, and the cache's behaviour
 across processes."""
 import os
 import pickle
+import re
 import subprocess
 import sys
 import textwrap
@@ -15,6 +16,7 @@ import numpy as np
 import pytest
 import sympy as sp
 from scipy.integrate import solve_ivp
+from sympy.codegen import cfunctions
 
 import mechpy as mp
 
@@ -431,32 +433,141 @@ def test_equations_first_order_against_solve_ivp():
         s.momenta([1.0, 1.0])
 
 
-def test_elementary_functions_against_sympy():
-    # the derivatives (the Jacobian) and the C text of every elementary form
-    # the generator prints itself, against SymPy's own diff and evaluation
-    x, y = mp.coordinates("x y")
-    a = sp.Symbol("a")
-    f1 = (sp.sin(x) * sp.cos(y) ** 3 + sp.tan(x * y) - sp.exp(-a * x) / sp.sqrt(1 + y ** 2)
-          + sp.log(2 + x ** 2) * y ** -2 + x ** sp.Rational(3, 2) + 1 / (x * y) ** 3
-          + a ** x + sp.Float("1.23456789012345678") * y ** 5 + t * sp.cos(t))
-    f2 = (sp.atan(x) + sp.asin(y / 3) + sp.acos(x / 4) + sp.sinh(x - y) * sp.cosh(y) ** 2
-          / sp.tanh(1 + x ** 2) + sp.atan2(y, x) + sp.Rational(2, 7) * x * y ** 7
-          + 12345678901234567 * x + sp.asinh(x * y) + y ** sp.Rational(-1, 2))
-    s = mp.equations([f1, f2], [x, y], params=dict(a=1.7))
-    X, Y = sp.symbols("X Y")
-    sub = {x: X, y: Y}
-    fs = [f.xreplace(sub) for f in (f1, f2)]
-    J = [[sp.diff(f, v) for v in (X, Y)] for f in fs]
+#: Every form the generator prints or differentiates itself, one per state
+#: (so that each is checked on its own): f(x) and the interval x is drawn from.
+_a = sp.Symbol("a")
+ELEMENTARY = [
+    (lambda x: sp.sin(x), (-3, 3)), (lambda x: sp.cos(x), (-3, 3)),
+    (lambda x: sp.tan(x), (-1.4, 1.4)), (lambda x: sp.exp(x), (-3, 3)),
+    (lambda x: sp.exp(-_a * x), (-3, 3)), (lambda x: sp.log(x), (0.1, 5)),
+    (lambda x: sp.sqrt(x), (0.1, 5)), (lambda x: x ** sp.Rational(-1, 2), (0.1, 5)),
+    (lambda x: x ** sp.Rational(3, 2), (0.1, 5)), (lambda x: x ** sp.Rational(-3, 2), (0.1, 5)),
+    (lambda x: x ** sp.Rational(1, 3), (0.1, 5)), (lambda x: x ** 2, (-3, 3)),
+    (lambda x: x ** 3, (-3, 3)), (lambda x: x ** 4, (-3, 3)), (lambda x: x ** 5, (-3, 3)),
+    (lambda x: x ** 7, (-3, 3)), (lambda x: 1 / x, (0.2, 3)), (lambda x: x ** -2, (0.2, 3)),
+    (lambda x: x ** -3, (0.2, 3)), (lambda x: x ** -5, (0.2, 3)), (lambda x: _a ** x, (-3, 3)),
+    (lambda x: x ** x, (0.2, 3)), (lambda x: sp.asin(x), (-0.9, 0.9)),
+    (lambda x: sp.acos(x), (-0.9, 0.9)), (lambda x: sp.atan(x), (-3, 3)),
+    (lambda x: sp.atan2(x, 0.7), (-3, 3)), (lambda x: sp.atan2(0.7, x), (-3, 3)),
+    (lambda x: sp.sinh(x), (-3, 3)), (lambda x: sp.cosh(x), (-3, 3)),
+    (lambda x: sp.tanh(x), (-3, 3)), (lambda x: sp.asinh(x), (-3, 3)),
+    (lambda x: sp.acosh(x), (1.1, 5)), (lambda x: sp.atanh(x), (-0.9, 0.9)),
+    (lambda x: sp.Float("1.23456789012345678") * x, (-3, 3)),
+    (lambda x: 12345678901234567 * x, (-3, 3)), (lambda x: sp.Rational(2, 7) * x, (-3, 3)),
+    (lambda x: sp.sin(x) * sp.cos(x) ** 3, (-3, 3)),
+    (lambda x: sp.log(2 + x ** 2) / x ** 2, (0.2, 3)),
+]
+
+
+def test_elementary_functions_against_sympy(rng):
+    # each elementary form on its own state: f(x_i) and d f/d x_i (the diagonal
+    # of the Jacobian) against SymPy's diff evaluated with 30 digits, each
+    # element to a few units in the last place, so that a wrong sign or a wrong
+    # power in one rule shows (an O(1) error in one term is not hidden behind
+    # the other terms of a sum)
+    xs = mp.coordinates(" ".join(f"x{i}" for i in range(len(ELEMENTARY))))
+    fs = [f(x) for (f, _), x in zip(ELEMENTARY, xs)]
+    s = mp.equations(fs, xs, params=dict(a=1.7))
+    X = sp.Symbol("X")
     worst_f = worst_j = 0.0
-    for tv, xv, yv in [(0.0, 0.5, 0.3), (0.7, 1.3, 1.1), (2.0, 0.9, 0.6)]:
-        vals = {X: xv, Y: yv, a: 1.7, t: tv}
-        ref = np.array([float(f.evalf(30, subs=vals)) for f in fs])
-        Jref = np.array([[float(e.evalf(30, subs=vals)) for e in row] for row in J])
-        got, Jgot = s.rhs(tv, [xv, yv]), s.jacobian(tv, [xv, yv])
-        worst_f = max(worst_f, np.abs(got / ref - 1).max())
-        worst_j = max(worst_j, np.abs(Jgot / Jref - 1).max())
-    assert worst_f < 1e-15     # measured 1.1e-16
-    assert worst_j < 1e-14     # measured 1.4e-15
+    for tv in (0.0, 0.7, 2.0):
+        pt = np.array([rng.uniform(*dom) for _, dom in ELEMENTARY])
+        got, J = s.rhs(tv, pt), s.jacobian(tv, pt)
+        assert np.count_nonzero(J - np.diag(np.diag(J))) == 0
+        for i, ((f, _), xv) in enumerate(zip(ELEMENTARY, pt)):
+            e = f(X)
+            vals = {X: sp.Float(xv, 30), _a: sp.Float(1.7, 30)}
+            ref = float(e.evalf(30, subs=vals))
+            dref = float(sp.diff(e, X).evalf(30, subs=vals))
+            err_f = abs(got[i] - ref) / abs(ref)
+            err_j = abs(J[i, i] - dref) / abs(dref)
+            assert err_f < 1e-15, (e, xv, got[i], ref)      # measured 2.2e-16 at worst
+            assert err_j < 2e-15, (e, xv, J[i, i], dref)    # measured 8.3e-16 at worst
+            worst_f, worst_j = max(worst_f, err_f), max(worst_j, err_j)
+    assert worst_f > 0 or worst_j > 0      # the points are not all exact
+
+
+#: SymPy's named constants (NumberSymbol): printed as double literals.
+CONSTANTS = [sp.pi, sp.E, sp.EulerGamma, sp.GoldenRatio, sp.Catalan, sp.TribonacciConstant]
+
+
+def test_driven_pendulum_with_pi_compiles():
+    # cos(2 pi t) drive: the build's -std=c99 declares no M_PI
+    th, = mp.coordinates("theta")
+    w = th.diff()
+    L = w ** 2 / 2 + sp.cos(th) + sp.cos(2 * sp.pi * t) * th
+    s = mp.lagrangian(L, [th])
+    assert not re.search(r"\bM_[A-Z]", s.c_source) and repr(np.pi) in s.c_source
+    for tv, y in [(0.0, [0.3, 0.1]), (0.3, [1.1, -0.4]), (1.7, [-2.0, 0.9])]:
+        # theta'' = -sin(theta) + cos(2 pi t)
+        assert s.rhs(tv, y)[1] == pytest.approx(-np.sin(y[0]) + np.cos(2 * np.pi * tv),
+                                                rel=1e-15, abs=1e-16)
+
+
+@pytest.mark.parametrize("c", CONSTANTS, ids=str)
+def test_constants_against_the_numpy_backend(c, rng):
+    th, = mp.coordinates("theta")
+    w = th.diff()
+    L = (1 + c * sp.sin(th) ** 2) * w ** 2 / 2 + c * sp.cos(th) + sp.cos(c * t) * th \
+        - sp.sqrt(c) * th ** 2 / 2 + sp.exp(c) * th ** 4 / 100
+    s, n = mp.lagrangian(L, [th]), mp.lagrangian(L, [th], backend="numpy")
+    assert repr(float(c)) in s.c_source       # the double nearest to c, as a literal
+    for tv in (0.0, 0.4, 1.3):
+        y = rng.uniform(-2, 2, 2)
+        # measured: rhs 3.9e-16, Jacobian within 1e-15, energy 3.2e-15 (relative)
+        assert np.allclose(s.rhs(tv, y), n.rhs(tv, y), rtol=2e-15, atol=0)
+        assert np.allclose(s.jacobian(tv, y), n.jacobian(tv, y), rtol=2e-15, atol=1e-15)
+        assert s.energy(y, tv) == pytest.approx(n.energy(y, tv), rel=1e-14, abs=0)
+    # a constant alone: its literal is the double nearest to it
+    x, = mp.coordinates("x")
+    e = mp.equations([c * x], [x])
+    assert e.rhs(0.0, [1.0])[0] == float(sp.N(c, 40))
+
+
+#: Special functions of C99's <math.h> (and SymPy's reciprocal ones), f(x, y).
+SPECIAL = {
+    "erf": lambda x, y: sp.erf(x * y),          # its derivative holds sqrt(pi)
+    "erfc": lambda x, y: sp.erfc(x - y),
+    "expm1": lambda x, y: cfunctions.expm1(x * y),
+    "log1p": lambda x, y: cfunctions.log1p(x ** 2 + y),
+    "exp2": lambda x, y: cfunctions.exp2(x * y),
+    "log2": lambda x, y: cfunctions.log2(x ** 2 + 1),
+    "log10": lambda x, y: cfunctions.log10(x ** 2 + y ** 2),
+    "log(.., 10)": lambda x, y: sp.log(x ** 2 + 1, 10),
+    "hypot": lambda x, y: cfunctions.hypot(x, y),
+    "cot": lambda x, y: sp.cot(x + 2), "sec": lambda x, y: sp.sec(x * y),
+    "csc": lambda x, y: sp.csc(x + 2), "coth": lambda x, y: sp.coth(x + 3),
+    "sech": lambda x, y: sp.sech(x * y), "csch": lambda x, y: sp.csch(x + 3),
+    "Piecewise": lambda x, y: sp.Piecewise((x ** 2 * y, x > 0.1), (x * y, True)),
+}
+
+
+@pytest.mark.parametrize("name", SPECIAL)
+def test_special_functions_against_the_numpy_backend(name, rng):
+    x, y = mp.coordinates("x y")
+    f = SPECIAL[name](x, y)
+    rhs = [y * f + sp.pi * x, -x * f]
+    s, n = mp.equations(rhs, [x, y]), mp.equations(rhs, [x, y], backend="numpy")
+    for tv in (0.0, 0.9):
+        v = rng.uniform(-1.5, 1.5, 2)
+        # measured: rhs 1.9e-16 (coth), Jacobian within 1e-15
+        assert np.allclose(s.rhs(tv, v), n.rhs(tv, v), rtol=2e-15, atol=0)
+        assert np.allclose(s.jacobian(tv, v), n.jacobian(tv, v), rtol=2e-15, atol=1e-15)
+
+
+def test_cbrt_against_sympy():
+    # (the NumPy backend has no Cbrt): against SymPy's evaluation, for x > 0
+    # (SymPy's Cbrt is the principal root x**(1/3))
+    x, = mp.coordinates("x")
+    X = sp.Symbol("X")
+    f = cfunctions.Cbrt(X)
+    s = mp.equations([f.subs(X, x)], [x])
+    for v in (0.3, 2.0, 5.0):
+        vals = {X: sp.Float(v, 30)}
+        assert s.rhs(0, [v])[0] == pytest.approx(float(sp.cbrt(X).evalf(30, subs=vals)),
+                                                 rel=4e-16)
+        assert s.jacobian(0, [v])[0, 0] == pytest.approx(
+            float(sp.diff(f, X).evalf(30, subs=vals)), rel=4e-16)
 
 
 def test_equations_with_time_and_radau():
@@ -630,6 +741,146 @@ def test_two_processes_building_at_once(tmp_path):
     assert not [f for f in files if f.startswith(".mp_")]    # no temporaries left
 
 
+#: A system built in a child process (a damaged library must not be loaded by
+#: the test process itself: truncating a mapped file can kill it): prints
+#: whether it compiled and theta'' at (0.4, 0.1).
+_CUBIC = """
+    import sympy as sp, mechpy as mp
+    t = sp.Symbol("t")
+    th, = mp.coordinates("theta")
+    L = th.diff(t)**2 / 2 + sp.cos(th) + sp.Symbol("kappa3") * th**3
+    s = mp.lagrangian(L, [th], params=dict(kappa3=0.25))
+    print(s._compiled, repr(float(s.rhs(0.0, [0.4, 0.1])[1])))
+"""
+_CUBIC_ACC = -np.sin(0.4) + 3 * 0.25 * 0.4 ** 2      # theta'' = -sin(theta) + 3 k theta^2
+
+
+def _damage(path, how):
+    data = path.read_bytes()
+    if how == "truncate":
+        path.write_bytes(data[:len(data) // 2])
+    elif how == "flip":             # bytes of the code, the tables and the headers
+        b = bytearray(data)
+        for i in range(0, len(b), max(1, len(b) // 97)):
+            b[i] ^= 0xFF
+        path.write_bytes(bytes(b))
+    elif how == "empty":
+        path.write_bytes(b"")
+    elif how == "unrecorded":       # a library without its recorded sha256
+        os.unlink(str(path)[:-3] + ".json")
+    elif how == "other":            # another valid library in its place
+        import shutil
+        shutil.copy(mp._core.__file__, path)
+
+
+@pytest.mark.parametrize("how", ["truncate", "flip", "empty", "unrecorded", "other"])
+def test_a_damaged_cached_library_is_rebuilt(how, tmp_path):
+    import hashlib
+    import json
+    env = {"MECHPY_CACHE_DIR": str(tmp_path)}
+    r = _run(_CUBIC, env, tmp_path)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.split()[0] == "True"
+    so, = tmp_path.glob("mp_*.so")
+    _damage(so, how)
+    # a fresh process: the damaged file is detected before it is loaded (no
+    # SIGBUS or SIGSEGV, no OSError), compiled again and replaced
+    r = _run(_CUBIC, env, tmp_path)
+    assert r.returncode == 0, (r.returncode, r.stderr[-2000:])
+    compiled, acc = r.stdout.split()
+    assert compiled == "True"
+    assert float(acc) == pytest.approx(_CUBIC_ACC, rel=1e-15, abs=1e-16)
+    rec = json.loads((tmp_path / (so.name[:-3] + ".json")).read_text())
+    assert rec["sha256"] == hashlib.sha256(so.read_bytes()).hexdigest()
+    # and the repaired cache serves the next process without compiling
+    r = _run(_CUBIC, env, tmp_path)
+    assert r.returncode == 0 and r.stdout.split()[0] == "False", r.stderr
+
+
+def test_a_compiler_that_writes_nothing(tmp_path, monkeypatch):
+    monkeypatch.setenv("MECHPY_CACHE_DIR", str(tmp_path))
+    monkeypatch.setenv("MECHPY_CC", "true")         # exits 0, writes no library
+    x, = mp.coordinates("x")
+    L = x.diff(t) ** 2 / 2 - sp.Symbol("c5") * x ** 5
+    with pytest.raises(mp.CompileError, match="'true .*' exited 0 but wrote no library"):
+        mp.lagrangian(L, [x], params=dict(c5=1.0))
+    assert not list(tmp_path.glob("*.so"))           # nothing left to fail later
+    monkeypatch.delenv("MECHPY_CC")
+    s = mp.lagrangian(L, [x], params=dict(c5=1.0))
+    assert s._compiled and s.rhs(0, [2.0, 0.0])[1] == -5 * 2.0 ** 4
+
+
+def test_a_stored_description_that_is_not_one(tmp_path, monkeypatch):
+    import json
+    monkeypatch.setenv("MECHPY_CACHE_DIR", str(tmp_path))
+    x, = mp.coordinates("x")
+    L = x.diff(t) ** 2 / 2 - sp.Symbol("c6") * x ** 6
+    mp.lagrangian(L, [x], params=dict(c6=1.0))
+    meta, = tmp_path.glob("sys_*.json")
+    for junk in ("[]", "{}", '{"param_names": ["c6"]}', "not json", "null"):
+        meta.write_text(junk)
+        s = mp.lagrangian(L, [x], params=dict(c6=1.0))       # derived again
+        assert s.rhs(0, [2.0, 0.0])[1] == -6 * 2.0 ** 5
+        assert json.loads(meta.read_text())["param_names"] == ["c6"]     # and repaired
+
+
+def test_a_cache_folder_that_is_a_file(tmp_path, monkeypatch):
+    from mechpy.symbolic import build
+    monkeypatch.setattr(build, "_PRIVATE", [], raising=False)         # this test's private folder
+    bad = tmp_path / "not_a_folder"
+    bad.write_text("")
+    monkeypatch.setenv("MECHPY_CACHE_DIR", str(bad))
+    x, = mp.coordinates("x")
+    L = x.diff(t) ** 2 / 2 - sp.Symbol("c7") * x ** 7
+    with pytest.warns(RuntimeWarning, match=f"cache folder '{bad}' cannot be used.*"
+                                            "MECHPY_CACHE_DIR"):
+        s = mp.lagrangian(L, [x], params=dict(c7=1.0))
+    assert s.rhs(0, [1.0, 0.0])[1] == -7.0
+    assert os.path.dirname(s._path) == build._PRIVATE[0]
+    import warnings
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")                   # warned once only
+        s2 = mp.lagrangian(L + x ** 2, [x], params=dict(c7=1.0))
+    assert s2.rhs(0, [1.0, 0.0])[1] == -5.0      # + 2x from the added x**2
+
+
+def test_a_read_only_cache_folder(tmp_path, monkeypatch):
+    import tempfile
+
+    from mechpy.symbolic import build
+    ro = tmp_path / "ro"
+    ro.mkdir()
+    r = _run(_CUBIC, {"MECHPY_CACHE_DIR": str(ro)}, tmp_path)    # built while writable
+    assert r.returncode == 0, r.stderr
+    ro.chmod(0o555)
+    if os.geteuid() == 0:      # root writes anyway: the refusal a user would get
+        real = tempfile.mkstemp
+
+        def mkstemp(*a, dir=None, **kw):
+            if dir is not None and os.path.samefile(dir, ro):
+                raise PermissionError(13, "Permission denied", os.path.join(dir, ".mp_x"))
+            return real(*a, dir=dir, **kw)
+        monkeypatch.setattr(tempfile, "mkstemp", mkstemp)
+    monkeypatch.setattr(build, "_PRIVATE", [], raising=False)
+    monkeypatch.setenv("MECHPY_CACHE_DIR", str(ro))
+    try:
+        # what it holds is loaded from it
+        th, = mp.coordinates("theta")
+        L = th.diff(t) ** 2 / 2 + sp.cos(th) + sp.Symbol("kappa3") * th ** 3
+        s = mp.lagrangian(L, [th], params=dict(kappa3=0.25))
+        assert not s._compiled and os.path.dirname(s._path) == str(ro)
+        assert s.rhs(0.0, [0.4, 0.1])[1] == pytest.approx(_CUBIC_ACC, rel=1e-15, abs=1e-16)
+        # a new system goes to a private folder, with a warning naming the cache
+        with pytest.warns(RuntimeWarning, match=f"'{ro}' cannot be used .*Permission"):
+            s2 = mp.lagrangian(L + th ** 4, [th], params=dict(kappa3=0.25))
+        assert s2._compiled and os.path.dirname(s2._path) == build._PRIVATE[0]
+        assert s2.rhs(0.0, [0.4, 0.1])[1] == pytest.approx(_CUBIC_ACC + 4 * 0.4 ** 3,
+                                                          rel=1e-15, abs=1e-16)
+        assert sorted(p.name[:3] for p in ro.iterdir()) == ["mp_", "mp_", "sys"]
+    finally:
+        ro.chmod(0o755)
+
+
 def test_pickle_loads_in_a_fresh_process(double_pendulum, tmp_path):
     s = double_pendulum.replace(m2=1.1)
     blob = tmp_path / "scene.pkl"
@@ -736,8 +987,64 @@ def test_singular_mass_matrix_at_the_initial_state():
 
 def test_unprintable_expression_is_named():
     x, = mp.coordinates("x")
-    with pytest.raises(ValueError, match="besselj"):
+    with pytest.raises(ValueError, match=r"L contains besselj\(0, x\)"):
         mp.lagrangian(x.diff(t) ** 2 / 2 - sp.besselj(0, x), [x])
+    # the NumPy backend: what lambdify evaluates runs (a Sum), the rest is named
+    k = sp.Symbol("k", integer=True)
+    s = mp.lagrangian(x.diff(t) ** 2 / 2 - sp.Sum(x ** k / k, (k, 1, 3)), [x],
+                      backend="numpy")
+    assert s.rhs(0, [0.5, 0.0])[1] == pytest.approx(-(1 + 0.5 + 0.25), rel=1e-15)
+    s = mp.lagrangian(x.diff(t) ** 2 / 2 - sp.besselj(0, x), [x], backend="numpy")
+    with pytest.raises(ValueError, match="uses besselj, which sympy.lambdify cannot"):
+        s.rhs(0, [0.5, 0.0])
+
+
+def _bad_systems():
+    th, = mp.coordinates("theta")
+    w = th.diff()
+    k = sp.Symbol("k", integer=True)
+    a, a_pos = sp.Symbol("a"), sp.Symbol("a", positive=True)
+    return {
+        "I": (w ** 2 / 2 + sp.I * th, r"L contains the imaginary unit I"),
+        "Sum": (w ** 2 / 2 + sp.Sum(th ** k, (k, 1, 3)), r"L contains Sum\(theta\*\*k"),
+        "1e400": (w ** 2 / 2 + sp.Integer(10) ** 400 * th ** 2,
+                  r"L contains the number 1\.0+E\+400 .*beyond the range of double"),
+        "oo": (w ** 2 / 2 + sp.oo * th, r"L contains oo, not a finite number"),
+        "names": (w ** 2 / 2 + a * th ** 2 + a_pos * th,
+                  r"two different symbols are named 'a' \(assumptions none and "
+                  r"\{positive=True\}\)"),
+        "sign": (w ** 2 / 2 + sp.sign(th) * th ** 2,
+                 r"sign\(theta\) \(in L\): its derivative, Derivative\(sign\(theta\), "
+                 r"theta\).*refused through the Jacobian"),
+        "Abs": (w ** 2 / 2 - sp.Abs(th), r"Abs\(theta\) \(in L\).*refused through the "
+                                          "Jacobian"),
+        "Max": (w ** 2 / 2 - sp.Max(th, 1), r"Max\(1, theta\) \(in L\).*Heaviside"),
+        "floor": (w ** 2 / 2 - sp.floor(th) * th, r"floor\(theta\) \(in L\)"),
+        "gamma": (w ** 2 / 2 - sp.gamma(th + 3), r"gamma\(theta \+ 3\) \(in L\).*"
+                                                  r"polygamma"),
+        "reserved": (w ** 2 / 2 - sp.Symbol("mp_y0") * th, r"mp_y0, a name mechpy reserves"),
+    }
+
+
+@pytest.mark.parametrize("case", list(_bad_systems()))
+def test_what_a_system_may_not_contain_is_named(case):
+    # a ValueError naming the culprit, never the compiler's output or a SymPy
+    # printer's internal message
+    L, msg = _bad_systems()[case]
+    th = mp.coordinates("theta")
+    params = {"a": 1.0} if case == "names" else {"mp_y0": 1.0} if case == "reserved" else None
+    with pytest.raises(ValueError, match=msg):
+        mp.lagrangian(L, th, params=params)
+
+
+def test_equations_refuse_relations_and_rough_functions():
+    y, = mp.coordinates("y")
+    with pytest.raises(ValueError, match=r"rhs\[0\] = Eq\(y\(t\), 1\) is an equation"):
+        mp.equations([sp.Eq(y, 1)], [y])
+    with pytest.raises(ValueError, match=r"sign\(y\) \(in rhs\[0\]\).*needed by the Jacobian"):
+        mp.equations([sp.sign(y)], [y])
+    with pytest.raises(ValueError, match=r"L = Eq\(y\(t\), 0\) is an equation"):
+        mp.lagrangian(sp.Eq(y, 0), [y])
 
 
 def test_wrong_number_of_forces():

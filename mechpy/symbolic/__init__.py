@@ -121,7 +121,12 @@ def _make(kind, ir_fn, key_parts, params, backend, constraints=()):
             return CompiledScene(meta, params, "c")
     from . import codegen    # SymPy's C printer: loaded only to derive
     ir = ir_fn()
-    source = codegen.c_source(ir, _core.STATUS)
+    try:
+        source = codegen.c_source(ir, _core.STATUS)
+    except ValueError as exc:
+        if backend == "c":
+            raise
+        source = f"/* not printable as C: {exc} */"    # NumPy evaluates it
     meta = _meta(ir, source, constraints, numpy_blocks=backend == "numpy")
     scene = CompiledScene(meta, params, backend)
     if backend == "c":
@@ -184,10 +189,21 @@ def lagrangian(L, q, params=None, constraints=(), forces=None, *, baumgarte=None
     ------
     ValueError
         A free symbol without a value (named), a coordinate absent from L, a
-        wrong number of forces, a velocity-dependent constraint, an
-        expression SymPy cannot print as C (named).
+        wrong number of forces, a velocity-dependent constraint, or an
+        expression that cannot be compiled, named with where it is.  The
+        expressions may hold numbers and SymPy's constants (printed as
+        doubles), +, *, powers, ``Piecewise`` and the functions sin, cos, tan,
+        cot, sec, csc, their inverses asin, acos, atan, atan2, the hyperbolic
+        ones and their inverses, exp, log, erf, erfc and
+        ``sympy.codegen.cfunctions``' expm1, log1p, exp2, log2, log10, Cbrt,
+        hypot.  Refused: other functions (Sum, besselj), the imaginary unit,
+        oo or numbers beyond the double range, an ``Eq`` where an expression
+        is expected, two symbols of one name with different assumptions; and,
+        through the Jacobian (their derivatives cannot be printed), Abs, sign,
+        Max, Min, floor, ceiling, gamma, loggamma.
     CompileError
-        No C compiler, or it failed (the command and its first lines).
+        No C compiler, or it failed (the command and its first lines), or it
+        wrote no library.
 
     Examples
     --------
@@ -242,6 +258,19 @@ def equations(rhs, y, params=None, *, energy=None, backend: str = "c"):
     CompiledScene
         ``rhs``, ``jacobian`` (analytic), ``energy`` (when given),
         ``equations``, ``c_source``.
+
+    Raises
+    ------
+    ValueError
+        A free symbol without a value, a wrong number of expressions, or an
+        expression that cannot be compiled, named: the expressions may hold
+        what :func:`lagrangian` lists (numbers and constants, +, *, powers,
+        Piecewise, the elementary functions, erf, erfc, ...); an ``Eq`` in
+        place of a right-hand side, the imaginary unit, numbers beyond the
+        double range and other functions are refused, and Abs, sign, Max,
+        Min, floor, ceiling, gamma through the Jacobian.
+    CompileError
+        No C compiler, or it failed, or it wrote no library.
 
     Examples
     --------

@@ -11,14 +11,20 @@ the sha256 of its source, the compiler command, the flags and the ABI
 version, so a second build of the same system loads the file without
 compiling.  Libraries are compiled to a temporary name in that folder and
 moved into place with ``os.replace`` (atomic): processes building the same
-system at once are safe.
+system at once are safe.  Each library's sha256 is recorded beside it when it
+is built (``mp_<key>.json``) and checked before the file is loaded: a
+truncated, damaged, foreign or unrecorded file is compiled again and replaced,
+never loaded (loading a damaged shared object can kill the process).  A cache
+folder that cannot be made or takes no file (a file of that name, a read-only
+folder) is still read; new systems then go to a private temporary folder for
+the process, with one RuntimeWarning that names the cache.
 """
 from __future__ import annotations
 
 import os
 import threading
 
-# ctypes, hashlib, json, shlex, subprocess, sysconfig and tempfile are imported
+# ctypes, hashlib, json, shlex, subprocess, sysconfig, tempfile and warnings are imported
 # where they are used: importing mechpy must stay fast.
 
 #: Version of the generated libraries' interface (function set, signatures,
@@ -64,15 +70,75 @@ class CompileError(_error_base(), RuntimeError):
     """
 
 
-def cache_dir() -> str:
-    """The folder of compiled systems (created on demand)."""
+def _configured() -> str:
+    """The cache folder the environment names (see the module docstring)."""
     d = os.environ.get("MECHPY_CACHE_DIR")
     if not d:
         xdg = os.environ.get("XDG_CACHE_HOME")
         d = os.path.join(xdg, "mechpy") if xdg else os.path.join(
             os.path.expanduser("~"), ".cache", "mechpy")
-    os.makedirs(d, exist_ok=True)
     return d
+
+
+#: This process's private temporary cache, once the configured one proved
+#: unusable (see _private); removed at exit.
+_PRIVATE: list = []
+_PRIVATE_LOCK = threading.Lock()
+
+
+def _private(folder: str, exc: BaseException) -> str:
+    """A private temporary cache folder for this process, made (with a
+    warning, once per process) when ``folder`` cannot be used."""
+    import atexit
+    import shutil
+    import tempfile
+    import warnings
+    with _PRIVATE_LOCK:
+        if not _PRIVATE:
+            d = tempfile.mkdtemp(prefix="mechpy-cache-")
+            atexit.register(shutil.rmtree, d, True)
+            _PRIVATE.append(d)
+            warnings.warn(f"mechpy's cache folder {folder!r} cannot be used ({exc}); compiled "
+                          f"systems go to the temporary folder {d!r} for this process and "
+                          "are compiled again in the next one: set MECHPY_CACHE_DIR to a "
+                          "writable folder", RuntimeWarning, stacklevel=4)
+        return _PRIVATE[0]
+
+
+def cache_dir() -> str:
+    """The folder of compiled systems (created on demand): ``MECHPY_CACHE_DIR``,
+    else ``$XDG_CACHE_HOME/mechpy``, else ``~/.cache/mechpy``; when that
+    cannot be made (a file of that name, no permission), a private temporary
+    folder for this process, with a RuntimeWarning once."""
+    d = _configured()
+    try:
+        os.makedirs(d, exist_ok=True)
+    except OSError as exc:
+        return _private(d, exc)
+    return d
+
+
+def _folders() -> list:
+    """The folders to look for a cached file in: the cache, then the private
+    one if this process has had to make it."""
+    return [cache_dir()] + [d for d in _PRIVATE if d != cache_dir()]
+
+
+class _Unwritable(Exception):
+    """A temporary file could not be made in a cache folder."""
+
+    def __init__(self, folder, exc):
+        super().__init__(folder, exc)
+        self.folder, self.exc = folder, exc
+
+
+def _mkstemp(folder: str, suffix: str):
+    """tempfile.mkstemp in ``folder``; _Unwritable if the folder takes no file."""
+    import tempfile
+    try:
+        return tempfile.mkstemp(suffix=suffix, prefix=".mp_", dir=folder)
+    except OSError as exc:
+        raise _Unwritable(folder, exc) from None
 
 
 def compiler() -> list:
@@ -135,18 +201,17 @@ def _compile(source: str, cmd: list, target: str, folder: str) -> None:
     atomically).  Several translation units (see :func:`units`) are compiled
     at once, each by its own compiler process, then linked.  Temporary files
     in ``folder`` are removed on every path; CompileError on failure."""
-    import tempfile
     flags = list(_flags(source))
     made = []
     procs = []
     try:
-        fd, tmp_so = tempfile.mkstemp(suffix=".so", prefix=".mp_", dir=folder)
+        fd, tmp_so = _mkstemp(folder, ".so")
         os.close(fd)
         made.append(tmp_so)
         parts = units(source)
         srcs = []
         for text in parts:
-            fd, src = tempfile.mkstemp(suffix=".c", prefix=".mp_", dir=folder)
+            fd, src = _mkstemp(folder, ".c")
             made.append(src)
             with os.fdopen(fd, "w") as f:
                 f.write(text)
@@ -166,6 +231,10 @@ def _compile(source: str, cmd: list, target: str, folder: str) -> None:
                 _wait(proc, full)
             full = cmd + ["-shared", "-o", tmp_so] + objs + list(LIBS)
             _wait(_run(full), full)
+        if os.path.getsize(tmp_so) == 0:
+            raise CompileError(f"the C compiler {' '.join(full)!r} exited 0 but wrote no "
+                               "library: set MECHPY_CC to a working C compiler or use "
+                               "backend='numpy'")
         os.replace(tmp_so, target)
     finally:
         for proc, _ in procs:      # a unit failed: stop the others
@@ -178,59 +247,170 @@ def _compile(source: str, cmd: list, target: str, folder: str) -> None:
                 pass
 
 
+def _digest(path: str) -> str:
+    """The sha256 of a file's bytes (hex)."""
+    import hashlib
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def _record_path(lib: str) -> str:
+    """The file that records a library's sha256: ``mp_<key>.json`` beside it."""
+    return lib[:-3] + ".json"
+
+
+def _recorded(lib: str):
+    """The sha256 recorded for the library ``lib`` when it was built, or None."""
+    import json
+    try:
+        with open(_record_path(lib)) as f:
+            rec = json.load(f)
+    except (OSError, ValueError):
+        return None
+    h = rec.get("sha256") if isinstance(rec, dict) else None
+    return h if isinstance(h, str) else None
+
+
+def _load(path: str):
+    """ctypes.CDLL(path) with its ABI version checked; CompileError naming the
+    file if it does not load or is not a generated library of this version."""
+    import ctypes
+    try:
+        lib = ctypes.CDLL(path)
+        dims = (ctypes.c_long * 5).in_dll(lib, "mp_gen_dims")
+    except (OSError, ValueError) as exc:
+        raise CompileError(f"the compiled system {path} does not load ({exc}): delete it "
+                           "(it is compiled again) or use backend='numpy'") from None
+    if dims[4] != ABI_VERSION:
+        raise CompileError(f"{path} has ABI version {dims[4]}, expected {ABI_VERSION}: "
+                           "delete it")
+    return lib
+
+
+def _cached(path: str):
+    """The library at ``path`` if it is there, unchanged since it was built
+    (its sha256 is the one recorded then) and loads; else None (it is then
+    built again: a truncated, damaged or foreign file is never loaded, as
+    loading it may crash the process)."""
+    want = _recorded(path)
+    try:
+        if want is None or _digest(path) != want:
+            return None
+    except OSError:
+        return None
+    try:
+        return _load(path)
+    except CompileError:
+        return None
+
+
+def _build_into(source: str, cmd: list, path: str, folder: str):
+    """Compile ``source`` into ``path`` (in ``folder``) and load it: the
+    library is compiled to a temporary name, hashed and loaded from there,
+    then its sha256 is recorded and it is moved into place (atomically; what
+    this process loaded is what it hashed, whatever another process writes)."""
+    import json
+    fd, tmp = _mkstemp(folder, ".so")
+    os.close(fd)
+    fd_rec, tmp_rec = None, None
+    try:
+        _compile(source, cmd, tmp, folder)
+        digest = _digest(tmp)
+        try:
+            lib = _load(tmp)
+        except CompileError as exc:
+            raise CompileError(f"the library {' '.join(cmd)!r} compiled for {path} does not "
+                               f"load: {exc}") from None
+        fd_rec, tmp_rec = _mkstemp(folder, ".json")
+        with os.fdopen(fd_rec, "w") as f:
+            json.dump({"sha256": digest, "abi": ABI_VERSION, "compiler": cmd}, f)
+        os.replace(tmp_rec, _record_path(path))
+        os.replace(tmp, path)
+        return lib
+    finally:
+        for f in (tmp, tmp_rec):
+            if f is not None:
+                try:
+                    os.unlink(f)
+                except FileNotFoundError:
+                    pass
+
+
 def build(source: str):
     """Compile ``source`` (or find it in the cache) and load it.
+
+    A cached library is loaded only if its sha256 is the one recorded when it
+    was built (``mp_<key>.json`` beside it); a damaged or unrecorded one is
+    compiled again and replaced.  A cache folder that takes no file (read-only,
+    not a folder) is replaced by a private temporary one (see cache_dir).
 
     Returns
     -------
     (library, path, compiled)
         The loaded ``ctypes.CDLL``, its file, and whether this call compiled it.
     """
-    import ctypes
     cmd = compiler()
-    folder = cache_dir()
-    path = os.path.join(folder, f"mp_{_key(source, cmd)}.so")
+    name = f"mp_{_key(source, cmd)}.so"
     with _LOCK:
-        lib = _LOADED.get(path)
-        if lib is not None:
-            return lib, path, False
-        compiled = False
-        if not os.path.exists(path):
-            _compile(source, cmd, path, folder)
-            compiled = True
-        lib = ctypes.CDLL(path)
-        dims = (ctypes.c_long * 5).in_dll(lib, "mp_gen_dims")
-        if dims[4] != ABI_VERSION:
-            raise CompileError(f"{path} has ABI version {dims[4]}, expected {ABI_VERSION}: "
-                               "delete it")
+        for folder in _folders():
+            path = os.path.join(folder, name)
+            lib = _LOADED.get(path)
+            if lib is None and os.path.exists(path):
+                lib = _cached(path)
+                if lib is not None:
+                    _LOADED[path] = lib
+            if lib is not None:
+                return lib, path, False
+        folder = cache_dir()
+        try:
+            path = os.path.join(folder, name)
+            lib = _build_into(source, cmd, path, folder)
+        except _Unwritable as exc:
+            folder = _private(exc.folder, exc.exc)
+            path = os.path.join(folder, name)
+            lib = _build_into(source, cmd, path, folder)
         _LOADED[path] = lib
-        return lib, path, compiled
+        return lib, path, True
 
 
-def _meta_path(key: str) -> str:
-    return os.path.join(cache_dir(), f"sys_{key}.json")
+#: The keys of a derived system's stored description (see symbolic._meta).
+META_KEYS = ("kind", "n", "nc", "k", "nq", "names", "param_names", "cyclic", "has_energy",
+             "source", "equations", "constraints")
 
 
 def load_meta(key: str):
-    """The stored description of a derived system, or None."""
+    """The stored description of a derived system, or None (none stored, or
+    unreadable or not a description: it is then derived again)."""
     import json
-    try:
-        with open(_meta_path(key)) as f:
-            return json.load(f)
-    except (OSError, ValueError):
-        return None
+    for folder in _folders():
+        try:
+            with open(os.path.join(folder, f"sys_{key}.json")) as f:
+                meta = json.load(f)
+        except (OSError, ValueError):
+            continue
+        if isinstance(meta, dict) and all(k in meta for k in META_KEYS) \
+                and isinstance(meta["source"], str) and isinstance(meta["param_names"], list):
+            return meta
+    return None
 
 
 def store_meta(key: str, meta: dict) -> None:
-    """Store a derived system's description (atomically)."""
+    """Store a derived system's description (atomically), in the cache or,
+    when it takes no file, in the private temporary one."""
     import json
-    import tempfile
     folder = cache_dir()
-    fd, tmp = tempfile.mkstemp(suffix=".json", prefix=".mp_", dir=folder)
+    try:
+        fd, tmp = _mkstemp(folder, ".json")
+    except _Unwritable as exc:
+        folder = _private(exc.folder, exc.exc)
+        fd, tmp = _mkstemp(folder, ".json")
     try:
         with os.fdopen(fd, "w") as f:
             json.dump(meta, f)
-        os.replace(tmp, _meta_path(key))
+        os.replace(tmp, os.path.join(folder, f"sys_{key}.json"))
     except BaseException:
         try:
             os.unlink(tmp)

@@ -230,8 +230,49 @@ static MP_INLINE void mp_lu_lanes(double *A, double *b, int *st)
 LANE_MAX = 100_000
 
 
+class _Unprintable(ValueError):
+    """An expression the generator cannot print as C: ``culprit`` is the
+    sub-expression, ``reason`` what is wrong with it."""
+
+    def __init__(self, culprit, reason):
+        super().__init__(f"{culprit}: {reason}")
+        self.culprit = culprit
+        self.reason = reason
+
+
+def _constant(x) -> str:
+    """A C literal for the real number x (a SymPy number or number symbol such
+    as pi, E, EulerGamma): the double nearest to it, printed with ``repr``
+    (17 significant digits at most, read back exactly).  The build's -std=c99
+    declares no M_PI or M_E, and a literal is the same on every compiler.
+    _Unprintable for a non-real or non-finite value, or one beyond the range of
+    double precision."""
+    if x.is_Integer and abs(int(x)) < 2 ** 53:
+        return f"{int(x)}.0"
+    if x.is_Rational and not x.is_Integer and abs(x.p) < 2 ** 53 and x.q < 2 ** 53:
+        return f"({x.p}.0/{x.q}.0)"       # one correctly rounded division
+    if x is sp.S.NaN or x.is_finite is False:
+        raise _Unprintable(x, "not a finite number")
+    if x.is_extended_real is False:
+        raise _Unprintable(x, "a complex number: the compiled system is real; remove I "
+                           "(the imaginary unit)")
+    try:
+        v = float(x)
+    except (TypeError, ValueError, OverflowError):
+        raise _Unprintable(x, "not a real number") from None
+    if v != v or v in (float("inf"), float("-inf")):
+        raise _Unprintable(x, "beyond the range of double precision (about 1.8e308)")
+    return repr(v)
+
+
 class _Printer(C99CodePrinter):
-    """C99 printer; small integer powers become products (exact, fast)."""
+    """C99 printer (for what the emitter does not print itself, e.g. Piecewise):
+    numbers and constants as literals (no M_PI: see _constant), small integer
+    powers as products (exact, fast), strict (anything it cannot print raises
+    PrintMethodNotImplementedError)."""
+
+    def __init__(self):
+        super().__init__(dict(math_macros={}, strict=True))
 
     def _print_Pow(self, expr):
         b, e = expr.as_base_exp()
@@ -242,12 +283,31 @@ class _Printer(C99CodePrinter):
             return f"(1.0/({self._print(b)}))"
         return super()._print_Pow(expr)
 
+    def _print_Number(self, expr):
+        return _constant(expr)
+
+    _print_Integer = _print_Rational = _print_Float = _print_NumberSymbol = _print_Number
+    _print_Infinity = _print_NegativeInfinity = _print_NaN = _print_Number
+    _print_ComplexInfinity = _print_ImaginaryUnit = _print_Number
+
 
 #: C names of the one-argument functions printed directly.
 _FUNCS1 = {"sin": "sin", "cos": "cos", "tan": "tan", "exp": "exp", "log": "log",
            "asin": "asin", "acos": "acos", "atan": "atan", "sinh": "sinh", "cosh": "cosh",
            "tanh": "tanh", "asinh": "asinh", "acosh": "acosh", "atanh": "atanh",
-           "Abs": "fabs", "pow": "pow", "atan2": "atan2"}
+           "Abs": "fabs", "pow": "pow", "atan2": "atan2",
+           # C99 <math.h> functions SymPy knows
+           "erf": "erf", "erfc": "erfc", "gamma": "tgamma", "loggamma": "lgamma",
+           "exp2": "exp2", "expm1": "expm1", "log2": "log2", "log10": "log10",
+           "log1p": "log1p", "Cbrt": "cbrt", "floor": "floor", "ceiling": "ceil",
+           "hypot": "hypot", "Max": "fmax", "Min": "fmin"}
+
+#: Reciprocal functions, printed as 1/(their reciprocal).
+_RECIPROCAL = {"cot": "tan", "sec": "cos", "csc": "sin", "coth": "tanh", "sech": "cosh",
+               "csch": "sinh"}
+
+#: Functions of two arguments (Max and Min of more are nested).
+_FUNCS2 = ("atan2", "hypot", "Max", "Min")
 
 #: Functions with a vector variant in glibc's libmvec: the lane right-hand
 #: side calls them as mp_lane_<name> (declared in LANE_RUNTIME), which a
@@ -290,28 +350,25 @@ class _Emitter:
             if c is None and (x.is_Add or x.is_Mul or x.is_Pow or x.is_Function):
                 stack.extend(x.args)
 
-    def _num(self, x):
-        if x.is_Integer:
-            return f"{int(x)}.0" if abs(int(x)) < 2 ** 53 else repr(float(x))
-        if x.is_Rational:
-            return f"({x.p}.0/{x.q}.0)"
-        if x.is_Float:
-            return repr(float(x))
-        return None
-
     def _fallback(self, x):
         if self.pr is None:
             self.pr = _Printer()
-        return self.pr.doprint(x.xreplace({s: sp.Symbol(c) for s, c in self.names.items()
-                                           if s in x.free_symbols}))
+        try:
+            return self.pr.doprint(x.xreplace({s: sp.Symbol(c) for s, c in self.names.items()
+                                               if s in x.free_symbols}))
+        except PrintMethodNotImplementedError:
+            # the first part that cannot be printed, for the message
+            bad = _first_unprintable(x)
+            raise _Unprintable(bad if bad is not None else x, _NOT_C) from None
 
     def expr(self, x):
         """C text of x; temporaries it needs are appended to ``lines``."""
         if x.is_Symbol:
             return self.names.get(x, x.name)
-        if x.is_Number:
-            r = self._num(x)
-            return r if r is not None else self._fallback(x)
+        if x.is_Atom:
+            if x.is_number:
+                return _constant(x)
+            raise _Unprintable(x, _NOT_C)
         t = self.temps.get(x)
         if t is not None:
             return t
@@ -390,17 +447,45 @@ class _Emitter:
                 r = self._pow(b, e)
                 if r is not None:
                     return r
-                e_text = self._num(e) or self._fallback(e)
+                e_text = _constant(e)
                 return f"{self.funcs['pow']}({self.expr(b)}, {e_text})"
             return f"{self.funcs['pow']}({self.expr(b)}, {self.expr(e)})"
         if x.is_Function:
             name = type(x).__name__
             f = self.funcs.get(name)
-            if f is not None and len(x.args) == 1 and name not in ("pow", "atan2"):
+            if f is not None and len(x.args) == 1 and name not in _FUNCS2:
                 return f"{f}({self.expr(x.args[0])})"
-            if name == "atan2":
-                return f"{self.funcs['atan2']}({self.expr(x.args[0])}, {self.expr(x.args[1])})"
-        return self._fallback(x)
+            if name in _FUNCS2 and len(x.args) >= 2:
+                # Max(a, b, c) -> fmax(a, fmax(b, c))
+                args = [self.expr(a) for a in x.args]
+                text = args[-1]
+                for a in reversed(args[:-1]):
+                    text = f"{f}({a}, {text})"
+                return text
+            r = _RECIPROCAL.get(name)
+            if r is not None and len(x.args) == 1:
+                return f"(1.0/{self.funcs[r]}({self.expr(x.args[0])}))"
+            if x.is_Piecewise:
+                return self._fallback(x)
+            raise _Unprintable(x, _NOT_C)
+        raise _Unprintable(x, _NOT_C)
+
+
+#: Why an expression cannot be printed.
+_NOT_C = ("mechpy cannot print it as C (it prints numbers, +, *, powers, Piecewise and the "
+          "functions " + ", ".join(sorted(set(_FUNCS1) - {"pow"} | set(_RECIPROCAL))) + ")")
+
+
+def _first_unprintable(x):
+    """The first sub-expression of x (depth first) that the strict printer
+    cannot print, or None."""
+    pr = _Printer()
+    for a in x.args:
+        try:
+            pr.doprint(a)
+        except (PrintMethodNotImplementedError, _Unprintable, ValueError):
+            return _first_unprintable(a) or a
+    return None
 
 
 def _product(factors):
@@ -424,10 +509,9 @@ def _block(name, exprs, ir, args, what, static=True):
     try:
         for i, e in enumerate(exprs):
             outs.append(f"    out[{i}] = {em.expr(e)};")
-    except PrintMethodNotImplementedError as exc:
-        bad = str(exc).split(":")[1].split("\n")[0].strip() if ":" in str(exc) else str(exc)
-        raise ValueError(f"{what}: SymPy cannot print {bad} as C; rewrite it with elementary "
-                         "functions (sin, exp, sqrt, ...) or use backend='numpy'") from None
+    except _Unprintable as exc:
+        from .derive import explain
+        raise ValueError(explain(ir, what, exc.culprit, exc.reason)) from None
     body = "\n".join(em.lines + outs)
     lines = [f"/* out[0..{len(exprs) - 1}] = {what} at (t, y), parameters p"
              + (", unknowns z" if "const double *z" in args else "") + ". */",
@@ -463,8 +547,8 @@ def _lane_loop(ir, outputs, what):
         em.scan(e)
     try:
         outs = [f"    {out}[{i} * MP_LANES + l] = {em.expr(e)};" for e, out, i in flat]
-    except PrintMethodNotImplementedError:
-        return None    # the scalar blocks raise the error that names the function
+    except _Unprintable:
+        return None    # the scalar blocks raise the error that names the culprit
     body = "\n".join(em.lines + outs)
     if len(body) > LANE_MAX:
         return None

@@ -24,6 +24,7 @@ g(q, t) = 0 the blocks are
 """
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 
 import sympy as sp
@@ -52,6 +53,14 @@ class IR:
     blocks: dict = field(default_factory=dict)
     cyclic: list = field(default_factory=list)
     equations: list = field(default_factory=list)
+    #: the user's expressions in the plain symbols, by name ("L", "rhs[0]", ...)
+    sources: dict = field(default_factory=dict)
+    #: plain symbol -> the symbol shown in messages (theta, theta', t)
+    display: dict = field(default_factory=dict)
+
+    def show(self, e) -> str:
+        """e as text in the user's names."""
+        return str(sp.sympify(e).xreplace(self.display))
 
 
 def coordinates(names):
@@ -117,7 +126,7 @@ def _name(qi):
 
 def _params(params, exprs, t, allowed_extra=()):
     """Parameter symbols in the order of ``params``; checks every free symbol
-    has a value and every key names a symbol."""
+    has a value, every key names a symbol, and no two symbols share a name."""
     if params is None:
         params = {}
     if not isinstance(params, dict):
@@ -127,17 +136,148 @@ def _params(params, exprs, t, allowed_extra=()):
         free |= {s for s in e.free_symbols if s != t}
     free -= set(allowed_extra)
     by_name = {}
-    for s in free:
-        by_name.setdefault(s.name, s)
+    for s in sorted(free, key=lambda s: (s.name, _assumptions(s))):
+        other = by_name.setdefault(s.name, s)
+        if other is not s:
+            raise ValueError(
+                f"two different symbols are named {s.name!r} (assumptions "
+                f"{_assumptions(other)} and {_assumptions(s)}): SymPy treats them as "
+                "different symbols, a parameter is one value; make every "
+                f"{s.name!r} the same symbol")
     missing = sorted(set(by_name) - set(params))
     if missing:
+        hint = (" (the time is sympy.Symbol('t') with no assumptions, as mp.coordinates "
+                "uses it)" if "t" in missing else "")
         raise ValueError(f"symbol(s) {missing} have no value: give them in params "
-                         f"(params={{{', '.join(repr(m) + ': ...' for m in missing)}}})")
+                         f"(params={{{', '.join(repr(m) + ': ...' for m in missing)}}})"
+                         + hint)
     unknown = [k for k in params if k not in by_name]
     if unknown:
         raise ValueError(f"params {unknown} name no symbol of the system "
                          f"(its symbols: {sorted(by_name)})")
     return list(params), [by_name[k] for k in params]
+
+
+def _assumptions(s):
+    """A symbol's assumptions as given (for a message)."""
+    a = getattr(s, "_assumptions_orig", None)
+    a = dict(s.assumptions0 if a is None else a)
+    a = {k: v for k, v in a.items() if not (k == "commutative" and v)}
+    return "{" + ", ".join(f"{k}={v}" for k, v in sorted(a.items())) + "}" if a else "none"
+
+
+#: Reserved names of the plain symbols (time, states, unknowns, parameters).
+_RESERVED = re.compile(r"mp_(t|[ypzc]\d+)$")
+
+
+def _check_input(e, what):
+    """``e`` (a user's expression) is a real, finite SymPy expression:
+    ValueError naming ``what`` and the culprit for an equation or condition,
+    the imaginary unit, an infinite or out-of-range number, a reserved name."""
+    if isinstance(e, (sp.logic.boolalg.Boolean, sp.core.relational.Relational)):
+        raise ValueError(f"{what} = {e} is an equation or a condition, not an expression "
+                         "(give the expression itself" + (": the right-hand side f of "
+                                                          "y' = f)" if what.startswith("rhs")
+                                                          else ")"))
+    if not isinstance(e, sp.Expr) or isinstance(e, sp.MatrixBase):
+        raise TypeError(f"{what} must be a scalar SymPy expression, got "
+                        f"{type(e).__name__}")
+    for a in e.atoms(sp.Number, sp.NumberSymbol, type(sp.I), sp.Symbol):
+        if a.is_Symbol:
+            if _RESERVED.match(a.name):
+                raise ValueError(f"{what} uses the symbol {a.name}, a name mechpy reserves "
+                                 "for its own variables: rename it")
+            continue
+        if a.is_extended_real is False:
+            raise ValueError(f"{what} contains the imaginary unit I ({_where(e, a)}): a "
+                             "compiled system is real")
+        if a.is_finite is False or a is sp.S.NaN:
+            raise ValueError(f"{what} contains {a}, not a finite number")
+        try:
+            v = float(a)
+        except (TypeError, ValueError, OverflowError):
+            v = float("inf")
+        if not abs(v) < float("inf"):
+            raise ValueError(f"{what} contains the number {sp.Float(a, 5)} ({_where(e, a)}), "
+                             "beyond the range of double precision (about 1.8e308)")
+
+
+def _where(e, a):
+    """The smallest term of e that holds the atom a, with a shortened (for a
+    message)."""
+    best = e
+    for node in sp.preorder_traversal(e):
+        if node.has(a) and node.count_ops() < best.count_ops() and node != a:
+            best = node
+    return str(best.xreplace({a: sp.Symbol(str(sp.Float(a, 5)))}) if a.is_Number else best)
+
+
+#: Functions whose derivatives cannot be printed (unevaluated, Heaviside,
+#: DiracDelta): a culprit of these kinds is named through the user's function
+#: that leads to it, not as one of the same kind in the input.
+_NONSMOOTH = ("Abs", "sign", "Max", "Min", "floor", "ceiling", "frac", "Heaviside",
+             "DiracDelta", "re", "im", "arg")
+
+
+def explain(ir, what, culprit, reason, numpy_ok=True) -> str:
+    """The message for an expression ``culprit`` of block ``what`` that cannot
+    be evaluated: where the user wrote it (or a function of the same kind),
+    or, when it comes from a derivative, which of the user's functions has no
+    usable derivative."""
+    shown = str(sp.Float(culprit, 5)) if culprit.is_Number else ir.show(culprit)
+    fix = "; rewrite it" + (" or use backend='numpy'" if numpy_ok else "")
+    for name, src in ir.sources.items():
+        if src.has(culprit):
+            return f"{name} contains {shown}: {reason}{fix}"
+    for name, src in ir.sources.items():
+        same = [x for x in sp.preorder_traversal(src) if x.func == culprit.func]
+        if same and not culprit.is_Atom and type(culprit).__name__ not in _NONSMOOTH \
+                and culprit.func not in (sp.Derivative, sp.Subs):
+            return f"{name} contains {ir.show(same[0])}: {reason}{fix}"
+    rough = {}      # the user's functions whose first or second derivative holds it
+    kind = culprit.func
+    for name, src in ir.sources.items():
+        for f in sp.preorder_traversal(src):
+            if not f.is_Function or isinstance(f, sp.core.function.AppliedUndef):
+                continue
+            for v in f.free_symbols:
+                d1 = sp.diff(f, v)
+                if any(x.func == kind for x in sp.preorder_traversal(d1)) or any(
+                        x.func == kind for x in sp.preorder_traversal(sp.diff(d1, v))):
+                    rough.setdefault(ir.show(f), name)
+    if rough:
+        where = ", ".join(f"{f} (in {name})" for f, name in sorted(rough.items()))
+        return (f"{where}: its derivative, {shown} (needed by {what}), cannot be compiled. "
+                "Functions without a derivative mechpy can print (Abs, sign, Max, Min, "
+                "floor, ceiling; gamma and loggamma, whose derivative is polygamma) are "
+                "refused through the Jacobian (the equations of motion and their Jacobian "
+                "differentiate the system): write a smooth form instead, e.g. "
+                "sqrt(x**2 + eps**2) for Abs(x)")
+    return (f"{what} (derived from {', '.join(ir.sources)}) contains {shown}: "
+            f"{reason}{fix}")
+
+
+def _check_derived(ir):
+    """No unevaluated derivative (Derivative, Subs) in the blocks: SymPy could
+    not differentiate one of the user's functions (Abs of a complex
+    argument, sign, floor, ...)."""
+    seen = set()
+    names = {"A": "the equations of motion (mass matrix)", "b": "the equations of motion",
+             "D": "the Jacobian", "J": "the Jacobian", "f": "the equations", "g":
+             "the constraints", "lag": "the derivatives of L", "momenta": "the momenta",
+             "energy": "the energy"}
+    for key, exprs in ir.blocks.items():
+        stack = [sp.sympify(e) for e in exprs]
+        while stack:
+            x = stack.pop()
+            if not x.args or x in seen:
+                continue
+            seen.add(x)
+            if isinstance(x, (sp.Derivative, sp.Subs)):
+                raise ValueError(explain(ir, names.get(key, key), x,
+                                         "SymPy leaves this derivative unevaluated",
+                                         numpy_ok=False))
+            stack.extend(x.args)
 
 
 def _check_functions(e, what):
@@ -237,8 +377,7 @@ def lagrangian_ir(L, q, params=None, constraints=(), forces=None, baumgarte=None
                         "mp.coordinates('q1 q2 ...')")
     n = len(qs)
     L = sp.sympify(L)
-    if not isinstance(L, sp.Expr) or isinstance(L, sp.MatrixBase):
-        raise TypeError("L must be a scalar SymPy expression")
+    _check_input(L, "L")
     cons = _as_list(constraints, "constraints")
     if forces is None:
         Qf = [sp.S.Zero] * n
@@ -264,6 +403,7 @@ def lagrangian_ir(L, q, params=None, constraints=(), forces=None, baumgarte=None
     f2s = {qi: Qi for qi, Qi in zip(qs, Q)}
 
     def plain(e, what):
+        _check_input(e, what)
         second = [d for d in e.atoms(sp.Derivative) if d.derivative_count > 1]
         if second:
             raise ValueError(f"{what} contains second derivatives {sorted(map(str, second))}")
@@ -336,6 +476,12 @@ def lagrangian_ir(L, q, params=None, constraints=(), forces=None, baumgarte=None
     ir.blocks = dict(A=list(A), b=b, D=list(D), energy=[energy], momenta=p, lag=lag)
     if k:
         ir.blocks["g"] = cx + gdots
+    ir.sources = {"L": Lx, **{f"constraints[{i}]": g for i, g in enumerate(cx)},
+                  **{f"forces[{i}]": f for i, f in enumerate(Fx) if forces is not None}}
+    ir.display = {T: t, **{Qi: sp.Symbol(nm) for Qi, nm in zip(Q, ir.names)},
+                  **{Ui: sp.Symbol(nm + "'") for Ui, nm in zip(U, ir.names)},
+                  **{Zi: sp.Symbol(f"z{i}") for i, Zi in enumerate(Z)}}
+    _check_derived(ir)
     others = set().union(*(e.free_symbols for e in cx + Fx)) if (cx or Fx) else set()
     ir.cyclic = [ir.names[i] for i in range(n)
                  if Q[i] not in Lx.free_symbols and Q[i] not in others]
@@ -375,6 +521,7 @@ def equations_ir(rhs, y, params=None, energy=None) -> IR:
     sub = {yi: Yi for yi, Yi in zip(ys, Y)}
 
     def plain(e, what):
+        _check_input(e, what)
         ders = [d for d in e.atoms(sp.Derivative)]
         if ders:
             raise ValueError(f"{what} contains derivatives {sorted(map(str, ders))}: a "
@@ -392,6 +539,10 @@ def equations_ir(rhs, y, params=None, energy=None) -> IR:
     ir.blocks = dict(f=fx, J=J)
     if ex:
         ir.blocks["energy"] = ex
+    ir.sources = {**{f"rhs[{i}]": f for i, f in enumerate(fx)},
+                  **({"energy": ex[0]} if ex else {})}
+    ir.display = {T: t, **{Yi: sp.Symbol(nm) for Yi, nm in zip(Y, ir.names)}}
+    _check_derived(ir)
     ir.equations = [sp.Eq(yi.diff(t) if not isinstance(yi, sp.Symbol) else
                           sp.Derivative(yi, t), f) for yi, f in zip(ys, fs)]
     return ir

@@ -30,6 +30,19 @@ _FUNCS = {
 }
 
 
+def _guard(fn):
+    """fn (made by sympy.lambdify), with a function that NumPy lacks (lambdify
+    leaves its name undefined) reported as a ValueError naming it."""
+    def call(*args):
+        try:
+            return fn(*args)
+        except NameError as exc:
+            name = getattr(exc, "name", None) or str(exc)
+            raise ValueError(f"backend='numpy': the system uses {name}, which "
+                             "sympy.lambdify cannot evaluate with NumPy; rewrite it") from None
+    return call
+
+
 class _NumpyFunctions:
     """The IR's blocks as NumPy functions of (t, y, p), one state at a time."""
 
@@ -40,7 +53,7 @@ class _NumpyFunctions:
         self.f = {}
         for name, exprs in blocks.items():
             args = (T, Y, P, Z) if name == "D" else (T, Y, P)
-            self.f[name] = sp.lambdify(args, list(exprs), "numpy")
+            self.f[name] = _guard(sp.lambdify(args, list(exprs), "numpy"))
 
     def _solve(self, t, y, p):
         from .. import SingularityError
@@ -403,6 +416,7 @@ class CompiledScene(Scene):
 
     def __eq__(self, other):
         return (type(other) is CompiledScene and self._meta["source"] == other._meta["source"]
+                and self._meta["equations"] == other._meta["equations"]
                 and self._params == other._params and self._backend == other._backend)
 
     def __hash__(self):
