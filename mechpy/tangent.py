@@ -53,6 +53,12 @@ def _no_symbolic(system) -> TypeError:
         "are generated from system.symbolic(); write a Python f(t, y) with mp.equations")
 
 
+def _require(system) -> None:
+    """A system the variational equations can be generated for, or TypeError."""
+    if not isinstance(system, Scene) or not hasattr(system, "symbolic"):
+        raise _no_symbolic(system)
+
+
 def _values(system) -> dict:
     """The system's parameters by the names its symbolic form uses."""
     return system._columns()
@@ -77,8 +83,7 @@ def _augmented(system, pnames: tuple, with_y0: bool):
     and the parameter names it takes (those in the field's expressions).
 
     S is stored row-major after y: S[i, j] is state n + i * ncol + j."""
-    if not isinstance(system, Scene) or not hasattr(system, "symbolic"):
-        raise _no_symbolic(system)
+    _require(system)
     skey = _system_key(system)
     key = (skey, tuple(pnames), bool(with_y0))
     if skey is not None and key in _AUGMENTED:
@@ -120,6 +125,7 @@ def _bind(aug, names, values: dict):
 
 
 def _param_names(system, params) -> tuple:
+    _require(system)
     if isinstance(params, str):
         params = (params,)
     try:
@@ -229,6 +235,7 @@ def _lyapunov_spectrum(system, y0, t, *, dt: float = 1.0, transient: float = 0.0
                        method: str = "dop853", rtol: float = 1e-10, atol: float = 1e-12,
                        return_history: bool = False):
     """What :func:`mechpy.phase.lyapunov_spectrum` does (its docstring)."""
+    _require(system)
     y = as_array(y0, "y0", ndim=1).copy()
     n = system.dim if isinstance(system, Scene) else y.size
     if y.shape[0] != n:
@@ -291,6 +298,7 @@ def _floquet(system, y0, *, period=None, tol: float = 1e-10, max_iter: int = 50,
              method: str = "dop853", rtol: float = 1e-11, atol: float = 1e-12,
              t_max: float = 1e4, return_orbit: bool = False):
     """What :func:`mechpy.phase.floquet` does (its docstring)."""
+    _require(system)
     import sympy as sp
     y = as_array(y0, "y0", ndim=1).copy()
     n = system.dim if isinstance(system, Scene) else y.size
@@ -343,8 +351,8 @@ def _floquet(system, y0, *, period=None, tol: float = 1e-10, max_iter: int = 50,
     mult = np.linalg.eigvals(M).astype(complex)
     mult = mult[np.argsort(-np.abs(mult), kind="stable")]
     if return_orbit:
-        return T, mult, y
-    return T, mult
+        return float(T), mult, y
+    return float(T), mult
 
 
 # ---- fitting --------------------------------------------------------------------------
@@ -504,8 +512,7 @@ def fit(system, t, data, params, *, y0, observe=None, sigma=None, fit_y0=False,
     0.3
     """
     from scipy.optimize import least_squares
-    if not isinstance(system, Scene) or not hasattr(system, "symbolic"):
-        raise _no_symbolic(system)
+    _require(system)
     if not isinstance(params, dict) or not params:
         raise TypeError(f"params must be a non-empty dict {{name: initial guess}}, got "
                         f"{params!r}")
