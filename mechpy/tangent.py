@@ -27,7 +27,11 @@ the plain solve's 9.4e-7, 9.4e-9, 8.3e-11), for one or two more steps than the p
 the sensitivities come out as accurate as the state, so no separate scaling is applied.
 
 ``mechpy.phase.lyapunov_spectrum`` and ``mechpy.phase.floquet`` are built on the same
-augmented system.
+augmented system.  Ensembles of sensitivities (``mp.solve_many`` of the augmented system) are
+not offered yet.
+
+Array shapes follow the layout rule in :mod:`mechpy` (``help(mechpy)``): ``Solution.S``
+(n, p + n, m) puts the state axis first, then the columns, then time.
 """
 from __future__ import annotations
 
