@@ -27,8 +27,8 @@ the plain solve's 9.4e-7, 9.4e-9, 8.3e-11), for one or two more steps than the p
 the sensitivities come out as accurate as the state, so no separate scaling is applied.
 
 ``mechpy.phase.lyapunov_spectrum`` and ``mechpy.phase.floquet`` are built on the same
-augmented system.  Ensembles of sensitivities (``mp.solve_many`` of the augmented system) are
-not offered yet.
+augmented system.  Ensembles of sensitivities (``y0`` of shape (K, n)) run as one
+``mp.solve_many`` ensemble.
 
 Array shapes follow the layout rule in :mod:`mechpy` (``help(mechpy)``): ``Solution.S``
 (n, p + n, m) puts the state axis first, then the columns, then time.
@@ -187,21 +187,28 @@ def sensitivity(system, t_span, y0, params=(), *, t_eval=None, method: str = "do
         :func:`mechpy.equations` / :func:`mechpy.lagrangian` (unconstrained).  A Python
         callable has no symbolic form: ``TypeError``.
     t_span : (t0, tf)
-    y0 : array_like, shape (n,)
+    y0 : array_like, shape (n,) or (K, n)
+        The initial state, or K of them: an ensemble, run by :func:`mechpy.solve_many`
+        (in SIMD lanes where it can; the system's parameter values for all).
     params : sequence of str
         The parameters to differentiate by, by name (``scene.params``' names; for a
         compiled system, its symbols').
     t_eval : array_like, optional
-        Output times, as in :func:`mechpy.solve`.
+        Output times, as in :func:`mechpy.solve` (for an ensemble: default the final
+        time only, as :func:`mechpy.solve_many`).
     method, rtol, atol, **solve_kw
-        Passed to :func:`mechpy.solve` for the augmented system.
+        Passed to :func:`mechpy.solve` (:func:`mechpy.solve_many`) for the augmented
+        system.  With ``dense_output`` or ``events``, ``sol`` and the event functions
+        see the augmented state (y, then S row by row).
 
     Returns
     -------
     Solution
         As :func:`mechpy.solve` (``t``, ``y`` (n, m), ...) with ``S`` of shape
         (n, k + n, m): ``S[:, :k]`` dy/dparams (units of y per unit of each parameter),
-        ``S[:, k:]`` dy/dy0 (the state transition matrix); ``params`` the names.
+        ``S[:, k:]`` dy/dy0 (the state transition matrix); ``params`` the names.  For an
+        ensemble an :class:`mechpy.EnsembleSolution` with ``y`` (K, n, m) and ``S``
+        (K, n, k + n, m).
 
     Examples
     --------
@@ -213,14 +220,25 @@ def sensitivity(system, t_span, y0, params=(), *, t_eval=None, method: str = "do
     (2, 3, 1)
     """
     names = _param_names(system, params)
-    y0 = as_array(y0, "y0", ndim=1)
-    if y0.shape[0] != system.dim:
-        raise ValueError(f"y0 must have {system.dim} components, got shape {y0.shape}")
+    y0 = as_array(y0, "y0", min_ndim=1)
+    if y0.ndim > 2 or y0.shape[-1] != system.dim:
+        raise ValueError(f"y0 must have shape ({system.dim},) or (k, {system.dim}), got "
+                         f"{y0.shape}")
     aug, pn = _augmented(system, names, True)
     aug = _bind(aug, pn, _values(system))
     n, k = system.dim, len(names)
     S0 = np.zeros((n, k + n))
     S0[:, k:] = np.eye(n)
+    if y0.ndim == 2:
+        from .integrate import solve_many
+        z0 = np.hstack([y0, np.broadcast_to(S0.ravel(), (y0.shape[0], S0.size))])
+        e = solve_many(aug, t_span, z0, t_eval=t_eval, method=method, rtol=rtol, atol=atol,
+                       **solve_kw)
+        z = e.y
+        e["y"] = np.ascontiguousarray(z[:, :n])
+        e["S"] = np.ascontiguousarray(z[:, n:].reshape(z.shape[0], n, k + n, -1))
+        e["params"] = list(names)
+        return e
     s = solve(aug, t_span, np.concatenate([y0, S0.ravel()]), method, rtol=rtol, atol=atol,
               t_eval=t_eval, **solve_kw)
     z = s.y
