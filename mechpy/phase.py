@@ -837,7 +837,11 @@ def floquet(system, y0, *, period=None, tol: float = 1e-10, max_iter: int = 50,
     when given).  For a forced system (f depends on t) the period must be given: the
     unknowns are y0 at t = 0, T is fixed.  The multipliers are M's eigenvalues; an
     autonomous orbit has one equal to 1 (along f), and their product is
-    :math:`\exp\int_0^T \nabla\cdot\mathbf f\,dt` (Liouville).
+    :math:`\exp\int_0^T \nabla\cdot\mathbf f\,dt` (Liouville).  On a family of orbits
+    (a conservative system's) the shooting is underdetermined and Newton's least-squares
+    step stays on the family; the two multipliers at 1 then form a Jordan block, which the
+    integration error splits by about its square root (1 +- 2e-6 for the pendulum at the
+    default tolerances).  Newton ending on a fixed point is a ConvergenceError.
 
     Parameters
     ----------

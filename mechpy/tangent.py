@@ -36,7 +36,6 @@ Array shapes follow the layout rule in :mod:`mechpy` (``help(mechpy)``): ``Solut
 from __future__ import annotations
 
 import copy
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -341,8 +340,9 @@ def _floquet(system, y0, *, period=None, tol: float = 1e-10, max_iter: int = 50,
     max_iter = as_int(max_iter, "max_iter", minimum=1)
     aug, pn = _augmented(system, (), True)
     aug = _bind(aug, pn, _values(system))
-    forced = sp.Symbol("t") in set().union(*(sp.sympify(e).free_symbols
-                                             for e in system.symbolic().f))
+    # forced: f depends on t at these parameter values (a drive of amplitude 0 is none)
+    fld = system.symbolic()
+    forced = any(fld.t in sp.sympify(e).xreplace(fld.params).free_symbols for e in fld.f)
     if period is None and forced:
         raise ValueError("floquet: the system is forced (its right-hand side depends on t): "
                          "give its period (period=...)")
@@ -353,12 +353,11 @@ def _floquet(system, y0, *, period=None, tol: float = 1e-10, max_iter: int = 50,
         if not np.any(f0):
             raise ValueError("floquet: y0 is a fixed point (f(y0) = 0), not on a periodic orbit")
         T = _first_return(system, y, f0, t_max, method, rtol, atol)
-    step = np.inf
     for it in range(max_iter + 1):
         yT, M = _flow(aug, n, 0.0, T, y, eye, method, rtol, atol, "floquet")
         r = yT - y
         scale = 1.0 + np.linalg.norm(y)
-        if np.linalg.norm(r) <= tol * scale and step <= math.sqrt(tol) * scale:
+        if np.linalg.norm(r) <= tol * scale:
             break
         if it == max_iter:
             raise ConvergenceError(
@@ -375,12 +374,15 @@ def _floquet(system, y0, *, period=None, tol: float = 1e-10, max_iter: int = 50,
             A[n, :n] = fy
             sol = np.linalg.lstsq(A, -np.concatenate([r, [0.0]]), rcond=None)[0]
             dy, dT = sol[:n], sol[n]
-        step = float(np.linalg.norm(np.concatenate([dy, [dT]])))
         y = y + dy
         T = T + dT
         if not T > 0:
             raise ConvergenceError("floquet: the period went non-positive in Newton's "
                                    "shooting; start nearer the orbit or give period=...")
+    if not forced and np.linalg.norm(system.rhs(0.0, y)) <= 1e-8 * scale / T:
+        raise ConvergenceError(
+            f"floquet: Newton's shooting converged to a fixed point (y = {y.tolist()}, "
+            "f(y) = 0), not a periodic orbit: there is none near y0")
     mult = np.linalg.eigvals(M).astype(complex)
     mult = mult[np.argsort(-np.abs(mult), kind="stable")]
     if return_orbit:

@@ -140,6 +140,17 @@ def test_van_der_pol_floquet_multipliers_obey_liouville():
     assert abs(T2 - Tref) < 1e-10 and abs(m2[1] - np.exp(div)) < 5e-11 * np.exp(div)
 
 
+def test_pendulum_orbit_family_period_is_the_elliptic_integral():
+    from scipy.special import ellipk
+    T, m = mp.phase.floquet(mp.scenes.Pendulum(length=1.3), [1.0, 0.0])
+    # T = 4 sqrt(L/g) K(sin^2(theta0/2)); measured 4e-13
+    assert abs(T - 4 * np.sqrt(1.3 / 9.81) * ellipk(np.sin(0.5) ** 2)) < 4e-12
+    # a Jordan block at 1, split by the integration error (measured 1.8e-6)
+    assert np.all(np.abs(m - 1) < 2e-5)
+    with pytest.raises(mp.ConvergenceError, match="fixed point"):
+        mp.phase.floquet(mp.scenes.Pendulum(damping=0.3), [1.0, 0.0])
+
+
 def test_forced_linear_oscillator_monodromy_is_the_exponential():
     x, v = sp.symbols("x v")
     c, w, a, om = sp.symbols("c w a Omega")
