@@ -67,6 +67,24 @@ def test_linear_system_sensitivities_are_matrix_exponentials():
         np.testing.assert_allclose(s.S[:, 0, i], B[:3, 3:] @ y0, rtol=0, atol=1e-11)
 
 
+def test_lagrangian_route_equals_the_scene():
+    """A pendulum from its Lagrangian (SymPy derivation) and the Pendulum scene (its C
+    row's field): the same sensitivities; the mass cancels from the motion."""
+    th, = mp.coordinates("theta")
+    m, g, ln = sp.symbols("m g l", positive=True)
+    L = m * ln ** 2 * th.diff() ** 2 / 2 + m * g * ln * sp.cos(th)
+    lag = mp.lagrangian(L, [th], params={"m": 1.0, "g": 9.81, "l": 1.2})
+    te = np.linspace(0, 5, 6)
+    kw = dict(t_eval=te, rtol=1e-11, atol=1e-13)
+    s1 = mp.sensitivity(lag, (0, 5), [1.0, 0.2], params=("l", "m"), **kw)
+    s2 = mp.sensitivity(mp.scenes.Pendulum(length=1.2), (0, 5), [1.0, 0.2],
+                        params=("length",), **kw)
+    # measured 2e-11 and 8e-12
+    np.testing.assert_allclose(s1.S[:, 0], s2.S[:, 0], rtol=0, atol=2e-10)
+    np.testing.assert_allclose(s1.S[:, 2:], s2.S[:, 1:], rtol=0, atol=1e-10)
+    assert np.all(s1.S[:, 1] == 0.0)
+
+
 def test_ensemble_sensitivities_equal_single_runs():
     sc = mp.scenes.Pendulum(damping=0.3, length=1.2)
     y0s = np.array([[0.1, 0.0], [1.0, 0.5], [2.5, -0.2], [-1.0, 0.3], [0.4, 0.4]])
@@ -110,6 +128,18 @@ def test_henon_heiles_spectrum_pairs():
     assert lam[0] > 0.05                       # a chaotic orbit
     assert abs(lam[0] + lam[3]) < 5e-3         # +- pairs
     assert abs(lam[1]) < 0.03 and abs(lam[2]) < 0.03
+
+
+def test_driven_pendulum_spectrum():
+    """Chaos in the driven damped pendulum (A = 1.5): the sum of the two exponents is the
+    divergence -b; the largest agrees with mp.phase.lyapunov's (a single tangent vector
+    integrated in Python)."""
+    sc = mp.scenes.Pendulum(g=1, length=1, damping=0.5, drive_amplitude=1.5,
+                            drive_frequency=2 / 3)
+    lam = mp.phase.lyapunov_spectrum(sc, [0.2, 0.0], 500.0, transient=50.0)
+    assert abs(lam.sum() + 0.5) < 1e-11                     # measured 1.3e-12
+    lam1 = mp.phase.lyapunov(sc, [0.2, 0.0], 500.0, transient=50.0)
+    assert lam[0] > 0.05 and abs(lam[0] - lam1) < 0.03      # measured 0.1024 vs 0.0996
 
 
 # ---- Floquet multipliers ------------------------------------------------------------
