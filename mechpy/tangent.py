@@ -391,7 +391,7 @@ def _floquet(system, y0, *, period=None, tol: float = 1e-10, max_iter: int = 50,
 
 
 # ---- fitting --------------------------------------------------------------------------
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class FitResult:
     """The result of :func:`fit`.
 
@@ -413,6 +413,9 @@ class FitResult:
         Evaluations of the residuals and of their Jacobian (each one solve).
     success : bool
     message : str
+        :func:`scipy.optimize.least_squares`' verdict.
+    names : list of str
+        The fitted quantities, in the order of ``cov``'s rows.
     """
     params: dict
     stderr: dict
