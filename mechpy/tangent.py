@@ -94,6 +94,11 @@ def _augmented(system, pnames: tuple, with_y0: bool):
     key = (skey, tuple(pnames), bool(with_y0))
     if skey is not None and key in _AUGMENTED:
         return _AUGMENTED[key]
+    disk = _disk_key(system, skey, key)
+    out = _load(disk)
+    if out is not None:
+        _AUGMENTED[key] = out
+        return out
     import sympy as sp
 
     from .symbolic import equations
@@ -120,7 +125,57 @@ def _augmented(system, pnames: tuple, with_y0: bool):
     out = (aug, tuple(names))
     if skey is not None:
         _AUGMENTED[key] = out
+        _store(disk, aug)
     return out
+
+
+def _disk_key(system, skey, key):
+    """The on-disk key of an augmented system: the field's text (a scene's row, a compiled
+    system's C source), the columns, and the code that generates it (this module and the
+    symbolic generator), so a warm start needs no SymPy."""
+    if skey is None:
+        return None
+    import hashlib
+    import os
+
+    from .symbolic import _generator_hash
+    h = hashlib.sha256(b"tangent\0")
+    if skey[0] == "scene":
+        h.update(repr((skey, _row(system._model).get("field"))).encode())
+    else:
+        h.update(skey[1].encode())
+    h.update(repr(key[1:]).encode())
+    with open(os.path.abspath(__file__), "rb") as f:
+        h.update(f.read())
+    h.update(_generator_hash().encode())
+    return h.hexdigest()[:40]
+
+
+def _load(disk):
+    """The augmented system stored under ``disk`` (its library loaded), or None."""
+    if disk is None:
+        return None
+    try:
+        from .symbolic import build
+        from .symbolic.scene import CompiledScene
+        meta = build.load_meta(disk)
+        if not isinstance(meta, dict) or "param_names" not in meta:
+            return None
+        names = list(meta["param_names"])
+        aug = CompiledScene(meta, {nm: 0.0 for nm in names}, "c")
+        return aug, tuple(names)
+    except Exception:  # a damaged or foreign entry: derive again
+        return None
+
+
+def _store(disk, aug) -> None:
+    if disk is None:
+        return
+    try:
+        from .symbolic import build
+        build.store_meta(disk, aug._meta)
+    except Exception:  # a read-only cache: the next process derives again
+        pass
 
 
 def _bind(aug, names, values: dict):

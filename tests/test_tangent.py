@@ -85,6 +85,22 @@ def test_lagrangian_route_equals_the_scene():
     assert np.all(s1.S[:, 1] == 0.0)
 
 
+def test_a_warm_start_needs_no_sympy():
+    """The augmented system is stored with the compiled cache: a second process loads it
+    without deriving (no SymPy), and gets the same numbers."""
+    import subprocess
+    import sys
+    code = ("import sys, mechpy as mp; s = mp.sensitivity(mp.scenes.Duffing(-1.0, 1.0, 0.2),"
+            " (0, 1), [1.0, 0.0], params=('delta',), t_eval=[1.0]);"
+            " print('sympy' in sys.modules, repr(float(s.S[0, 0, -1])))")
+    runs = [subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+            for _ in range(2)]
+    for r in runs:
+        assert r.returncode == 0, r.stderr
+    assert runs[1].stdout.split()[0] == "False"
+    assert runs[0].stdout.split()[1] == runs[1].stdout.split()[1]
+
+
 def test_ensemble_sensitivities_equal_single_runs():
     sc = mp.scenes.Pendulum(damping=0.3, length=1.2)
     y0s = np.array([[0.1, 0.0], [1.0, 0.5], [2.5, -0.2], [-1.0, 0.3], [0.4, 0.4]])
