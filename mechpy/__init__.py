@@ -4,7 +4,7 @@
 ``mp.scenes``, ``mp.inertia``, ``mp.stress``, ``mp.rotation``, ``mp.rigid``,
 ``mp.modes``, ``mp.phase``, ``mp.frames``, ``mp.particles``, ``mp.variational``,
 ``mp.plot``; a user's own system compiled to C: ``mp.coordinates``, ``mp.lagrangian``,
-``mp.equations``.
+``mp.equations``; the tangent flow: ``mp.sensitivity``, ``mp.fit`` (:mod:`mechpy.tangent`).
 
 Array layout
 ------------
@@ -52,6 +52,8 @@ from .integrate import (DenseOutput, EnsembleSolution, SecondOrder, Solution,  #
                         methods, solve, solve_many)
 from .symbolic import coordinates, equations, lagrangian  # noqa: F401  (SymPy loads on call)
 from .symbolic.build import CompileError  # noqa: F401
+from . import tangent  # noqa: F401
+from .tangent import FitResult, fit, sensitivity  # noqa: F401
 
 __version__ = "0.1.0"
 
@@ -59,4 +61,5 @@ __all__ = ["integrate", "scenes", "inertia", "stress", "rotation", "rigid", "mod
            "frames", "particles", "variational", "plot", "live", "errors", "symbolic",
            "solve", "solve_many", "methods", "Solution", "EnsembleSolution", "DenseOutput",
            "SecondOrder", "coordinates", "lagrangian", "equations", "CompileError",
+           "tangent", "sensitivity", "fit", "FitResult",
            *_errors_all]

@@ -858,3 +858,126 @@ def logistic_bifurcation(r_values, x0=0.5, n: int = 200, skip: int = 1000) -> np
     """
     r = as_array(r_values, "r_values", ndim=1)
     return logistic(r, as_scalar(x0, "x0"), n, skip)
+
+
+# ---- the tangent flow: Lyapunov spectrum, Floquet multipliers ------------------------------
+def lyapunov_spectrum(system, y0, t, *, dt: float = 1.0, transient: float = 0.0,
+                      method: str = "dop853", rtol: float = 1e-10, atol: float = 1e-12,
+                      return_history: bool = False):
+    r"""All Lyapunov exponents along the trajectory from ``y0`` (Benettin's method).
+
+    .. math:: \lambda_i = \lim_{t\to\infty}\frac1t \ln |R_{ii}|, \qquad
+              \Phi(t_{j+1}, t_j)\,Q_j = Q_{j+1} R_{j+1}
+
+    The tangent flow :math:`\dot\Phi = J(t, \mathbf y)\,\Phi` (the variational
+    equations, generated from ``system.symbolic()`` and compiled with it:
+    :mod:`mechpy.tangent`) carries an orthonormal frame Q over each interval ``dt``;
+    a QR decomposition re-orthonormalises it, and the logarithms of R's diagonal,
+    summed and divided by the elapsed time, are the running estimates.  Their sum is
+    the mean divergence of f (the trace of J) along the orbit, exactly up to the
+    integration error; a flow has one zero exponent (along f), a Hamiltonian system
+    pairs them as +-lambda.
+
+    Parameters
+    ----------
+    system : Scene or compiled system
+        With a symbolic form (``system.symbolic()``); a Python callable has none
+        (``TypeError``: write it with :func:`mechpy.equations`).
+    y0 : array_like, shape (dim,)
+    t : float
+        Averaging time (after ``transient``), in the system's time units.
+    dt : float
+        Re-orthonormalisation interval (the frame's columns may grow or shrink by
+        exp(lambda dt) in between; keep that within float64's range).
+    transient : float
+        Time integrated first and discarded.
+    method, rtol, atol
+        For :func:`mechpy.solve`; the tolerances apply to the state and the frame alike.
+    return_history : bool
+        Also return the renormalisation times (m,) and the running estimates (m, dim)
+        (row j: the exponents after times[j], in the QR order): their convergence.
+
+    Returns
+    -------
+    ndarray (dim,)
+        The exponents, descending (1/time units); with ``return_history``,
+        ``(spectrum, times, running)``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import mechpy as mp
+    >>> lam = mp.phase.lyapunov_spectrum(mp.scenes.Duffing(alpha=-1.0, beta=1.0,
+    ...                                  delta=0.3), [1.0, 0.0], 50.0)
+    >>> bool(np.isclose(lam.sum(), -0.3, atol=1e-8))
+    True
+    """
+    from .tangent import _lyapunov_spectrum as _spectrum
+    return _spectrum(system, y0, t, dt=dt, transient=transient, method=method, rtol=rtol,
+                     atol=atol, return_history=return_history)
+
+
+def floquet(system, y0, *, period=None, tol: float = 1e-10, max_iter: int = 50,
+            method: str = "dop853", rtol: float = 1e-11, atol: float = 1e-12,
+            t_max: float = 1e4):
+    r"""Period and Floquet multipliers of the periodic orbit through (near) ``y0``.
+
+    The orbit is found by shooting: Newton's method on
+    :math:`\varphi_T(\mathbf y_0) - \mathbf y_0 = 0` with the exact monodromy matrix
+    :math:`M = \partial\varphi_T/\partial\mathbf y_0` from the tangent flow
+    (:mod:`mechpy.tangent`).  For an autonomous system the unknowns are
+    (y0, T), closed by the phase condition
+    :math:`\mathbf f(\mathbf y_0^{(k)})\cdot(\mathbf y_0 - \mathbf y_0^{(k)}) = 0`
+    (the correction is normal to the flow), and the first guess of T is the first
+    return of the orbit from y0 to the plane through y0 normal to f(y0) (or ``period``
+    when given).  For a forced system (f depends on t) the period must be given: the
+    unknowns are y0 at t = 0, T is fixed.  The multipliers are M's eigenvalues; an
+    autonomous orbit has one equal to 1 (along f), and their product is
+    :math:`\exp\int_0^T \nabla\cdot\mathbf f\,dt` (Liouville).  On a family of orbits
+    (a conservative system's) the shooting is underdetermined and Newton's least-squares
+    step stays on the family; the two multipliers at 1 then form a Jordan block, which the
+    integration error splits by about its square root (1 +- 2e-6 for the pendulum at the
+    default tolerances).  Newton ending on a fixed point is a ConvergenceError.
+
+    Parameters
+    ----------
+    system : Scene or compiled system
+        With a symbolic form (``system.symbolic()``).
+    y0 : array_like, shape (dim,)
+        A state on or near the orbit (after a transient for an attracting cycle).
+    period : float, optional
+        The period: required for a forced system, a first guess for an autonomous one.
+    tol : float
+        Newton stops when ``|phi_T(y0) - y0| <= tol (1 + |y0|)``.
+    max_iter : int
+        Newton iterations before :class:`mechpy.ConvergenceError`.
+    method, rtol, atol
+        For :func:`mechpy.solve` of the augmented system.
+    t_max : float
+        Longest integration when looking for the first return.
+
+    Returns
+    -------
+    period : float
+        In the system's time units.
+    multipliers : ndarray (dim,), complex
+        The monodromy matrix's eigenvalues, by decreasing modulus.
+
+    Raises
+    ------
+    ConvergenceError
+        No return to the section, or Newton's shooting did not converge.
+
+    Examples
+    --------
+    >>> import mechpy as mp
+    >>> T, mu = mp.phase.floquet(mp.scenes.VanDerPol(1.0), [2.0, 0.0])
+    >>> round(T, 6)
+    6.663287
+    """
+    from .tangent import _floquet
+    return _floquet(system, y0, period=period, tol=tol, max_iter=max_iter, method=method,
+                    rtol=rtol, atol=atol, t_max=t_max)
+
+
+__all__ += ["lyapunov_spectrum", "floquet"]

@@ -501,6 +501,23 @@ def _lyapunov():
                                            [1.0, 0.0], 20.0), ())]
 
 
+def _tangent_flow():
+    sc = mp.scenes.Pendulum(damping=0.2)
+    s = mp.sensitivity(sc, (0, 1), [0.3, 0.0], params=("damping",), t_eval=[0.0, 0.5, 1.0])
+    t = np.linspace(0.0, 2.0, 9)
+    data = mp.solve(sc, (0, 2), [0.3, 0.0], t_eval=t).y[:1]
+    r = mp.fit(sc, t, data, {"damping": 0.1}, y0=[0.3, 0.0], observe=0)
+    return [("sensitivity y", s.y, (2, 3)), ("sensitivity S", s.S, (2, 3, 3)),
+            ("fit cov", r.cov, (1, 1)), ("fit residuals", r.residuals, (1, 9))]
+
+
+def _phase_tangent():
+    duff = mp.scenes.Duffing(-1.0, 1.0, 0.3, 0.5, 1.2)
+    T, mu = mp.phase.floquet(mp.scenes.VanDerPol(), [2.0, 0.0])
+    return [("lyapunov_spectrum", mp.phase.lyapunov_spectrum(duff, [1.0, 0.0], 5.0), (2,)),
+            ("floquet period", T, ()), ("floquet multipliers", mu, (2,))]
+
+
 def _drop():
     r, t = mp.frames.drop(100.0, 45.0)
     r2, t2 = mp.frames.projectile([10.0, 0.0, 10.0], 45.0)
@@ -613,6 +630,11 @@ TABLE = {
     "mechpy.phase.LyapunovFloorWarning": (NONE, None),
     "mechpy.phase.logistic": (STACK, _logistic_case),
     "mechpy.phase.logistic_bifurcation": (STACK, _logistic_case),
+    "mechpy.phase.lyapunov_spectrum": (SINGLE, _single(_phase_tangent)),
+    "mechpy.phase.floquet": (SINGLE, _single(_phase_tangent)),
+    # tangent
+    **{f"mechpy.tangent.{n}": (SINGLE, _single(_tangent_flow)) for n in (
+        "sensitivity", "fit", "FitResult")},
     # particles
     "mechpy.particles.collide": (STACK, _collide_case),
     "mechpy.particles.to_cm": (STACK, _cm_case),

@@ -73,6 +73,10 @@ def run(out: Path) -> None:
         ax.figure.savefig(out / "vanderpol_portrait.png", dpi=100)
     except ImportError:  # pragma: no cover
         pass
+    # the tangent flow: the cycle's Floquet multipliers by shooting with the exact monodromy
+    Tf, mult = mp.phase.floquet(vdp, [2.0, 0.0])
+    line("Van der Pol Floquet multipliers", f"1 and {mult[1].real:.6e} (T = {Tf:.12f})",
+         ref=f"T {ref:.10f}", err=abs(Tf - ref))
 
 
 def _scipy_cycle(t_end=60.0):

@@ -1,0 +1,751 @@
+r"""The tangent flow: sensitivities, Lyapunov spectra, Floquet multipliers, fitting.
+
+For :math:`\dot{\mathbf y} = \mathbf f(t, \mathbf y, \mathbf p)` the derivatives of the
+solution with respect to parameters and initial state,
+:math:`S = [\partial\mathbf y/\partial\mathbf p \,|\, \partial\mathbf y/\partial\mathbf y_0]`
+(n x (p + n)), obey the variational equations
+
+.. math:: \dot S = \frac{\partial\mathbf f}{\partial\mathbf y}\,S
+          + \Big[\frac{\partial\mathbf f}{\partial\mathbf p}\,\Big|\,0\Big], \qquad
+          S(t_0) = [\,0 \,|\, I\,].
+
+They are generated symbolically from the system's right-hand side
+(``system.symbolic()``: every built-in scene with a fixed set of expressions and the
+unconstrained compiled systems of :func:`mechpy.equations` / :func:`mechpy.lagrangian`),
+differentiated by SymPy, and the augmented system (y, S) of n (1 + p + n) states is compiled
+to C by :func:`mechpy.equations` (cached on disk, and in memory per system and parameter
+set): it runs in the one engine, in every method.
+
+Error control.  The tolerances apply to every component of the augmented state alike: the
+step's error estimate is the rms over y and S of ``e / (atol + rtol |z|)``.  S has the
+units of y per unit parameter; where its entries are much larger than y's (long times,
+chaotic flows) the relative term dominates and they are controlled relatively, where they
+are much smaller ``atol`` sets their absolute accuracy.  Measured on y' = A y (3 states,
+t = 10, atol = rtol / 100) against ``scipy.linalg.expm``: S's error relative to max |S| is
+7.9e-7, 7.0e-9, 6.4e-11 at rtol = 1e-6, 1e-8, 1e-10, as y's own (9.3e-7, 9.5e-9, 8.3e-11;
+the plain solve's 9.4e-7, 9.4e-9, 8.3e-11), for one or two more steps than the plain solve:
+the sensitivities come out as accurate as the state, so no separate scaling is applied.
+
+``mechpy.phase.lyapunov_spectrum`` and ``mechpy.phase.floquet`` are built on the same
+augmented system.  Ensembles of sensitivities (``y0`` of shape (K, n)) run as one
+``mp.solve_many`` ensemble.
+
+Array shapes follow the layout rule in :mod:`mechpy` (``help(mechpy)``): ``Solution.S``
+(n, p + n, m) puts the state axis first, then the columns, then time.
+"""
+from __future__ import annotations
+
+import copy
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ._validate import as_array, as_int, as_scalar
+from .errors import ConvergenceError
+from .integrate import Solution, solve
+from .scenes import Scene, _row
+
+__all__ = ["sensitivity", "fit", "FitResult"]
+
+#: augmented systems compiled in this process: key -> (compiled, param names it takes)
+_AUGMENTED: dict = {}
+
+
+# ---- the augmented system ------------------------------------------------------------
+def _no_symbolic(system) -> TypeError:
+    return TypeError(
+        f"system must be a scene or a compiled system (mp.equations, mp.lagrangian) with a "
+        f"symbolic right-hand side, got {type(system).__name__}: the variational equations "
+        "are generated from system.symbolic(); write a Python f(t, y) with mp.equations")
+
+
+def _require(system) -> None:
+    """A system the variational equations can be generated for, or TypeError."""
+    if not isinstance(system, Scene) or not hasattr(system, "symbolic"):
+        raise _no_symbolic(system)
+
+
+def _values(system) -> dict:
+    """The system's parameters by the names its symbolic form uses."""
+    return system._columns()
+
+
+def _system_key(system):
+    """What identifies a system's symbolic field (not its parameter values)."""
+    if getattr(system, "_model", None):
+        return ("scene", system._model, system.dim,
+                getattr(system, "_torque_fn", None) is not None)
+    src = getattr(system, "c_source", None)
+    if src is None:
+        meta = getattr(system, "_meta", None)
+        src = repr(meta.get("equations")) if isinstance(meta, dict) else None
+    if src is None:
+        return None
+    return ("compiled", src)
+
+
+def _augmented(system, pnames: tuple, with_y0: bool):
+    """The compiled augmented system (y, S) for the columns ``pnames`` (+ y0),
+    and the parameter names it takes (those in the field's expressions).
+
+    S is stored row-major after y: S[i, j] is state n + i * ncol + j."""
+    _require(system)
+    skey = _system_key(system)
+    key = (skey, tuple(pnames), bool(with_y0))
+    if skey is not None and key in _AUGMENTED:
+        return _AUGMENTED[key]
+    disk = _disk_key(system, skey, key)
+    out = _load(disk)
+    if out is not None:
+        _AUGMENTED[key] = out
+        return out
+    import sympy as sp
+
+    from .symbolic import equations
+    fld = system.symbolic()          # ValueError when the system has none (names it)
+    f = [sp.sympify(e) for e in fld.f]
+    y = list(fld.y)
+    n = len(y)
+    t = sp.Symbol("t")
+    if fld.t != t:
+        f = [e.xreplace({fld.t: t}) for e in f]
+    by_name = {str(s): s for s in fld.params}
+    P = [by_name.get(nm, sp.Symbol(nm)) for nm in pnames]
+    ncol = len(P) + (n if with_y0 else 0)
+    S = sp.Matrix(n, ncol, lambda i, j: sp.Symbol(f"mp_S{i}_{j}"))
+    J = sp.Matrix(n, n, lambda i, j: sp.diff(f[i], y[j]))
+    dS = J * S
+    for j, p in enumerate(P):
+        for i in range(n):
+            dS[i, j] += sp.diff(f[i], p)
+    free = set().union(*(e.free_symbols for e in f)) if f else set()
+    names = [str(s) for s in fld.params if s in free]
+    values = {str(s): float(v) for s, v in fld.params.items()}
+    aug = equations(f + list(dS), y + list(S), params={nm: values[nm] for nm in names})
+    out = (aug, tuple(names))
+    if skey is not None:
+        _AUGMENTED[key] = out
+        _store(disk, aug)
+    return out
+
+
+def _disk_key(system, skey, key):
+    """The on-disk key of an augmented system: the field's text (a scene's row, a compiled
+    system's C source), the columns, and the code that generates it (this module and the
+    symbolic generator), so a warm start needs no SymPy."""
+    if skey is None:
+        return None
+    import hashlib
+    import os
+
+    from .symbolic import _generator_hash
+    h = hashlib.sha256(b"tangent\0")
+    if skey[0] == "scene":
+        h.update(repr((skey, _row(system._model).get("field"))).encode())
+    else:
+        h.update(skey[1].encode())
+    h.update(repr(key[1:]).encode())
+    with open(os.path.abspath(__file__), "rb") as f:
+        h.update(f.read())
+    h.update(_generator_hash().encode())
+    return h.hexdigest()[:40]
+
+
+def _load(disk):
+    """The augmented system stored under ``disk`` (its library loaded), or None."""
+    if disk is None:
+        return None
+    try:
+        from .symbolic import build
+        from .symbolic.scene import CompiledScene
+        meta = build.load_meta(disk)
+        if not isinstance(meta, dict) or "param_names" not in meta:
+            return None
+        names = list(meta["param_names"])
+        aug = CompiledScene(meta, {nm: 0.0 for nm in names}, "c")
+        return aug, tuple(names)
+    except Exception:  # a damaged or foreign entry: derive again
+        return None
+
+
+def _store(disk, aug) -> None:
+    if disk is None:
+        return
+    try:
+        from .symbolic import build
+        build.store_meta(disk, aug._meta)
+    except Exception:  # a read-only cache: the next process derives again
+        pass
+
+
+def _bind(aug, names, values: dict):
+    """The augmented system at the parameter values ``values`` (by name)."""
+    cur = aug.params
+    change = {nm: float(values[nm]) for nm in names if cur[nm] != float(values[nm])}
+    if not change:
+        return aug
+    # the same library with another parameter vector: a shallow copy (replace() would
+    # load the library again, 1 ms a call, a third of a fit's time)
+    new = copy.copy(aug)
+    cur.update(change)
+    new._params = cur
+    new._vec = np.array(list(cur.values()), dtype=np.float64)
+    return new
+
+
+def _param_names(system, params) -> tuple:
+    _require(system)
+    if isinstance(params, str):
+        params = (params,)
+    try:
+        names = tuple(params)
+    except TypeError:
+        raise TypeError(f"params must be a sequence of parameter names, got "
+                        f"{type(params).__name__}") from None
+    have = _values(system)
+    for nm in names:
+        if not isinstance(nm, str):
+            raise TypeError(f"params must hold parameter names (str), got {nm!r}")
+        if nm not in have:
+            raise ValueError(f"params: {type(system).__name__} has no parameter {nm!r}; its "
+                             f"parameters are {list(have)}")
+    if len(set(names)) != len(names):
+        raise ValueError(f"params names a parameter twice: {list(names)}")
+    return names
+
+
+def _check(s, what: str):
+    if s.status < 0:
+        s.raise_for_status()
+        raise ConvergenceError(f"{what}: the integration failed: {s.message}")
+
+
+# ---- sensitivities --------------------------------------------------------------------
+def sensitivity(system, t_span, y0, params=(), *, t_eval=None, method: str = "dop853",
+                rtol: float = 1e-8, atol=1e-10, **solve_kw) -> Solution:
+    r"""The solution and its derivatives with respect to parameters and initial state.
+
+    .. math:: S_{ij}(t) = \frac{\partial y_i(t)}{\partial \theta_j}, \qquad
+              \theta = (p_1, \dots, p_k, y_{0,1}, \dots, y_{0,n}),
+
+    from the variational equations
+    :math:`\dot S = (\partial f/\partial y) S + [\partial f/\partial p \,|\, 0]`,
+    generated with SymPy from ``system.symbolic()`` and compiled with the system
+    (:mod:`mechpy.tangent`).  The tolerances apply to all n (1 + k + n) components of
+    the augmented state (see the module's notes on error control).
+
+    Parameters
+    ----------
+    system : Scene or compiled system
+        A scene with a symbolic form (``system.symbolic()``) or a system from
+        :func:`mechpy.equations` / :func:`mechpy.lagrangian` (unconstrained).  A Python
+        callable has no symbolic form: ``TypeError``.
+    t_span : (t0, tf)
+    y0 : array_like, shape (n,) or (K, n)
+        The initial state, or K of them: an ensemble, run by :func:`mechpy.solve_many`
+        (in SIMD lanes where it can; the system's parameter values for all).
+    params : sequence of str
+        The parameters to differentiate by, by name (``scene.params``' names; for a
+        compiled system, its symbols').
+    t_eval : array_like, optional
+        Output times, as in :func:`mechpy.solve` (for an ensemble: default the final
+        time only, as :func:`mechpy.solve_many`).
+    method, rtol, atol, **solve_kw
+        Passed to :func:`mechpy.solve` (:func:`mechpy.solve_many`) for the augmented
+        system.  With ``dense_output`` or ``events``, ``sol`` and the event functions
+        see the augmented state (y, then S row by row).
+
+    Returns
+    -------
+    Solution
+        As :func:`mechpy.solve` (``t``, ``y`` (n, m), ...) with ``S`` of shape
+        (n, k + n, m): ``S[:, :k]`` dy/dparams (units of y per unit of each parameter),
+        ``S[:, k:]`` dy/dy0 (the state transition matrix); ``params`` the names.  For an
+        ensemble an :class:`mechpy.EnsembleSolution` with ``y`` (K, n, m) and ``S``
+        (K, n, k + n, m).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import mechpy as mp
+    >>> s = mp.sensitivity(mp.scenes.Pendulum(damping=0.1), (0, 1), [0.3, 0.0],
+    ...                    params=("damping",), t_eval=[1.0])
+    >>> s.S.shape
+    (2, 3, 1)
+    """
+    names = _param_names(system, params)
+    y0 = as_array(y0, "y0", min_ndim=1)
+    if y0.ndim > 2 or y0.shape[-1] != system.dim:
+        raise ValueError(f"y0 must have shape ({system.dim},) or (k, {system.dim}), got "
+                         f"{y0.shape}")
+    aug, pn = _augmented(system, names, True)
+    aug = _bind(aug, pn, _values(system))
+    n, k = system.dim, len(names)
+    S0 = np.zeros((n, k + n))
+    S0[:, k:] = np.eye(n)
+    if y0.ndim == 2:
+        from .integrate import solve_many
+        z0 = np.hstack([y0, np.broadcast_to(S0.ravel(), (y0.shape[0], S0.size))])
+        e = solve_many(aug, t_span, z0, t_eval=t_eval, method=method, rtol=rtol, atol=atol,
+                       **solve_kw)
+        z = e.y
+        e["y"] = np.ascontiguousarray(z[:, :n])
+        e["S"] = np.ascontiguousarray(z[:, n:].reshape(z.shape[0], n, k + n, -1))
+        e["params"] = list(names)
+        return e
+    s = solve(aug, t_span, np.concatenate([y0, S0.ravel()]), method, rtol=rtol, atol=atol,
+              t_eval=t_eval, **solve_kw)
+    z = s.y
+    out = Solution(s)
+    out.__dict__.update(s.__dict__)
+    out["y"] = np.ascontiguousarray(z[:n])
+    out["S"] = np.ascontiguousarray(z[n:].reshape(n, k + n, -1))
+    out["params"] = list(names)
+    for key in ("y_events",):
+        if out.get(key) is not None:
+            out[key] = [np.ascontiguousarray(np.asarray(v)[..., :n]) for v in out[key]]
+    return out
+
+
+def _flow(aug, n, t0, t1, y, cols0, method, rtol, atol, what):
+    """Integrate the augmented system from (y, S = cols0) over [t0, t1]; -> (y, S)."""
+    ncol = cols0.shape[1]
+    s = solve(aug, (t0, t1), np.concatenate([y, cols0.ravel()]), method, rtol=rtol,
+              atol=atol, t_eval=[t1])
+    _check(s, what)
+    z = s.y[:, -1]
+    return z[:n].copy(), z[n:].reshape(n, ncol).copy()
+
+
+# ---- Lyapunov spectrum ----------------------------------------------------------------
+def _lyapunov_spectrum(system, y0, t, *, dt: float = 1.0, transient: float = 0.0,
+                       method: str = "dop853", rtol: float = 1e-10, atol: float = 1e-12,
+                       return_history: bool = False):
+    """What :func:`mechpy.phase.lyapunov_spectrum` does (its docstring)."""
+    _require(system)
+    y = as_array(y0, "y0", ndim=1).copy()
+    n = system.dim if isinstance(system, Scene) else y.size
+    if y.shape[0] != n:
+        raise ValueError(f"y0 must have {n} components, got shape {y.shape}")
+    T = as_scalar(t, "t", positive=True)
+    dt = as_scalar(dt, "dt", positive=True)
+    transient = as_scalar(transient, "transient", nonnegative=True)
+    aug, pn = _augmented(system, (), True)
+    aug = _bind(aug, pn, _values(system))
+    t0 = 0.0
+    if transient > 0:
+        s = solve(system, (0.0, transient), y, method, rtol=rtol, atol=atol, t_eval=[transient])
+        _check(s, "lyapunov_spectrum (transient)")
+        y, t0 = s.y[:, -1].copy(), transient
+    m = max(1, int(round(T / dt)))
+    times = t0 + (T / m) * np.arange(1, m + 1)
+    Q = np.eye(n)
+    sums = np.zeros(n)
+    running = np.empty((m, n))
+    ta = t0
+    for i in range(m):
+        y, Phi = _flow(aug, n, ta, times[i], y, Q, method, rtol, atol, "lyapunov_spectrum")
+        Q, R = np.linalg.qr(Phi)
+        d = np.diag(R)
+        if not np.all(np.isfinite(d)) or np.any(d == 0.0):
+            raise ConvergenceError(
+                f"lyapunov_spectrum: the tangent vectors became degenerate at t = "
+                f"{times[i]:.6g} (a zero or non-finite diagonal of R); use a shorter dt")
+        sums += np.log(np.abs(d))
+        Q = Q * np.sign(d)
+        running[i] = sums / (times[i] - t0)
+        ta = times[i]
+    spec = np.sort(running[-1])[::-1].copy()
+    if return_history:
+        return spec, times, running
+    return spec
+
+
+# ---- Floquet multipliers --------------------------------------------------------------
+def _first_return(system, y0, f0, t_max, method, rtol, atol):
+    """The time of the first return of the orbit from y0 to the plane through y0
+    normal to f0, crossed in the direction of f0."""
+    def g(t, y):
+        return float(f0 @ (np.asarray(y) - y0))
+    g.terminal, g.direction = True, 1.0
+    s = solve(system, (0.0, t_max), y0, method, rtol=rtol, atol=atol, events=g,
+              t_eval=[])
+    _check(s, "floquet (first return)")
+    te = s.t_events[0]
+    te = te[te > 0.0]
+    if te.size == 0:
+        raise ConvergenceError(
+            f"floquet: the orbit from y0 did not return to the plane through y0 across its "
+            f"velocity within t = {t_max:g}; give the period (period=...) or start on the "
+            "orbit")
+    return float(te[0])
+
+
+def _floquet(system, y0, *, period=None, tol: float = 1e-10, max_iter: int = 50,
+             method: str = "dop853", rtol: float = 1e-11, atol: float = 1e-12,
+             t_max: float = 1e4, return_orbit: bool = False):
+    """What :func:`mechpy.phase.floquet` does (its docstring)."""
+    _require(system)
+    import sympy as sp
+    y = as_array(y0, "y0", ndim=1).copy()
+    n = system.dim if isinstance(system, Scene) else y.size
+    if y.shape[0] != n:
+        raise ValueError(f"y0 must have {n} components, got shape {y.shape}")
+    tol = as_scalar(tol, "tol", positive=True)
+    max_iter = as_int(max_iter, "max_iter", minimum=1)
+    aug, pn = _augmented(system, (), True)
+    aug = _bind(aug, pn, _values(system))
+    # forced: f depends on t at these parameter values (a drive of amplitude 0 is none)
+    fld = system.symbolic()
+    forced = any(fld.t in sp.sympify(e).xreplace(fld.params).free_symbols for e in fld.f)
+    if period is None and forced:
+        raise ValueError("floquet: the system is forced (its right-hand side depends on t): "
+                         "give its period (period=...)")
+    T = None if period is None else as_scalar(period, "period", positive=True)
+    eye = np.eye(n)
+    if T is None:
+        f0 = system.rhs(0.0, y)
+        if not np.any(f0):
+            raise ValueError("floquet: y0 is a fixed point (f(y0) = 0), not on a periodic orbit")
+        T = _first_return(system, y, f0, t_max, method, rtol, atol)
+    for it in range(max_iter + 1):
+        yT, M = _flow(aug, n, 0.0, T, y, eye, method, rtol, atol, "floquet")
+        r = yT - y
+        scale = 1.0 + np.linalg.norm(y)
+        if np.linalg.norm(r) <= tol * scale:
+            break
+        if it == max_iter:
+            raise ConvergenceError(
+                f"floquet: Newton's shooting did not converge in {max_iter} iterations "
+                f"(|phi_T(y) - y| = {np.linalg.norm(r):.3g}); start nearer the orbit")
+        if forced:
+            dy = np.linalg.solve(M - eye, -r)
+            dT = 0.0
+        else:
+            fy = system.rhs(0.0, y)
+            A = np.zeros((n + 1, n + 1))
+            A[:n, :n] = M - eye
+            A[:n, n] = system.rhs(T, yT)
+            A[n, :n] = fy
+            sol = np.linalg.lstsq(A, -np.concatenate([r, [0.0]]), rcond=None)[0]
+            dy, dT = sol[:n], sol[n]
+        y = y + dy
+        T = T + dT
+        if not T > 0:
+            raise ConvergenceError("floquet: the period went non-positive in Newton's "
+                                   "shooting; start nearer the orbit or give period=...")
+    if not forced and np.linalg.norm(system.rhs(0.0, y)) <= 1e-8 * scale / T:
+        raise ConvergenceError(
+            f"floquet: Newton's shooting converged to a fixed point (y = {y.tolist()}, "
+            "f(y) = 0), not a periodic orbit: there is none near y0")
+    mult = np.linalg.eigvals(M).astype(complex)
+    mult = mult[np.argsort(-np.abs(mult), kind="stable")]
+    if return_orbit:
+        return float(T), mult, y
+    return float(T), mult
+
+
+# ---- fitting --------------------------------------------------------------------------
+@dataclass(frozen=True, eq=False)
+class FitResult:
+    """The result of :func:`fit`.
+
+    Attributes
+    ----------
+    params : dict
+        Best-fit values by name (initial-state components as ``"y0[i]"``).
+    stderr : dict
+        Standard errors, sqrt of cov's diagonal.
+    cov : ndarray (p, p)
+        Covariance of the estimates, in the order of ``params``.
+    residuals : ndarray (k, m)
+        data - model at the optimum.
+    chi2 : float
+        Sum of squared residuals, each divided by its sigma (1 when sigma is None).
+    dof : int
+        Degrees of freedom, k m - p.
+    nfev, njev : int
+        Evaluations of the residuals and of their Jacobian (each one solve).
+    success : bool
+    message : str
+        :func:`scipy.optimize.least_squares`' verdict.
+    names : list of str
+        The fitted quantities, in the order of ``cov``'s rows.
+    """
+    params: dict
+    stderr: dict
+    cov: np.ndarray
+    residuals: np.ndarray
+    chi2: float
+    dof: int
+    nfev: int
+    njev: int
+    success: bool
+    message: str
+    names: list = field(default_factory=list)
+
+    def __repr__(self):
+        rows = [f"{k} = {v:.10g} +- {self.stderr[k]:.3g}" for k, v in self.params.items()]
+        return (f"FitResult(success={self.success}, chi2={self.chi2:.6g}, dof={self.dof}, "
+                f"nfev={self.nfev}:\n  " + "\n  ".join(rows) + ")")
+
+
+def _observer(observe, n):
+    """-> (h(Y) (k, m), dh(Y) (k, n, m), k) for states Y (n, m)."""
+    if observe is None:
+        idx = list(range(n))
+    elif callable(observe):
+        def h(Y):
+            out = np.asarray(observe(Y), dtype=np.float64)
+            if out.ndim == 1:
+                out = out[None, :]
+            if out.ndim != 2 or out.shape[1] != Y.shape[1]:
+                raise ValueError(f"observe(y) must return shape (k, m) for y of shape "
+                                 f"{Y.shape}, got {out.shape}")
+            return out
+
+        def dh(Y):
+            k = h(Y).shape[0]
+            D = np.empty((k, n, Y.shape[1]))
+            for j in range(n):
+                e = 1e-6 * np.maximum(1.0, np.abs(Y[j]))
+                Yp, Ym = Y.copy(), Y.copy()
+                Yp[j] += e
+                Ym[j] -= e
+                D[:, j] = (h(Yp) - h(Ym)) / (2 * e)
+            return D
+        return h, dh, None
+    else:
+        items = [observe] if isinstance(observe, (int, np.integer)) else list(observe)
+        idx = []
+        for v in items:
+            idx.append(as_int(v, "observe", minimum=-n, maximum=n - 1) % n)
+    sel = np.zeros((len(idx), n))
+    sel[np.arange(len(idx)), idx] = 1.0
+    return (lambda Y: Y[idx]), (lambda Y: np.broadcast_to(sel[:, :, None],
+                                                         sel.shape + (Y.shape[1],))), len(idx)
+
+
+def fit(system, t, data, params, *, y0, observe=None, sigma=None, fit_y0=False,
+        t0=None, method: str = "dop853", rtol: float = 1e-10, atol: float = 1e-12,
+        bounds=None, loss: str = "linear", max_nfev=None) -> FitResult:
+    r"""Fit parameters (and initial state) of a system to sampled data by least squares.
+
+    .. math:: \min_\theta\ \sum_{i,j}\left(\frac{h_i(\mathbf y(t_j; \theta)) - d_{ij}}
+              {\sigma_{ij}}\right)^2
+
+    with :func:`scipy.optimize.least_squares` (trust region reflective, ``x_scale="jac"``)
+    and the exact Jacobian :math:`\partial h/\partial y \cdot S` from the sensitivities
+    (:func:`sensitivity`: one solve of the augmented system gives the residuals and
+    the Jacobian).  Bounds default to the scene's parameter domains (its C row), so a
+    poor start cannot wander into, say, a negative length.
+
+    Parameters
+    ----------
+    system : Scene or compiled system
+        With a symbolic form (``system.symbolic()``); the parameters not fitted keep
+        the system's values.
+    t : array_like (m,)
+        Sample times, strictly increasing.
+    data : array_like (k, m)
+        The k observed quantities at the m times ((m,) for k = 1); finite.
+    params : dict
+        ``{name: initial guess}`` of the parameters to fit.
+    y0 : array_like (n,)
+        The initial state at ``t0`` (the first guess of it with ``fit_y0``).
+    observe : int, sequence of int or callable, optional
+        What ``data`` measures: state components by index, or ``h(y)`` taking states
+        (n, m) to (k, m) (its derivative by central differences, step 1e-6 max(1, |y|)).
+        Default: all n components.
+    sigma : float, (k,) or (k, m), optional
+        Standard deviations of the data.  Given: the residuals are weighted by 1/sigma
+        and ``cov`` = (J^T J)^-1 (absolute sigma).  None: unit weights and ``cov`` =
+        (J^T J)^-1 chi2 / (k m - p), scaled by the reduced chi-square (as
+        ``scipy.optimize.curve_fit`` with ``absolute_sigma=False``).
+    fit_y0 : bool or sequence of int
+        Fit the initial state too (all components, or those indexed); they appear in
+        the result as ``"y0[i]"``.
+    t0 : float, optional
+        The time of ``y0`` (default ``t[0]``).
+    method, rtol, atol
+        For :func:`mechpy.solve` of the augmented system.
+    bounds : (lo, hi), optional
+        Override the domains: arrays over the fitted quantities (params, then y0).
+    loss : str
+        :func:`scipy.optimize.least_squares`' loss (``"soft_l1"`` for outliers; the
+        standard errors then are those of the linearised problem).
+    max_nfev : int, optional
+        Budget of residual evaluations.
+
+    Returns
+    -------
+    FitResult
+        ``params``, ``stderr``, ``cov``, ``residuals`` (data - model, (k, m)), ``chi2``,
+        ``dof``, ``nfev``, ``njev``, ``success``, ``message``.
+
+    Raises
+    ------
+    TypeError
+        A system without a symbolic form (a Python callable), params not a dict.
+    ValueError
+        A parameter the system lacks (named), data of the wrong shape or non-finite
+        (the first bad entry named), a guess outside the parameter's domain.
+    ConvergenceError
+        An integration failed at some trial parameters.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import mechpy as mp
+    >>> sc = mp.scenes.Pendulum(damping=0.3)
+    >>> t = np.linspace(0, 5, 51)
+    >>> data = mp.solve(sc, (0, 5), [1.0, 0.0], t_eval=t).y[:1]
+    >>> r = mp.fit(sc, t, data, {"damping": 0.1}, y0=[1.0, 0.0], observe=0)
+    >>> round(r.params["damping"], 6)
+    0.3
+    """
+    from scipy.optimize import least_squares
+    _require(system)
+    if not isinstance(params, dict) or not params:
+        raise TypeError(f"params must be a non-empty dict {{name: initial guess}}, got "
+                        f"{params!r}")
+    names = _param_names(system, tuple(params))
+    guess = np.array([as_scalar(params[nm], f"params[{nm!r}]") for nm in names])
+    n = system.dim
+    y0 = as_array(y0, "y0", ndim=1)
+    if y0.shape[0] != n:
+        raise ValueError(f"y0 must have {n} components, got shape {y0.shape}")
+    t = as_array(t, "t", ndim=1)
+    if t.size < 1 or np.any(np.diff(t) <= 0):
+        raise ValueError("t must be strictly increasing sample times")
+    m = t.size
+    t0 = float(t[0]) if t0 is None else as_scalar(t0, "t0")
+    if t0 > t[0]:
+        raise ValueError(f"t0 ({t0}) must not lie after the first sample time t[0] = {t[0]}")
+    data = as_array(data, "data", finite=False)
+    if data.ndim == 1:
+        data = data[None, :]
+    h, dh, k = _observer(observe, n)
+    if k is None:
+        k = h(np.repeat(y0[:, None], m, axis=1)).shape[0]
+    if data.shape != (k, m):
+        raise ValueError(f"data must have shape (k, m) = ({k}, {m}) (k observed components "
+                         f"at the {m} times t), got {data.shape}")
+    bad = ~np.isfinite(data)
+    if bad.any():
+        i, j = np.argwhere(bad)[0]
+        raise ValueError(f"data must be finite: data[{i}, {j}] = {data[i, j]} (and "
+                         f"{int(bad.sum()) - 1} more)")
+    if sigma is None:
+        w = np.ones((k, m))
+    else:
+        sg = as_array(sigma, "sigma", min_ndim=0, positive=True)
+        try:
+            w = np.broadcast_to(sg if sg.ndim != 1 else sg[:, None], (k, m)).copy()
+        except ValueError:
+            raise ValueError(f"sigma must be a scalar, (k,) = ({k},) or (k, m) = ({k}, {m}), "
+                             f"got shape {sg.shape}") from None
+    if fit_y0 is True:
+        y0_idx = list(range(n))
+    elif fit_y0 is False or fit_y0 is None:
+        y0_idx = []
+    else:
+        y0_idx = sorted({as_int(i, "fit_y0", minimum=0, maximum=n - 1) for i in fit_y0})
+    np_ = len(names)
+    x0 = np.concatenate([guess, y0[y0_idx]])
+    labels = list(names) + [f"y0[{i}]" for i in y0_idx]
+    if bounds is None:
+        lo, hi = _scene_bounds(system, names)
+        lo = np.concatenate([lo, np.full(len(y0_idx), -np.inf)])
+        hi = np.concatenate([hi, np.full(len(y0_idx), np.inf)])
+    else:
+        lo, hi = (np.broadcast_to(as_array(b, "bounds", min_ndim=0, finite=False),
+                                  x0.shape).copy() for b in bounds)
+    for i, nm in enumerate(labels):
+        if not lo[i] <= x0[i] <= hi[i]:
+            raise ValueError(f"the initial guess {nm} = {x0[i]} lies outside its domain "
+                             f"[{lo[i]}, {hi[i]}]")
+    # least_squares wants x0 strictly inside: nudge a guess sitting on a bound
+    span = np.where(np.isfinite(hi - lo), hi - lo, np.maximum(1.0, np.abs(x0)))
+    x0 = np.clip(x0, lo + 1e-10 * span, hi - 1e-10 * span)
+    with_y0 = bool(y0_idx)
+    aug, pn = _augmented(system, names, with_y0)
+    base = _values(system)
+    ncol = np_ + (n if with_y0 else 0)
+    cache = {}
+
+    def model(x):
+        key = x.tobytes()
+        if key in cache:
+            return cache[key]
+        vals = dict(base)
+        vals.update(zip(names, x[:np_]))
+        yy = y0.copy()
+        yy[y0_idx] = x[np_:]
+        S0 = np.zeros((n, ncol))
+        if with_y0:
+            S0[:, np_:] = np.eye(n)
+        s = solve(_bind(aug, pn, vals), (t0, float(t[-1])),
+                  np.concatenate([yy, S0.ravel()]), method, rtol=rtol, atol=atol, t_eval=t)
+        if s.status < 0 or s.y.shape[1] != m:
+            raise ConvergenceError(
+                f"fit: the integration failed at {dict(zip(labels, x.tolist()))}: "
+                f"{s.message}")
+        Y = s.y[:n]
+        S = s.y[n:].reshape(n, ncol, m)
+        if with_y0:
+            S = np.concatenate([S[:, :np_], S[:, np_:][:, y0_idx]], axis=1)
+        pred = h(Y)
+        jac = np.einsum("knm,npm->kmp", dh(Y), S)
+        cache.clear()
+        cache[key] = (pred, jac)
+        return pred, jac
+
+    def fun(x):
+        pred, _ = model(x)
+        return ((pred - data) / w).ravel()
+
+    def jac(x):
+        _, J = model(x)
+        return (J / w[:, :, None]).reshape(k * m, -1)
+
+    res = least_squares(fun, x0, jac=jac, bounds=(lo, hi), x_scale="jac", loss=loss,
+                        method="trf", max_nfev=max_nfev)
+    pred, J = model(res.x)
+    Jw = (J / w[:, :, None]).reshape(k * m, -1)
+    r = (data - pred)
+    chi2 = float(np.sum((r / w) ** 2))
+    dof = k * m - x0.size
+    _, sv, Vt = np.linalg.svd(Jw, full_matrices=False)
+    keep = sv > sv[0] * 1e-12 if sv.size and sv[0] > 0 else np.zeros(sv.shape, bool)
+    cov = (Vt[keep].T / sv[keep] ** 2) @ Vt[keep]
+    if keep.sum() < x0.size:
+        cov[:] = np.inf
+    if sigma is None:
+        cov = cov * (chi2 / dof if dof > 0 else np.inf)
+    err = np.sqrt(np.diag(cov))
+    return FitResult(params=dict(zip(labels, res.x.tolist())),
+                     stderr=dict(zip(labels, err.tolist())), cov=cov, residuals=r,
+                     chi2=chi2, dof=int(dof), nfev=int(res.nfev), njev=int(res.njev or 0),
+                     success=bool(res.success), message=str(res.message), names=labels)
+
+
+def _scene_bounds(system, names):
+    """Bounds of the named parameters from the scene's C row (its domains: an open
+    end is nudged inwards by 1e-12 of the scale); (-inf, inf) without a row."""
+    lo, hi = np.full(len(names), -np.inf), np.full(len(names), np.inf)
+    model = getattr(system, "_model", None)
+    if not model:
+        return lo, hi
+    info = {p["name"]: p for p in _row(model)["param_info"]}
+    for i, nm in enumerate(names):
+        p = info.get(nm)
+        if p is None:
+            continue
+        a, b = float(p["lo"]), float(p["hi"])
+        if p.get("lo_open") and np.isfinite(a):
+            a += 1e-12 * max(1.0, abs(a))
+        if p.get("hi_open") and np.isfinite(b):
+            b -= 1e-12 * max(1.0, abs(b))
+        lo[i], hi[i] = a, b
+    return lo, hi
