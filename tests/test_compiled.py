@@ -1100,3 +1100,16 @@ def test_import_does_not_load_sympy():
     r = subprocess.run([sys.executable, "-c", "import sys, mechpy; "
                         "print('sympy' in sys.modules)"], capture_output=True, text=True)
     assert r.stdout.strip() == "False", r.stderr
+
+
+def test_a_state_symbol_is_a_right_hand_side():
+    """x' = v: a plain Symbol is an expression (SymPy counts Symbol among its
+    Booleans), while an Eq or a condition is refused."""
+    import sympy as sp
+    x, v = sp.symbols("x v")
+    osc = mp.equations([v, -x], [x, v])
+    np.testing.assert_array_equal(osc.rhs(0.0, np.array([0.3, -0.7])), [-0.7, -0.3])
+    with pytest.raises(ValueError, match="equation or a condition"):
+        mp.equations([sp.Eq(v, 1), -x], [x, v])
+    with pytest.raises(ValueError, match="equation or a condition"):
+        mp.equations([x > 0, -x], [x, v])

@@ -174,7 +174,10 @@ def _check_input(e, what):
     """``e`` (a user's expression) is a real, finite SymPy expression:
     ValueError naming ``what`` and the culprit for an equation or condition,
     the imaginary unit, an infinite or out-of-range number, a reserved name."""
-    if isinstance(e, (sp.logic.boolalg.Boolean, sp.core.relational.Relational)):
+    # a Symbol is a Boolean to SymPy (it may stand for a truth value): a state or a
+    # parameter given as a right-hand side (x' = v) is an expression here
+    if isinstance(e, sp.core.relational.Relational) or (
+            isinstance(e, sp.logic.boolalg.Boolean) and not isinstance(e, sp.Symbol)):
         raise ValueError(f"{what} = {e} is an equation or a condition, not an expression "
                          "(give the expression itself" + (": the right-hand side f of "
                                                           "y' = f)" if what.startswith("rhs")
