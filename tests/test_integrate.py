@@ -523,7 +523,7 @@ def _fixed_step_reference(method, f, tf, y0, h):
             t += hc
         return [q, v], [v, a]
 
-    t, y = 0.0, list(y0)
+    t, y, i = 0.0, list(y0), 0
     ts, ys = [t], [y]
     try:
         fy = rhs(t, y)
@@ -535,7 +535,8 @@ def _fixed_step_reference(method, f, tf, y0, h):
                     hh = math.nextafter(hh, 0.0)
                 last = True
             y, fy = (rk4 if method == "rk4" else compose)(t, hh, y, fy)
-            t = tf if last else t + hh
+            i += 1
+            t = tf if last else i * h   # times counted, not summed
             ts.append(t)
             ys.append(y)
     except _Failed as e:

@@ -1,6 +1,7 @@
 /* The one driver loop of every integration method: step-size control,
  * budget, interrupts, output at t_eval from dense output, events, storage. */
 #include "ode/ode.h"
+#include "ode/fixed.h"
 
 #include <float.h>
 #include <math.h>
@@ -467,6 +468,8 @@ typedef struct {
     mp_ode_ws w;
     ode_control c;
     double t, tf, h, hmax;    /* where the solve is, its end, the next step, the largest */
+    double t0;                /* its start */
+    long nfixed;              /* fixed steps taken: the next starts at t0 + nfixed h */
     size_t ie;                /* the next t_eval index */
     long attempts;            /* steps attempted (the budget) */
     int need_dense;           /* some step may need the interpolant */
@@ -565,7 +568,8 @@ static int start_run(ode_run *s, double t0, const double *y0)
     const mp_ode_options *o = s->o;
     size_t n = w->n, ne = o->n_events;
     int rc;
-    s->t = t0;
+    s->t = s->t0 = t0;
+    s->nfixed = 0;
     memcpy(w->y, y0, n * sizeof(double));
     if ((rc = mp_ode_ws_rhs(w, t0, w->y, w->f)) != MP_OK) return rc;
     if (o->n_eval == 0) {
@@ -645,6 +649,7 @@ static int accept_step(ode_run *s, double h, double hnew, double tnew)
     double *sw = w->y; w->y = w->ynew; w->ynew = sw;
     if (w->fnew_valid) { sw = w->f; w->f = w->fnew; w->fnew = sw; }
     s->t = tnew;
+    s->nfixed += !s->cur->adaptive;
     s->h = fmin(s->cur->adaptive ? hnew : o->h, s->hmax);
     /* the switching row: to the stiff method when the test fires, back when
      * the stiff method's steps are within the explicit stability region */
@@ -672,7 +677,11 @@ static void fixed_block(ode_run *s)
     long k = 0, kmax = MP_ODE_INTERRUPT_EVERY - 1 - s->attempts % MP_ODE_INTERRUPT_EVERY;
     if (kmax > o->max_steps - s->attempts) kmax = o->max_steps - s->attempts;
     double t = s->t, h = s->h, tout = s->ie < o->n_eval ? o->t_eval[s->ie] : INFINITY;
-    for (; k < kmax && t + h * (1.0 + 1e-9) < s->tf && t + h < tout; k++) t += h;
+    for (; k < kmax; k++) { /* the steps run_loop would take as not the last, no output due */
+        double tn = mp_ode_fixed_time(s->t0, s->nfixed + k + 1, h);
+        if (!(t + h * (1.0 + 1e-9) < s->tf && tn < tout)) break;
+        t = tn;
+    }
     if (k == 0) return;
     int every = o->n_eval == 0; /* every step is a sample */
     if (every && reserve_samples(r, (size_t)k) != MP_OK) return; /* the checked loop reports */
@@ -680,7 +689,7 @@ static void fixed_block(ode_run *s)
     memcpy(s->save, w->y, n * sizeof(double));
     memcpy(s->save + n, w->f, n * sizeof(double));
     w->discarded = 0.0;
-    int rc = s->cur->block(w, s->t, h, k, every ? r->t + r->m : NULL,
+    int rc = s->cur->block(w, s->t0, s->nfixed, h, k, every ? r->t + r->m : NULL,
                            every ? r->y + r->m * n : NULL);
     int bad = rc != MP_OK || !isfinite(w->discarded);
     for (size_t i = 0; i < n && !bad; i++) bad = !isfinite(w->y[i]) || !isfinite(w->f[i]);
@@ -694,6 +703,7 @@ static void fixed_block(ode_run *s)
     if (every) r->m += (size_t)k;
     r->nsteps += k;
     s->t = t;
+    s->nfixed += k;
     s->attempts += k;
 }
 
@@ -750,7 +760,10 @@ static int run_loop(ode_run *s)
             r->nreject++;
             continue;
         }
-        if ((rc = accept_step(s, h, hnew, last ? s->tf : t + h)) != MP_OK || r->terminated)
+        /* a fixed step's end is counted, t0 + (i + 1) h: a sum of steps drifts */
+        double tnew = last ? s->tf
+                    : cur->adaptive ? t + h : mp_ode_fixed_time(s->t0, s->nfixed + 1, h);
+        if ((rc = accept_step(s, h, hnew, tnew)) != MP_OK || r->terminated)
             break;
     }
     r->t_fail = s->t;

@@ -20,6 +20,7 @@
 
 #include "ode/dop853_tableau.h"
 #include "ode/dopri5_tableau.h"
+#include "ode/fixed.h"
 
 #ifndef MP_LANES_RUN
 #error "MP_LANES_RUN names this build of the lane driver (csrc/meson.build)"
@@ -612,7 +613,10 @@ static void lane_attempt(lane_group *g)
         }
         if (g->adaptive && !lane_control(g, l, err[l], fac11[l], fold[l], &hnew[l])) continue;
         acc[l] = 1;
-        tnew[l] = last[l] ? g->sf : g->t[l] + g->h[l];
+        /* a fixed step's end is counted, as driver.c counts it: s0 + (i + 1) h */
+        tnew[l] = last[l]      ? g->sf
+                : g->adaptive ? g->t[l] + g->h[l]
+                              : mp_ode_fixed_time(g->s0, g->attempts[l], g->h[l]);
         dense[l] = g->ie[l] < g->nt && g->sev[g->ie[l]] < tnew[l];
     }
     memcpy(on, acc, sizeof on);

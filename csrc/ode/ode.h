@@ -27,13 +27,14 @@ typedef int (*mp_ode_interrupt)(void *ctx);
  * its rhs is this one (a wrapper that replaces rhs leaves them unused). */
 typedef struct mp_ode_blocks {
     mp_ode_rhs rhs;
-    /* k rk4 steps in place, as ode/fixed.h's mp_ode_rk4_steps */
-    int (*rk4)(void *data, double t, double h, long k, double *y, double *f, double *ts,
-               double *ys);
+    /* k rk4 steps in place, step j from t0 + (i0 + j) h, as ode/fixed.h's
+     * mp_ode_rk4_steps */
+    int (*rk4)(void *data, double t0, long i0, double h, long k, double *y, double *f,
+               double *ts, double *ys);
     /* k steps of the composition c[0..ns), as mp_ode_compose_steps (NULL: rhs
      * is not separable) */
-    int (*compose)(void *data, double t, double h, const double *c, int ns, long k, double *y,
-                   double *f, double *ts, double *ys, double *discarded);
+    int (*compose)(void *data, double t0, long i0, double h, const double *c, int ns, long k,
+                   double *y, double *f, double *ts, double *ys, double *discarded);
 } mp_ode_blocks;
 
 typedef struct mp_ode_problem {
@@ -143,15 +144,16 @@ typedef struct mp_ode_method {
      * output needs it, and the interpolant's coefficients when need_dense. */
     int (*finish)(mp_ode_ws *w, double t, double h, int need_dense);
     /* Optional, for a fixed-step row whose steps depend on (t, h, y, f) alone:
-     * k steps of size h from (t, w->y, w->f) in place, the times t + h, t + 2h,
-     * ... accumulated step by step, ending with f = f(t_k, y_k); the same
-     * arithmetic as k calls of step and finish.  The state after step j is
-     * written to ys + j n and its time to ts[j] when ys is not NULL.  The
+     * k steps of size h from (w->y, w->f) in place, step j from the counted
+     * time t0 + (i0 + j) h (ode/fixed.h's mp_ode_fixed_time, as the driver
+     * counts a fixed-step solve's times), ending with f = f(t_k, y_k); the
+     * same arithmetic as k calls of step and finish.  The state after step j
+     * is written to ys + j n and its time to ts[j] when ys is not NULL.  The
      * stages are not checked (the driver's fast path checks the state after
      * the block; values a step computes and drops leave their trace in
      * w->discarded); f is called directly (ode/fixed.h), or inlined in the
      * problem's own blocks; nfev counts k times the row's evaluations. */
-    int (*block)(mp_ode_ws *w, double t, double h, long k, double *ts, double *ys);
+    int (*block)(mp_ode_ws *w, double t0, long i0, double h, long k, double *ts, double *ys);
     /* Optional: forget history (a switching row changed method). */
     void (*restart)(mp_ode_ws *w);
     /* A switching row ("auto"): the driver runs `nonstiff` and `stiff` in

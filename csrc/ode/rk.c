@@ -50,13 +50,14 @@ static int rk4_step(mp_ode_ws *w, double t, double h, double *err)
 /* Contract: the block of ode.h's method row: k steps in place, each one's
  * four evaluations as rk4_step and the finish make them; the problem's own
  * blocks when it has them. */
-static int rk4_block(mp_ode_ws *w, double t, double h, long k, double *ts, double *ys)
+static int rk4_block(mp_ode_ws *w, double t0, long i0, double h, long k, double *ts,
+                     double *ys)
 {
     const mp_ode_problem *p = w->p;
     w->nfev += 4 * k;
     if (p->blocks && p->blocks->rhs == p->rhs)
-        return p->blocks->rk4(p->data, t, h, k, w->y, w->f, ts, ys);
-    return mp_ode_rk4_steps(p->rhs, p->data, w->n, t, h, k, w->y, w->f, w->k, ts, ys);
+        return p->blocks->rk4(p->data, t0, i0, h, k, w->y, w->f, ts, ys);
+    return mp_ode_rk4_steps(p->rhs, p->data, w->n, t0, i0, h, k, w->y, w->f, w->k, ts, ys);
 }
 
 const mp_ode_method mp_ode_rk4 = {
