@@ -511,11 +511,11 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
     spec, dim = _system_spec(system, args, method)
     if dim is not None and dim != n:
         raise ValueError(f"y0 must have {dim} values for {type(system).__name__}, got {n}")
-    check = getattr(system, "_check_initial", None)   # e.g. constraints a scene imposes
-    if check is not None:
-        check(t0, y0a)
     evs, term, dirs = _events_spec(events)
     errors = _errors_mode(errors)
+    check = getattr(system, "_check_initial", None)   # e.g. constraints a scene imposes
+    if check is not None:   # a singular state is the solve's to report (errors="status")
+        check(t0, y0a, singular=errors != "status")
 
     watch = _watch_list(system)
     call = (method, spec, y0a, t0, tf, rtol, atol_a, tev, hh, fs, ms, budget, dense_output,
@@ -736,16 +736,16 @@ def solve_many(system, t_span: Sequence[float], y0s, *, params=None, t_eval=None
     if dim is not None and dim != n:
         raise ValueError(f"y0s must have {dim} columns for {type(system).__name__}, got {n}")
     par = _ensemble_params(system, params, k)
+    errors = _errors_mode(errors)
     check = getattr(system, "_check_initial", None)   # e.g. constraints a scene imposes
-    if check is not None and k:
-        check(t0, Y0) if par is None else check(t0, Y0, params=par)
+    if check is not None and k:   # singular rows: statuses under errors="status"
+        check(t0, Y0, params=par, singular=errors != "status")
     if threads is None:
         nthreads = os.cpu_count() or 1
     else:
         nthreads = as_int(threads, "threads", minimum=1)
     if not isinstance(progress, (bool, np.bool_)):
         raise TypeError("progress must be a bool")
-    errors = _errors_mode(errors)
     want_lanes = _lanes_mode(lanes)
     opts = _options(t0, tf, rtol, atol_a, tev, hh, fs, ms, budget)
     watch = _watch_list(system)

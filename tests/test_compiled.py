@@ -728,6 +728,18 @@ def test_singular_mass_matrix_at_the_initial_state():
         s.rhs(0, [0.0, 1.0])
     with pytest.raises(mp.SingularityError, match="mass matrix"):
         mp.solve_many(s, (0, 1), [[1.0, 0.0], [0.0, 1.0]])
+    # errors="status": a status, not an exception; one singular row leaves the
+    # ensemble's other rows (in lanes and scalar), as HeavyTop's -3 does
+    st = mp.solve(s, (0, 1), [0.0, 1.0], errors="status")
+    assert st.status == -3 and "singular" in st.message
+    for lanes in (None, False):
+        ens = mp.solve_many(s, (0, 1), [[1.0, 0.0], [0.0, 1.0]], errors="status", lanes=lanes)
+        assert ens.status.tolist() == [0, -3]
+        # the regular row keeps its energy x^2 x'^2/2 + x^2/2 = 1/2 (measured 1.0e-8)
+        x1, v1 = ens.y[0, :, -1]
+        assert abs(x1 ** 2 * v1 ** 2 / 2 + x1 ** 2 / 2 - 0.5) < 1e-7
+        with pytest.raises(mp.SingularityError, match="trajectory 1"):
+            ens.raise_for_status()
     sn = mp.lagrangian(x ** 2 * x.diff(t) ** 2 / 2 - x ** 2 / 2, [x], backend="numpy")
     with pytest.raises(mp.SingularityError, match="mass matrix"):
         mp.solve(sn, (0, 1), [0.0, 1.0])

@@ -246,11 +246,13 @@ class CompiledScene(Scene):
             raise AttributeError(f"{what}: the system has no constraints")
 
     # -- initial-state check (mechpy.solve calls it) ----------------------------
-    def _check_initial(self, t0, y0, params=None, tol: float = 1e-8):
+    def _check_initial(self, t0, y0, params=None, tol: float = 1e-8, singular: bool = True):
         """Raise if an initial state (validated float64, (n,) or rows (k, n),
         with ``params`` rows (k, p) if given) violates a constraint (|g| or
-        |g'| above tol, scaled by the state's size) or the mass matrix is
-        singular there.  One C evaluation per function (per row with params)."""
+        |g'| above tol, scaled by the state's size) or, with ``singular``, the
+        mass matrix is singular there (``singular=False``: the solve reports
+        it, as a status under ``errors="status"``).  One C evaluation per
+        function (per row with params)."""
         Y = np.ascontiguousarray(y0.reshape(-1, self._dim))
         if params is None:
             vecs = [(self._vec, slice(None))]
@@ -261,9 +263,9 @@ class CompiledScene(Scene):
             vecs = [(np.ascontiguousarray(params[i]), slice(i, i + 1))
                     for i in range(Y.shape[0])]
         for vec, rows in vecs:
-            self._check_rows(t0, Y[rows], vec, rows.start or 0, y0.ndim > 1, tol)
+            self._check_rows(t0, Y[rows], vec, rows.start or 0, y0.ndim > 1, tol, singular)
 
-    def _check_rows(self, t0, Y, vec, first, many, tol):
+    def _check_rows(self, t0, Y, vec, first, many, tol, singular=True):
         if self._k:
             gv = self._raw("constraints", t0, Y, vec)
             scale = np.maximum(1.0, np.max(np.abs(Y), axis=1)) ** 2
@@ -279,7 +281,7 @@ class CompiledScene(Scene):
                     raise ValueError(f"y0{row} violates {what} {c}: {sym} = "
                                      f"{gv[i, cols][c]!r} ({self._meta['constraints'][c]} = 0); "
                                      f"{hint}")
-        if self._meta["kind"] == "lagrangian":
+        if singular and self._meta["kind"] == "lagrangian":
             self._raw("rhs", t0, Y, vec)   # raises SingularityError naming the mass matrix
 
     # -- what a Lagrangian gives besides -----------------------------------------
