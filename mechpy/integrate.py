@@ -295,7 +295,13 @@ def _events_spec(events):
         return None, None, None
     if callable(events):
         events = [events]
-    evs = list(events)
+    try:
+        evs = list(events)
+    except TypeError:
+        raise TypeError(f"events must be a callable or a sequence of callables, got "
+                        f"{type(events).__name__}") from None
+    if not evs:   # SciPy's events=[]: no event, empty t_events and y_events
+        return evs, None, None
     term, dirs = [], []
     for i, e in enumerate(evs):
         if not callable(e):
@@ -450,7 +456,10 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
     events : callable or list of callables
         ``g(t, y, *args)``; a zero crossing is located to round-off on the
         interpolant.  Attributes ``terminal`` (bool, or the number of
-        crossings after which to stop) and ``direction`` as in SciPy.
+        crossings after which to stop) and ``direction`` as in SciPy.  As in
+        SciPy, a g exactly zero at t0 is an event at t0 when the solution
+        leaves zero in its direction; a crossing landing exactly on zero at a
+        step's end is reported once (SciPy: twice).  ``[]``: no event.
     args : tuple
         Extra arguments for a Python ``system``, ``jac`` and events.
     h : float
@@ -519,7 +528,7 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
 
     watch = _watch_list(system)
     call = (method, spec, y0a, t0, tf, rtol, atol_a, tev, hh, fs, ms, budget, dense_output,
-            evs, term, dirs, args, jac, watch)
+            evs or None, term, dirs, args, jac, watch)
     if watch is None:
         r = _core.ode_solve(*call)
     else:
@@ -534,8 +543,8 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
         sol = DenseOutput(*dense, backward=bool(backward))
     t_events = y_events = None
     if evs is not None:
-        t_events = [te for te, _ in events_out]
-        y_events = [ye for _, ye in events_out]
+        t_events = [te for te, _ in events_out or ()]
+        y_events = [ye for _, ye in events_out or ()]
     out = Solution(t=t, y=y.T, sol=sol, t_events=t_events, y_events=y_events, nfev=nfev,
                    njev=njev, nlu=nlu, nsteps=nsteps, nreject=nreject, status=status,
                    message=message, success=status >= 0)

@@ -543,3 +543,52 @@ def test_long_fixed_step_driven_run_samples_the_drive_at_counted_times(method, b
     # the sample times are the counted ones, i h
     t = mp.solve(scene, (0, 2.0), [1.0, 0.0], method=method, h=1e-3).t
     np.testing.assert_array_equal(t, np.arange(2001) * 1e-3)
+
+
+# ---- events: an empty list, a zero at t0, a zero at a step's end ------------------
+
+def test_empty_events_list_is_no_event():
+    # SciPy accepts events=[] (t_events = y_events = []); it raised TypeError
+    a = mp.solve(harmonic, (0, 2), [1.0, 0.0], events=[])
+    b = solve_ivp(harmonic, (0, 2), [1.0, 0.0], events=[])
+    assert a.t_events == b.t_events == [] and a.y_events == b.y_events == []
+    assert np.array_equal(a.y, mp.solve(harmonic, (0, 2), [1.0, 0.0]).y)
+    with pytest.raises(TypeError, match="events must be a callable or a sequence"):
+        mp.solve(harmonic, (0, 2), [1.0, 0.0], events=3)
+
+
+@pytest.mark.parametrize("rate, direction, terminal", [
+    (1.0, 0, False), (-1.0, 0, False), (1.0, 1, False), (1.0, -1, False), (-1.0, 1, False),
+    (-1.0, -1, False), (1.0, 0, True)])
+def test_event_zero_at_t0_as_scipy(rate, direction, terminal):
+    # y' = rate, y(0) = 0, event y: SciPy reports the zero at t0 when the solution
+    # leaves it in the event's direction (ivp.py's find_active_events: g <= 0 <= g_new),
+    # and a terminal one stops there (t = [0, 0], status 1); mechpy never reported it
+    def ev(t, y):
+        return y[0]
+    ev.direction, ev.terminal = direction, terminal
+    ours = mp.solve(lambda t, y: [rate], (0, 2), [0.0], events=ev)
+    ref = solve_ivp(lambda t, y: [rate], (0, 2), [0.0], events=ev)
+    assert [e.tolist() for e in ours.t_events] == [e.tolist() for e in ref.t_events]
+    assert ours.status == ref.status
+    if terminal:
+        assert ours.t.tolist() == ref.t.tolist() == [0.0, 0.0]
+    # backwards the same: the zero at t0 = 2
+    back = mp.solve(lambda t, y: [-rate], (2, 0), [0.0], events=ev)
+    refb = solve_ivp(lambda t, y: [-rate], (2, 0), [0.0], events=ev)
+    assert [e.tolist() for e in back.t_events] == [e.tolist() for e in refb.t_events]
+
+
+@pytest.mark.parametrize("sign", [1.0, -1.0])
+@pytest.mark.parametrize("direction", [0, 1, -1])
+def test_crossing_that_lands_on_zero_at_a_step_end(sign, direction):
+    # steps of 0.5 end exactly at t = 1 where g = sign (t - 1) is exactly zero:
+    # the crossing is reported once, at t = 1 (SciPy reports it twice: at the end
+    # of the step and again at the start of the next; docs/conventions.md)
+    def ev(t, y):
+        return sign * (t - 1.0)
+    ev.direction = direction
+    s = mp.solve(lambda t, y: [0.0], (0, 2), [0.0], events=ev, first_step=0.5, max_step=0.5)
+    assert s.t.tolist() == [0.0, 0.5, 1.0, 1.5, 2.0]
+    fires = direction == 0 or direction == sign
+    assert s.t_events[0].tolist() == ([1.0] if fires else [])

@@ -275,10 +275,13 @@ static int ev_cmp(const void *a, const void *b)
 
 /* Find every crossing in the accepted step [t, t + h]; g_old holds g at t and
  * is updated to g at the step end.  Sets *s_stop < 1 when a terminal event
- * fires (the step is truncated there). */
+ * fires (the step is truncated there).  On the first step (first != 0) an
+ * event that is exactly zero at t0 occurs at t0 when it leaves zero in its
+ * direction (any way for direction 0), as SciPy's solve_ivp reports it; a
+ * zero at a later step's start is the crossing the step before reported. */
 static int ev_step(mp_ode_ws *w, mp_ode_result *r, const mp_ode_options *o, double t, double h,
-                   double *g_old, double *g_sub, double *ytmp, double *gtmp, ev_hit *hits,
-                   double *s_stop)
+                   int first, double *g_old, double *g_sub, double *ytmp, double *gtmp,
+                   ev_hit *hits, double *s_stop)
 {
     size_t ne = o->n_events, nh = 0;
     ev_ctx c = {w, o, t, h, ytmp, gtmp};
@@ -298,7 +301,14 @@ static int ev_step(mp_ode_ws *w, mp_ode_result *r, const mp_ode_options *o, doub
                 w->bad_index = k;
                 return MP_ENONFINITE;
             }
-            if (crosses(g_old[k], g_sub[k], o->direction[k])) {
+            int dk = o->direction[k];
+            if (first && j == 1 && g_old[k] == 0.0) { /* zero at t0 */
+                if (dk == 0 || (dk > 0 ? g_sub[k] >= 0.0 : g_sub[k] <= 0.0)) {
+                    hits[nh].s = 0.0;
+                    hits[nh].k = k;
+                    nh++;
+                }
+            } else if (crosses(g_old[k], g_sub[k], dk)) {
                 double root;
                 rc = ev_root(&c, k, s0, g_old[k], s1, g_sub[k], &root);
                 if (rc != MP_OK) return rc;
@@ -631,8 +641,8 @@ static int accept_step(ode_run *s, double h, double hnew, double tnew)
     if ((rc = s->cur->finish(w, t, h, dense_now)) != MP_OK) return rc;
     if (w->rho > 0.0) stiffness_test(s);
     double s_stop = 2.0;
-    if (o->n_events && (rc = ev_step(w, r, o, t, h, s->g_old, s->g_sub, s->ytmp, s->gtmp,
-                                     s->hits, &s_stop)) != MP_OK)
+    if (o->n_events && (rc = ev_step(w, r, o, t, h, r->nsteps == 0, s->g_old, s->g_sub,
+                                     s->ytmp, s->gtmp, s->hits, &s_stop)) != MP_OK)
         return rc;
     double tend = s_stop <= 1.0 ? t + s_stop * h : tnew;
     if ((rc = output_step(r, o, w, t, h, tnew, tend, &s->ie, s->ytmp)) != MP_OK) return rc;
