@@ -181,6 +181,36 @@ class DenseOutput:
         return f"DenseOutput(t_min={self.t_min}, t_max={self.t_max}, segments={self.n_segments})"
 
 
+class _ConstantDense(DenseOutput):
+    """The continuous solution of a solve that takes no step (t0 == tf, or an
+    empty y0): y0 at every t, shaped as :class:`DenseOutput`'s values."""
+
+    def __init__(self, y0, t0, tf):
+        self._y = np.array(y0)
+        self.t_min, self.t_max = min(t0, tf), max(t0, tf)
+        self.n_segments = 1
+
+    def __call__(self, t):
+        t = np.asarray(t, dtype=np.float64)
+        if not np.all(np.isfinite(t)):
+            raise ValueError("t must be finite")
+        y = self._y.reshape(self._y.shape + (1,) * t.ndim)
+        return np.array(np.broadcast_to(y, self._y.shape + t.shape))
+
+
+class _MappedDense(DenseOutput):
+    """A DenseOutput whose values (states first) go through ``fn``: a complex
+    solve's (Re y, Im y) back to y."""
+
+    def __init__(self, inner, fn):
+        self._inner, self._fn = inner, fn
+        self.t_min, self.t_max = inner.t_min, inner.t_max
+        self.n_segments = inner.n_segments
+
+    def __call__(self, t):
+        return self._fn(self._inner(t))
+
+
 def methods() -> list[dict]:
     """Every integration method: name, order, adaptive, implicit, symplectic,
     needs_jacobian, dense_output (the order of its interpolant).
@@ -203,11 +233,12 @@ def methods() -> list[dict]:
 
 
 #: SciPy's ``solve_ivp`` method names and the mechpy method each one runs.
-#: RK23 has no counterpart (use ``"dopri5"``); ``"BDF"`` runs GSL's
-#: variable-order BDF, ``"LSODA"`` the stiffness-switching ``"auto"``
+#: ``"RK23"`` (Bogacki-Shampine 3(2)) runs ``"dopri5"``, the explicit pair of
+#: the next order: the same tolerances met in fewer steps; ``"BDF"`` runs
+#: GSL's variable-order BDF, ``"LSODA"`` the stiffness-switching ``"auto"``
 #: (dop853 and radau rather than Adams and BDF).
-SCIPY_METHODS = {"RK45": "dopri5", "DOP853": "dop853", "Radau": "radau", "BDF": "gsl:msbdf",
-                 "LSODA": "auto"}
+SCIPY_METHODS = {"RK45": "dopri5", "RK23": "dopri5", "DOP853": "dop853", "Radau": "radau",
+                 "BDF": "gsl:msbdf", "LSODA": "auto"}
 
 _METHOD_NAMES = None
 
@@ -326,11 +357,12 @@ def _as_args(args) -> tuple:
 
 
 def _common(method, t_span, rtol, atol, n, h, first_step, max_step, max_steps,
-            scalar_atol=False):
+            scalar_atol=False, zero_span=False):
     """Validate the arguments solve and solve_many share.
 
     atol comes back as n values, or with ``scalar_atol`` a scalar as a float
-    (the C core of ``solve`` spreads it over the n states)."""
+    (the C core of ``solve`` spreads it over the n states).  ``zero_span``:
+    t0 == tf is allowed (solve returns y0, as SciPy)."""
     if not isinstance(method, str):
         raise TypeError(f"method must be a string, got {type(method).__name__}")
     names = _method_names()
@@ -344,7 +376,7 @@ def _common(method, t_span, rtol, atol, n, h, first_step, max_step, max_steps,
         raise ValueError("t_span must be a pair (t0, tf)")
     t0 = as_scalar(t_span[0], "t_span[0]")
     tf = as_scalar(t_span[1], "t_span[1]")
-    if t0 == tf:
+    if t0 == tf and not zero_span:
         raise ValueError(f"t_span must have t0 != tf, got ({t0}, {tf})")
     if tf < t0 and ((info["symplectic"] and not info["implicit"]) or method.startswith("rigid:")):
         raise ValueError(f"method {method!r} integrates forwards in time only (t0 < tf); "
@@ -414,7 +446,7 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
           events=None, args: tuple = (), h: float | None = None,
           first_step: float | None = None, max_step: float = np.inf,
           max_steps: int = 10_000_000, jac: Callable | None = None,
-          errors: str = "auto") -> Solution:
+          errors: str = "auto", vectorized: bool = False) -> Solution:
     """Solve an initial value problem dy/dt = f(t, y), y(t0) = y0.
 
     Parameters
@@ -432,7 +464,9 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
         ``yoshida4``/``yoshida6``, whose negative sub-steps sample it up to
         0.35 h (0.16 h) beyond a step's ends.
     y0 : array_like, shape (n,)
-        Initial state.
+        Initial state; complex for a Python callable (integrated as the real
+        system (Re y, Im y) of size 2n, ``y`` returned complex, as SciPy
+        integrates complex states); empty gives y0's empty rows.
     method : str
         See :func:`methods`: ``"dop853"`` (default), ``"dopri5"``; stiff
         ``"radau"`` (Radau IIA, order 5) and ``"auto"`` (dop853, switching to
@@ -482,6 +516,9 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
         :class:`mechpy.StepSizeError` too).  ``"status"``: every failure is a
         negative ``status`` with its message.  An exception of a Python
         callback, Ctrl-C and memory exhaustion always raise.
+    vectorized : bool
+        SciPy's: a Python ``system`` takes y of shape (n, k) (it is called
+        with one column, k = 1).
 
     Returns
     -------
@@ -501,12 +538,25 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
     are NaN until it writes them.  Integration failures (budget exhausted,
     step below round-off) are reported in ``status``/``message`` as SciPy does
     (see ``errors``); ``Solution.raise_for_status()`` raises them.
+
+    As SciPy's ``solve_ivp``: ``t0 == tf`` (or an empty y0) takes no step and
+    returns y0 at ``t = [t0, tf]``; ``method="RK23"`` runs ``"dopri5"``.
     """
+    if not isinstance(vectorized, (bool, np.bool_)):
+        raise TypeError(f"vectorized must be a bool, got {vectorized!r}")
+    if vectorized and _python_fun(system):
+        system = _one_column(system)
+    if _is_complex(y0):
+        return _solve_complex(system, t_span, y0, dict(
+            method=method, rtol=rtol, atol=atol, t_eval=t_eval, dense_output=dense_output,
+            events=events, args=args, h=h, first_step=first_step, max_step=max_step,
+            max_steps=max_steps, jac=jac, errors=errors))
     # y0's values are checked finite by the C core, which reads them anyway
-    y0a = as_array(y0, "y0", ndim=1, finite=False)
+    y0a = as_array(y0, "y0", ndim=1, finite=False, allow_empty=True)
     n = y0a.size
     method, t0, tf, rtol, atol_a, hh, fs, ms, budget = _common(
-        method, t_span, rtol, atol, n, h, first_step, max_step, max_steps, scalar_atol=True)
+        method, t_span, rtol, atol, n, h, first_step, max_step, max_steps, scalar_atol=True,
+        zero_span=True)
     tev = None if t_eval is None else _t_eval(t_eval, t0, tf)
     if not isinstance(dense_output, (bool, np.bool_)):
         raise TypeError("dense_output must be a bool")
@@ -522,6 +572,8 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
         raise ValueError(f"y0 must have {dim} values for {type(system).__name__}, got {n}")
     evs, term, dirs = _events_spec(events)
     errors = _errors_mode(errors)
+    if t0 == tf or n == 0:
+        return _no_step(t0, tf, y0a, tev, dense_output, evs)
     check = getattr(system, "_check_initial", None)   # e.g. constraints a scene imposes
     if check is not None:   # a singular state is the solve's to report (errors="status")
         check(t0, y0a, singular=errors != "status")
@@ -550,6 +602,106 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
                    message=message, success=status >= 0)
     object.__setattr__(out, "_code", code)
     return out
+
+
+def _no_step(t0, tf, y0, tev, dense_output, evs) -> Solution:
+    """SciPy's result of a solve that takes no step (t0 == tf) or integrates
+    no state (an empty y0): y0 at t = [t0, tf] (at t_eval: none for t0 == tf,
+    where no step passes them, as in SciPy), no event."""
+    if not np.all(np.isfinite(y0)):
+        raise ValueError("y0 must be finite")
+    n = y0.size
+    if n == 0 and evs:
+        raise ValueError("events need a state: y0 is empty")
+    t = np.array([t0, tf]) if tev is None else (tev[:0] if t0 == tf else tev)
+    out = Solution(t=t, y=np.tile(y0[:, None], (1, t.size)),
+                   sol=_ConstantDense(y0, t0, tf) if dense_output else None,
+                   t_events=None if evs is None else [np.empty(0) for _ in evs],
+                   y_events=None if evs is None else [np.empty((0, n)) for _ in evs],
+                   nfev=0, njev=0, nlu=0, nsteps=0, nreject=0, status=0,
+                   message=_STATUS[0]["message"], success=True)
+    object.__setattr__(out, "_code", 0)
+    return out
+
+
+def _python_fun(system) -> bool:
+    """A Python callable system (not a scene, SecondOrder or C callback)."""
+    return (callable(system) and not isinstance(system, (Scene, SecondOrder))
+            and _c_address(system) is None)
+
+
+def _one_column(fun):
+    """SciPy's ``vectorized=True`` fun (y of shape (n, k)) called with one column."""
+    def f(t, y, *args):
+        return np.asarray(fun(t, y[:, None], *args)).reshape(-1)
+    return f
+
+
+def _is_complex(y0) -> bool:
+    if isinstance(y0, (str, bytes)) or y0 is None:
+        return False
+    try:
+        return np.iscomplexobj(y0)
+    except Exception:   # as_array names what is wrong with it
+        return False
+
+
+def _solve_complex(system, t_span, y0, kw) -> Solution:
+    """solve for a complex y0, as SciPy integrates complex states: the real
+    system z = (Re y, Im y) of size 2n (f, jac and events see complex y), the
+    results mapped back to complex y.  The error norm is over the 2n real
+    components (SciPy's over |y_i|)."""
+    if not _python_fun(system):
+        raise TypeError("a complex y0 needs a Python callable f(t, y): scenes, SecondOrder "
+                        "and C callbacks integrate real states (split y0 into its real and "
+                        "imaginary parts)")
+    y0c = np.asarray(y0, dtype=np.complex128)
+    if y0c.ndim != 1:
+        raise ValueError(f"y0 must have 1 dimension(s), got shape {y0c.shape}")
+    n = y0c.size
+
+    def cplx(z):   # states first
+        return z[:n] + 1j * z[n:]
+
+    def f(t, z, *args):
+        d = np.asarray(system(t, cplx(z), *args), dtype=np.complex128).reshape(-1)
+        return np.concatenate([d.real, d.imag])
+
+    def real_jac(J):
+        J = np.asarray(J, dtype=np.complex128)
+        if J.shape != (n, n):
+            raise ValueError(f"jac must be of shape ({n}, {n}), got {J.shape}")
+        return np.block([[J.real, -J.imag], [J.imag, J.real]])
+
+    jac = kw["jac"]
+    if callable(jac):
+        user_jac = jac
+        kw["jac"] = lambda t, z, *args: real_jac(user_jac(t, cplx(z), *args))
+    elif jac is not None and not isinstance(jac, (str, bytes)):
+        kw["jac"] = real_jac(jac)
+    events = kw["events"]
+    if events is not None:
+        wrapped = []
+        for e in ([events] if callable(events) else list(events)):
+            if callable(e):
+                def g(t, z, *args, e=e):
+                    return e(t, cplx(z), *args)
+                for attr in ("terminal", "direction"):
+                    if hasattr(e, attr):
+                        setattr(g, attr, getattr(e, attr))
+                e = g
+            wrapped.append(e)
+        kw["events"] = wrapped
+    atol = kw["atol"]
+    if not isinstance(atol, (str, bytes)) and np.ndim(atol) == 1 and np.size(atol) == n:
+        kw["atol"] = np.concatenate([np.asarray(atol), np.asarray(atol)])
+    r = solve(f, t_span, np.concatenate([y0c.real, y0c.imag]), **kw)
+    r["y"] = cplx(r["y"])
+    if r["y_events"] is not None:
+        r["y_events"] = [cplx(ye.T).T for ye in r["y_events"]]
+    if r["sol"] is not None:
+        r["sol"] = _MappedDense(r["sol"], cplx)
+    return r
 
 
 class EnsembleSolution(Solution):

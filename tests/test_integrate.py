@@ -378,10 +378,20 @@ def test_bad_rtol(rtol):
         mp.solve(P, (0, 1), [1.0, 0.0], rtol=rtol)
 
 
-@pytest.mark.parametrize("span", [(1.0, 1.0), (0.0,), (0, np.inf), "ab"])  # (1, 0): backwards
+@pytest.mark.parametrize("span", [(0.0,), (0, np.inf), "ab"])  # (1, 0): backwards
 def test_bad_t_span(span):
     with pytest.raises(ValueError, match="t_span"):
         mp.solve(P, span, [1.0, 0.0])
+
+
+def test_zero_span_returns_y0_as_scipy():
+    # t0 == tf: y0 at t = [t0, t0], no step, as solve_ivp (it raised ValueError);
+    # solve_many has nothing to integrate and says so
+    s = mp.solve(P, (1.0, 1.0), [1.0, 0.0])
+    assert s.t.tolist() == [1.0, 1.0] and s.y.tolist() == [[1.0, 1.0], [0.0, 0.0]]
+    assert s.status == 0 and s.nsteps == 0
+    with pytest.raises(ValueError, match="t_span"):
+        mp.solve_many(P, (1.0, 1.0), [[1.0, 0.0]])
 
 
 def test_bad_options():
