@@ -422,7 +422,7 @@ def test_compiled_lanes_agree_with_scalar_path(name, method):
 
 def test_chaotic_rows_in_lanes_are_another_rounding_of_the_same_solve():
     """What the docs state for chaotic trajectories: a lane's evaluations agree with
-    the scalar ones to a few ulp (test_lane_rhs_equals_eight_scalar_calls), which
+    the scalar ones to round-off (test_lane_rhs_equals_eight_scalar_calls), which
     the flow amplifies: the paths agree before the chaos grows, keep the same energy
     error after it, and their nfev (which may differ where a step is accepted on
     one path and rejected on the other) stay within a few percent."""
