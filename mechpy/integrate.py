@@ -572,11 +572,11 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
         raise ValueError(f"y0 must have {dim} values for {type(system).__name__}, got {n}")
     evs, term, dirs = _events_spec(events)
     errors = _errors_mode(errors)
+    check = getattr(system, "_check_initial", None)   # e.g. constraints a scene imposes
+    if check is not None and n:   # a singular state is the solve's to report (errors="status")
+        check(t0, y0a, singular=errors != "status")
     if t0 == tf or n == 0:
         return _no_step(t0, tf, y0a, tev, dense_output, evs)
-    check = getattr(system, "_check_initial", None)   # e.g. constraints a scene imposes
-    if check is not None:   # a singular state is the solve's to report (errors="status")
-        check(t0, y0a, singular=errors != "status")
 
     watch = _watch_list(system)
     call = (method, spec, y0a, t0, tf, rtol, atol_a, tev, hh, fs, ms, budget, dense_output,

@@ -411,6 +411,8 @@ def test_initial_state_must_satisfy_the_constraint():
     s = cartesian_pendulum()
     with pytest.raises(ValueError, match="violates constraint 0"):
         mp.solve(s, (0, 1), [1.0, -0.5, 0.0, 0.0])
+    with pytest.raises(ValueError, match="violates constraint 0"):   # no step: checked too
+        mp.solve(s, (1, 1), [1.0, -0.5, 0.0, 0.0])
     with pytest.raises(ValueError, match="rate of constraint 0"):
         mp.solve(s, (0, 1), [0.0, -1.0, 0.0, 1.0])
     good = cart_state(0.5, 0.2)
