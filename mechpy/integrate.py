@@ -357,12 +357,13 @@ def _as_args(args) -> tuple:
 
 
 def _common(method, t_span, rtol, atol, n, h, first_step, max_step, max_steps,
-            scalar_atol=False, zero_span=False):
+            scalar_atol=False, zero_span=False, infinite_tf=False):
     """Validate the arguments solve and solve_many share.
 
     atol comes back as n values, or with ``scalar_atol`` a scalar as a float
     (the C core of ``solve`` spreads it over the n states).  ``zero_span``:
-    t0 == tf is allowed (solve returns y0, as SciPy)."""
+    t0 == tf is allowed (solve returns y0, as SciPy); ``infinite_tf``: tf may
+    be infinite for an adaptive method (solve, as SciPy)."""
     if not isinstance(method, str):
         raise TypeError(f"method must be a string, got {type(method).__name__}")
     names = _method_names()
@@ -375,7 +376,12 @@ def _common(method, t_span, rtol, atol, n, h, first_step, max_step, max_steps,
                                       not hasattr(t_span, "__len__")) or len(t_span) != 2:
         raise ValueError("t_span must be a pair (t0, tf)")
     t0 = as_scalar(t_span[0], "t_span[0]")
-    tf = as_scalar(t_span[1], "t_span[1]")
+    tf = as_scalar(t_span[1], "t_span[1]", finite=not infinite_tf)
+    if math.isnan(tf):
+        raise ValueError("t_span[1] must not be NaN")
+    if math.isinf(tf) and not info["adaptive"]:
+        raise ValueError(f"t_span[1] = {tf}: method {method!r} has a fixed step and needs a "
+                         "finite t_span")
     if t0 == tf and not zero_span:
         raise ValueError(f"t_span must have t0 != tf, got ({t0}, {tf})")
     if tf < t0 and ((info["symplectic"] and not info["implicit"]) or method.startswith("rigid:")):
@@ -540,7 +546,9 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
     (see ``errors``); ``Solution.raise_for_status()`` raises them.
 
     As SciPy's ``solve_ivp``: ``t0 == tf`` (or an empty y0) takes no step and
-    returns y0 at ``t = [t0, tf]``; ``method="RK23"`` runs ``"dopri5"``.
+    returns y0 at ``t = [t0, tf]``; ``tf = +-inf`` runs an adaptive method
+    until a terminal event (one is required); ``method="RK23"`` runs
+    ``"dopri5"``.
     """
     if not isinstance(vectorized, (bool, np.bool_)):
         raise TypeError(f"vectorized must be a bool, got {vectorized!r}")
@@ -556,7 +564,7 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
     n = y0a.size
     method, t0, tf, rtol, atol_a, hh, fs, ms, budget = _common(
         method, t_span, rtol, atol, n, h, first_step, max_step, max_steps, scalar_atol=True,
-        zero_span=True)
+        zero_span=True, infinite_tf=True)
     tev = None if t_eval is None else _t_eval(t_eval, t0, tf)
     if not isinstance(dense_output, (bool, np.bool_)):
         raise TypeError("dense_output must be a bool")
@@ -571,6 +579,9 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
     if dim is not None and dim != n:
         raise ValueError(f"y0 must have {dim} values for {type(system).__name__}, got {n}")
     evs, term, dirs = _events_spec(events)
+    if math.isinf(tf) and n and not (term is not None and term.any()):
+        raise ValueError(f"t_span = ({t0}, {tf}): an infinite t_span needs a terminal event "
+                         "to end the solve (events with terminal = True)")
     errors = _errors_mode(errors)
     check = getattr(system, "_check_initial", None)   # e.g. constraints a scene imposes
     if check is not None and n:   # a singular state is the solve's to report (errors="status")

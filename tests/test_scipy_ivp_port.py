@@ -8,9 +8,9 @@ method names.  SciPy's work bounds (nfev, njev, nlu) are checked where the
 method is the same one (dopri5/RK45, dop853/DOP853, radau/Radau); the accuracy
 bounds (SciPy's error measure below 5) everywhere.
 
-Complex y0, an empty y0, an empty t_span (t0 == tf), RK23 and vectorized=
-run as in SciPy.  Where mechpy documents that it differs from solve_ivp (an
-infinite t_span, solver classes, SciPy's quirks in docs/conventions.md), the
+Complex y0, an empty y0, an empty t_span (t0 == tf), an infinite one, RK23
+and vectorized= run as in SciPy.  Where mechpy documents that it differs from
+solve_ivp (solver classes, SciPy's quirks in docs/conventions.md), the
 port checks the documented behaviour instead.  SciPy's tests of its internal
 helpers (OdeSolution, ConstantDenseOutput, num_jac, group_columns,
 select_initial_step) and of jac_sparsity have no counterpart in mp.solve and
@@ -632,10 +632,11 @@ def test_empty(method):
     # SciPy integrates a 0-dimensional system (it raised ValueError)
     def fun(t, y):
         return np.zeros((0,))
-    sol = solve(method, fun, [0, 10], np.zeros((0,)), dense_output=True)
-    assert_equal(sol.sol(10), np.zeros((0,)))
-    assert_equal(sol.sol([1, 2, 3]), np.zeros((0, 3)))
-    assert sol.success and sol.y.shape == (0, sol.t.size)
+    for tf in [10, np.inf] if method != "rk4" else [10]:
+        sol = solve(method, fun, [0, tf], np.zeros((0,)), dense_output=True)
+        assert_equal(sol.sol(10), np.zeros((0,)))
+        assert_equal(sol.sol([1, 2, 3]), np.zeros((0, 3)))
+        assert sol.success and sol.y.shape == (0, sol.t.size)
 
 
 def test_integration_vectorized():
@@ -661,11 +662,26 @@ def test_duplicate_t_eval_is_refused_as_scipy_does():
         mp.solve(fun_rational, [5, 9], [1 / 3, 2 / 9], t_eval=[6, 7, 7, 8])
 
 
-def test_infinite_t_span_is_refused():
-    # SciPy accepts t_span = [0, inf] with a terminal event; mechpy documents
-    # t_span as finite (ValueError naming it)
-    with pytest.raises(ValueError, match="t_span"):
-        mp.solve(lambda t, y: [y[1], -9.80665], [0, np.inf], [0, 0.01])
+@pytest.mark.parametrize("method", ["RK45", "dop853", "radau", "auto", "gsl:rk8pd"])
+@pytest.mark.parametrize("sign", [1, -1])
+def test_infinite_t_span(method, sign):
+    # SciPy integrates t_span = [0, +-inf] until a terminal event (it raised
+    # ValueError): the cannon ball lands at 2 v0 / g, forwards and backwards
+    def hit_ground(t, y):
+        return y[0]
+    hit_ground.terminal = True
+    hit_ground.direction = -1   # down, along the integration (y(t0) = 0 is no landing)
+    res = mp.solve(lambda t, y: [y[1], -9.80665], [0, sign * np.inf], [0, sign * 0.01],
+                   events=hit_ground, method=method)
+    assert res.status == 1
+    assert_allclose(res.t_events[0], [sign * 2 * 0.01 / 9.80665], rtol=1e-10)
+    assert res.t[-1] == res.t_events[0][0]
+    # without a terminal event nothing would end it; fixed steps need a finite span
+    with pytest.raises(ValueError, match="infinite t_span needs a terminal event"):
+        mp.solve(lambda t, y: [y[1], -9.80665], [0, sign * np.inf], [0, 0.01], method=method)
+    with pytest.raises(ValueError, match="fixed step"):
+        mp.solve(lambda t, y: [y[1], -9.80665], [0, np.inf], [0, 0.01], method="rk4",
+                 h=0.1, events=hit_ground)
 
 
 @pytest.mark.parametrize("f0_fill", [np.nan, np.inf])
@@ -684,7 +700,7 @@ def test_integration_zero_rhs(method):
 
 @pytest.mark.parametrize("method", ALL)
 def test_duplicate_timestamps(method):
-    # SciPy runs this to t = inf; mechpy's t_span is finite (the event ends it)
+    # SciPy's case runs to t = inf, as the adaptive rows do; rk4 to t = 1
     def upward_cannon(t, y):
         return [y[1], -9.80665]
 
@@ -696,8 +712,8 @@ def test_duplicate_timestamps(method):
     kw = dict(rtol=1e-3, atol=1e-6, max_step=0.05 * 0.001 / 9.80665)
     if method == "rk4":
         kw = dict(h=kw["max_step"])
-    res = mp.solve(upward_cannon, [0, 1], [0, 0.01], events=hit_ground, dense_output=True,
-                   method=method, **kw)
+    res = mp.solve(upward_cannon, [0, 1 if method == "rk4" else np.inf], [0, 0.01],
+                   events=hit_ground, dense_output=True, method=method, **kw)
     if method in ("dopri5", "RK45"):
         # SciPy's case (its default RK45): sol(0.01) extrapolates the last step's
         # quartic 2400 steps ahead, exact on this parabola up to amplified round-off;

@@ -491,8 +491,9 @@ typedef struct {
 
 int mp_ode_span_ok(const mp_ode_method *m, double t0, double tf, const mp_ode_options *o)
 {
-    if (!(t0 != tf) || !isfinite(t0) || !isfinite(tf) || !(o->rtol > 0) ||
-        !(o->max_steps > 0) || (!m->adaptive && !(o->h > 0)) || !(o->max_step > 0))
+    if (!(t0 != tf) || !isfinite(t0) || isnan(tf) || (!isfinite(tf) && !m->adaptive) ||
+        !(o->rtol > 0) || !(o->max_steps > 0) || (!m->adaptive && !(o->h > 0)) ||
+        !(o->max_step > 0))
         return MP_EDOM;
     /* a fixed step below the spacing of floats at t would never advance t */
     double tmax = fmax(fabs(t0), fabs(tf));

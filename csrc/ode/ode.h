@@ -241,9 +241,11 @@ extern const mp_ode_method *const mp_ode_methods[];
 const mp_ode_method *mp_ode_method_find(const char *name);
 
 /* MP_OK when a solve of m from t0 to tf (either way) with options o is in the
- * domain every solve checks at its start: t0 != tf finite, rtol > 0, a budget,
- * max_step > 0, for a fixed-step method h > 0 large enough to advance t; else
- * MP_EDOM.  (The state's checks - n, y0, atol - are the solve's own.) */
+ * domain every solve checks at its start: t0 != tf, t0 finite, tf finite or,
+ * for an adaptive method, infinite (the solve then ends at a terminal event or
+ * its budget, as SciPy's solve_ivp with t_span = (t0, inf)), rtol > 0, a
+ * budget, max_step > 0, for a fixed-step method h > 0 large enough to advance
+ * t; else MP_EDOM.  (The state's checks - n, y0, atol - are the solve's own.) */
 int mp_ode_span_ok(const mp_ode_method *m, double t0, double tf, const mp_ode_options *o);
 
 /* Integrate from t0 to tf (tf < t0 integrates backwards: the driver solves
