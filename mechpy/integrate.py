@@ -387,9 +387,15 @@ def _common(method, t_span, rtol, atol, n, h, first_step, max_step, max_steps,
     if tf < t0 and ((info["symplectic"] and not info["implicit"]) or method.startswith("rigid:")):
         raise ValueError(f"method {method!r} integrates forwards in time only (t0 < tf); "
                          "for a backward solve use dop853, radau, gauss4, ...")
-    rtol = as_scalar(rtol, "rtol")
-    if not rtol > 0:
-        raise ValueError(f"rtol must be positive, got {rtol}")
+    if type(rtol) is float or np.ndim(rtol) == 0:
+        rtol = as_scalar(rtol, "rtol")
+        if not rtol > 0:
+            raise ValueError(f"rtol must be positive, got {rtol}")
+    else:   # one per component, as SciPy's
+        rtol = as_array(rtol, "rtol", shape=(n,), positive=True)
+        if method.startswith("gsl:") and np.any(rtol != rtol[0]):
+            raise ValueError(f"method {method!r} takes one rtol (GSL's control): give a "
+                             "scalar, or use dop853, dopri5, radau, ...")
     if type(atol) is float and math.isfinite(atol) and atol >= 0:  # the common case
         atol_a = atol if scalar_atol else np.full(n, atol)
     else:
@@ -486,8 +492,9 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
         dop853, ``"Radau"`` radau, ``"BDF"`` gsl:msbdf (GSL's variable-order
         BDF), ``"LSODA"`` auto (see :data:`SCIPY_METHODS`).
     rtol, atol : float or array_like
-        Relative and absolute tolerances: the local error estimate e of each
-        step satisfies ``rms(e / (atol + rtol |y|)) <= 1``.
+        Relative and absolute tolerances, each a scalar or one per component
+        (as SciPy's; GSL's steppers take one rtol): the local error estimate
+        e of each step satisfies ``rms(e / (atol + rtol |y|)) <= 1``.
     t_eval : array_like, optional
         Times in ``t_span``, ordered along the integration, at which to store the solution, filled
         from each step's interpolant (the steps are never forced onto them).

@@ -38,7 +38,7 @@ int mp_ode_ws_jac(mp_ode_ws *w, double t, const double *y, const double *f0, dou
     }
     memcpy(scratch_y, y, n * sizeof(double));
     for (size_t j = 0; j < n; j++) {
-        double scale = fmax(fabs(y[j]), w->o->atol[j] / w->o->rtol);
+        double scale = fmax(fabs(y[j]), w->o->atol[j] / w->o->rtolv[j]);
         if (!(scale > 0)) scale = 1.0;
         double yj = y[j], d = sqrt(DBL_EPSILON) * scale;
         scratch_y[j] = yj + d;
@@ -55,7 +55,7 @@ double mp_ode_err_norm(const mp_ode_ws *w, const double *e, const double *y0, co
 {
     double s = 0.0;
     for (size_t i = 0; i < w->n; i++) {
-        double sc = w->o->atol[i] + w->o->rtol * fmax(fabs(y0[i]), fabs(y1[i]));
+        double sc = w->o->atol[i] + w->o->rtolv[i] * fmax(fabs(y0[i]), fabs(y1[i]));
         double q = e[i] / sc;
         s += q * q;
     }
@@ -342,7 +342,7 @@ static int first_step(mp_ode_ws *w, double t0, double tf, double hmax, double *h
     const mp_ode_options *o = w->o;
     double dnf = 0, dny = 0;
     for (size_t i = 0; i < n; i++) {
-        double sk = o->atol[i] + o->rtol * fabs(w->y[i]);
+        double sk = o->atol[i] + o->rtolv[i] * fabs(w->y[i]);
         dnf += (w->f[i] / sk) * (w->f[i] / sk);
         dny += (w->y[i] / sk) * (w->y[i] / sk);
     }
@@ -362,7 +362,7 @@ static int first_step(mp_ode_ws *w, double t0, double tf, double hmax, double *h
     if (rc != MP_OK) return rc;
     double der2 = 0;
     for (size_t i = 0; i < n; i++) {
-        double sk = o->atol[i] + o->rtol * fabs(w->y[i]);
+        double sk = o->atol[i] + o->rtolv[i] * fabs(w->y[i]);
         double d = (f1[i] - w->f[i]) / sk;
         der2 += d * d;
     }
@@ -502,13 +502,14 @@ int mp_ode_span_ok(const mp_ode_method *m, double t0, double tf, const mp_ode_op
 }
 
 /* Contract: MP_OK when the arguments of a forward solve are in its domain:
- * n > 0, t0 < tf, mp_ode_span_ok, y0 finite and atol >= 0; else MP_EDOM. */
+ * n > 0, t0 < tf, mp_ode_span_ok, y0 finite, atol >= 0 and rtolv >= rtol;
+ * else MP_EDOM. */
 static int check_args(const mp_ode_method *m, const mp_ode_problem *p, double t0, double tf,
                       const double *y0, const mp_ode_options *o)
 {
     if (p->n == 0 || !(tf > t0) || mp_ode_span_ok(m, t0, tf, o) != MP_OK) return MP_EDOM;
     for (size_t i = 0; i < p->n; i++)
-        if (!isfinite(y0[i]) || !(o->atol[i] >= 0)) return MP_EDOM;
+        if (!isfinite(y0[i]) || !(o->atol[i] >= 0) || !(o->rtolv[i] >= o->rtol)) return MP_EDOM;
     return MP_OK;
 }
 

@@ -59,7 +59,8 @@ typedef struct mp_ode_problem {
 } mp_ode_problem;
 
 typedef struct mp_ode_options {
-    double rtol;              /* > 0 */
+    double rtol;              /* > 0: the least of rtolv (Newton's and GSL's one tolerance) */
+    const double *rtolv;      /* n relative tolerances > 0 (SciPy's per-component rtol) */
     const double *atol;       /* n values >= 0 */
     double first_step;        /* 0: Hairer's automatic guess */
     double max_step;          /* may be inf */
@@ -221,7 +222,7 @@ static inline int mp_ode_ws_eval(double t, const double *y, double *dydt, void *
 int mp_ode_ws_jac(mp_ode_ws *w, double t, const double *y, const double *f0, double *jac,
                   double *scratch_y, double *scratch_f);
 
-/* Hairer's RMS error norm: sqrt(mean((e_i / (atol_i + rtol max(|y0_i|, |y1_i|)))^2)). */
+/* Hairer's RMS error norm: sqrt(mean((e_i / (atol_i + rtol_i max(|y0_i|, |y1_i|)))^2)). */
 double mp_ode_err_norm(const mp_ode_ws *w, const double *e, const double *y0, const double *y1);
 
 /* Dense-output evaluation shared by every method: the interpolant is
