@@ -192,10 +192,10 @@ def _solve_many(*, client, chunk_size, lazy, system, t_span, y0s, params=None, t
     bounds = _chunk_bounds(k, nthreads, chunk_size)
     per_chunk = 1 if threads is None else as_int(threads, "threads", minimum=1)
     par = integrate._ensemble_params(system, params, k)
-    # the local checks and the result's fields: one row, one step
-    probe = dict(options, max_steps=1)
-    if "errors" in probe:   # a raising error mode would stop the probe at its budget
-        probe["errors"] = _default("errors")
+    errors = integrate._errors_mode(options.get("errors", _default("errors")))
+    # the local checks and the result's fields: one row, one step, its failures
+    # statuses (the error rule applies once, to the joined result, as locally)
+    probe = dict(options, max_steps=1, errors="status")
     template = integrate.solve_many(system, t_span, Y0[:1], params=None if par is None
                                     else par[:1], threads=1, progress=False, **probe)
     if k == 0:
@@ -219,7 +219,7 @@ def _solve_many(*, client, chunk_size, lazy, system, t_span, y0s, params=None, t
         from dask.distributed import progress as dask_progress
         dask_progress(futures)
     out = _join(client.gather(futures), sizes)
-    integrate._raise_first(out._code, out["message"], options.get("errors", _default("errors")))
+    integrate._raise_first(out._code, out["message"], errors)
     return out
 
 

@@ -184,11 +184,12 @@ class Scene:
             return dict(zip(_row(self._model)["params"], self._vec.tolist()))
         return dict(self._params)
 
-    def ensemble_params(self, k: int, **columns) -> np.ndarray:
+    def ensemble_params(self, k: int, /, **columns) -> np.ndarray:
         """Rows of parameters for :func:`mechpy.solve_many`, one per trajectory.
 
         Each keyword names a parameter and gives one value per row (shape
-        (k,)) or one for all; the others keep this scene's values.  This is
+        (k,)) or one for all; the others keep this scene's values (``k`` is
+        positional-only: any name, ``k`` and ``self`` too, is a parameter's).  This is
         what ``solve_many(scene, ..., params={name: values})`` uses.  The
         names are the scene's C row's (``RigidBody``: I1, I2, I3, tau1,
         tau2, tau3); each row is checked as the scene's parameters are.
@@ -798,7 +799,7 @@ class SpringChain(Scene):
         """Whether the FPUT terms are on (alpha or beta non-zero)."""
         return self._params["alpha"] != 0.0 or self._params["beta"] != 0.0
 
-    def ensemble_params(self, k: int | None = None, **columns) -> np.ndarray:
+    def ensemble_params(self, k: int | None = None, /, **columns) -> np.ndarray:
         """Rows of parameters for :func:`mechpy.solve_many`, one per trajectory.
 
         Each keyword (``masses``, ``springs``, ``alpha``, ``beta``) gives

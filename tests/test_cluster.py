@@ -112,6 +112,27 @@ def test_errors_name_the_trajectory_in_the_whole_ensemble(client):
         st_remote.raise_for_status()
 
 
+def test_failing_first_row_gives_statuses_as_locally(client):
+    """errors="status" with row 0 failing (HeavyTop singular at y0, SingularityError
+    under "auto"): the cluster's checks ran row 0 under "auto" and raised where the
+    local run returns statuses; now the same result, field by field, and "auto"
+    still raises naming trajectory 0, as locally."""
+    top = mp.scenes.HeavyTop(1.0, 2.0, 1.0)
+    y0s = np.tile([0.0, 0.5, 0.0, 1.0, 1.0, 1.0], (6, 1))
+    y0s[0, 1] = 0.0                                   # theta = 0: singular Euler angles
+    local = mp.solve_many(top, (0, 1), y0s, errors="status")
+    assert local.status.tolist() == [-3, 0, 0, 0, 0, 0]
+    _assert_same(_run(mp.solve_many, top, (0, 1), y0s, errors="status", client=client,
+                      chunk_size=2), local)
+    lazy = _run(mp.solve_many, top, (0, 1), y0s, errors="status", client=client,
+                chunk_size=2, lazy=True)
+    assert np.array_equal(lazy.status.compute(), local.status)
+    with pytest.raises(mp.SingularityError, match="trajectory 0"):
+        _run(mp.solve_many, top, (0, 1), y0s, client=client, chunk_size=2)
+    with pytest.raises(ValueError, match="errors must be one of"):
+        mp.solve_many(top, (0, 1), y0s, errors="quiet", client=client)
+
+
 def test_compiled_scene_is_rebuilt_on_the_workers(client):
     th, = mp.coordinates("theta")
     m, l, g = sp.symbols("m length g")

@@ -365,6 +365,32 @@ def test_cartesian_pendulum_with_constraint():
     assert np.abs(J - Jref).max() < 5e-10 * np.abs(Jref).max()   # measured 5.0e-11
 
 
+def test_constraint_forces_and_multipliers_take_a_solutions_times():
+    # a mass on a vertically driven constraint y = A sin(w t): lambda = m (g + y''),
+    # y'' = -A w^2 sin(w t), a force along y only.  The natural call with a
+    # solution's arrays raised "t must be a real scalar"; t broadcasts as y does
+    x, y = mp.coordinates("x y")
+    m, g, A, w = sp.symbols("m g A w", positive=True)
+    L = m * (x.diff(t) ** 2 + y.diff(t) ** 2) / 2 - m * g * y
+    s = mp.lagrangian(L, [x, y], params=dict(m=2.0, g=G, A=0.3, w=5.0),
+                      constraints=[y - A * sp.sin(w * t)])
+    te = np.linspace(0, 3, 61)
+    sol = mp.solve(s, (0, 3), [0.0, 0.0, 0.5, 1.5], rtol=1e-11, atol=1e-12, t_eval=te)
+    lam_ref = 2.0 * (G - 0.3 * 25.0 * np.sin(5.0 * te))
+    lam = s.multipliers(sol.t, sol.y)
+    assert lam.shape == (1, 61)
+    assert np.abs(lam[0] - lam_ref).max() < 1e-9 * lam_ref.max()   # measured 4e-12 relative
+    f = s.constraint_forces(sol.t, sol.y)
+    assert f.shape == (2, 61) and np.all(f[0] == 0.0)
+    np.testing.assert_array_equal(f[1], lam[0])                      # C = (0, 1)
+    # column j at its own time: the same as the scalar call there
+    assert s.multipliers(te[20], sol.y[:, 20])[0] == lam[0, 20]
+    # a scalar state against several times; shapes that do not broadcast are named
+    assert s.multipliers(te[:3], sol.y[:, 20]).shape == (1, 3)
+    with pytest.raises(ValueError, match="t must be a scalar or broadcast"):
+        s.multipliers(te[:3], sol.y)
+
+
 def test_constraint_drift_over_a_long_run():
     s = cartesian_pendulum()
     sol = mp.solve(s, (0, 1000), cart_state(2.0, 0.0), rtol=1e-9, atol=1e-10,
@@ -387,6 +413,8 @@ def test_initial_state_must_satisfy_the_constraint():
     s = cartesian_pendulum()
     with pytest.raises(ValueError, match="violates constraint 0"):
         mp.solve(s, (0, 1), [1.0, -0.5, 0.0, 0.0])
+    with pytest.raises(ValueError, match="violates constraint 0"):   # no step: checked too
+        mp.solve(s, (1, 1), [1.0, -0.5, 0.0, 0.0])
     with pytest.raises(ValueError, match="rate of constraint 0"):
         mp.solve(s, (0, 1), [0.0, -1.0, 0.0, 1.0])
     good = cart_state(0.5, 0.2)
@@ -979,6 +1007,18 @@ def test_singular_mass_matrix_at_the_initial_state():
         s.rhs(0, [0.0, 1.0])
     with pytest.raises(mp.SingularityError, match="mass matrix"):
         mp.solve_many(s, (0, 1), [[1.0, 0.0], [0.0, 1.0]])
+    # errors="status": a status, not an exception; one singular row leaves the
+    # ensemble's other rows (in lanes and scalar), as HeavyTop's -3 does
+    st = mp.solve(s, (0, 1), [0.0, 1.0], errors="status")
+    assert st.status == -3 and "singular" in st.message
+    for lanes in (None, False):
+        ens = mp.solve_many(s, (0, 1), [[1.0, 0.0], [0.0, 1.0]], errors="status", lanes=lanes)
+        assert ens.status.tolist() == [0, -3]
+        # the regular row keeps its energy x^2 x'^2/2 + x^2/2 = 1/2 (measured 1.0e-8)
+        x1, v1 = ens.y[0, :, -1]
+        assert abs(x1 ** 2 * v1 ** 2 / 2 + x1 ** 2 / 2 - 0.5) < 1e-7
+        with pytest.raises(mp.SingularityError, match="trajectory 1"):
+            ens.raise_for_status()
     sn = mp.lagrangian(x ** 2 * x.diff(t) ** 2 / 2 - x ** 2 / 2, [x], backend="numpy")
     with pytest.raises(mp.SingularityError, match="mass matrix"):
         mp.solve(sn, (0, 1), [0.0, 1.0])

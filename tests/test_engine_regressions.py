@@ -486,3 +486,140 @@ def test_backward_t_eval_must_strictly_decrease():
         mp.solve(harmonic, (2, 0), [1.0, 0.0], t_eval=[1.5, 1.0, 1.0, 0.5])
     with pytest.raises(ValueError, match="strictly increasing"):
         mp.solve(harmonic, (0, 2), [1.0, 0.0], t_eval=[0.5, 1.0, 1.0, 1.5])
+
+
+# ---- fixed-step times are counted, t0 + i h, not summed ---------------------------
+
+def _pendulum_exact(t, theta0, w0=np.sqrt(9.81)):
+    """theta(t) of the pendulum released at rest from theta0: 2 arcsin(k sn(K - w0 t, k)),
+    k = sin(theta0 / 2) (Jacobi's elliptic functions; scipy.special.ellipj takes m = k^2)."""
+    from scipy.special import ellipj, ellipk
+    m = np.sin(theta0 / 2) ** 2
+    sn = ellipj(ellipk(m) - w0 * t, m)[0]
+    return 2 * np.arcsin(np.sqrt(m) * sn)
+
+
+def _pendulum_rk4_loop(tf, h, theta0):
+    """The plain rk4 loop: round(tf / h) steps of h from (theta0, 0)."""
+    import math
+    th, w = theta0, 0.0
+    for _ in range(round(tf / h)):
+        a1, b1 = w, -9.81 * math.sin(th)
+        a2, b2 = w + 0.5 * h * b1, -9.81 * math.sin(th + 0.5 * h * a1)
+        a3, b3 = w + 0.5 * h * b2, -9.81 * math.sin(th + 0.5 * h * a2)
+        a4, b4 = w + h * b3, -9.81 * math.sin(th + h * a3)
+        th += (h / 6) * (a1 + 2 * (a2 + a3) + a4)
+        w += (h / 6) * (b1 + 2 * (b2 + b3) + b4)
+    return th
+
+
+@pytest.mark.parametrize("method, bound", [("rk4", 5e-13), ("yoshida4", 2e-12)])
+def test_long_fixed_step_run_counts_its_time(method, bound):
+    # 20 / 1e-4 is not an integer in floating point: with times summed step by
+    # step the solve took 200,001 steps (a last one of 1e-11 making up for the
+    # drift) and ended 7.9e-11 from the exact solution; counted, 200,000 steps
+    # and the accuracy of the method (measured: rk4 5.6e-14, yoshida4 1.8e-13)
+    tf, h = 20.0, 1e-4
+    s = mp.solve(mp.scenes.Pendulum(), (0, tf), [1.0, 0.0], method=method, h=h)
+    assert s.nsteps == 200_000 and s.t[-1] == tf
+    assert abs(s.y[0, -1] - _pendulum_exact(tf, 1.0)) < bound
+    if method == "rk4":     # the plain loop: measured 5e-16 apart
+        assert abs(s.y[0, -1] - _pendulum_rk4_loop(tf, h, 1.0)) < 1e-14
+        # the lanes count the same way (before: 7.9e-11 off too; measured 5.6e-14)
+        e = mp.solve_many(mp.scenes.Pendulum(), (0, tf), [[1.0, 0.0]] * 4, method=method, h=h)
+        assert e.lanes and np.all(np.abs(e.y[:, 0, -1] - _pendulum_exact(tf, 1.0)) < bound)
+
+
+@pytest.mark.parametrize("method, bound", [("rk4", 2e-11), ("yoshida4", 2e-10)])
+def test_long_fixed_step_driven_run_samples_the_drive_at_counted_times(method, bound):
+    # a driven linear oscillator x'' + x = cos 2t, x(0) = 1, x'(0) = 0:
+    # x = (4/3) cos t - cos(2t) / 3; 2e5 steps of 1e-3 (measured: rk4 2.0e-12,
+    # yoshida4 1.6e-11, the methods' own truncation errors: the same at h = 2^-10)
+    scene = mp.scenes.Duffing(alpha=1.0, beta=0.0, gamma=1.0, omega=2.0)
+    tf = 200.0
+    s = mp.solve(scene, (0, tf), [1.0, 0.0], method=method, h=1e-3)
+    assert s.nsteps == 200_000
+    assert abs(s.y[0, -1] - (4 / 3 * np.cos(tf) - np.cos(2 * tf) / 3)) < bound
+    # the sample times are the counted ones, i h
+    t = mp.solve(scene, (0, 2.0), [1.0, 0.0], method=method, h=1e-3).t
+    np.testing.assert_array_equal(t, np.arange(2001) * 1e-3)
+
+
+# ---- events: an empty list, a zero at t0, a zero at a step's end ------------------
+
+def test_empty_events_list_is_no_event():
+    # SciPy accepts events=[] (t_events = y_events = []); it raised TypeError
+    a = mp.solve(harmonic, (0, 2), [1.0, 0.0], events=[])
+    b = solve_ivp(harmonic, (0, 2), [1.0, 0.0], events=[])
+    assert a.t_events == b.t_events == [] and a.y_events == b.y_events == []
+    assert np.array_equal(a.y, mp.solve(harmonic, (0, 2), [1.0, 0.0]).y)
+    with pytest.raises(TypeError, match="events must be a callable or a sequence"):
+        mp.solve(harmonic, (0, 2), [1.0, 0.0], events=3)
+
+
+@pytest.mark.parametrize("rate, direction, terminal", [
+    (1.0, 0, False), (-1.0, 0, False), (1.0, 1, False), (1.0, -1, False), (-1.0, 1, False),
+    (-1.0, -1, False), (1.0, 0, True)])
+def test_event_zero_at_t0_as_scipy(rate, direction, terminal):
+    # y' = rate, y(0) = 0, event y: SciPy reports the zero at t0 when the solution
+    # leaves it in the event's direction (ivp.py's find_active_events: g <= 0 <= g_new),
+    # and a terminal one stops there (t = [0, 0], status 1); mechpy never reported it
+    def ev(t, y):
+        return y[0]
+    ev.direction, ev.terminal = direction, terminal
+    ours = mp.solve(lambda t, y: [rate], (0, 2), [0.0], events=ev)
+    ref = solve_ivp(lambda t, y: [rate], (0, 2), [0.0], events=ev)
+    assert [e.tolist() for e in ours.t_events] == [e.tolist() for e in ref.t_events]
+    assert ours.status == ref.status
+    if terminal:
+        assert ours.t.tolist() == ref.t.tolist() == [0.0, 0.0]
+    # backwards the same: the zero at t0 = 2
+    back = mp.solve(lambda t, y: [-rate], (2, 0), [0.0], events=ev)
+    refb = solve_ivp(lambda t, y: [-rate], (2, 0), [0.0], events=ev)
+    assert [e.tolist() for e in back.t_events] == [e.tolist() for e in refb.t_events]
+
+
+@pytest.mark.parametrize("sign", [1.0, -1.0])
+@pytest.mark.parametrize("direction", [0, 1, -1])
+def test_crossing_that_lands_on_zero_at_a_step_end(sign, direction):
+    # steps of 0.5 end exactly at t = 1 where g = sign (t - 1) is exactly zero:
+    # the crossing is reported once, at t = 1 (SciPy reports it twice: at the end
+    # of the step and again at the start of the next; docs/conventions.md)
+    def ev(t, y):
+        return sign * (t - 1.0)
+    ev.direction = direction
+    s = mp.solve(lambda t, y: [0.0], (0, 2), [0.0], events=ev, first_step=0.5, max_step=0.5)
+    assert s.t.tolist() == [0.0, 0.5, 1.0, 1.5, 2.0]
+    fires = direction == 0 or direction == sign
+    assert s.t_events[0].tolist() == ([1.0] if fires else [])
+
+
+# ---- rtol per component, as SciPy's ---------------------------------------------
+
+def test_rtol_per_component_as_scipy():
+    # SciPy takes one rtol per component (mp.solve raised TypeError): equal values
+    # are the scalar bit for bit; unequal ones against SciPy's RK45/DOP853 on the
+    # harmonic oscillator, rtol (1e-3, 1e-9): measured errors 5.2e-9 (RK45: 5.9e-9)
+    # and 5.2e-10 (DOP853: 1.1e-9), nfev 1130 (1100) and 443 (398)
+    a = mp.solve(harmonic, (0, 10), [1.0, 0.0], rtol=1e-6)
+    b = mp.solve(harmonic, (0, 10), [1.0, 0.0], rtol=[1e-6, 1e-6])
+    assert np.array_equal(a.y, b.y) and a.nfev == b.nfev
+    rtol = np.array([1e-3, 1e-9])
+    for method in ("RK45", "DOP853"):
+        ours = mp.solve(harmonic, (0, 10), [1.0, 0.0], method=method, rtol=rtol, atol=1e-12)
+        ref = solve_ivp(harmonic, (0, 10), [1.0, 0.0], method=method, rtol=rtol, atol=1e-12)
+        err, err_ref = abs(ours.y[0, -1] - np.cos(10)), abs(ref.y[0, -1] - np.cos(10))
+        assert err < 2 * err_ref and abs(ours.nfev / ref.nfev - 1) < 0.2
+    # the ensemble's lanes and scalar path take it too
+    y0s = np.tile([1.0, 0.0], (5, 1))
+    lanes = mp.solve_many(mp.scenes.Pendulum(), (0, 5), y0s, rtol=[1e-10, 1e-4])
+    one = mp.solve(mp.scenes.Pendulum(), (0, 5), [1.0, 0.0], rtol=[1e-10, 1e-4])
+    assert lanes.lanes and (lanes.nfev == one.nfev).all()
+    # GSL's control takes one rtol; bad values are named
+    with pytest.raises(ValueError, match="takes one rtol"):
+        mp.solve(harmonic, (0, 1), [1.0, 0.0], rtol=[1e-3, 1e-9], method="gsl:rkf45")
+    assert mp.solve(harmonic, (0, 1), [1.0, 0.0], rtol=[1e-6, 1e-6], method="gsl:rkf45").success
+    with pytest.raises(ValueError, match="rtol must be positive"):
+        mp.solve(harmonic, (0, 1), [1.0, 0.0], rtol=[1e-3, 0.0])
+    with pytest.raises(ValueError, match=r"rtol must have shape \(2\)"):
+        mp.solve(harmonic, (0, 1), [1.0, 0.0], rtol=[1e-3, 1e-3, 1e-3])

@@ -60,6 +60,23 @@ def test_scene_params_per_trajectory():
         assert np.array_equal(s.y[:, -1], e.y[i, :, 0])
 
 
+def test_every_parameter_name_can_be_swept():
+    # ensemble_params(self, k, **columns) took params={"k": ...} (the usual spring
+    # constant) or {"self": ...} as its own arguments: TypeError; now positional-only
+    import sympy as sp
+    x, = mp.coordinates("x")
+    m, k, me = sp.symbols("m k self", positive=True)
+    L = m * x.diff(sp.Symbol("t")) ** 2 / 2 - k * me * x ** 2 / 2
+    osc = mp.lagrangian(L, [x], params={"m": 1.0, "k": 1.0, "self": 1.0})
+    ks, selfs = np.array([1.0, 4.0, 9.0]), np.array([1.0, 1.0, 0.25])
+    e = mp.solve_many(osc, (0, 2), np.tile([1.0, 0.0], (3, 1)),
+                      params={"k": ks, "self": selfs}, rtol=1e-10, atol=1e-12)
+    # x = cos(sqrt(k self / m) t); measured 1.9e-11
+    np.testing.assert_allclose(e.y[:, 0, -1], np.cos(np.sqrt(ks * selfs) * 2.0), atol=2e-10)
+    rows = osc.ensemble_params(3, k=ks, self=selfs)
+    assert rows.shape == (3, 3) and np.array_equal(rows[:, list(osc.params).index("k")], ks)
+
+
 def test_python_callable_params_are_leading_args():
     g = np.array([[9.81], [4.0], [1.0]])
     y0s = np.tile([1.0, 0.0], (3, 1))

@@ -163,8 +163,10 @@ def test_terminal_count_and_several_events():
     assert s.status == 1
     assert len(s.t_events[0]) == 3
     np.testing.assert_allclose(s.t_events[0], [T / 4, 3 * T / 4, 5 * T / 4], rtol=1e-9)
-    # turning points at T/2 and T before the third zero
-    np.testing.assert_allclose(s.t_events[1], [T / 2, T], rtol=1e-9)
+    # turning points at 0 (released at rest: theta_dot = 0 at t0, reported as
+    # SciPy's solve_ivp reports it), T/2 and T before the third zero
+    assert s.t_events[1][0] == 0.0
+    np.testing.assert_allclose(s.t_events[1][1:], [T / 2, T], rtol=1e-9)
 
 
 def test_several_crossings_in_one_step_are_found():
@@ -172,7 +174,7 @@ def test_several_crossings_in_one_step_are_found():
     def g(t, y):
         return np.sin(5 * t)
     s = mp.solve(lambda t, y: [0.0], (0, 10), [0.0], events=g, first_step=2.0, max_step=2.0)
-    expected = np.arange(1, 16) * np.pi / 5
+    expected = np.arange(0, 16) * np.pi / 5   # g(0) = 0: an event at t0, as in SciPy
     assert s.nsteps == 5  # three zeros in each step
     np.testing.assert_allclose(s.t_events[0], expected, rtol=0, atol=1e-12)
 
@@ -376,10 +378,20 @@ def test_bad_rtol(rtol):
         mp.solve(P, (0, 1), [1.0, 0.0], rtol=rtol)
 
 
-@pytest.mark.parametrize("span", [(1.0, 1.0), (0.0,), (0, np.inf), "ab"])  # (1, 0): backwards
+@pytest.mark.parametrize("span", [(0.0,), (0, np.inf), "ab"])  # (1, 0): backwards
 def test_bad_t_span(span):
     with pytest.raises(ValueError, match="t_span"):
         mp.solve(P, span, [1.0, 0.0])
+
+
+def test_zero_span_returns_y0_as_scipy():
+    # t0 == tf: y0 at t = [t0, t0], no step, as solve_ivp (it raised ValueError);
+    # solve_many has nothing to integrate and says so
+    s = mp.solve(P, (1.0, 1.0), [1.0, 0.0])
+    assert s.t.tolist() == [1.0, 1.0] and s.y.tolist() == [[1.0, 1.0], [0.0, 0.0]]
+    assert s.status == 0 and s.nsteps == 0
+    with pytest.raises(ValueError, match="t_span"):
+        mp.solve_many(P, (1.0, 1.0), [[1.0, 0.0]])
 
 
 def test_bad_options():
@@ -523,7 +535,7 @@ def _fixed_step_reference(method, f, tf, y0, h):
             t += hc
         return [q, v], [v, a]
 
-    t, y = 0.0, list(y0)
+    t, y, i = 0.0, list(y0), 0
     ts, ys = [t], [y]
     try:
         fy = rhs(t, y)
@@ -535,7 +547,8 @@ def _fixed_step_reference(method, f, tf, y0, h):
                     hh = math.nextafter(hh, 0.0)
                 last = True
             y, fy = (rk4 if method == "rk4" else compose)(t, hh, y, fy)
-            t = tf if last else t + hh
+            i += 1
+            t = tf if last else i * h   # times counted, not summed
             ts.append(t)
             ys.append(y)
     except _Failed as e:

@@ -8,11 +8,13 @@ method names.  SciPy's work bounds (nfev, njev, nlu) are checked where the
 method is the same one (dopri5/RK45, dop853/DOP853, radau/Radau); the accuracy
 bounds (SciPy's error measure below 5) everywhere.
 
-Where mechpy documents that it differs from solve_ivp (complex y, an empty y0,
-an empty or infinite t_span, solver classes), the port checks the documented
-behaviour instead.  SciPy's tests of its internal helpers (OdeSolution,
-ConstantDenseOutput, num_jac, group_columns, select_initial_step) and of
-jac_sparsity / vectorized have no counterpart in mp.solve and are not ported.
+Complex y0, an empty y0, an empty t_span (t0 == tf), an infinite one, RK23
+and vectorized= run as in SciPy.  Where mechpy documents that it differs from
+solve_ivp (solver classes, SciPy's quirks in docs/conventions.md), the
+port checks the documented behaviour instead.  SciPy's tests of its internal
+helpers (OdeSolution, ConstantDenseOutput, num_jac, group_columns,
+select_initial_step) and of jac_sparsity have no counterpart in mp.solve and
+are not ported.
 """
 import numpy as np
 import pytest
@@ -25,13 +27,13 @@ import mechpy as mp
 NATIVE = ["dopri5", "dop853", "radau", "auto"]
 GSL = ["gsl:rk2", "gsl:rk4", "gsl:rkf45", "gsl:rkck", "gsl:rk8pd", "gsl:msadams",
        "gsl:rk1imp", "gsl:rk2imp", "gsl:rk4imp", "gsl:bsimp", "gsl:msbdf"]
-SCIPY_NAMES = ["RK45", "DOP853", "Radau", "BDF", "LSODA"]
+SCIPY_NAMES = ["RK45", "RK23", "DOP853", "Radau", "BDF", "LSODA"]
 ADAPTIVE = NATIVE + GSL + SCIPY_NAMES
 ALL = ADAPTIVE + ["rk4"]
 # the same method as SciPy's: SciPy's work bounds apply
 SAME_AS_SCIPY = {"dopri5": "RK45", "dop853": "DOP853", "radau": "Radau",
                  "RK45": "RK45", "DOP853": "DOP853", "Radau": "Radau"}
-EXPLICIT = {"dopri5", "dop853", "RK45", "DOP853", "gsl:rk2", "gsl:rk4", "gsl:rkf45",
+EXPLICIT = {"dopri5", "dop853", "RK45", "RK23", "DOP853", "gsl:rk2", "gsl:rk4", "gsl:rkf45",
             "gsl:rkck", "gsl:rk8pd", "gsl:msadams", "rk4"}
 # variable-order multistep rows start at order 1 and are the least accurate at
 # loose tolerances (rtol 1e-3: end error 2.4e-3 relative on the rational
@@ -197,12 +199,58 @@ def test_integration(method, span, with_jac):
     assert np.all(compute_error(res.sol(tc), sol_rational(tc), rtol, atol) < bound)
 
 
-@pytest.mark.parametrize("method", ["dop853", "radau", "RK45", "BDF"])
-def test_integration_complex_is_refused(method):
-    # SciPy integrates complex y; mechpy documents real float64 states only:
-    # a complex y0 is a TypeError naming y0 (split into real and imaginary parts)
-    with pytest.raises(TypeError, match="y0"):
-        mp.solve(lambda t, y: -y, [0, 1], [0.5 + 1j], method=method, rtol=1e-3, atol=1e-6)
+def fun_complex(t, y):
+    return -y
+
+
+def jac_complex(t, y):
+    return -np.eye(y.shape[0])
+
+
+def sol_complex(t):
+    y = (0.5 + 1j) * np.exp(-t)
+    return y.reshape((1, -1))
+
+
+@pytest.mark.parametrize("with_jac", [False, True], ids=["fd-jac", "jac"])
+@pytest.mark.parametrize("method", ["RK23", "RK45", "DOP853", "Radau", "BDF", "LSODA",
+                                    "dop853", "radau", "gsl:rk8pd"])
+def test_integration_complex(method, with_jac):
+    # SciPy integrates complex y; mp.solve integrates (Re y, Im y) for a Python
+    # callable and returns complex y (it raised TypeError)
+    rtol, atol = 1e-3, 1e-6
+    t_span = [0, 1]
+    tc = np.linspace(*t_span)
+    res = mp.solve(fun_complex, t_span, [0.5 + 1j], method=method, dense_output=True,
+                   rtol=rtol, atol=atol, jac=jac_complex if with_jac else None)
+    assert_equal(res.t[0], t_span[0])
+    assert res.t_events is None and res.success and res.status == 0
+    assert res.y.dtype == np.complex128 and res.y.shape == (1, res.t.size)
+    same = SAME_AS_SCIPY.get(method)
+    if same == "DOP853":
+        assert res.nfev <= 90
+    elif same in ("RK45", "Radau"):
+        assert res.nfev - (2 * res.njev if same == "Radau" and not with_jac else 0) < 25
+    if same == "Radau":
+        assert res.njev == 1 and res.nlu < 5
+    assert np.all(compute_error(res.y, sol_complex(res.t), rtol, atol) < 5)
+    yc = res.sol(tc)
+    assert yc.dtype == np.complex128
+    assert np.all(compute_error(yc, sol_complex(tc), rtol, atol) < 5)
+    # a complex state through events and a constant complex jac
+    def im_zero(t, y):
+        return y[0].imag - 0.5
+    r = mp.solve(lambda t, y: -1j * y, [0, 4], [1.0 + 0j], method=method, events=im_zero,
+                 jac=np.array([[-1j]]), rtol=1e-10, atol=1e-12)
+    # y = exp(-i t): Im y = -sin t = 0.5 at t = pi + pi/6 (sin t = -1/2)
+    assert_allclose(r.t_events[0], [7 * np.pi / 6], rtol=1e-8)
+    assert r.y_events[0].dtype == np.complex128
+    assert_allclose(r.y_events[0][0], np.exp(-1j * 7 * np.pi / 6), atol=1e-7)
+
+
+def test_integration_complex_needs_a_python_callable():
+    with pytest.raises(TypeError, match="complex y0 needs a Python callable"):
+        mp.solve(mp.scenes.Pendulum(), [0, 1], [0.5 + 1j, 0.0])
 
 
 def test_integration_complex_as_real_pair():
@@ -568,27 +616,72 @@ def test_event_dense_output_lsoda(method):
 
 # ---- empty and degenerate problems (documented differences) ------------------------
 
-@pytest.mark.parametrize("method", ["dop853", "radau", "RK45", "LSODA"])
-def test_no_integration_is_refused(method):
-    # SciPy returns y0 for t_span = [4, 4]; mechpy documents an empty t_span as
-    # a ValueError naming t_span
-    with pytest.raises(ValueError, match="t_span"):
-        mp.solve(lambda t, y: -y, [4, 4], [2, 3], method=method, dense_output=True)
+@pytest.mark.parametrize("method", ["dop853", "radau", "RK45", "RK23", "LSODA", "rk4"])
+def test_no_integration(method):
+    # SciPy returns y0 for t_span = [4, 4] (it raised ValueError)
+    sol = solve(method, lambda t, y: -y, [4, 4], [2, 3], dense_output=True)
+    assert_equal(sol.sol(4), [2, 3])
+    assert_equal(sol.sol([4, 5, 6]), [[2, 2, 2], [3, 3, 3]])
+    assert sol.success and sol.status == 0
+    assert_equal(sol.t, [4, 4])
+    assert_equal(sol.y, [[2, 2], [3, 3]])
 
 
-@pytest.mark.parametrize("method", ["dop853", "radau", "RK45", "LSODA"])
-def test_empty_y0_is_refused(method):
-    # SciPy integrates a 0-dimensional system; mechpy documents an empty y0 as a
-    # ValueError naming y0
-    with pytest.raises(ValueError, match="y0"):
-        mp.solve(lambda t, y: np.zeros((0,)), [0, 10], np.zeros((0,)), method=method)
+@pytest.mark.parametrize("method", ["dop853", "radau", "RK45", "RK23", "BDF", "LSODA", "rk4"])
+def test_empty(method):
+    # SciPy integrates a 0-dimensional system (it raised ValueError)
+    def fun(t, y):
+        return np.zeros((0,))
+    for tf in [10, np.inf] if method != "rk4" else [10]:
+        sol = solve(method, fun, [0, tf], np.zeros((0,)), dense_output=True)
+        assert_equal(sol.sol(10), np.zeros((0,)))
+        assert_equal(sol.sol([1, 2, 3]), np.zeros((0, 3)))
+        assert sol.success and sol.y.shape == (0, sol.t.size)
 
 
-def test_infinite_t_span_is_refused():
-    # SciPy accepts t_span = [0, inf] with a terminal event; mechpy documents
-    # t_span as finite (ValueError naming it)
-    with pytest.raises(ValueError, match="t_span"):
-        mp.solve(lambda t, y: [y[1], -9.80665], [0, np.inf], [0, 0.01])
+def test_integration_vectorized():
+    # SciPy's vectorized=True: fun takes y of shape (n, k); the same solve
+    def fun_vec(t, y):
+        return np.vstack([y[1] / t, y[1] * (y[0] + 2 * y[1] - 1) / (t * (y[0] - 1))])
+    for method in ["RK45", "dop853", "radau"]:
+        a = mp.solve(fun_vec, [5, 9], [1 / 3, 2 / 9], method=method, vectorized=True,
+                     rtol=1e-3, atol=1e-6)
+        b = mp.solve(fun_rational, [5, 9], [1 / 3, 2 / 9], method=method, rtol=1e-3, atol=1e-6)
+        assert_equal(a.y, b.y)
+        assert a.nfev == b.nfev
+    with pytest.raises(TypeError, match="vectorized must be a bool"):
+        mp.solve(fun_rational, [5, 9], [1 / 3, 2 / 9], vectorized="yes")
+
+
+def test_duplicate_t_eval_is_refused_as_scipy_does():
+    # SciPy raises "Values in `t_eval` are not properly sorted." for duplicates
+    from scipy.integrate import solve_ivp
+    with pytest.raises(ValueError, match="properly sorted"):
+        solve_ivp(fun_rational, [5, 9], [1 / 3, 2 / 9], t_eval=[6, 7, 7, 8])
+    with pytest.raises(ValueError, match="strictly increasing"):
+        mp.solve(fun_rational, [5, 9], [1 / 3, 2 / 9], t_eval=[6, 7, 7, 8])
+
+
+@pytest.mark.parametrize("method", ["RK45", "dop853", "radau", "auto", "gsl:rk8pd"])
+@pytest.mark.parametrize("sign", [1, -1])
+def test_infinite_t_span(method, sign):
+    # SciPy integrates t_span = [0, +-inf] until a terminal event (it raised
+    # ValueError): the cannon ball lands at 2 v0 / g, forwards and backwards
+    def hit_ground(t, y):
+        return y[0]
+    hit_ground.terminal = True
+    hit_ground.direction = -1   # down, along the integration (y(t0) = 0 is no landing)
+    res = mp.solve(lambda t, y: [y[1], -9.80665], [0, sign * np.inf], [0, sign * 0.01],
+                   events=hit_ground, method=method)
+    assert res.status == 1
+    assert_allclose(res.t_events[0], [sign * 2 * 0.01 / 9.80665], rtol=1e-10)
+    assert res.t[-1] == res.t_events[0][0]
+    # without a terminal event nothing would end it; fixed steps need a finite span
+    with pytest.raises(ValueError, match="infinite t_span needs a terminal event"):
+        mp.solve(lambda t, y: [y[1], -9.80665], [0, sign * np.inf], [0, 0.01], method=method)
+    with pytest.raises(ValueError, match="fixed step"):
+        mp.solve(lambda t, y: [y[1], -9.80665], [0, np.inf], [0, 0.01], method="rk4",
+                 h=0.1, events=hit_ground)
 
 
 @pytest.mark.parametrize("f0_fill", [np.nan, np.inf])
@@ -607,7 +700,7 @@ def test_integration_zero_rhs(method):
 
 @pytest.mark.parametrize("method", ALL)
 def test_duplicate_timestamps(method):
-    # SciPy runs this to t = inf; mechpy's t_span is finite (the event ends it)
+    # SciPy's case runs to t = inf, as the adaptive rows do; rk4 to t = 1
     def upward_cannon(t, y):
         return [y[1], -9.80665]
 
@@ -619,8 +712,8 @@ def test_duplicate_timestamps(method):
     kw = dict(rtol=1e-3, atol=1e-6, max_step=0.05 * 0.001 / 9.80665)
     if method == "rk4":
         kw = dict(h=kw["max_step"])
-    res = mp.solve(upward_cannon, [0, 1], [0, 0.01], events=hit_ground, dense_output=True,
-                   method=method, **kw)
+    res = mp.solve(upward_cannon, [0, 1 if method == "rk4" else np.inf], [0, 0.01],
+                   events=hit_ground, dense_output=True, method=method, **kw)
     if method in ("dopri5", "RK45"):
         # SciPy's case (its default RK45): sol(0.01) extrapolates the last step's
         # quartic 2400 steps ahead, exact on this parabola up to amplified round-off;

@@ -1,6 +1,7 @@
 /* The one driver loop of every integration method: step-size control,
  * budget, interrupts, output at t_eval from dense output, events, storage. */
 #include "ode/ode.h"
+#include "ode/fixed.h"
 
 #include <float.h>
 #include <math.h>
@@ -37,7 +38,7 @@ int mp_ode_ws_jac(mp_ode_ws *w, double t, const double *y, const double *f0, dou
     }
     memcpy(scratch_y, y, n * sizeof(double));
     for (size_t j = 0; j < n; j++) {
-        double scale = fmax(fabs(y[j]), w->o->atol[j] / w->o->rtol);
+        double scale = fmax(fabs(y[j]), w->o->atol[j] / w->o->rtolv[j]);
         if (!(scale > 0)) scale = 1.0;
         double yj = y[j], d = sqrt(DBL_EPSILON) * scale;
         scratch_y[j] = yj + d;
@@ -54,7 +55,7 @@ double mp_ode_err_norm(const mp_ode_ws *w, const double *e, const double *y0, co
 {
     double s = 0.0;
     for (size_t i = 0; i < w->n; i++) {
-        double sc = w->o->atol[i] + w->o->rtol * fmax(fabs(y0[i]), fabs(y1[i]));
+        double sc = w->o->atol[i] + w->o->rtolv[i] * fmax(fabs(y0[i]), fabs(y1[i]));
         double q = e[i] / sc;
         s += q * q;
     }
@@ -274,10 +275,13 @@ static int ev_cmp(const void *a, const void *b)
 
 /* Find every crossing in the accepted step [t, t + h]; g_old holds g at t and
  * is updated to g at the step end.  Sets *s_stop < 1 when a terminal event
- * fires (the step is truncated there). */
+ * fires (the step is truncated there).  On the first step (first != 0) an
+ * event that is exactly zero at t0 occurs at t0 when it leaves zero in its
+ * direction (any way for direction 0), as SciPy's solve_ivp reports it; a
+ * zero at a later step's start is the crossing the step before reported. */
 static int ev_step(mp_ode_ws *w, mp_ode_result *r, const mp_ode_options *o, double t, double h,
-                   double *g_old, double *g_sub, double *ytmp, double *gtmp, ev_hit *hits,
-                   double *s_stop)
+                   int first, double *g_old, double *g_sub, double *ytmp, double *gtmp,
+                   ev_hit *hits, double *s_stop)
 {
     size_t ne = o->n_events, nh = 0;
     ev_ctx c = {w, o, t, h, ytmp, gtmp};
@@ -297,7 +301,14 @@ static int ev_step(mp_ode_ws *w, mp_ode_result *r, const mp_ode_options *o, doub
                 w->bad_index = k;
                 return MP_ENONFINITE;
             }
-            if (crosses(g_old[k], g_sub[k], o->direction[k])) {
+            int dk = o->direction[k];
+            if (first && j == 1 && g_old[k] == 0.0) { /* zero at t0 */
+                if (dk == 0 || (dk > 0 ? g_sub[k] >= 0.0 : g_sub[k] <= 0.0)) {
+                    hits[nh].s = 0.0;
+                    hits[nh].k = k;
+                    nh++;
+                }
+            } else if (crosses(g_old[k], g_sub[k], dk)) {
                 double root;
                 rc = ev_root(&c, k, s0, g_old[k], s1, g_sub[k], &root);
                 if (rc != MP_OK) return rc;
@@ -331,7 +342,7 @@ static int first_step(mp_ode_ws *w, double t0, double tf, double hmax, double *h
     const mp_ode_options *o = w->o;
     double dnf = 0, dny = 0;
     for (size_t i = 0; i < n; i++) {
-        double sk = o->atol[i] + o->rtol * fabs(w->y[i]);
+        double sk = o->atol[i] + o->rtolv[i] * fabs(w->y[i]);
         dnf += (w->f[i] / sk) * (w->f[i] / sk);
         dny += (w->y[i] / sk) * (w->y[i] / sk);
     }
@@ -351,7 +362,7 @@ static int first_step(mp_ode_ws *w, double t0, double tf, double hmax, double *h
     if (rc != MP_OK) return rc;
     double der2 = 0;
     for (size_t i = 0; i < n; i++) {
-        double sk = o->atol[i] + o->rtol * fabs(w->y[i]);
+        double sk = o->atol[i] + o->rtolv[i] * fabs(w->y[i]);
         double d = (f1[i] - w->f[i]) / sk;
         der2 += d * d;
     }
@@ -467,6 +478,8 @@ typedef struct {
     mp_ode_ws w;
     ode_control c;
     double t, tf, h, hmax;    /* where the solve is, its end, the next step, the largest */
+    double t0;                /* its start */
+    long nfixed;              /* fixed steps taken: the next starts at t0 + nfixed h */
     size_t ie;                /* the next t_eval index */
     long attempts;            /* steps attempted (the budget) */
     int need_dense;           /* some step may need the interpolant */
@@ -478,8 +491,9 @@ typedef struct {
 
 int mp_ode_span_ok(const mp_ode_method *m, double t0, double tf, const mp_ode_options *o)
 {
-    if (!(t0 != tf) || !isfinite(t0) || !isfinite(tf) || !(o->rtol > 0) ||
-        !(o->max_steps > 0) || (!m->adaptive && !(o->h > 0)) || !(o->max_step > 0))
+    if (!(t0 != tf) || !isfinite(t0) || isnan(tf) || (!isfinite(tf) && !m->adaptive) ||
+        !(o->rtol > 0) || !(o->max_steps > 0) || (!m->adaptive && !(o->h > 0)) ||
+        !(o->max_step > 0))
         return MP_EDOM;
     /* a fixed step below the spacing of floats at t would never advance t */
     double tmax = fmax(fabs(t0), fabs(tf));
@@ -488,13 +502,14 @@ int mp_ode_span_ok(const mp_ode_method *m, double t0, double tf, const mp_ode_op
 }
 
 /* Contract: MP_OK when the arguments of a forward solve are in its domain:
- * n > 0, t0 < tf, mp_ode_span_ok, y0 finite and atol >= 0; else MP_EDOM. */
+ * n > 0, t0 < tf, mp_ode_span_ok, y0 finite, atol >= 0 and rtolv >= rtol;
+ * else MP_EDOM. */
 static int check_args(const mp_ode_method *m, const mp_ode_problem *p, double t0, double tf,
                       const double *y0, const mp_ode_options *o)
 {
     if (p->n == 0 || !(tf > t0) || mp_ode_span_ok(m, t0, tf, o) != MP_OK) return MP_EDOM;
     for (size_t i = 0; i < p->n; i++)
-        if (!isfinite(y0[i]) || !(o->atol[i] >= 0)) return MP_EDOM;
+        if (!isfinite(y0[i]) || !(o->atol[i] >= 0) || !(o->rtolv[i] >= o->rtol)) return MP_EDOM;
     return MP_OK;
 }
 
@@ -565,7 +580,8 @@ static int start_run(ode_run *s, double t0, const double *y0)
     const mp_ode_options *o = s->o;
     size_t n = w->n, ne = o->n_events;
     int rc;
-    s->t = t0;
+    s->t = s->t0 = t0;
+    s->nfixed = 0;
     memcpy(w->y, y0, n * sizeof(double));
     if ((rc = mp_ode_ws_rhs(w, t0, w->y, w->f)) != MP_OK) return rc;
     if (o->n_eval == 0) {
@@ -627,8 +643,8 @@ static int accept_step(ode_run *s, double h, double hnew, double tnew)
     if ((rc = s->cur->finish(w, t, h, dense_now)) != MP_OK) return rc;
     if (w->rho > 0.0) stiffness_test(s);
     double s_stop = 2.0;
-    if (o->n_events && (rc = ev_step(w, r, o, t, h, s->g_old, s->g_sub, s->ytmp, s->gtmp,
-                                     s->hits, &s_stop)) != MP_OK)
+    if (o->n_events && (rc = ev_step(w, r, o, t, h, r->nsteps == 0, s->g_old, s->g_sub,
+                                     s->ytmp, s->gtmp, s->hits, &s_stop)) != MP_OK)
         return rc;
     double tend = s_stop <= 1.0 ? t + s_stop * h : tnew;
     if ((rc = output_step(r, o, w, t, h, tnew, tend, &s->ie, s->ytmp)) != MP_OK) return rc;
@@ -645,6 +661,7 @@ static int accept_step(ode_run *s, double h, double hnew, double tnew)
     double *sw = w->y; w->y = w->ynew; w->ynew = sw;
     if (w->fnew_valid) { sw = w->f; w->f = w->fnew; w->fnew = sw; }
     s->t = tnew;
+    s->nfixed += !s->cur->adaptive;
     s->h = fmin(s->cur->adaptive ? hnew : o->h, s->hmax);
     /* the switching row: to the stiff method when the test fires, back when
      * the stiff method's steps are within the explicit stability region */
@@ -672,7 +689,11 @@ static void fixed_block(ode_run *s)
     long k = 0, kmax = MP_ODE_INTERRUPT_EVERY - 1 - s->attempts % MP_ODE_INTERRUPT_EVERY;
     if (kmax > o->max_steps - s->attempts) kmax = o->max_steps - s->attempts;
     double t = s->t, h = s->h, tout = s->ie < o->n_eval ? o->t_eval[s->ie] : INFINITY;
-    for (; k < kmax && t + h * (1.0 + 1e-9) < s->tf && t + h < tout; k++) t += h;
+    for (; k < kmax; k++) { /* the steps run_loop would take as not the last, no output due */
+        double tn = mp_ode_fixed_time(s->t0, s->nfixed + k + 1, h);
+        if (!(t + h * (1.0 + 1e-9) < s->tf && tn < tout)) break;
+        t = tn;
+    }
     if (k == 0) return;
     int every = o->n_eval == 0; /* every step is a sample */
     if (every && reserve_samples(r, (size_t)k) != MP_OK) return; /* the checked loop reports */
@@ -680,7 +701,7 @@ static void fixed_block(ode_run *s)
     memcpy(s->save, w->y, n * sizeof(double));
     memcpy(s->save + n, w->f, n * sizeof(double));
     w->discarded = 0.0;
-    int rc = s->cur->block(w, s->t, h, k, every ? r->t + r->m : NULL,
+    int rc = s->cur->block(w, s->t0, s->nfixed, h, k, every ? r->t + r->m : NULL,
                            every ? r->y + r->m * n : NULL);
     int bad = rc != MP_OK || !isfinite(w->discarded);
     for (size_t i = 0; i < n && !bad; i++) bad = !isfinite(w->y[i]) || !isfinite(w->f[i]);
@@ -694,6 +715,7 @@ static void fixed_block(ode_run *s)
     if (every) r->m += (size_t)k;
     r->nsteps += k;
     s->t = t;
+    s->nfixed += k;
     s->attempts += k;
 }
 
@@ -750,7 +772,10 @@ static int run_loop(ode_run *s)
             r->nreject++;
             continue;
         }
-        if ((rc = accept_step(s, h, hnew, last ? s->tf : t + h)) != MP_OK || r->terminated)
+        /* a fixed step's end is counted, t0 + (i + 1) h: a sum of steps drifts */
+        double tnew = last ? s->tf
+                    : cur->adaptive ? t + h : mp_ode_fixed_time(s->t0, s->nfixed + 1, h);
+        if ((rc = accept_step(s, h, hnew, tnew)) != MP_OK || r->terminated)
             break;
     }
     r->t_fail = s->t;

@@ -30,15 +30,16 @@ static int compose(mp_ode_ws *w, double t, double h, const double *c, int ns)
 /* Contract: the block of ode.h's method row for the composition c[0..ns):
  * k steps in place, each as compose makes it; the problem's own blocks when
  * it has them. */
-static int compose_block(mp_ode_ws *w, double t, double h, long k, double *ts, double *ys,
-                         const double *c, int ns)
+static int compose_block(mp_ode_ws *w, double t0, long i0, double h, long k, double *ts,
+                         double *ys, const double *c, int ns)
 {
     const mp_ode_problem *p = w->p;
     w->nfev += ns * k;
     if (p->blocks && p->blocks->rhs == p->rhs && p->blocks->compose)
-        return p->blocks->compose(p->data, t, h, c, ns, k, w->y, w->f, ts, ys, &w->discarded);
-    return mp_ode_compose_steps(p->rhs, p->data, p->nq, t, h, c, ns, k, w->y, w->f, ts, ys,
-                                &w->discarded);
+        return p->blocks->compose(p->data, t0, i0, h, c, ns, k, w->y, w->f, ts, ys,
+                                  &w->discarded);
+    return mp_ode_compose_steps(p->rhs, p->data, p->nq, t0, i0, h, c, ns, k, w->y, w->f, ts,
+                                ys, &w->discarded);
 }
 
 static const double verlet_c[1] = {1.0};
@@ -59,9 +60,10 @@ static int verlet_step(mp_ode_ws *w, double t, double h, double *err)
     return compose(w, t, h, verlet_c, 1);
 }
 
-static int verlet_block(mp_ode_ws *w, double t, double h, long k, double *ts, double *ys)
+static int verlet_block(mp_ode_ws *w, double t0, long i0, double h, long k, double *ts,
+                        double *ys)
 {
-    return compose_block(w, t, h, k, ts, ys, verlet_c, 1);
+    return compose_block(w, t0, i0, h, k, ts, ys, verlet_c, 1);
 }
 
 static int yoshida4_step(mp_ode_ws *w, double t, double h, double *err)
@@ -70,9 +72,10 @@ static int yoshida4_step(mp_ode_ws *w, double t, double h, double *err)
     return compose(w, t, h, yoshida4_c, 3);
 }
 
-static int yoshida4_block(mp_ode_ws *w, double t, double h, long k, double *ts, double *ys)
+static int yoshida4_block(mp_ode_ws *w, double t0, long i0, double h, long k, double *ts,
+                        double *ys)
 {
-    return compose_block(w, t, h, k, ts, ys, yoshida4_c, 3);
+    return compose_block(w, t0, i0, h, k, ts, ys, yoshida4_c, 3);
 }
 
 static int yoshida6_step(mp_ode_ws *w, double t, double h, double *err)
@@ -81,9 +84,10 @@ static int yoshida6_step(mp_ode_ws *w, double t, double h, double *err)
     return compose(w, t, h, yoshida6_c, 7);
 }
 
-static int yoshida6_block(mp_ode_ws *w, double t, double h, long k, double *ts, double *ys)
+static int yoshida6_block(mp_ode_ws *w, double t0, long i0, double h, long k, double *ts,
+                        double *ys)
 {
-    return compose_block(w, t, h, k, ts, ys, yoshida6_c, 7);
+    return compose_block(w, t0, i0, h, k, ts, ys, yoshida6_c, 7);
 }
 
 /* fnew = f(t + h, ynew) came out of the last kick */

@@ -86,6 +86,9 @@ static int gsl_alloc(mp_ode_ws *w)
 {
     size_t n = w->n;
     const gsl_odeiv2_step_type *const *type = w->m->extra;
+    /* GSL's control takes one rtol: a per-component one is outside its domain */
+    for (size_t i = 0; i < n; i++)
+        if (w->o->rtolv[i] != w->o->rtol) return MP_EDOM;
     gsl_state *st = calloc(1, sizeof *st);
     if (!st) return MP_ENOMEM;
     w->state = st;
@@ -169,7 +172,7 @@ static double quintic_hermite(mp_ode_ws *w, double h, const double *ym, const do
         double dy = w->ynew[i] - w->y[i], chord = 0.5 * (w->y[i] + w->ynew[i]);
         double p_m = chord + 0.125 * h * (w->f[i] - w->fnew[i]); /* the cubic at s = 1/2 */
         double e1 = fabs(ym[i] - chord), e3 = fabs(ym[i] - p_m);
-        double sc = w->o->atol[i] + w->o->rtol * fabs(ym[i]);
+        double sc = w->o->atol[i] + w->o->rtolv[i] * fabs(ym[i]);
         double q = e1 > 0.0 ? fmin(e3, e3 * e3 / e1) / sc : 0.0;
         est += q * q;
         double dp_m = 1.5 * dy - 0.25 * h * (w->f[i] + w->fnew[i]); /* d/ds at s = 1/2 */

@@ -20,6 +20,7 @@
 
 #include "ode/dop853_tableau.h"
 #include "ode/dopri5_tableau.h"
+#include "ode/fixed.h"
 
 #ifndef MP_LANES_RUN
 #error "MP_LANES_RUN names this build of the lane driver (csrc/meson.build)"
@@ -210,7 +211,7 @@ static void lane_first_step(lane_group *g, int *on)
         if (!on[l]) continue;
         double sf2 = 0.0, sy2 = 0.0;
         for (size_t c = 0; c < n; c++) {
-            double sk = o->atol[c] + o->rtol * fabs(g->y[c * W + l]);
+            double sk = o->atol[c] + o->rtolv[c] * fabs(g->y[c * W + l]);
             double qf = g->f[c * W + l] / sk, qy = g->y[c * W + l] / sk;
             sf2 += qf * qf;
             sy2 += qy * qy;
@@ -250,7 +251,7 @@ static void lane_first_step(lane_group *g, int *on)
         if (!on[l]) continue;
         double der2 = 0.0, h = g->h[l];
         for (size_t c = 0; c < n; c++) {
-            double sk = o->atol[c] + o->rtol * fabs(g->y[c * W + l]);
+            double sk = o->atol[c] + o->rtolv[c] * fabs(g->y[c * W + l]);
             double d = (g->fnew[c * W + l] - g->f[c * W + l]) / sk;
             der2 += d * d;
         }
@@ -361,7 +362,7 @@ static double lane_err_norm(const lane_group *g, int l, const double *e)
     double s = 0.0;
     for (size_t c = 0; c < g->n; c++) {
         size_t i = c * W + (size_t)l;
-        double sc = g->o->atol[c] + g->o->rtol * fmax(fabs(g->y[i]), fabs(g->ynew[i]));
+        double sc = g->o->atol[c] + g->o->rtolv[c] * fmax(fabs(g->y[i]), fabs(g->ynew[i]));
         double q = e[i] / sc;
         s += q * q;
     }
@@ -426,9 +427,9 @@ static void dop853_lanes(lane_group *g, int *on, int *rc, double *err, double *r
     D8(1); D8(2); D8(3); D8(4); D8(5); D8(6); D8(7); D8(8); D8(9); D8(10); D8(11);
 #undef D8
     lane_stage(nW, g->y, g->h, mp_dop853_b, K, 12, g->ynew);
-    double e5s[W] = {0.0}, e3s[W] = {0.0}, rtol = g->o->rtol;
+    double e5s[W] = {0.0}, e3s[W] = {0.0};
     for (size_t c = 0; c < n; c++) {
-        double e5[W], e3[W], at = g->o->atol[c];
+        double e5[W], e3[W], at = g->o->atol[c], rtol = g->o->rtolv[c];
         const double *y = g->y + c * W, *y1 = g->ynew + c * W;
         lane_dot(mp_dop853_e5, K, 12, c * W, e5);
         lane_dot(mp_dop853_e3, K, 12, c * W, e3);
@@ -612,7 +613,10 @@ static void lane_attempt(lane_group *g)
         }
         if (g->adaptive && !lane_control(g, l, err[l], fac11[l], fold[l], &hnew[l])) continue;
         acc[l] = 1;
-        tnew[l] = last[l] ? g->sf : g->t[l] + g->h[l];
+        /* a fixed step's end is counted, as driver.c counts it: s0 + (i + 1) h */
+        tnew[l] = last[l]      ? g->sf
+                : g->adaptive ? g->t[l] + g->h[l]
+                              : mp_ode_fixed_time(g->s0, g->attempts[l], g->h[l]);
         dense[l] = g->ie[l] < g->nt && g->sev[g->ie[l]] < tnew[l];
     }
     memcpy(on, acc, sizeof on);

@@ -27,13 +27,14 @@ typedef int (*mp_ode_interrupt)(void *ctx);
  * its rhs is this one (a wrapper that replaces rhs leaves them unused). */
 typedef struct mp_ode_blocks {
     mp_ode_rhs rhs;
-    /* k rk4 steps in place, as ode/fixed.h's mp_ode_rk4_steps */
-    int (*rk4)(void *data, double t, double h, long k, double *y, double *f, double *ts,
-               double *ys);
+    /* k rk4 steps in place, step j from t0 + (i0 + j) h, as ode/fixed.h's
+     * mp_ode_rk4_steps */
+    int (*rk4)(void *data, double t0, long i0, double h, long k, double *y, double *f,
+               double *ts, double *ys);
     /* k steps of the composition c[0..ns), as mp_ode_compose_steps (NULL: rhs
      * is not separable) */
-    int (*compose)(void *data, double t, double h, const double *c, int ns, long k, double *y,
-                   double *f, double *ts, double *ys, double *discarded);
+    int (*compose)(void *data, double t0, long i0, double h, const double *c, int ns, long k,
+                   double *y, double *f, double *ts, double *ys, double *discarded);
 } mp_ode_blocks;
 
 typedef struct mp_ode_problem {
@@ -58,7 +59,8 @@ typedef struct mp_ode_problem {
 } mp_ode_problem;
 
 typedef struct mp_ode_options {
-    double rtol;              /* > 0 */
+    double rtol;              /* > 0: the least of rtolv (Newton's and GSL's one tolerance) */
+    const double *rtolv;      /* n relative tolerances > 0 (SciPy's per-component rtol) */
     const double *atol;       /* n values >= 0 */
     double first_step;        /* 0: Hairer's automatic guess */
     double max_step;          /* may be inf */
@@ -143,15 +145,16 @@ typedef struct mp_ode_method {
      * output needs it, and the interpolant's coefficients when need_dense. */
     int (*finish)(mp_ode_ws *w, double t, double h, int need_dense);
     /* Optional, for a fixed-step row whose steps depend on (t, h, y, f) alone:
-     * k steps of size h from (t, w->y, w->f) in place, the times t + h, t + 2h,
-     * ... accumulated step by step, ending with f = f(t_k, y_k); the same
-     * arithmetic as k calls of step and finish.  The state after step j is
-     * written to ys + j n and its time to ts[j] when ys is not NULL.  The
+     * k steps of size h from (w->y, w->f) in place, step j from the counted
+     * time t0 + (i0 + j) h (ode/fixed.h's mp_ode_fixed_time, as the driver
+     * counts a fixed-step solve's times), ending with f = f(t_k, y_k); the
+     * same arithmetic as k calls of step and finish.  The state after step j
+     * is written to ys + j n and its time to ts[j] when ys is not NULL.  The
      * stages are not checked (the driver's fast path checks the state after
      * the block; values a step computes and drops leave their trace in
      * w->discarded); f is called directly (ode/fixed.h), or inlined in the
      * problem's own blocks; nfev counts k times the row's evaluations. */
-    int (*block)(mp_ode_ws *w, double t, double h, long k, double *ts, double *ys);
+    int (*block)(mp_ode_ws *w, double t0, long i0, double h, long k, double *ts, double *ys);
     /* Optional: forget history (a switching row changed method). */
     void (*restart)(mp_ode_ws *w);
     /* A switching row ("auto"): the driver runs `nonstiff` and `stiff` in
@@ -219,7 +222,7 @@ static inline int mp_ode_ws_eval(double t, const double *y, double *dydt, void *
 int mp_ode_ws_jac(mp_ode_ws *w, double t, const double *y, const double *f0, double *jac,
                   double *scratch_y, double *scratch_f);
 
-/* Hairer's RMS error norm: sqrt(mean((e_i / (atol_i + rtol max(|y0_i|, |y1_i|)))^2)). */
+/* Hairer's RMS error norm: sqrt(mean((e_i / (atol_i + rtol_i max(|y0_i|, |y1_i|)))^2)). */
 double mp_ode_err_norm(const mp_ode_ws *w, const double *e, const double *y0, const double *y1);
 
 /* Dense-output evaluation shared by every method: the interpolant is
@@ -239,9 +242,11 @@ extern const mp_ode_method *const mp_ode_methods[];
 const mp_ode_method *mp_ode_method_find(const char *name);
 
 /* MP_OK when a solve of m from t0 to tf (either way) with options o is in the
- * domain every solve checks at its start: t0 != tf finite, rtol > 0, a budget,
- * max_step > 0, for a fixed-step method h > 0 large enough to advance t; else
- * MP_EDOM.  (The state's checks - n, y0, atol - are the solve's own.) */
+ * domain every solve checks at its start: t0 != tf, t0 finite, tf finite or,
+ * for an adaptive method, infinite (the solve then ends at a terminal event or
+ * its budget, as SciPy's solve_ivp with t_span = (t0, inf)), rtol > 0, a
+ * budget, max_step > 0, for a fixed-step method h > 0 large enough to advance
+ * t; else MP_EDOM.  (The state's checks - n, y0, atol - are the solve's own.) */
 int mp_ode_span_ok(const mp_ode_method *m, double t0, double tf, const mp_ode_options *o);
 
 /* Integrate from t0 to tf (tf < t0 integrates backwards: the driver solves

@@ -283,7 +283,7 @@ static int radau_step(mp_ode_ws *w, double t, double h_req, double *err_out)
         } else {
             memset(st->Z, 0, 3 * n * sizeof(double));
         }
-        for (size_t i = 0; i < n; i++) st->scale[i] = o->atol[i] + fabs(w->y[i]) * rtol;
+        for (size_t i = 0; i < n; i++) st->scale[i] = o->atol[i] + fabs(w->y[i]) * o->rtolv[i];
         int converged = 0;
         for (;;) {
             if (!st->have_LU || st->lu_h != h) {
@@ -313,7 +313,7 @@ static int radau_step(mp_ode_ws *w, double t, double h_req, double *err_out)
         }
         solve_real(st, e);
         for (size_t i = 0; i < n; i++)
-            st->scale[i] = o->atol[i] + fmax(fabs(w->y[i]), fabs(ynew[i])) * rtol;
+            st->scale[i] = o->atol[i] + fmax(fabs(w->y[i]), fabs(ynew[i])) * o->rtolv[i];
         err = rms(n, e, st->scale);
         double safety = 0.9 * (2 * NEWTON_MAXITER + 1) / (2 * NEWTON_MAXITER + iters);
         if (rejected && err > 1.0) { /* Hairer's improved estimate after a rejection */

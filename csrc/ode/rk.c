@@ -50,13 +50,14 @@ static int rk4_step(mp_ode_ws *w, double t, double h, double *err)
 /* Contract: the block of ode.h's method row: k steps in place, each one's
  * four evaluations as rk4_step and the finish make them; the problem's own
  * blocks when it has them. */
-static int rk4_block(mp_ode_ws *w, double t, double h, long k, double *ts, double *ys)
+static int rk4_block(mp_ode_ws *w, double t0, long i0, double h, long k, double *ts,
+                     double *ys)
 {
     const mp_ode_problem *p = w->p;
     w->nfev += 4 * k;
     if (p->blocks && p->blocks->rhs == p->rhs)
-        return p->blocks->rk4(p->data, t, h, k, w->y, w->f, ts, ys);
-    return mp_ode_rk4_steps(p->rhs, p->data, w->n, t, h, k, w->y, w->f, w->k, ts, ys);
+        return p->blocks->rk4(p->data, t0, i0, h, k, w->y, w->f, ts, ys);
+    return mp_ode_rk4_steps(p->rhs, p->data, w->n, t0, i0, h, k, w->y, w->f, w->k, ts, ys);
 }
 
 const mp_ode_method mp_ode_rk4 = {
@@ -170,7 +171,7 @@ static int dop853_step(mp_ode_ws *w, double t, double h, double *err)
             if (mp_dop853_e5[s] != 0.0) e5 += mp_dop853_e5[s] * K[s][i];
             if (mp_dop853_e3[s] != 0.0) e3 += mp_dop853_e3[s] * K[s][i];
         }
-        double sk = w->o->atol[i] + w->o->rtol * fmax(fabs(w->y[i]), fabs(w->ynew[i]));
+        double sk = w->o->atol[i] + w->o->rtolv[i] * fmax(fabs(w->y[i]), fabs(w->ynew[i]));
         e5s += (e5 / sk) * (e5 / sk);
         e3s += (e3 / sk) * (e3 / sk);
     }

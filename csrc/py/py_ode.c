@@ -486,54 +486,75 @@ fail:
  * over, parsed here and nowhere else: ode_solve_many's as one dict, ode_solve's
  * as positional arguments (its call is the one whose fixed cost counts). */
 typedef struct {
-    double t0, tf, rtol, h, first_step, max_step;
+    double t0, tf, rtol, h, first_step, max_step; /* rtol: the least of the n */
     long max_steps;
-    PyArrayObject *atol, *tev; /* owned; atol NULL: a scalar in atol1; tev NULL: no t_eval */
-    double *atol1;             /* PyMem: n copies of a scalar atol */
+    /* owned; atol/rtolv NULL: a scalar in atol1/rtol1; tev NULL: no t_eval */
+    PyArrayObject *atol, *rtolv, *tev;
+    double *atol1, *rtol1;     /* PyMem: n copies of a scalar atol, rtol */
 } ode_args;
 
 static void ode_args_clear(ode_args *a)
 {
     Py_CLEAR(a->atol);
+    Py_CLEAR(a->rtolv);
     Py_CLEAR(a->tev);
     PyMem_Free(a->atol1);
-    a->atol1 = NULL;
+    PyMem_Free(a->rtol1);
+    a->atol1 = a->rtol1 = NULL;
 }
 
-/* Contract: the arrays of a from atol (a Python float, taken as n copies, or
- * n values) and t_eval (None or m values), then o from a (o points into a:
- * clear a after the solve).  0, or -1 with an exception set and a cleared. */
-static int ode_args_fill(PyObject *atolo, PyObject *tevo, size_t n, ode_args *a,
-                         mp_ode_options *o)
+/* Contract: n tolerances from obj, a Python float (finite, > 0 when positive,
+ * else >= 0; n copies in *copies, PyMem) or n values (*arr, a new reference;
+ * their values are the solve's to check): their address, or NULL with an
+ * exception set (what was allocated is in *arr / *copies). */
+static const double *ode_tolerances(PyObject *obj, const char *name, int positive, size_t n,
+                                    PyArrayObject **arr, double **copies)
 {
-    const double *atol;
-    if (PyFloat_CheckExact(atolo)) {
-        double v = PyFloat_AS_DOUBLE(atolo);
-        if (!(v >= 0) || !isfinite(v)) {
-            PyErr_Format(PyExc_ValueError, "atol must be finite and non-negative, got %R", atolo);
-            return -1;
+    if (PyFloat_CheckExact(obj)) {
+        double v = PyFloat_AS_DOUBLE(obj);
+        if (!(positive ? v > 0 : v >= 0) || !isfinite(v)) {
+            PyErr_Format(PyExc_ValueError, "%s must be finite and %s, got %R", name,
+                         positive ? "positive" : "non-negative", obj);
+            return NULL;
         }
-        if (!(a->atol1 = PyMem_Malloc((n ? n : 1) * sizeof(double)))) {
+        if (!(*copies = PyMem_Malloc((n ? n : 1) * sizeof(double)))) {
             PyErr_NoMemory();
-            return -1;
+            return NULL;
         }
-        for (size_t i = 0; i < n; i++) a->atol1[i] = v;
-        atol = a->atol1;
-    } else {
-        if (!(a->atol = mp_py_array(atolo, "atol", 1))) return -1;
-        if ((size_t)PyArray_SIZE(a->atol) != n) {
-            PyErr_SetString(PyExc_ValueError, "atol must be a scalar or have one value per state");
-            ode_args_clear(a);
-            return -1;
-        }
-        atol = PyArray_DATA(a->atol);
+        for (size_t i = 0; i < n; i++) (*copies)[i] = v;
+        return *copies;
     }
+    if (!(*arr = mp_py_array(obj, name, 1))) return NULL;
+    if ((size_t)PyArray_SIZE(*arr) != n) {
+        PyErr_Format(PyExc_ValueError, "%s must be a scalar or have one value per state", name);
+        return NULL;
+    }
+    return PyArray_DATA(*arr);
+}
+
+/* Contract: the arrays of a from rtol and atol (each a Python float, taken as
+ * n copies, or n values) and t_eval (None or m values), then o from a (o
+ * points into a: clear a after the solve; o->rtol the least rtol).  0, or -1
+ * with an exception set and a cleared. */
+static int ode_args_fill(PyObject *rtolo, PyObject *atolo, PyObject *tevo, size_t n,
+                         ode_args *a, mp_ode_options *o)
+{
+    const double *rtolv = ode_tolerances(rtolo, "rtol", 1, n, &a->rtolv, &a->rtol1);
+    const double *atol = rtolv ? ode_tolerances(atolo, "atol", 0, n, &a->atol, &a->atol1)
+                               : NULL;
+    if (!atol) {
+        ode_args_clear(a);
+        return -1;
+    }
+    a->rtol = PyFloat_CheckExact(rtolo) ? PyFloat_AS_DOUBLE(rtolo) : INFINITY;
+    for (size_t i = 0; i < n; i++) a->rtol = fmin(a->rtol, rtolv[i]);
     if (tevo != Py_None && !(a->tev = mp_py_array(tevo, "t_eval", 1))) {
         ode_args_clear(a);
         return -1;
     }
     memset(o, 0, sizeof *o);
     o->rtol = a->rtol;
+    o->rtolv = rtolv;
     o->atol = atol;
     o->first_step = a->first_step;
     o->max_step = a->max_step;
@@ -552,7 +573,7 @@ static int ode_args_parse(PyObject *opts, size_t n, ode_args *a, mp_ode_options 
 {
     static char *kwlist[] = {"t0", "tf", "rtol", "atol", "t_eval", "h", "first_step",
                              "max_step", "max_steps", NULL};
-    PyObject *atolo, *tevo, *empty = PyTuple_New(0);
+    PyObject *rtolo, *atolo, *tevo, *empty = PyTuple_New(0);
     memset(a, 0, sizeof *a);
     if (!empty) return -1;
     if (!PyDict_Check(opts)) {
@@ -560,8 +581,8 @@ static int ode_args_parse(PyObject *opts, size_t n, ode_args *a, mp_ode_options 
         PyErr_SetString(PyExc_TypeError, "options must be a dict");
         return -1;
     }
-    int ok = PyArg_ParseTupleAndKeywords(empty, opts, "|$dddOOdddl", kwlist, &a->t0, &a->tf,
-                                         &a->rtol, &atolo, &tevo, &a->h, &a->first_step,
+    int ok = PyArg_ParseTupleAndKeywords(empty, opts, "|$ddOOOdddl", kwlist, &a->t0, &a->tf,
+                                         &rtolo, &atolo, &tevo, &a->h, &a->first_step,
                                          &a->max_step, &a->max_steps);
     Py_DECREF(empty);
     if (!ok) return -1;
@@ -570,7 +591,7 @@ static int ode_args_parse(PyObject *opts, size_t n, ode_args *a, mp_ode_options 
                                          "first_step, max_step and max_steps");
         return -1;
     }
-    return ode_args_fill(atolo, tevo, n, a, o);
+    return ode_args_fill(rtolo, atolo, tevo, n, a, o);
 }
 
 /* Contract: the options of ode_solve from its positional arguments argv[0..8]
@@ -578,7 +599,7 @@ static int ode_args_parse(PyObject *opts, size_t n, ode_args *a, mp_ode_options 
  * ode_args_parse does from the dict.  0, or -1 with an exception set. */
 static int ode_args_from_argv(PyObject *const *argv, size_t n, ode_args *a, mp_ode_options *o)
 {
-    double *dst[8] = {&a->t0, &a->tf, &a->rtol, NULL, NULL, &a->h, &a->first_step, &a->max_step};
+    double *dst[8] = {&a->t0, &a->tf, NULL, NULL, NULL, &a->h, &a->first_step, &a->max_step};
     memset(a, 0, sizeof *a);
     for (int i = 0; i < 8; i++) {
         if (!dst[i]) continue;
@@ -587,7 +608,7 @@ static int ode_args_from_argv(PyObject *const *argv, size_t n, ode_args *a, mp_o
     }
     a->max_steps = PyLong_AsLong(argv[8]);
     if (a->max_steps == -1 && PyErr_Occurred()) return -1;
-    return ode_args_fill(argv[3], argv[4], n, a, o);
+    return ode_args_fill(argv[2], argv[3], argv[4], n, a, o);
 }
 
 /* ---- ode_solve ------------------------------------------------------------ */

@@ -18,8 +18,11 @@ _GEN_HASH = None
 
 def _generator_hash() -> str:
     """A hash of the generator's own code: a cached derivation is valid only
-    for the code that made it."""
+    for the code that made it (and for the engine's fixed-step blocks its
+    source embeds, ``_core.FIXED_STEPS_C``)."""
     import hashlib
+
+    from .. import _core
     global _GEN_HASH
     if _GEN_HASH is None:
         h = hashlib.sha256()
@@ -27,6 +30,7 @@ def _generator_hash() -> str:
         for name in _SOURCES:
             with open(os.path.join(here, name), "rb") as f:
                 h.update(f.read())
+        h.update(_core.FIXED_STEPS_C.encode())
         _GEN_HASH = h.hexdigest()
     return _GEN_HASH
 

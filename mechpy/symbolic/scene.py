@@ -186,9 +186,33 @@ class CompiledScene(Scene):
         return self._np("rhs", t, y, np.asarray(p) if p else self._vec)[self._nc:]
 
     def _eval(self, what, t, y, *, flat=False):
-        """Function ``what`` at (t, y) for y of shape (dim, ...) -> (m, nout)."""
-        t, Y, y = self._state_rows(t, y)
-        return self._raw(what, t, Y), y.shape[1:]
+        """Function ``what`` at (t, y) for y of shape (dim, ...) -> (m, nout).
+        t is a scalar, or times broadcast against y's trailing axes (as a
+        solution's ``(sol.t, sol.y)``): one C call per distinct time."""
+        if np.ndim(t) == 0:
+            t, Y, y = self._state_rows(t, y)
+            return self._raw(what, t, Y), y.shape[1:]
+        y = self._states(y)
+        ta = as_array(t, "t")
+        try:
+            shape = np.broadcast_shapes(ta.shape, y.shape[1:])
+        except ValueError:
+            raise ValueError(f"t must be a scalar or broadcast against y's trailing shape "
+                             f"{y.shape[1:]}, got shape {ta.shape}") from None
+        y = y.reshape(y.shape[:1] + (1,) * (len(shape) - y.ndim + 1) + y.shape[1:])
+        Y = np.ascontiguousarray(np.broadcast_to(y, y.shape[:1] + shape)
+                                 .reshape(self._dim, -1).T)
+        times, which = np.unique(np.broadcast_to(ta, shape).reshape(-1), return_inverse=True)
+        out = None
+        for j, tj in enumerate(times):
+            rows = which == j
+            part = self._raw(what, float(tj), np.ascontiguousarray(Y[rows]))
+            if out is None:
+                out = np.empty((Y.shape[0], part.shape[1]))
+            out[rows] = part
+        if out is None:   # no states
+            out = self._raw(what, 0.0, Y)
+        return out, shape
 
     def _raw(self, what, t, Y, vec=None):
         """Function ``what`` at time t for the rows of Y (m, dim) -> (m, nout),
@@ -232,14 +256,17 @@ class CompiledScene(Scene):
 
     def multipliers(self, t, y) -> np.ndarray:
         """The Lagrange multipliers lambda, shape (k, ...): the equations of
-        motion are d/dt dL/dq' - dL/dq = Q + sum_c lambda_c dg_c/dq."""
+        motion are d/dt dL/dq' - dL/dq = Q + sum_c lambda_c dg_c/dq.  t is a
+        scalar or times broadcast against y's trailing axes:
+        ``multipliers(sol.t, sol.y)``."""
         self._need_constraints("multipliers")
         out, rest = self._eval("multipliers", t, y)
         return self._shape(out, rest, (self._k,))
 
     def constraint_forces(self, t, y) -> np.ndarray:
         """The generalized constraint forces sum_c lambda_c dg_c/dq, shape (n, ...)
-        (in Cartesian coordinates, the force the constraint exerts)."""
+        (in Cartesian coordinates, the force the constraint exerts); t as for
+        :meth:`multipliers`: ``constraint_forces(sol.t, sol.y)``."""
         self._need_constraints("constraint_forces")
         out, rest = self._eval("constraint_forces", t, y)
         return self._shape(out, rest, (self._nc,))
@@ -259,11 +286,13 @@ class CompiledScene(Scene):
             raise AttributeError(f"{what}: the system has no constraints")
 
     # -- initial-state check (mechpy.solve calls it) ----------------------------
-    def _check_initial(self, t0, y0, params=None, tol: float = 1e-8):
+    def _check_initial(self, t0, y0, params=None, tol: float = 1e-8, singular: bool = True):
         """Raise if an initial state (validated float64, (n,) or rows (k, n),
         with ``params`` rows (k, p) if given) violates a constraint (|g| or
-        |g'| above tol, scaled by the state's size) or the mass matrix is
-        singular there.  One C evaluation per function (per row with params)."""
+        |g'| above tol, scaled by the state's size) or, with ``singular``, the
+        mass matrix is singular there (``singular=False``: the solve reports
+        it, as a status under ``errors="status"``).  One C evaluation per
+        function (per row with params)."""
         Y = np.ascontiguousarray(y0.reshape(-1, self._dim))
         if params is None:
             vecs = [(self._vec, slice(None))]
@@ -274,9 +303,9 @@ class CompiledScene(Scene):
             vecs = [(np.ascontiguousarray(params[i]), slice(i, i + 1))
                     for i in range(Y.shape[0])]
         for vec, rows in vecs:
-            self._check_rows(t0, Y[rows], vec, rows.start or 0, y0.ndim > 1, tol)
+            self._check_rows(t0, Y[rows], vec, rows.start or 0, y0.ndim > 1, tol, singular)
 
-    def _check_rows(self, t0, Y, vec, first, many, tol):
+    def _check_rows(self, t0, Y, vec, first, many, tol, singular=True):
         if self._k:
             gv = self._raw("constraints", t0, Y, vec)
             scale = np.maximum(1.0, np.max(np.abs(Y), axis=1)) ** 2
@@ -292,7 +321,7 @@ class CompiledScene(Scene):
                     raise ValueError(f"y0{row} violates {what} {c}: {sym} = "
                                      f"{gv[i, cols][c]!r} ({self._meta['constraints'][c]} = 0); "
                                      f"{hint}")
-        if self._meta["kind"] == "lagrangian":
+        if singular and self._meta["kind"] == "lagrangian":
             self._raw("rhs", t0, Y, vec)   # raises SingularityError naming the mass matrix
 
     # -- what a Lagrangian gives besides -----------------------------------------
