@@ -367,7 +367,9 @@ def _first_return(system, y0, f0, t_max, method, rtol, atol):
     normal to f0, crossed in the direction of f0."""
     def g(t, y):
         return float(f0 @ (np.asarray(y) - y0))
-    g.terminal, g.direction = True, 1.0
+    # g is zero at t = 0 and leaves zero upwards: as in solve_ivp that start is an
+    # event too, so the solve stops at the second (the return)
+    g.terminal, g.direction = 2, 1.0
     s = solve(system, (0.0, t_max), y0, method, rtol=rtol, atol=atol, events=g,
               t_eval=[])
     _check(s, "floquet (first return)")
