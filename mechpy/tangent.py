@@ -21,7 +21,7 @@ step's error estimate is the rms over y and S of ``e / (atol + rtol |z|)``.  S h
 units of y per unit parameter; where its entries are much larger than y's (long times,
 chaotic flows) the relative term dominates and they are controlled relatively, where they
 are much smaller ``atol`` sets their absolute accuracy.  Measured on y' = A y (3 states,
-t = 10, atol = rtol / 100) against ``scipy.linalg.expm``: S's error relative to max |S| is
+t = 10, atol = rtol / 100) against ``scipy.linalg.expm``: S's error relative to ``max |S|`` is
 7.9e-7, 7.0e-9, 6.4e-11 at rtol = 1e-6, 1e-8, 1e-10, as y's own (9.3e-7, 9.5e-9, 8.3e-11;
 the plain solve's 9.4e-7, 9.4e-9, 8.3e-11), for one or two more steps than the plain solve:
 the sensitivities come out as accurate as the state, so no separate scaling is applied.
@@ -574,7 +574,7 @@ def fit(system, t, data, params, *, y0, observe=None, sigma=None, fit_y0=False,
         The initial state at ``t0`` (the first guess of it with ``fit_y0``).
     observe : int, sequence of int or callable, optional
         What ``data`` measures: state components by index, or ``h(y)`` taking states
-        (n, m) to (k, m) (its derivative by central differences, step 1e-6 max(1, |y|)).
+        (n, m) to (k, m) (its derivative by central differences, step ``1e-6 max(1, |y|)``).
         Default: all n components.
     sigma : float, (k,) or (k, m), optional
         Standard deviations of the data.  Given: the residuals are weighted by 1/sigma

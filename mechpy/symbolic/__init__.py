@@ -196,7 +196,7 @@ def lagrangian(L, q, params=None, constraints=(), forces=None, *, baumgarte=None
         wrong number of forces, a velocity-dependent constraint, or an
         expression that cannot be compiled, named with where it is.  The
         expressions may hold numbers and SymPy's constants (printed as
-        doubles), +, *, powers, ``Piecewise`` and the functions sin, cos, tan,
+        doubles), ``+``, ``*``, powers, ``Piecewise`` and the functions sin, cos, tan,
         cot, sec, csc, their inverses asin, acos, atan, atan2, the hyperbolic
         ones and their inverses, exp, log, erf, erfc and
         ``sympy.codegen.cfunctions``' expm1, log1p, exp2, log2, log10, Cbrt,
@@ -268,7 +268,7 @@ def equations(rhs, y, params=None, *, energy=None, backend: str = "c"):
     ValueError
         A free symbol without a value, a wrong number of expressions, or an
         expression that cannot be compiled, named: the expressions may hold
-        what :func:`lagrangian` lists (numbers and constants, +, *, powers,
+        what :func:`lagrangian` lists (numbers and constants, ``+``, ``*``, powers,
         Piecewise, the elementary functions, erf, erfc, ...); an ``Eq`` in
         place of a right-hand side, the imaginary unit, numbers beyond the
         double range and other functions are refused, and Abs, sign, Max,
