@@ -291,6 +291,39 @@ static int var_band_cholesky(size_t N, size_t kd, double *ab, size_t ldh)
     return MP_OK;
 }
 
+/* The number of negative eigenvalues of the symmetric band matrix with its
+ * lower band in ab (layout of var_band_cholesky), from L D L^T without
+ * pivoting (the band is kept; Sylvester's law of inertia): the pivots
+ * D_j < -tau.  A pivot within tau of zero is round-off of a flat direction
+ * (a degenerate minimum, as the brachistochrone's free-fall limit): it is
+ * set to tau and not counted; with tau = 0 an exact zero or a non-finite
+ * pivot ends the factorisation and counts the remaining columns.  ab is
+ * overwritten (L below the diagonal, D on it).  O(N kd^2). */
+static size_t var_band_ldlt_negative(size_t N, size_t kd, double *ab, size_t ldh, double tau)
+{
+    size_t count = 0;
+    for (size_t j = 0; j < N; j++) {
+        size_t k0 = j > kd ? j - kd : 0;
+        double dj = ab[j * ldh];
+        for (size_t k = k0; k < j; k++) {
+            double l = ab[(j - k) + k * ldh];
+            dj -= l * l * ab[k * ldh];
+        }
+        if (!isfinite(dj) || (tau == 0.0 && dj == 0.0)) return count + (N - j);
+        if (dj < -tau) count++;
+        else if (dj <= tau) dj = tau;
+        ab[j * ldh] = dj;
+        size_t imax = j + kd < N - 1 ? j + kd : N - 1;
+        for (size_t i = j + 1; i <= imax; i++) {
+            double t = ab[(i - j) + j * ldh];
+            for (size_t k = i > kd ? i - kd : 0; k < j; k++)
+                t -= ab[(i - k) + k * ldh] * ab[(j - k) + k * ldh] * ab[k * ldh];
+            ab[(i - j) + j * ldh] = t / dj;
+        }
+    }
+    return count;
+}
+
 /* Solve L L^T x = b in place with the factor of var_band_cholesky. */
 static void var_band_cholesky_solve(size_t N, size_t kd, const double *ab, size_t ldh, double *x)
 {
@@ -638,7 +671,7 @@ int mp_variational_solve(const mp_var_problem *pb, double *y, double *lambda, mp
         if (!accepted) {
             /* no decrease: at the round-off floor if the step is tiny */
             if (dmax <= 1e-7 * (1.0 + ymax) && dlmax <= 1e-7 * (1.0 + lmax)) {
-                st = var_assemble(pb, &w, y, lambda, 0);
+                st = var_assemble(pb, &w, y, lambda, 1);
                 converged = st == MP_OK;
             } else {
                 st = MP_ENOCONV;
@@ -654,7 +687,26 @@ int mp_variational_solve(const mp_var_problem *pb, double *y, double *lambda, mp
     }
     if (st == MP_OK && !converged) st = MP_ENOCONV;
     if (st == MP_ENONFINITE) st = MP_ENOCONV;
+    size_t nonpos = 0;
+    if (st == MP_OK && minimise) {
+        /* the second variation: a minimum needs the Hessian of J_h at y (w.H,
+           assembled there) positive definite; a stationary point with a
+           non-positive direction is a saddle or a maximum (past a conjugate
+           point, or F not convex in y') and is not reported as a minimum */
+        /* round-off scale of the Hessian: the gradient's summands (gscale,
+           units F / y) over the largest step between nodes (units y); 0 (an
+           exact test) for a constant path */
+        double dymax = 0.0;
+        for (size_t i = 0; i < n; i++)
+            for (size_t a = 0; a < d; a++)
+                dymax = var_max(dymax, fabs(y[(i + 1) * d + a] - y[i * d + a]));
+        double tau = dymax > 0 ? 1e-8 * w.gscale / dymax : 0.0;
+        memcpy(w.AB, w.H, N * w.ldh * sizeof(double));
+        nonpos = var_band_ldlt_negative(N, w.kd, w.AB, w.ldh, isfinite(tau) ? tau : 0.0);
+        if (nonpos > 0) st = MP_ENOTSPD;
+    }
     if (info) {
+        info->negative = nonpos;
         info->iterations = it;
         info->J = w.J;
         double rmax = 0.0, cmax = 0.0;
