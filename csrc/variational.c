@@ -108,6 +108,10 @@ void mp_variational_builtin_bind(mp_var_builtin *b, mp_var_integrand *out)
  * (its finite-difference stencil multiplies the points). */
 #define MP_VAR_CHUNK 4096
 
+/* Points between two interrupt checks of an assembly (about 10 ms of a
+ * built-in integrand). */
+#define MP_VAR_BLOCK (64 * MP_VAR_CHUNK)
+
 /* Evaluate L at m points, MP_VAR_CHUNK at a time; an out-of-domain status
  * becomes MP_ENONFINITE, as does any non-finite value among the m * K outputs. */
 static int var_eval(const mp_var_integrand *L, size_t m, const double *x, const double *y,
@@ -432,7 +436,7 @@ static void var_hadd(var_ws *w, size_t r, size_t c, double v)
 
 /* Evaluate J, G, the gradient of Phi and (if hess) its block-tridiagonal
  * Hessian at the path y ((n + 1) x d).  MP_ENONFINITE when a value is not
- * finite or a point is outside the domain. */
+ * finite or a point is outside the domain, or the interrupt's status. */
 static int var_assemble(const mp_var_problem *pb, var_ws *w, const double *y,
                         const double *lam, int hess)
 {
@@ -442,11 +446,20 @@ static int var_assemble(const mp_var_problem *pb, var_ws *w, const double *y,
             w->ym[i * d + a] = 0.5 * (y[i * d + a] + y[(i + 1) * d + a]);
             w->pm[i * d + a] = (y[(i + 1) * d + a] - y[i * d + a]) / w->h[i];
         }
-    int st = var_eval(&pb->F, n, w->xm, w->ym, w->pm, w->ev);
-    if (st != MP_OK) return st;
-    for (size_t k = 0; k < nc; k++) {
-        st = var_eval(&pb->G[k], n, w->xm, w->ym, w->pm, w->evg + n * K * k);
+    /* the evaluations by blocks of MP_VAR_BLOCK points, asking the interrupt
+       between blocks (a long path answers Ctrl-C within one block) */
+    int st = MP_OK;
+    for (size_t i0 = 0; i0 < n; i0 += MP_VAR_BLOCK) {
+        size_t c = n - i0 < MP_VAR_BLOCK ? n - i0 : MP_VAR_BLOCK;
+        if (i0 > 0 && pb->interrupt && (st = pb->interrupt(pb->interrupt_ctx)) != MP_OK)
+            return st;
+        st = var_eval(&pb->F, c, w->xm + i0, w->ym + i0 * d, w->pm + i0 * d, w->ev + i0 * K);
         if (st != MP_OK) return st;
+        for (size_t k = 0; k < nc; k++) {
+            st = var_eval(&pb->G[k], c, w->xm + i0, w->ym + i0 * d, w->pm + i0 * d,
+                          w->evg + n * K * k + i0 * K);
+            if (st != MP_OK) return st;
+        }
     }
     memset(w->g, 0, N * sizeof(double));
     memset(w->B, 0, N * nc * sizeof(double));
@@ -530,6 +543,10 @@ static int var_step(const mp_var_problem *pb, var_ws *w, int minimise)
         double shift = 0.0, scale = 0.0;
         for (size_t j = 0; j < N; j++) scale = var_max(scale, fabs(w->H[j * ldh]));
         for (int tries = 0;; tries++) {
+            /* each try is an O(n) factorisation (up to 62 of them) */
+            int st;
+            if (tries > 0 && pb->interrupt && (st = pb->interrupt(pb->interrupt_ctx)) != MP_OK)
+                return st;
             memcpy(w->AB, w->H, N * ldh * sizeof(double));
             for (size_t j = 0; j < N; j++) w->AB[j * ldh] += shift;
             if (var_band_cholesky(N, kd, w->AB, ldh) == MP_OK) break;
@@ -644,6 +661,10 @@ int mp_variational_solve(const mp_var_problem *pb, double *y, double *lambda, mp
         double J0 = w.J, m0 = var_merit(pb, &w), alpha = 1.0;
         int accepted = 0;
         for (int ls = 0; ls < 40; ls++) {
+            /* each trial is an O(n) assembly: the line search (up to 40 of them
+               per iteration) answers Ctrl-C between trials */
+            if (ls > 0 && pb->interrupt && (st = pb->interrupt(pb->interrupt_ctx)) != MP_OK)
+                break;
             memcpy(w.ytry, y, d * sizeof(double));
             memcpy(w.ytry + n * d, y + n * d, d * sizeof(double));
             for (size_t j = 0; j < N; j++) w.ytry[d + j] = y[d + j] + alpha * w.dy[j];

@@ -87,8 +87,9 @@ typedef struct {
                                       1: any stationary point (Newton on the residual) */
     double tol;                    /* relative step tolerance */
     size_t max_iter;               /* Newton iteration budget */
-    int (*interrupt)(void *);      /* asked once per iteration (may be NULL); its status
-                                      ends the solve */
+    int (*interrupt)(void *);      /* asked before each Newton iteration and each line-search
+                                      trial, i.e. every O(n) assembly (may be NULL); its
+                                      status ends the solve */
     void *interrupt_ctx;
 } mp_var_problem;
 

@@ -140,10 +140,22 @@ class Extremal(NamedTuple):
     residual: float
 
 
+#: The most intervals a discretised functional takes (the budget of
+#: ``variational_integrate``'s steps, MAX_STEPS, too): about 160 bytes each and
+#: 1 s per 10^6 for a built-in integrand, while the midpoint rule's error,
+#: O(h^2), reaches round-off near n = 10^5 for a smooth extremal.
+_MAX_INTERVALS = 10_000_000
+
+
 def _n_nodes(n) -> int:
     n = as_int(n, "n")
     if n < 4:
         raise ValueError(f"n (the number of intervals) is too small: need n >= 4, got {n}")
+    if n > _MAX_INTERVALS:
+        raise ValueError(
+            f"n = {n} intervals is beyond the budget of {_MAX_INTERVALS:.0e} (about "
+            f"{160 * n / 1e9:.3g} GB of workspace): the midpoint rule's error, O(1/n^2), "
+            "reaches round-off near n = 1e5 for a smooth extremal; take a smaller n")
     return n
 
 
