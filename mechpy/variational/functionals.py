@@ -14,7 +14,6 @@ import numpy as np
 
 from .. import _core
 from .._validate import as_array, as_int, as_scalar
-from ..errors import NotPositiveDefiniteError
 
 __all__ = ["minimize_functional", "Extremal"]
 
@@ -312,8 +311,8 @@ def minimize_functional(F: Callable, x_span, y_ends, n: int = 200, *, constraint
     try:
         y, lam, info = _solve(_integrand(F), x, y0, cons, vals, lam0,
                               stationary, tol, max_iter)
-    except NotPositiveDefiniteError as e:
-        raise NotPositiveDefiniteError(
+    except _core.NotPositiveDefiniteError as e:     # mechpy.errors' class, from the table
+        raise _core.NotPositiveDefiniteError(
             f"minimize_functional: no minimum found: {e}. Jacobi's condition: a minimum "
             "needs F_y'y' > 0 along the path and no point conjugate to x = a inside "
             f"({a}, {b}); past a conjugate point J has no minimum with these ends. "
