@@ -46,20 +46,19 @@ except KeyboardInterrupt:
 '''
 
 
-def interrupt_delay(setup: str, call: str, delay: float = 0.3, timeout: float = 900.0,
-                    lost_after: float = 60.0) -> float:
-    """Seconds from SIGINT to KeyboardInterrupt for ``eval(call)`` after ``exec(setup)``
-    in a fresh interpreter (names np and mp are defined).
+def run_child(argv, *, cwd=None, timeout: float = 900.0, lost_after: float = 60.0,
+              what: str = "the call"):
+    """Run ``python -c argv...`` (the child prints a line ``SENT`` when it sends itself
+    SIGINT) and return (exit status, stdout lines but SENT, stderr).
 
     ``timeout`` bounds the child's start and set-up (a hang there), ``lost_after`` the
-    time from SIGINT to the child's report: beyond it the interrupt counts as lost and
-    the child is killed.  Raises AssertionError if the interrupt was lost, the call
-    finished first or the child failed otherwise."""
+    time from SIGINT to the child's exit: beyond it the interrupt counts as lost, the
+    child is killed and AssertionError is raised."""
     env = dict(os.environ)
     root = str(Path(mechpy.__file__).resolve().parent.parent)
     env["PYTHONPATH"] = root + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
-    p = subprocess.Popen([sys.executable, "-c", CHILD, setup, call, str(delay)],
-                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    p = subprocess.Popen([sys.executable, "-c", *argv], cwd=cwd, stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE, text=True, env=env)
     lines: queue.Queue = queue.Queue()
     err: list = []
 
@@ -75,30 +74,43 @@ def interrupt_delay(setup: str, call: str, delay: float = 0.3, timeout: float = 
     out, deadline, sent_at = [], time.monotonic() + timeout, None
     try:
         while True:
-            now = time.monotonic()
-            limit = deadline if sent_at is None else min(deadline + lost_after, sent_at + lost_after)
+            limit = deadline if sent_at is None else sent_at + lost_after
             try:
-                line = lines.get(timeout=max(0.0, limit - now))
+                line = lines.get(timeout=max(0.0, limit - time.monotonic()))
             except queue.Empty:
                 if sent_at is None:
-                    raise AssertionError(f"the child did not reach the call within {timeout} s "
+                    raise AssertionError(f"the child did not reach {what} within {timeout} s "
                                          "(start-up and set-up)") from None
-                raise AssertionError(
-                    f"KeyboardInterrupt was lost: no report {lost_after} s after SIGINT "
-                    f"(call: {call})") from None
+                raise AssertionError(f"KeyboardInterrupt was lost: the child had not ended "
+                                     f"{lost_after} s after SIGINT ({what})") from None
             if line is None:
                 break
-            out.append(line)
             if line == "SENT":
                 sent_at = time.monotonic()
+            else:
+                out.append(line)
+        p.wait(max(1.0, (sent_at or time.monotonic()) + lost_after - time.monotonic()))
+    except subprocess.TimeoutExpired:
+        raise AssertionError(f"KeyboardInterrupt was lost: the child had not exited "
+                             f"{lost_after} s after SIGINT ({what})") from None
     finally:
         if p.poll() is None:
             p.kill()
-        p.wait()
+            p.wait()
         te.join(5.0)
-    rc = p.returncode
-    stderr = "\n".join(err)[-3000:]
-    res = [s for s in out if s != "SENT"]
-    assert rc == 0 and res, f"exit status {rc}: {stderr}"
+    return p.returncode, out, "\n".join(err)
+
+
+def interrupt_delay(setup: str, call: str, delay: float = 0.3, timeout: float = 900.0,
+                    lost_after: float = 60.0) -> float:
+    """Seconds from SIGINT to KeyboardInterrupt for ``eval(call)`` after ``exec(setup)``
+    in a fresh interpreter (names np and mp are defined).
+
+    ``timeout`` bounds the child's start and set-up, ``lost_after`` the time from SIGINT
+    to its report (see :func:`run_child`).  Raises AssertionError if the interrupt was
+    lost, the call finished first or the child failed otherwise."""
+    rc, res, stderr = run_child([CHILD, setup, call, str(delay)], timeout=timeout,
+                                lost_after=lost_after, what=call)
+    assert rc == 0 and res, f"exit status {rc}: {stderr[-3000:]}"
     assert res[-1].startswith("INTERRUPTED"), f"the call was not interrupted: {res[-1]}"
     return float(res[-1].split()[1])
