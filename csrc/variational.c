@@ -108,6 +108,10 @@ void mp_variational_builtin_bind(mp_var_builtin *b, mp_var_integrand *out)
  * (its finite-difference stencil multiplies the points). */
 #define MP_VAR_CHUNK 4096
 
+/* Points between two interrupt checks of an assembly (about 10 ms of a
+ * built-in integrand). */
+#define MP_VAR_BLOCK (64 * MP_VAR_CHUNK)
+
 /* Evaluate L at m points, MP_VAR_CHUNK at a time; an out-of-domain status
  * becomes MP_ENONFINITE, as does any non-finite value among the m * K outputs. */
 static int var_eval(const mp_var_integrand *L, size_t m, const double *x, const double *y,
@@ -291,6 +295,39 @@ static int var_band_cholesky(size_t N, size_t kd, double *ab, size_t ldh)
     return MP_OK;
 }
 
+/* The number of negative eigenvalues of the symmetric band matrix with its
+ * lower band in ab (layout of var_band_cholesky), from L D L^T without
+ * pivoting (the band is kept; Sylvester's law of inertia): the pivots
+ * D_j < -tau.  A pivot within tau of zero is round-off of a flat direction
+ * (a degenerate minimum, as the brachistochrone's free-fall limit): it is
+ * set to tau and not counted; with tau = 0 an exact zero or a non-finite
+ * pivot ends the factorisation and counts the remaining columns.  ab is
+ * overwritten (L below the diagonal, D on it).  O(N kd^2). */
+static size_t var_band_ldlt_negative(size_t N, size_t kd, double *ab, size_t ldh, double tau)
+{
+    size_t count = 0;
+    for (size_t j = 0; j < N; j++) {
+        size_t k0 = j > kd ? j - kd : 0;
+        double dj = ab[j * ldh];
+        for (size_t k = k0; k < j; k++) {
+            double l = ab[(j - k) + k * ldh];
+            dj -= l * l * ab[k * ldh];
+        }
+        if (!isfinite(dj) || (tau == 0.0 && dj == 0.0)) return count + (N - j);
+        if (dj < -tau) count++;
+        else if (dj <= tau) dj = tau;
+        ab[j * ldh] = dj;
+        size_t imax = j + kd < N - 1 ? j + kd : N - 1;
+        for (size_t i = j + 1; i <= imax; i++) {
+            double t = ab[(i - j) + j * ldh];
+            for (size_t k = i > kd ? i - kd : 0; k < j; k++)
+                t -= ab[(i - k) + k * ldh] * ab[(j - k) + k * ldh] * ab[k * ldh];
+            ab[(i - j) + j * ldh] = t / dj;
+        }
+    }
+    return count;
+}
+
 /* Solve L L^T x = b in place with the factor of var_band_cholesky. */
 static void var_band_cholesky_solve(size_t N, size_t kd, const double *ab, size_t ldh, double *x)
 {
@@ -399,7 +436,7 @@ static void var_hadd(var_ws *w, size_t r, size_t c, double v)
 
 /* Evaluate J, G, the gradient of Phi and (if hess) its block-tridiagonal
  * Hessian at the path y ((n + 1) x d).  MP_ENONFINITE when a value is not
- * finite or a point is outside the domain. */
+ * finite or a point is outside the domain, or the interrupt's status. */
 static int var_assemble(const mp_var_problem *pb, var_ws *w, const double *y,
                         const double *lam, int hess)
 {
@@ -409,11 +446,20 @@ static int var_assemble(const mp_var_problem *pb, var_ws *w, const double *y,
             w->ym[i * d + a] = 0.5 * (y[i * d + a] + y[(i + 1) * d + a]);
             w->pm[i * d + a] = (y[(i + 1) * d + a] - y[i * d + a]) / w->h[i];
         }
-    int st = var_eval(&pb->F, n, w->xm, w->ym, w->pm, w->ev);
-    if (st != MP_OK) return st;
-    for (size_t k = 0; k < nc; k++) {
-        st = var_eval(&pb->G[k], n, w->xm, w->ym, w->pm, w->evg + n * K * k);
+    /* the evaluations by blocks of MP_VAR_BLOCK points, asking the interrupt
+       between blocks (a long path answers Ctrl-C within one block) */
+    int st = MP_OK;
+    for (size_t i0 = 0; i0 < n; i0 += MP_VAR_BLOCK) {
+        size_t c = n - i0 < MP_VAR_BLOCK ? n - i0 : MP_VAR_BLOCK;
+        if (i0 > 0 && pb->interrupt && (st = pb->interrupt(pb->interrupt_ctx)) != MP_OK)
+            return st;
+        st = var_eval(&pb->F, c, w->xm + i0, w->ym + i0 * d, w->pm + i0 * d, w->ev + i0 * K);
         if (st != MP_OK) return st;
+        for (size_t k = 0; k < nc; k++) {
+            st = var_eval(&pb->G[k], c, w->xm + i0, w->ym + i0 * d, w->pm + i0 * d,
+                          w->evg + n * K * k + i0 * K);
+            if (st != MP_OK) return st;
+        }
     }
     memset(w->g, 0, N * sizeof(double));
     memset(w->B, 0, N * nc * sizeof(double));
@@ -497,6 +543,10 @@ static int var_step(const mp_var_problem *pb, var_ws *w, int minimise)
         double shift = 0.0, scale = 0.0;
         for (size_t j = 0; j < N; j++) scale = var_max(scale, fabs(w->H[j * ldh]));
         for (int tries = 0;; tries++) {
+            /* each try is an O(n) factorisation (up to 62 of them) */
+            int st;
+            if (tries > 0 && pb->interrupt && (st = pb->interrupt(pb->interrupt_ctx)) != MP_OK)
+                return st;
             memcpy(w->AB, w->H, N * ldh * sizeof(double));
             for (size_t j = 0; j < N; j++) w->AB[j * ldh] += shift;
             if (var_band_cholesky(N, kd, w->AB, ldh) == MP_OK) break;
@@ -611,6 +661,10 @@ int mp_variational_solve(const mp_var_problem *pb, double *y, double *lambda, mp
         double J0 = w.J, m0 = var_merit(pb, &w), alpha = 1.0;
         int accepted = 0;
         for (int ls = 0; ls < 40; ls++) {
+            /* each trial is an O(n) assembly: the line search (up to 40 of them
+               per iteration) answers Ctrl-C between trials */
+            if (ls > 0 && pb->interrupt && (st = pb->interrupt(pb->interrupt_ctx)) != MP_OK)
+                break;
             memcpy(w.ytry, y, d * sizeof(double));
             memcpy(w.ytry + n * d, y + n * d, d * sizeof(double));
             for (size_t j = 0; j < N; j++) w.ytry[d + j] = y[d + j] + alpha * w.dy[j];
@@ -638,7 +692,7 @@ int mp_variational_solve(const mp_var_problem *pb, double *y, double *lambda, mp
         if (!accepted) {
             /* no decrease: at the round-off floor if the step is tiny */
             if (dmax <= 1e-7 * (1.0 + ymax) && dlmax <= 1e-7 * (1.0 + lmax)) {
-                st = var_assemble(pb, &w, y, lambda, 0);
+                st = var_assemble(pb, &w, y, lambda, 1);
                 converged = st == MP_OK;
             } else {
                 st = MP_ENOCONV;
@@ -654,7 +708,26 @@ int mp_variational_solve(const mp_var_problem *pb, double *y, double *lambda, mp
     }
     if (st == MP_OK && !converged) st = MP_ENOCONV;
     if (st == MP_ENONFINITE) st = MP_ENOCONV;
+    size_t nonpos = 0;
+    if (st == MP_OK && minimise) {
+        /* the second variation: a minimum needs the Hessian of J_h at y (w.H,
+           assembled there) positive definite; a stationary point with a
+           non-positive direction is a saddle or a maximum (past a conjugate
+           point, or F not convex in y') and is not reported as a minimum */
+        /* round-off scale of the Hessian: the gradient's summands (gscale,
+           units F / y) over the largest step between nodes (units y); 0 (an
+           exact test) for a constant path */
+        double dymax = 0.0;
+        for (size_t i = 0; i < n; i++)
+            for (size_t a = 0; a < d; a++)
+                dymax = var_max(dymax, fabs(y[(i + 1) * d + a] - y[i * d + a]));
+        double tau = dymax > 0 ? 1e-8 * w.gscale / dymax : 0.0;
+        memcpy(w.AB, w.H, N * w.ldh * sizeof(double));
+        nonpos = var_band_ldlt_negative(N, w.kd, w.AB, w.ldh, isfinite(tau) ? tau : 0.0);
+        if (nonpos > 0) st = MP_ENOTSPD;
+    }
     if (info) {
+        info->negative = nonpos;
         info->iterations = it;
         info->J = w.J;
         double rmax = 0.0, cmax = 0.0;

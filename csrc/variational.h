@@ -87,8 +87,9 @@ typedef struct {
                                       1: any stationary point (Newton on the residual) */
     double tol;                    /* relative step tolerance */
     size_t max_iter;               /* Newton iteration budget */
-    int (*interrupt)(void *);      /* asked once per iteration (may be NULL); its status
-                                      ends the solve */
+    int (*interrupt)(void *);      /* asked before each Newton iteration and each line-search
+                                      trial, i.e. every O(n) assembly (may be NULL); its
+                                      status ends the solve */
     void *interrupt_ctx;
 } mp_var_problem;
 
@@ -97,6 +98,8 @@ typedef struct {
     double J;                      /* J_h at the solution */
     double residual;               /* max |dJ_h/dy_j + sum lambda_k dG_k/dy_j| */
     double constraint_error;       /* max |G_k - value_k| */
+    size_t negative;               /* minimise mode: negative eigenvalues of the Hessian of J_h
+                                      at the stationary point found (0 for a minimum) */
 } mp_var_info;
 
 /* Solve the problem.  y ((n + 1) x d) holds the initial guess with the fixed
@@ -106,7 +109,13 @@ typedef struct {
  * d = 0, nodes not increasing, a non-finite or out-of-domain guess),
  * MP_ENOCONV when the budget runs out or no step decreases the merit
  * function, MP_ESINGULAR for a singular Newton matrix, MP_ENOMEM, or the
- * interrupt's status. */
+ * interrupt's status.  Minimise mode (stationary = 0, no constraints) checks
+ * the second variation at the stationary point found: MP_ENOTSPD (with
+ * info->negative > 0) when the Hessian of J_h has a negative eigenvalue
+ * (counted by a band L D L^T; beyond round-off: 1e-8 of the gradient's
+ * summands over the largest step between nodes), i.e. the point is a saddle
+ * or a maximum, not a minimum (y holds it); a flat direction (a degenerate
+ * minimum) passes. */
 int mp_variational_solve(const mp_var_problem *pb, double *y, double *lambda, mp_var_info *info);
 
 /* Discrete momenta of a path (x, y) with n intervals: p_0 = -D1 L_d(y_0, y_1),

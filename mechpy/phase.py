@@ -385,7 +385,16 @@ def limit_cycle(system, y0, *, component: int = 0, tol: float = 1e-9, t_max: flo
     ------
     mechpy.ConvergenceError
         When a budget (``t_max``, ``max_periods``, ``stall``) runs out; the
-        message gives the spread reached.  Ctrl-C raises ``KeyboardInterrupt``.
+        message gives the spread reached and why no cycle was found (the
+        amplitude keeps decaying or growing, the motion does not repeat, no
+        oscillation at all, or ``tol`` below what ``rtol`` resolves).  Also
+        when the closed orbit reached is not isolated: the integral of
+        :math:`\nabla\cdot\mathbf f` over its period (the log of its
+        nontrivial Floquet multipliers' product) is zero to 1e-6 of the
+        Jacobian's size, so its neighbours are closed as well -- a centre's
+        family of closed orbits, as the undamped pendulum's, not a limit
+        cycle (before, one of them was returned).  Ctrl-C raises
+        ``KeyboardInterrupt``.
 
     Examples
     --------
@@ -424,6 +433,8 @@ def limit_cycle(system, y0, *, component: int = 0, tol: float = 1e-9, t_max: flo
             A = np.array(amps[j - 3:j])
             spreads.append(max(np.ptp(P) / P[-1], np.ptp(A) / max(abs(A[-1]), 1e-300)))
             if spreads[-1] <= tol:
+                _refuse_centre(system, s.y_events[0][-1], float(s.t_events[0][-1]),
+                               float(P[-1]), method, rtol)
                 return float(P[-1]), float(A[-1])
             if j > max_periods:
                 raise ConvergenceError(
@@ -434,11 +445,73 @@ def limit_cycle(system, y0, *, component: int = 0, tol: float = 1e-9, t_max: flo
         else:
             chunk *= 2.0
         if len(spreads) > stall and min(spreads[-stall:]) > 0.5 * min(spreads[:-stall]):
-            raise ConvergenceError(
-                f"limit_cycle: the relative spread of periods and amplitudes stalled at "
-                f"{min(spreads):.2g} over the last {stall} cycles, above tol = {tol:g}: "
-                f"tol is below what rtol = {rtol:g} resolves; raise tol or lower rtol")
-    raise ConvergenceError(f"limit_cycle: no cycle converged to {tol} before t = {t_max}")
+            raise ConvergenceError(_stall_message(amps, spreads, stall, tol, rtol, k))
+    if len(times) < 4:
+        raise ConvergenceError(
+            f"limit_cycle: no cycle found: y[{k}] reached only {len(times)} maxima up to "
+            f"t_max = {t_max:g} (a cycle needs 4 to be measured): the trajectory from y0 "
+            "settles or runs off without oscillating")
+    raise ConvergenceError(f"limit_cycle: no cycle converged to tol = {tol:g} before t_max = "
+                           f"{t_max:g} (relative spread {spreads[-1]:.2g} after "
+                           f"{len(times)} maxima)")
+
+
+def _stall_message(amps, spreads, stall, tol, rtol, k) -> str:
+    """Why the spread of periods and amplitudes stopped shrinking: the amplitude
+    keeps decaying or growing (no cycle there), the motion does not repeat (the
+    spread stays far above the integration's resolution), or tol is below what
+    rtol resolves (a cycle is there)."""
+    A = np.asarray(amps[-stall:], dtype=float)
+    lo = min(spreads)
+    spread = (f"the relative spread of periods and amplitudes stopped shrinking at {lo:.2g} "
+              f"over the last {stall} cycles")
+    head = f"limit_cycle: no cycle found: {spread}"
+    if A.size >= 3 and np.all(np.diff(A) < 0):
+        return (f"{head}; the amplitude (max of y[{k}]) kept decreasing, from {A[0]:.6g} to "
+                f"{A[-1]:.6g}: the orbit decays (towards a fixed point or a cycle not yet "
+                "reached), it is not a limit cycle")
+    if A.size >= 3 and np.all(np.diff(A) > 0):
+        return (f"{head}; the amplitude (max of y[{k}]) kept growing, from {A[0]:.6g} to "
+                f"{A[-1]:.6g}: the orbit runs away, it is not a limit cycle")
+    if lo > 1e3 * rtol:
+        return (f"{head}, far above what rtol = {rtol:g} resolves: the motion does not repeat "
+                "(quasi-periodic or chaotic), so there is no cycle to converge to")
+    return (f"limit_cycle: {spread}, above tol = {tol:g}: the orbit repeats to within what "
+            f"rtol = {rtol:g} resolves (a cycle is there, tol asks for more); raise tol or "
+            "lower rtol")
+
+
+def _refuse_centre(system, y, t, period, method, rtol):
+    """Raise ConvergenceError when the closed orbit through y is one of a
+    centre's family, not a limit cycle.
+
+    A limit cycle attracts (or repels) its neighbours: the product of its
+    nontrivial Floquet multipliers, exp(integral of div f over one period)
+    (Liouville), is not 1.  A centre's orbits (the undamped pendulum's, any
+    conservative system's) keep phase-space volume, div f = 0: every nearby
+    orbit is closed too, none is isolated.  The integral is taken by the
+    trapezoid rule on 256 points of the orbit (spectrally accurate for a
+    periodic integrand) and compared with the Jacobian's size along it."""
+    te = np.linspace(t, t + period, 257)
+    s = solve(system, (t, t + period), y, method=method, rtol=rtol, atol=rtol * 1e-2,
+              t_eval=te)
+    if s.status < 0:
+        return
+    tr, size = np.empty(te.size), np.empty(te.size)
+    for i in range(te.size):
+        J = np.asarray(_jacobian(system, te[i], s.y[:, i]), dtype=float)
+        tr[i], size[i] = np.trace(J), np.max(np.abs(J))
+    h = period / (te.size - 1)
+    div = h * (0.5 * (tr[0] + tr[-1]) + tr[1:-1].sum())
+    scale = h * (0.5 * (size[0] + size[-1]) + size[1:-1].sum())
+    if abs(div) <= 1e-6 * scale:
+        raise ConvergenceError(
+            f"limit_cycle: the closed orbit through y0 (period {period:.10g}) is not a limit "
+            f"cycle: the flow keeps phase-space volume along it (integral of div f over the "
+            f"period {div:.2g}, Floquet multiplier product exp of it = 1), so its neighbours "
+            "are closed orbits too: a centre's family of closed orbits (a conservative "
+            "system, such as the undamped pendulum), none isolated. Every start gives its "
+            "own period; there is no limit cycle to converge to")
 
 
 # ---- sections ----------------------------------------------------------------------

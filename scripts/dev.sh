@@ -5,8 +5,10 @@
 #   bash scripts/dev.sh test     # set up, then: the test suite once, against mechpy built
 #                                #   from its sdist and installed into a fresh environment
 #                                #   (the editable install when the work tree has changes not
-#                                #   yet committed); then the suite against the ASan+UBSan
-#                                #   build (scripts/sanitize.sh)
+#                                #   yet committed), and beside it (the other core) the suite
+#                                #   against the ASan+UBSan build (scripts/sanitize.sh); each
+#                                #   pass's output in build/ci/, printed when both are done,
+#                                #   with its 15 slowest tests
 #   bash scripts/dev.sh bench    # set up (with the bench extras), then: python -m mechpy bench
 #
 # Set-up installs what is missing and nothing twice: Debian's libgsl-dev,
@@ -159,14 +161,40 @@ fi
 case "$job" in
     tour)  exec "$vpy" -m mechpy tour "$@" ;;
     bench) exec "$vpy" -m mechpy bench "$@" ;;
-    test)  # the suite once (sdist-installed or editable), then under the sanitizers
+    test)  # the suite once (sdist-installed or editable) and under the sanitizers, side
+           # by side (one core each); each pass's output is kept and printed after both
+           # end; either failing fails the run, with the first failure's status
+           if [ -n "${MECHPY_SANITIZE_SKIP:-}" ]; then
+               t0=$SECONDS
+               suite --durations=15 "$@"
+               say "the suite took $((SECONDS - t0)) s (with its set-up)"
+               exit 0
+           fi
+           logs=build/ci; mkdir -p "$logs"
            t0=$SECONDS
-           suite "$@"
-           say "the suite took $((SECONDS - t0)) s (with its set-up)"
-           [ -n "${MECHPY_SANITIZE_SKIP:-}" ] && exit 0
-           say "the test suite again, under AddressSanitizer and UndefinedBehaviorSanitizer"
-           t0=$SECONDS
-           PYTHON="$vpy" bash scripts/sanitize.sh "$@"
-           say "the sanitizer pass took $((SECONDS - t0)) s" ;;
+           say "the test suite and, beside it, the suite under AddressSanitizer and" \
+               "UndefinedBehaviorSanitizer (outputs in $logs/suite.log, $logs/sanitize.log)"
+           # each pass in a subshell of its own (errexit applies inside it as in a plain run)
+           ( suite --durations=15 "$@" ) >"$logs/suite.log" 2>&1 &
+           p1=$!
+           ( PYTHON="$vpy" bash scripts/sanitize.sh --durations=15 "$@" ) >"$logs/sanitize.log" 2>&1 &
+           p2=$!
+           # whichever ends first is printed first; the run's status is the first failure's
+           rc=0; first=""; left=("$p1" "$p2")
+           while [ ${#left[@]} -gt 0 ]; do
+               r=0; fin=""; wait -n -p fin "${left[@]}" || r=$?
+               if [ -z "$fin" ]; then say "lost track of the passes (wait: $r)"; rc=1; break; fi
+               if [ "$fin" = "$p1" ]; then name=suite; what="the suite (with its set-up)"
+               else name=sanitize; what="the sanitizer pass (with its build)"; fi
+               rest=(); for p in "${left[@]}"; do [ "$p" = "$fin" ] || rest+=("$p"); done
+               left=("${rest[@]}")
+               printf '\n==== %s (%s) ====\n' "$what" "$logs/$name.log"
+               cat "$logs/$name.log"
+               say "$what took $((SECONDS - t0)) s, exit status $r"
+               if [ "$r" -ne 0 ] && [ "$rc" -eq 0 ]; then rc=$r; first=$what; fi
+           done
+           say "both passes took $((SECONDS - t0)) s side by side"
+           [ "$rc" -eq 0 ] || say "FAILED: $first (exit status $rc)"
+           exit "$rc" ;;
     *) say "unknown job '$job' (tour, test or bench)"; exit 2 ;;
 esac

@@ -183,7 +183,8 @@ def test_limit_cycle_unreachable_tol_has_a_budget():
     vdp = mp.scenes.VanDerPol(1.0)
     # the spread of successive periods settles near 2e-15 at rtol 1e-12: tol = 1e-16 ran
     # to t_max (116 s); it now stops when the spread has not halved in `stall` cycles
-    with pytest.raises(mp.ConvergenceError, match="stalled.*rtol"):
+    with pytest.raises(mp.ConvergenceError,
+                       match="stopped shrinking.*a cycle is there.*raise tol or lower rtol"):
         mp.phase.limit_cycle(vdp, [2.0, 0.0], tol=1e-16)
     with pytest.raises(mp.ConvergenceError, match="max_periods = 6"):
         mp.phase.limit_cycle(vdp, [0.01, 0.0], tol=1e-12, max_periods=6)   # needs 7 to 10
@@ -228,3 +229,44 @@ def test_ctrl_c_is_prompt(setup, call):
     from sigint import interrupt_delay
     dt = interrupt_delay(setup, call, delay=0.5)
     assert dt < 1.0, f"KeyboardInterrupt {dt} s after SIGINT"   # measured < 0.05 s
+
+
+# ---- closed orbits that are not limit cycles ----------------------------------------------
+
+@pytest.mark.parametrize("system, theta0", [
+    (mp.scenes.Pendulum(), 1.0),
+    (lambda t, y: np.array([y[1], -9.81 * np.sin(y[0])]), 2.5),
+])
+def test_a_centre_is_not_a_limit_cycle(system, theta0):
+    """The undamped pendulum's orbits are closed but not isolated (a centre's
+    family: every amplitude has its own period); limit_cycle returned one as a
+    "limit cycle" (issue #28).  It now refuses, and the period it names is the
+    closed form T = 4 K(sin^2(theta0 / 2)) / sqrt(g / l)."""
+    from scipy.special import ellipk
+    with pytest.raises(mp.ConvergenceError, match="centre's family of closed orbits") as e:
+        mp.phase.limit_cycle(system, [theta0, 0.0])
+    T = float(str(e.value).split("(period ")[1].split(")")[0])
+    assert T == pytest.approx(4 * ellipk(np.sin(theta0 / 2) ** 2) / np.sqrt(9.81),
+                              rel=2e-9)             # measured 2e-10 (10 digits printed)
+
+
+def test_van_der_pol_at_mu_0_is_a_centre_and_at_mu_1_a_cycle():
+    """mu = 0 is the harmonic oscillator (div f = mu (1 - x^2) = 0: a centre);
+    for mu > 0 the cycle's multiplier is exp(integral of mu (1 - x^2)) < 1."""
+    with pytest.raises(mp.ConvergenceError, match="centre's family"):
+        mp.phase.limit_cycle(mp.scenes.VanDerPol(0.0), [1.0, 0.0])
+    T, A = mp.phase.limit_cycle(mp.scenes.VanDerPol(1.0), [0.5, 0.0], tol=1e-10)
+    assert abs(T - 6.6632868593231) < 1e-13                   # measured 8e-15
+
+
+def test_no_cycle_says_why():
+    """A damped pendulum spirals into its fixed point: the message said "raise
+    tol or lower rtol" as if a cycle were there (issue #28); it now says no
+    cycle was found and that the amplitude kept decaying."""
+    with pytest.raises(mp.ConvergenceError,
+                       match="no cycle found.*kept decreasing.*not a limit cycle") as e:
+        mp.phase.limit_cycle(mp.scenes.Pendulum(damping=0.1), [1.0, 0.0])
+    assert "raise tol" not in str(e.value)
+    # no oscillation at all (a node): no maxima of y[0] to measure
+    with pytest.raises(mp.ConvergenceError, match="no cycle found.*maxima"):
+        mp.phase.limit_cycle(lambda t, y: -y, [1.0, 2.0], t_max=50.0)

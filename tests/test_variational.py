@@ -899,3 +899,83 @@ def test_free_particle_path_is_the_straight_line_at_once(qa, qb):
     assert r.iterations == 1
     line = qa + (qb - qa) * r.t / 2.0
     assert np.abs(r.q - line).max() < 7e-14 * max(abs(qa), abs(qb))   # measured 6.8e-15 rel.
+
+
+# ---- the second variation: a minimum, never a saddle or a maximum ----------------------
+
+@pytest.mark.parametrize("kL, ends, err", [
+    (0.5 * np.pi, (0.0, 1.0), 1e-4),     # measured 1.3e-5
+    (0.9 * np.pi, (0.0, 1.0), 1e-2),     # measured 1.4e-3 (of 8.7)
+    (0.99 * np.pi, (0.0, 1.0), 1.0),     # measured 0.20 (of 99: 1/(pi - kL) amplifies h^2)
+    (0.99 * np.pi, (0.0, 0.0), 0.0),
+])
+def test_minimum_before_the_conjugate_point(kL, ends, err):
+    """Jacobi: F = y'^2 - k^2 y^2 on [0, 1] has a minimum iff k < pi (the
+    conjugate point of 0 is pi / k); it is y = y_b sin(kx) / sin(k) with
+    J = y_b^2 k cot(k)."""
+    k = kL
+    r = V.minimize_functional(lambda x, y, yp: yp * yp - k * k * y * y, (0.0, 1.0), ends, 200)
+    yb = ends[1]
+    assert abs(r.value - yb * yb * k / np.tan(k)) <= err
+    assert np.max(np.abs(r.y - yb * np.sin(k * r.x) / np.sin(k))) <= max(err, 1e-12)
+
+
+@pytest.mark.parametrize("kL, negative", [(1.01 * np.pi, 1), (1.1 * np.pi, 1),
+                                          (np.sqrt(10) * np.pi, 3), (2.5 * np.pi, 2)])
+def test_no_minimum_past_the_conjugate_point_is_refused(kL, negative):
+    """Past the conjugate point (k L > pi) y = 0 is still stationary but a
+    saddle: the second variation has floor(kL / pi) negative directions (the
+    modes sin(j pi x / L), j < kL / pi).  It came back as the minimum, 0.0,
+    after one iteration (issue #28: y'^2 - 10 y^2 on [0, pi])."""
+    L = np.pi if kL == np.sqrt(10) * np.pi else 1.0
+    k = kL / L
+    with pytest.raises(mp.NotPositiveDefiniteError,
+                       match=rf" {negative} negative eigenvalue.*not a minimum"):
+        V.minimize_functional(lambda x, y, yp: yp * yp - k * k * y * y, (0.0, L), (0.0, 0.0), 200)
+    # the stationary path itself is still there on request
+    r = V.minimize_functional(lambda x, y, yp: yp * yp - k * k * y * y, (0.0, L), (0.0, 0.0), 200,
+                              stationary=True)
+    assert np.all(r.y == 0.0)
+
+
+def test_a_maximum_is_not_reported_as_a_minimum():
+    """F = -y'^2: the straight line is the maximum, J = -1 (issue #28: it came
+    back as the minimum); every direction of the second variation is negative."""
+    with pytest.raises(mp.NotPositiveDefiniteError, match="199 negative eigenvalue.*not a minimum"):
+        V.minimize_functional(lambda x, y, yp: -yp * yp, (0.0, 1.0), (0.0, 1.0), 200)
+    # the minimum of its negative is the same line
+    r = V.minimize_functional(lambda x, y, yp: yp * yp, (0.0, 1.0), (0.0, 1.0), 200)
+    assert abs(r.value - 1.0) < 1e-12 and np.max(np.abs(r.y - r.x)) < 1e-12
+
+
+# ---- budgets and Ctrl-C ---------------------------------------------------------------------
+
+def test_absurd_n_is_refused_before_allocating():
+    """n = 10^8 intervals (16 GB of workspace) ran for minutes deaf to Ctrl-C
+    (issue #28); beyond the budget it is a ValueError naming n."""
+    for call in (lambda: V.brachistochrone(2.0, 1.0, n=10 ** 8),
+                 lambda: V.minimize_functional(lambda x, y, yp: yp * yp, (0, 1), (0, 1), 10 ** 8),
+                 lambda: V.catenary(-1.0, 1.0, 3.0, n=10 ** 8)):
+        with pytest.raises(ValueError, match=r"n = 100000000 intervals is beyond the budget"):
+            call()
+
+
+def test_cycloid_inversion_converges_pointwise():
+    """The exact cycloid's theta(x) at 10^5 nodes, checked against
+    x = a (theta - sin theta): each point now stops when it has converged
+    (the whole array ran all 200 iterations because a few points sat at the
+    round-off floor: 22 s of brachistochrone(2, 1, n=10**6), now 1 s)."""
+    from mechpy.variational.classic import _cycloid_theta_of_x
+    a, th = 1.0, 4.0
+    x = a * (th - np.sin(th)) * np.linspace(0.0, 1.0, 10 ** 5 + 1) ** 3
+    theta = _cycloid_theta_of_x(x, a, th)
+    assert np.max(np.abs(a * (theta - np.sin(theta)) - x)) < 1e-14   # measured 8.9e-16
+
+
+def test_ctrl_c_is_prompt_in_a_long_minimisation():
+    """KeyboardInterrupt within 1 s of SIGINT during a solve of 2 10^6 intervals
+    (the C loop asks between blocks of the assembly, line-search trials and
+    Hessian shifts; before, once per Newton iteration)."""
+    from sigint import interrupt_delay
+    dt = interrupt_delay("", "mp.variational.brachistochrone(2.0, 1.0, n=2 * 10 ** 6)", delay=1.0)
+    assert dt < 1.0, f"KeyboardInterrupt {dt} s after SIGINT"         # measured 0.02-0.3 s

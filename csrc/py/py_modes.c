@@ -223,7 +223,8 @@ static PyObject *modes_tridiag(PyObject *self, PyObject *args)
         return PyErr_NoMemory();
     }
     mp_modes_run(j);
-    return mp_py_modes_result(j, &j->z, "normal_modes(K, M) (chain)");
+    /* the user called normal_modes (the chain path is its choice, not theirs) */
+    return mp_py_modes_result(j, &j->z, "normal_modes(K, M)");
 }
 
 PyDoc_STRVAR(modes_is_chain_doc,

@@ -287,10 +287,18 @@ static PyObject *py_variational_solve(PyObject *self, PyObject *args)
     st = mp_variational_solve(&pb, yy, ll, &info);
     Py_END_ALLOW_THREADS
     if (st != MP_OK) {
-        char detail[160];
-        snprintf(detail, sizeof detail,
-                 "after %zu Newton iterations (residual %.3g, constraint error %.3g)",
-                 info.iterations, info.residual, info.constraint_error);
+        char detail[320];
+        if (st == MP_ENOTSPD)
+            snprintf(detail, sizeof detail,
+                     "the second variation at the stationary path found after %zu Newton "
+                     "iterations (residual %.3g) has %zu negative eigenvalue(s) among %zu: it is "
+                     "a saddle or a maximum of the discrete functional, not a minimum",
+                     info.iterations, info.residual, info.negative,
+                     (size_t)(npts - 2) * F.F.d);
+        else
+            snprintf(detail, sizeof detail,
+                     "after %zu Newton iterations (residual %.3g, constraint error %.3g)",
+                     info.iterations, info.residual, info.constraint_error);
         return mp_py_release(&k, mp_py_raise_detail(st, "variational_solve", detail));
     }
     return mp_py_release(&k, Py_BuildValue("(OO{s:n,s:d,s:d,s:d})", (PyObject *)y,

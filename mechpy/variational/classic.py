@@ -76,26 +76,34 @@ def _t_minus_sin(t):
 
 def _cycloid_solve(target, a, lo, hi, ratio=False):
     """Safeguarded Newton (vectorised) for a (t - sin t) = target on [lo, hi],
-    or, with ``ratio``, for (t - sin t) - target (1 - cos t) = 0."""
+    or, with ``ratio``, for (t - sin t) - target (1 - cos t) = 0.
+
+    Each iteration works on the points not converged yet only: the whole array
+    went through all 200 iterations when a few points (at the round-off
+    floor) never met the test, 22 s for the 10^6 nodes of
+    ``brachistochrone(2, 1, n=10**6)`` against 1 s for its solve."""
     lo, hi = lo.copy(), hi.copy()
     t = np.clip(np.cbrt(6 * target / a) if not ratio else 3 * target, lo, hi)
+    act = np.arange(t.size)
     for _ in range(200):
-        vers = 2 * np.sin(0.5 * t) ** 2          # 1 - cos t
+        tt, tg, lo_a, hi_a = t[act], target[act], lo[act], hi[act]
+        vers = 2 * np.sin(0.5 * tt) ** 2          # 1 - cos t
         if ratio:
-            f = _t_minus_sin(t) - target * vers
-            d = vers - target * np.sin(t)
+            f = _t_minus_sin(tt) - tg * vers
+            d = vers - tg * np.sin(tt)
         else:
-            f = a * _t_minus_sin(t) - target
+            f = a * _t_minus_sin(tt) - tg
             d = a * vers
-        lo = np.where(f < 0, t, lo)
-        hi = np.where(f > 0, t, hi)
+        lo_a = np.where(f < 0, tt, lo_a)
+        hi_a = np.where(f > 0, tt, hi_a)
         with np.errstate(divide="ignore", invalid="ignore"):
-            tn = t - f / d
-        tn = np.where((tn >= lo) & (tn <= hi), tn, 0.5 * (lo + hi))
-        tn = np.where(f == 0, t, tn)
-        done = np.all((np.abs(tn - t) <= 1e-15 * (1 + t)) | (hi - lo <= 4e-16 * (1 + t)))
-        t = tn
-        if done:
+            tn = tt - f / d
+        tn = np.where((tn >= lo_a) & (tn <= hi_a), tn, 0.5 * (lo_a + hi_a))
+        tn = np.where(f == 0, tt, tn)
+        done = (np.abs(tn - tt) <= 1e-15 * (1 + tt)) | (hi_a - lo_a <= 4e-16 * (1 + tt))
+        t[act], lo[act], hi[act] = tn, lo_a, hi_a
+        act = act[~done]
+        if act.size == 0:
             break
     return t
 

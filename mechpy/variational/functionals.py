@@ -153,10 +153,22 @@ class Extremal(NamedTuple):
     residual: float
 
 
+#: The most intervals a discretised functional takes (the budget of
+#: ``variational_integrate``'s steps, MAX_STEPS, too): about 160 bytes each and
+#: 1 s per 10^6 for a built-in integrand, while the midpoint rule's error,
+#: O(h^2), reaches round-off near n = 10^5 for a smooth extremal.
+_MAX_INTERVALS = 10_000_000
+
+
 def _n_nodes(n) -> int:
     n = as_int(n, "n")
     if n < 4:
         raise ValueError(f"n (the number of intervals) is too small: need n >= 4, got {n}")
+    if n > _MAX_INTERVALS:
+        raise ValueError(
+            f"n = {n} intervals is beyond the budget of {_MAX_INTERVALS:.0e} (about "
+            f"{160 * n / 1e9:.3g} GB of workspace): the midpoint rule's error, O(1/n^2), "
+            "reaches round-off near n = 1e5 for a smooth extremal; take a smaller n")
     return n
 
 
@@ -255,6 +267,15 @@ def minimize_functional(F: Callable, x_span, y_ends, n: int = 200, *, constraint
     ------
     ConvergenceError
         The budget ran out or no step improved the merit function.
+    NotPositiveDefiniteError
+        (Minimisation only.)  The stationary path found is not a minimum: the
+        second variation, the Hessian of the discrete functional there, has
+        a negative eigenvalue (counted by one banded :math:`LDL^T`, O(n)).  So
+        it is a saddle or a maximum, as past a conjugate point (Jacobi:
+        :math:`F = y'^2 - k^2 y^2` on [0, L] has a minimum iff
+        :math:`kL < \pi`) or where :math:`F_{y'y'} < 0`.  Before this check
+        such a point came back as the minimum.  ``stationary=True`` returns
+        it without the check.
     ValueError
         F is singular at an end point (not finite there, or growing like a
         power of the distance to it along the straight line between the
@@ -313,6 +334,13 @@ def minimize_functional(F: Callable, x_span, y_ends, n: int = 200, *, constraint
         vals.append(as_scalar(v, f"constraints[{i}] value"))
     lam0 = np.zeros(len(cons)) if multipliers is None else \
         as_array(multipliers, "multipliers", shape=(len(cons),), allow_empty=True)
-    y, lam, info = _solve(_integrand(F), x, y0, cons, vals, lam0,
-                          stationary, tol, max_iter)
+    try:
+        y, lam, info = _solve(_integrand(F), x, y0, cons, vals, lam0,
+                              stationary, tol, max_iter)
+    except _core.NotPositiveDefiniteError as e:     # mechpy.errors' class, from the table
+        raise _core.NotPositiveDefiniteError(
+            f"minimize_functional: no minimum found: {e}. Jacobi's condition: a minimum "
+            "needs F_y'y' > 0 along the path and no point conjugate to x = a inside "
+            f"({a}, {b}); past a conjugate point J has no minimum with these ends. "
+            "Pass stationary=True to get the stationary path itself") from None
     return Extremal(x, y, info["J"], lam, info["iterations"], info["residual"])
