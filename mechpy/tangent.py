@@ -317,16 +317,22 @@ def _flow(aug, n, t0, t1, y, cols0, method, rtol, atol, what):
     return z[:n].copy(), z[n:].reshape(n, ncol).copy()
 
 
+def _initial_state(system, y0):
+    """y0 as a fresh float array of the system's dimension, and that dimension."""
+    y = as_array(y0, "y0", ndim=1).copy()
+    n = system.dim if isinstance(system, Scene) else y.size
+    if y.shape[0] != n:
+        raise ValueError(f"y0 must have {n} components, got shape {y.shape}")
+    return y, n
+
+
 # ---- Lyapunov spectrum ----------------------------------------------------------------
 def _lyapunov_spectrum(system, y0, t, *, dt: float = 1.0, transient: float = 0.0,
                        method: str = "dop853", rtol: float = 1e-10, atol: float = 1e-12,
                        return_history: bool = False):
     """What :func:`mechpy.phase.lyapunov_spectrum` does (its docstring)."""
     _require(system)
-    y = as_array(y0, "y0", ndim=1).copy()
-    n = system.dim if isinstance(system, Scene) else y.size
-    if y.shape[0] != n:
-        raise ValueError(f"y0 must have {n} components, got shape {y.shape}")
+    y, n = _initial_state(system, y0)
     T = as_scalar(t, "t", positive=True)
     dt = as_scalar(dt, "dt", positive=True)
     transient = as_scalar(transient, "transient", nonnegative=True)
@@ -389,10 +395,7 @@ def _floquet(system, y0, *, period=None, tol: float = 1e-10, max_iter: int = 50,
     """What :func:`mechpy.phase.floquet` does (its docstring)."""
     _require(system)
     import sympy as sp
-    y = as_array(y0, "y0", ndim=1).copy()
-    n = system.dim if isinstance(system, Scene) else y.size
-    if y.shape[0] != n:
-        raise ValueError(f"y0 must have {n} components, got shape {y.shape}")
+    y, n = _initial_state(system, y0)
     tol = as_scalar(tol, "tol", positive=True)
     max_iter = as_int(max_iter, "max_iter", minimum=1)
     aug, pn = _augmented(system, (), True)
