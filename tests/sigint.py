@@ -33,9 +33,12 @@ exec(setup, env)
 exec("def _call():\n    return " + call, env)
 sent = {}
 def fire():
+    # SENT first, in one write: printed after the kill it raced the main thread's report
+    # (two threads' prints interleave) and the parent read "SENTINTERRUPTED ..."
+    sys.stdout.write("SENT\n")
+    sys.stdout.flush()
     sent["t"] = time.perf_counter()
     os.kill(os.getpid(), signal.SIGINT)
-    print("SENT", flush=True)
 threading.Timer(delay, fire).start()
 t0 = time.perf_counter()
 try:

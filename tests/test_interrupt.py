@@ -41,9 +41,10 @@ check = lambda: mp.solve(P, (0, 5), [2.0, 0.0], rtol=1e-10).y
 before = check()
 sent = {}
 def fire():
+    sys.stdout.write("SENT\n")    # tests/sigint.py times the child from here (written
+    sys.stdout.flush()            # before the kill: after it, it raced the main thread's print)
     sent["t"] = time.perf_counter()
     os.kill(os.getpid(), signal.SIGINT)
-    print("SENT", flush=True)     # tests/sigint.py times the child from here
 threading.Timer(0.5, fire).start()
 try:
     LONG[name]()

@@ -197,10 +197,14 @@ def test_sections_have_a_step_budget_and_a_size_budget():
     T = 3 * np.pi
     with pytest.raises(mp.StepBudgetError, match="max_steps"):
         mp.phase.poincare(sc, [0.1, 0.0], T, 3, skip=10 ** 12)
+    # the default budget is spent once above (10^6 steps: 22 s under ASan for the three);
+    # the bifurcation paths reach the same budget check with a smaller one
     with pytest.raises(mp.StepBudgetError, match="drive_amplitude = 1.1"):
-        mp.phase.bifurcation(sc, "drive_amplitude", [1.1, 1.2], [0.1, 0.0], T, 3, 10 ** 12)
+        mp.phase.bifurcation(sc, "drive_amplitude", [1.1, 1.2], [0.1, 0.0], T, 3, 10 ** 12,
+                             max_steps=10 ** 4)
     with pytest.raises(mp.StepBudgetError, match="drive_amplitude = 1.1"):
-        mp.phase.bifurcation(sc, "drive_amplitude", [1.1], [0.1, 0.0], lambda v: T, 3, 10 ** 12)
+        mp.phase.bifurcation(sc, "drive_amplitude", [1.1], [0.1, 0.0], lambda v: T, 3, 10 ** 12,
+                             max_steps=10 ** 4)
     with pytest.raises(ValueError, match="n must be <= 10000000"):
         mp.phase.poincare(sc, [0.1, 0.0], T, 10 ** 8)
     with pytest.raises(ValueError, match="MAX_SECTION_POINTS"):
