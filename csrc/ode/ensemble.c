@@ -30,6 +30,7 @@ typedef struct {
     mp_ode_outcome *out;
     atomic_size_t next, done;
     atomic_int stop;    /* set on interrupt or a fatal error */
+    atomic_int running; /* worker threads not yet finished */
     int fatal;          /* first fatal status (written once, under stop) */
     mp_ode_interrupt interrupt; /* the main thread's check (may be NULL) */
     void *interrupt_ctx;
@@ -142,6 +143,15 @@ static void *ens_run(void *argp)
     return NULL;
 }
 
+/* A worker thread: its share of the ensemble, then one fewer running. */
+static void *ens_worker(void *argp)
+{
+    ens_arg *a = argp;
+    ens_run(a);
+    atomic_fetch_sub(&a->e->running, 1);
+    return NULL;
+}
+
 /* Contract: see lanes.h: dopri5, dop853 or rk4, t_eval given, no events or
  * dense output, and the checks solve_forward makes at its start pass (else
  * the scalar path reports them). */
@@ -202,11 +212,24 @@ int mp_ode_solve_many(const mp_ode_method *m, const mp_ode_problem *probs,
     if (threads > 1 && !tid) return MP_ENOMEM;
     ens_arg wa = {&e, 0}, ma = {&e, 1};
     int started = 0;
+    atomic_init(&e.running, threads - 1);
     for (int i = 0; i < threads - 1; i++) {
-        if (pthread_create(&tid[i], NULL, ens_run, &wa) != 0) break;
+        if (pthread_create(&tid[i], NULL, ens_worker, &wa) != 0) {
+            atomic_fetch_sub(&e.running, threads - 1 - i); /* these never start */
+            break;
+        }
         started++;
     }
     ens_run(&ma); /* the calling thread works too, and watches for interrupts */
+    /* Its share done (or none left to take: a worker's lane group can take every
+       trajectory before the calling thread starts), it keeps watching until the
+       workers end: they never ask for interrupts themselves, and a joined-on
+       worker with a long trajectory left Ctrl-C unanswered for good. */
+    while (atomic_load(&e.running) > 0 && !atomic_load(&e.stop)) {
+        struct timespec nap = {0, 5000000}; /* 5 ms */
+        nanosleep(&nap, NULL);
+        main_interrupt(&e);
+    }
     for (int i = 0; i < started; i++) pthread_join(tid[i], NULL);
     free(tid);
     if (e.fatal) return e.fatal;
