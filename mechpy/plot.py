@@ -328,7 +328,7 @@ def animate_field(system, xlim=(-2 * np.pi, 2 * np.pi), ylim=(-4.0, 4.0), *, par
     r"""Particles advected through a 2-D field and fading, as fieldplay does (deprecated).
 
     Deprecated: use :func:`mechpy.live.phase_portrait`, whose particles move
-    on the GPU in the browser (10^4 at 18-30 fps in software WebGL, against
+    on the GPU in the browser (10^4 at 32-34 fps in software WebGL, against
     0.8 s a frame and 16 MB of pre-rendered frames for 30 frames here), whose
     sliders work in a saved page, and which draws fixed points, nullclines
     and the limit cycle.  This function stays for a printed figure or a GIF
