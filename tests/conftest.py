@@ -77,3 +77,17 @@ def pytest_sessionfinish(session, exitstatus):
     if check():
         session.exitstatus = 1
         print("\nLeakSanitizer: leaks found (report above)")
+
+
+@pytest.fixture
+def double_pendulum():
+    """The double pendulum from its Lagrangian (m1 = m2 = 1, l1 = 1, l2 = 0.5, g = 9.81),
+    compiled: the drawings of mp.plot.animate and mp.live.animate take it."""
+    import sympy as sp
+    th1, th2 = mechpy.coordinates("theta1 theta2")
+    m1, m2, l1, l2, g = sp.symbols("m1 m2 l1 l2 g")
+    w1, w2 = th1.diff(), th2.diff()
+    L = ((m1 + m2) * l1**2 * w1**2 / 2 + m2 * l2**2 * w2**2 / 2
+         + m2 * l1 * l2 * w1 * w2 * sp.cos(th1 - th2)
+         + (m1 + m2) * g * l1 * sp.cos(th1) + m2 * g * l2 * sp.cos(th2))
+    return mechpy.lagrangian(L, [th1, th2], params=dict(m1=1.0, m2=1.0, l1=1.0, l2=0.5, g=9.81))

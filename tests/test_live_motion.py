@@ -75,19 +75,8 @@ def test_pendulum_from_samples_is_the_hermite_interpolant(driver, tmp_path):
     assert err < 5e-6
 
 
-def _double_pendulum():
-    import sympy as sp
-    th1, th2 = mp.coordinates("theta1 theta2")
-    m1, m2, l1, l2, g = sp.symbols("m1 m2 l1 l2 g")
-    w1, w2 = th1.diff(), th2.diff()
-    L = ((m1 + m2) * l1**2 * w1**2 / 2 + m2 * l2**2 * w2**2 / 2
-         + m2 * l1 * l2 * w1 * w2 * sp.cos(th1 - th2)
-         + (m1 + m2) * g * l1 * sp.cos(th1) + m2 * g * l2 * sp.cos(th2))
-    return mp.lagrangian(L, [th1, th2], params=dict(m1=1.0, m2=1.0, l1=1.0, l2=0.5, g=9.81))
-
-
-def test_double_pendulum_bobs_from_a_lagrangian(driver, tmp_path):
-    scene = _double_pendulum()
+def test_double_pendulum_bobs_from_a_lagrangian(driver, tmp_path, double_pendulum):
+    scene = double_pendulum
     sol = mp.solve(scene, (0, 3), [2.0, 1.0, 0.0, 0.0], dense_output=True, rtol=1e-10)
     w = mp.live.animate(scene, sol, fps=20)
     assert w.kind == "double_pendulum" and w.bodies == ["bob 1", "bob 2"]

@@ -145,15 +145,8 @@ def test_animate_pendulum_bob_and_rod_follow_the_solution():
     plt.close("all")
 
 
-def test_animate_double_pendulum_from_a_compiled_scene():
-    import sympy as sp
-    th1, th2 = mp.coordinates("theta1 theta2")
-    m1, m2, l1, l2, g = sp.symbols("m1 m2 l1 l2 g")
-    w1, w2 = th1.diff(), th2.diff()
-    L = ((m1 + m2) * l1**2 * w1**2 / 2 + m2 * l2**2 * w2**2 / 2
-         + m2 * l1 * l2 * w1 * w2 * sp.cos(th1 - th2)
-         + (m1 + m2) * g * l1 * sp.cos(th1) + m2 * g * l2 * sp.cos(th2))
-    scene = mp.lagrangian(L, [th1, th2], params=dict(m1=1.0, m2=1.0, l1=1.0, l2=0.5, g=9.81))
+def test_animate_double_pendulum_from_a_compiled_scene(double_pendulum):
+    scene = double_pendulum
     sol = mp.solve(scene, (0, 3), [1.0, 0.5, 0.0, 0.0], t_eval=np.linspace(0, 3, 31))
     anim = mp.plot.animate(scene, sol, trail=np.inf)
     ax = anim._fig.axes[0]
