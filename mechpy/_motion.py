@@ -12,6 +12,10 @@ from __future__ import annotations
 import numpy as np
 
 from ._validate import as_array
+from . import scenes as S
+from .integrate import solve
+from .rigid import nutation_bounds
+from .rotation import euler_matrix, matrix_from_quat
 
 KINDS = ("pendulum", "double_pendulum", "foucault", "top", "rigid", "chain")
 #: the kinds that draw one scene class
@@ -24,7 +28,6 @@ DEFAULT_TRAIL = {"pendulum": 0.2, "double_pendulum": 0.2, "foucault": np.inf, "t
 def kind_of(system, kind) -> str:
     """The kind of drawing for ``system``: ``kind`` checked against the scene,
     or chosen from the scene's type."""
-    from . import scenes as S
     if not isinstance(system, S.Scene):
         raise TypeError("system must be a mechpy scene (the one that made sol), "
                         f"got {type(system).__name__}")
@@ -138,7 +141,6 @@ def foucault_bob(system, y):
 def top_rotation(y):
     """Body-to-space rotation matrices (m, 3, 3) of a heavy top from its ZXZ
     Euler angles (the active matrix: column 3 is the symmetry axis e3)."""
-    from .rotation import euler_matrix
     return euler_matrix(y[0], y[1], y[2], passive=False)
 
 
@@ -146,7 +148,6 @@ def top_bounds(system, y0) -> tuple:
     """The nutation bounds (theta_min, theta_max) of the top started at
     ``y0`` (:func:`mechpy.rigid.nutation_bounds`); () for an upright or
     inverted start, where Euler angles are singular."""
-    from .rigid import nutation_bounds
     p = system.params
     try:
         return tuple(nutation_bounds(p["I1"], p["I3"], p["mass"], p["g"], p["l"], y0[1],
@@ -162,7 +163,6 @@ def rigid_oriented(system, t, y):
     times ``t`` (rtol 1e-11)."""
     if y.shape[0] == 7:
         return y
-    from .integrate import solve
     oriented = system.replace(orientation=True)
     y0 = oriented.initial_state(y[:, 0])
     if t[0] == t[-1]:                                  # one sample, or one instant
@@ -173,7 +173,6 @@ def rigid_oriented(system, t, y):
 def rigid_rotation(y7):
     """Body-to-space rotation matrices (m, 3, 3) of oriented rigid-body states
     (7, m): columns are the principal axes in space."""
-    from .rotation import matrix_from_quat
     return matrix_from_quat(y7[3:7].T)
 
 

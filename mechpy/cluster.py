@@ -38,12 +38,15 @@ Array shapes follow the layout rule in :mod:`mechpy` (``help(mechpy)``):
 """
 from __future__ import annotations
 
+import inspect
 import math
 import operator
 
 import numpy as np
 
-from . import integrate
+from ._callbacks import c_address
+from ._solution import _errors_mode, _raise_first
+from ._system import SecondOrder, _ensemble_params
 from ._validate import as_array, as_int
 
 __all__: list = []
@@ -53,13 +56,12 @@ __all__: list = []
 CHUNKS_PER_THREAD = 4
 
 
-def _solve_chunk(system, t_span, y0s, params, options):
+def _solve_chunk(local, system, t_span, y0s, params, options):
     """Run on a worker: one chunk of the ensemble through the local solve_many,
     with every failure reported as a status (``errors="status"``): the error
     rule is applied once, on the joined result, so that an exception names the
     trajectory's index in the whole ensemble, not in its chunk."""
-    return integrate.solve_many(system, t_span, y0s, params=params,
-                                **dict(options, errors="status"))
+    return local(system, t_span, y0s, params=params, **dict(options, errors="status"))
 
 
 def _client_threads(client) -> int:
@@ -80,9 +82,9 @@ def _client_threads(client) -> int:
 
 def _check_travels(system):
     """TypeError unless ``system`` can be sent to another process."""
-    obj = system.accel if isinstance(system, integrate.SecondOrder) else system
+    obj = system.accel if isinstance(system, SecondOrder) else system
     for o in (obj, getattr(obj, "_torque_fn", None)):
-        if o is not None and integrate._c_address(o) is not None:
+        if o is not None and c_address(o) is not None:
             raise TypeError(
                 "system holds a C callback (a ctypes function pointer, LowLevelCallable or "
                 "numba cfunc): it is an address in this process and cannot travel to a Dask "
@@ -167,18 +169,23 @@ def _join_field(vals: list):
     return vals[0]
 
 
-def _solve_many(*, client, chunk_size, lazy, system, t_span, y0s, params=None, threads=None,
-                progress=False, **options):
+def _solve_many(*, local, client, chunk_size, lazy, system, t_span, y0s, params=None,
+                threads=None, progress=False, **options):
     """mp.solve_many(..., client=client): validate here, solve on the cluster.
 
     Every argument is checked before anything is submitted (one local solve
     of the first row with a one-step budget runs the same checks as a local
     call and gives the result's fields); then the chunks run on the cluster,
     each a local solve_many on ``threads`` threads (default 1: the worker's
-    threads run chunks side by side).
+    threads run chunks side by side).  ``local`` is that function
+    (mechpy.integrate.solve_many, handed over so that this module imports
+    nothing that solves: integrate imports it, one way).
     """
     if client is None:
         raise ValueError("chunk_size and lazy need a client (a dask.distributed.Client)")
+    if options.get("events") is not None:
+        raise ValueError("events are not taken with a client: the chunks' event lists are "
+                         "not joined; solve the ensemble locally (client=None)")
     nthreads = _client_threads(client)
     if not isinstance(lazy, (bool, np.bool_)):
         raise TypeError("lazy must be a bool")
@@ -191,13 +198,13 @@ def _solve_many(*, client, chunk_size, lazy, system, t_span, y0s, params=None, t
     k = Y0.shape[0]
     bounds = _chunk_bounds(k, nthreads, chunk_size)
     per_chunk = 1 if threads is None else as_int(threads, "threads", minimum=1)
-    par = integrate._ensemble_params(system, params, k)
-    errors = integrate._errors_mode(options.get("errors", _default("errors")))
+    par = _ensemble_params(system, params, k)
+    errors = _errors_mode(options.get("errors", _default(local, "errors")))
     # the local checks and the result's fields: one row, one step, its failures
     # statuses (the error rule applies once, to the joined result, as locally)
     probe = dict(options, max_steps=1, errors="status")
-    template = integrate.solve_many(system, t_span, Y0[:1], params=None if par is None
-                                    else par[:1], threads=1, progress=False, **probe)
+    template = local(system, t_span, Y0[:1], params=None if par is None else par[:1],
+                     threads=1, progress=False, **probe)
     if k == 0:
         return template
     _check_travels(system)
@@ -207,11 +214,12 @@ def _solve_many(*, client, chunk_size, lazy, system, t_span, y0s, params=None, t
     if lazy:
         import dask
         solve = dask.delayed(_solve_chunk, pure=True)
-        tasks = [solve(system, t_span, y, p, opts) for y, p in chunks]
+        tasks = [solve(local, system, t_span, y, p, opts) for y, p in chunks]
         return _lazy(template, tasks, sizes)
     from dask.base import tokenize
     token = tokenize(system, t_span, opts, Y0, par)
-    futures = client.map(_solve_chunk, [system] * len(chunks), [t_span] * len(chunks),
+    futures = client.map(_solve_chunk, [local] * len(chunks), [system] * len(chunks),
+                         [t_span] * len(chunks),
                          [y for y, _ in chunks], [p for _, p in chunks],
                          [opts] * len(chunks),
                          key=[f"mechpy-solve_many-{token}-{i}" for i in range(len(chunks))])
@@ -219,11 +227,10 @@ def _solve_many(*, client, chunk_size, lazy, system, t_span, y0s, params=None, t
         from dask.distributed import progress as dask_progress
         dask_progress(futures)
     out = _join(client.gather(futures), sizes)
-    integrate._raise_first(out._code, out["message"], errors)
+    _raise_first(out._code, out["message"], errors)
     return out
 
 
-def _default(name: str):
+def _default(local, name: str):
     """The default of one of solve_many's keyword arguments."""
-    import inspect
-    return inspect.signature(integrate.solve_many).parameters[name].default
+    return inspect.signature(local).parameters[name].default

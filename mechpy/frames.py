@@ -23,7 +23,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._validate import as_array, as_scalar, as_vector3
+from ._validate import as_array, as_int, as_scalar, as_vector3
+from .errors import StepBudgetError
+from .integrate import solve
 
 __all__ = ["OMEGA_EARTH", "FLIGHT_MAX_STEPS", "fictitious", "to_rotating", "from_rotating",
            "foucault_period", "earth_omega", "eastward_deflection", "drop", "projectile_drift", "projectile"]
@@ -242,9 +244,6 @@ FLIGHT_MAX_STEPS = 20_000
 
 def _coriolis_flight(r0, v0, latitude, g, omega, rtol, max_steps):
     """Integrate r'' = g - 2 omega x v in the local frame until z = 0."""
-    from ._validate import as_int
-    from .errors import StepBudgetError
-    from .integrate import solve
     max_steps = as_int(max_steps, "max_steps", minimum=1)
     wx, wy, wz = (2.0 * float(c) for c in earth_omega(latitude, omega))
 

@@ -12,402 +12,25 @@ states first, as SciPy's: ``Solution.y`` (n, m), ``EnsembleSolution.y`` (k, n, m
 from __future__ import annotations
 
 import contextlib
-import ctypes
 import math
 import os
-import sys
-import threading
 import warnings
-from typing import Any, Callable, Sequence
+from typing import Callable, Sequence
 
 import numpy as np
 
 from . import _core
-from ._callbacks import c_address as _c_address
+from . import cluster as _cluster
+from ._solution import (_STATUS, DenseOutput, EnsembleSolution, Solution,  # noqa: F401
+                        _ConstantDense, _errors_mode, _MappedDense, _raise_first, _raises,
+                        _status_error)
+from ._system import (SCIPY_METHODS, SecondOrder, _as_args, _catch_unraisable,  # noqa: F401
+                      _ensemble_params, _events_spec, _method_names, _python_fun,
+                      _rigid_split_check, _system_spec, _watch_list, methods)
 from ._validate import as_array, as_int, as_scalar
-from .scenes import RigidBody, Scene
 
 __all__ = ["solve", "solve_many", "methods", "Solution", "EnsembleSolution", "DenseOutput",
            "SecondOrder"]
-
-
-class SecondOrder:
-    """A second-order system q'' = a(t, q) for the symplectic methods.
-
-    ``accel`` is a Python callable ``a(t, q, *args)`` returning the
-    acceleration (same length as q), or a C callback ``void a(double t,
-    const double *q, double *acc, void *user_data)`` (ctypes, LowLevelCallable
-    or numba cfunc).  The state is ``y = (q, v)``: give ``y0`` of even length
-    2 len(q).  Every method accepts it; ``verlet``, ``yoshida4`` and
-    ``yoshida6`` need it (or an undamped scene).
-
-    Example: ``mp.solve(mp.SecondOrder(lambda t, q: -q), (0, 10), [1, 0],
-    method="yoshida4", h=0.01)``.
-
-    Examples
-    --------
-    q'' = -q with Yoshida's 4th-order symplectic method: q(t) = cos t, and the energy
-    (q^2 + v^2)/2 stays at 1/2 without drift.
-
-    >>> s = mp.solve(mp.SecondOrder(lambda t, q: -q), (0, 10), [1.0, 0.0],
-    ...              method="yoshida4", h=0.01)
-    >>> round(float(s.y[0, -1]), 8), round(float(np.cos(10.0)), 8)
-    (-0.83907153, -0.83907153)
-    >>> energy = 0.5 * (s.y[0] ** 2 + s.y[1] ** 2)
-    >>> bool(np.abs(energy - 0.5).max() < 1e-9)
-    True
-    """
-
-    def __init__(self, accel):
-        if _c_address(accel) is None and not callable(accel):
-            raise TypeError("accel must be callable or a C callback")
-        self.accel = accel
-
-    def __repr__(self):
-        return f"SecondOrder({self.accel!r})"
-
-#: The status table of the C core (``mechpy._core.STATUS_TABLE``): per C status
-#: code its exception class, message, Solution status and whether it raises.
-_STATUS = {row["code"]: row for row in _core.STATUS_TABLE}
-_ERRORS = ("auto", "raise", "status")
-
-
-def _errors_mode(errors) -> str:
-    if not isinstance(errors, str) or errors not in _ERRORS:
-        raise ValueError(f"errors must be one of {_ERRORS}, got {errors!r}")
-    return errors
-
-
-def _raises(code: int, errors: str) -> bool:
-    """Whether the outcome ``code`` raises under ``errors`` (the table decides
-    for "auto"; a failure that cannot be a status always raises)."""
-    row = _STATUS[code]
-    if row["solve_status"] >= 0:
-        return False
-    return errors == "raise" or row["raises"] == 2 or (errors == "auto" and row["raises"] == 1)
-
-
-def _status_error(code: int, where: str, message: str) -> Exception:
-    """The exception of the outcome ``code``: its class from the table."""
-    return _STATUS[code]["exception"](f"{where}: {message}")
-
-
-class Solution(dict):
-    """Result of :func:`solve`, shaped like SciPy's ``OdeResult``.
-
-    Attributes
-    ----------
-    t : ndarray, shape (m,)
-        Time points.
-    y : ndarray, shape (n, m)
-        Values of the solution at ``t``.
-    sol : DenseOutput or None
-        Continuous solution when ``dense_output=True``.
-    t_events, y_events : list of ndarray or None
-        For each event function, the times and states at which it crossed zero.
-    nfev, njev, nlu, nsteps, nreject : int
-        Right-hand side evaluations, Jacobian evaluations, LU decompositions,
-        accepted and rejected steps.
-    status : int
-        0 end reached, 1 terminal event, negative a failure: -1 the step
-        budget ran out or the step fell below round-off (SciPy's -1), and with
-        ``errors="status"`` the other kinds (-2 a NaN or inf, -3 a singular
-        state, ...; the table in :mod:`mechpy.errors`).
-    message : str
-        What happened, and for a failure where (t, the component).
-    success : bool
-        ``status >= 0``.
-
-    Methods
-    -------
-    raise_for_status()
-        Raise the failure's exception (:class:`mechpy.StepBudgetError`,
-        :class:`mechpy.StepSizeError`, ...); nothing when ``success``.
-
-    Examples
-    --------
-    >>> s = mp.solve(lambda t, y: -2.0 * y, (0, 1), [3.0], t_eval=[0.5, 1.0])
-    >>> s.success, s.status, s.y.shape
-    (True, 0, (1, 2))
-    >>> np.round(s.y[0], 7), np.round(3.0 * np.exp(-2.0 * s.t), 7)    # y = 3 exp(-2t)
-    (array([1.1036383, 0.4060059]), array([1.1036383, 0.4060058]))
-    >>> s.raise_for_status() is None
-    True
-
-    A step budget too small is a status, not an exception (``errors="auto"``), until
-    asked for:
-
-    >>> s = mp.solve(mp.scenes.VanDerPol(1.0), (0, 1000), [2.0, 0.0], max_steps=10)
-    >>> s.status, s.success
-    (-1, False)
-    >>> try:
-    ...     s.raise_for_status()
-    ... except mp.StepBudgetError:
-    ...     print("StepBudgetError")
-    StepBudgetError
-    """
-
-    def raise_for_status(self) -> None:
-        """Raise the exception of a failed solve; return None when it succeeded.
-
-        Raises
-        ------
-        mechpy.MechpyError
-            The class the status table gives the failure (for ``status = -1``
-            :class:`mechpy.StepBudgetError` or :class:`mechpy.StepSizeError`),
-            with the solve's message.
-        """
-        code = self.__dict__.get("_code", 0)
-        if _STATUS[code]["solve_status"] < 0:
-            raise _status_error(code, "solve", self["message"])
-
-    def __getattr__(self, name):
-        try:
-            return self[name]
-        except KeyError:
-            raise AttributeError(name) from None
-
-    __setattr__ = dict.__setitem__
-
-    def __repr__(self):
-        keys = ["message", "success", "status", "t", "y", "sol", "t_events", "y_events", "nfev",
-                "njev", "nlu", "nsteps", "nreject"]
-        w = max(map(len, keys))
-        lines = []
-        for k in keys:
-            v = self.get(k)
-            s = repr(v) if not isinstance(v, np.ndarray) or v.size < 8 else \
-                f"array of shape {v.shape}"
-            lines.append(f"{k.rjust(w)}: {s}")
-        return "\n".join(lines)
-
-    def __dir__(self):
-        return list(self.keys())
-
-
-class DenseOutput:
-    """Continuous solution: ``sol(t)`` gives y at any t in ``[t_min, t_max]``.
-
-    Like SciPy's ``OdeSolution``: a scalar t gives shape (n,), an array of
-    times shape (n, len(t)), times of any shape (...) shape (n, ...).  Each
-    step's interpolant is the method's own (4th order for dopri5, 7th for
-    dop853, cubic Hermite otherwise); it is evaluated in C.
-
-    Examples
-    --------
-    >>> s = mp.solve(lambda t, y: [y[1], -y[0]], (0, 2 * np.pi), [0.0, 1.0], dense_output=True,
-    ...              rtol=1e-10, atol=1e-12)
-    >>> t = np.array([0.3, 1.7, 4.0])
-    >>> np.round(s.sol(t)[0], 8), np.round(np.sin(t), 8)            # y = (sin t, cos t)
-    (array([ 0.29552021,  0.99166481, -0.7568025 ]), array([ 0.29552021,  0.99166481, -0.7568025 ]))
-    >>> s.sol(1.0).shape, s.sol(np.ones((2, 5))).shape
-    ((2,), (2, 2, 5))
-    """
-
-    def __init__(self, seg_t, seg_h, seg_c, backward=False):
-        # a backward solve keeps its segments in s = -t
-        self._seg = (np.ascontiguousarray(seg_t), np.ascontiguousarray(seg_h),
-                     np.ascontiguousarray(seg_c))
-        self._sign = -1.0 if backward else 1.0
-        ends = (self._sign * float(seg_t[0]), self._sign * float(seg_t[-1] + seg_h[-1]))
-        self.t_min, self.t_max = min(ends), max(ends)
-        self.n_segments = len(seg_t)
-
-    def __call__(self, t):
-        t = np.asarray(t, dtype=np.float64)
-        scalar = t.ndim == 0
-        tq = np.ascontiguousarray(t.reshape(-1) * self._sign)
-        if not np.all(np.isfinite(tq)):
-            raise ValueError("t must be finite")
-        out = _core.ode_dense_eval(*self._seg, tq)
-        return out[0] if scalar else out.T.reshape(out.shape[1:] + t.shape)
-
-    def __repr__(self):
-        return f"DenseOutput(t_min={self.t_min}, t_max={self.t_max}, segments={self.n_segments})"
-
-
-class _ConstantDense(DenseOutput):
-    """The continuous solution of a solve that takes no step (t0 == tf, or an
-    empty y0): y0 at every t, shaped as :class:`DenseOutput`'s values."""
-
-    def __init__(self, y0, t0, tf):
-        self._y = np.array(y0)
-        self.t_min, self.t_max = min(t0, tf), max(t0, tf)
-        self.n_segments = 1
-
-    def __call__(self, t):
-        t = np.asarray(t, dtype=np.float64)
-        if not np.all(np.isfinite(t)):
-            raise ValueError("t must be finite")
-        y = self._y.reshape(self._y.shape + (1,) * t.ndim)
-        return np.array(np.broadcast_to(y, self._y.shape + t.shape))
-
-
-class _MappedDense(DenseOutput):
-    """A DenseOutput whose values (states first) go through ``fn``: a complex
-    solve's (Re y, Im y) back to y."""
-
-    def __init__(self, inner, fn):
-        self._inner, self._fn = inner, fn
-        self.t_min, self.t_max = inner.t_min, inner.t_max
-        self.n_segments = inner.n_segments
-
-    def __call__(self, t):
-        return self._fn(self._inner(t))
-
-
-def methods() -> list[dict]:
-    """Every integration method: name, order, adaptive, implicit, symplectic,
-    needs_jacobian, dense_output (the order of its interpolant).
-
-    GSL's steppers have no interpolant of their own: the one-step rows of
-    order >= 4 use a quintic Hermite interpolant (the midpoint from a half
-    step, built only on steps that need output; their steps are then kept to
-    the length at which it meets the tolerance), the others the cubic Hermite
-    interpolant.  SciPy's method names are accepted as aliases (see
-    :data:`SCIPY_METHODS`).
-
-    Known limitations: ``"gsl:bsimp"`` (GSL's Bader-Deuflhard stepper)
-    underestimates its error on components that sit a few tens of atol above
-    zero in a stiff system: on the test set's E5 it ends 150% off at rtol 1e-6
-    with status 0 (6e-2 at 1e-8); it needs rtol <= 1e-10 there (1.1e-3, the
-    atol-limited error of every method), or use ``"radau"``.  ``"gsl:msbdf"``
-    (and ``"BDF"``) is the least accurate stiff row per rtol: 2-10x SciPy's
-    BDF error at the same tolerances.
-
-    Examples
-    --------
-    >>> rows = {m["name"]: m for m in mp.methods()}
-    >>> rows["dop853"]["order"], rows["dop853"]["adaptive"], rows["verlet"]["symplectic"]
-    (8, True, True)
-    >>> rows["radau"]["implicit"], rows["radau"]["order"]         # Radau IIA, order 5
-    (True, 5)
-    """
-    return _core.ode_methods()
-
-
-#: SciPy's ``solve_ivp`` method names and the mechpy method each one runs.
-#: ``"RK23"`` (Bogacki-Shampine 3(2)) runs ``"dopri5"``, the explicit pair of
-#: the next order: the same tolerances met in fewer steps; ``"BDF"`` runs
-#: GSL's variable-order BDF, ``"LSODA"`` the stiffness-switching ``"auto"``
-#: (dop853 and radau rather than Adams and BDF).
-SCIPY_METHODS = {"RK45": "dopri5", "RK23": "dopri5", "DOP853": "dop853", "Radau": "radau",
-                 "BDF": "gsl:msbdf", "LSODA": "auto"}
-
-_METHOD_NAMES = None
-
-
-def _method_names():
-    global _METHOD_NAMES
-    if _METHOD_NAMES is None:
-        _METHOD_NAMES = {m["name"]: m for m in methods()}
-    return _METHOD_NAMES
-
-
-def _python_backed(obj) -> bool:
-    """True for a ctypes callback made from a Python function (directly or
-    inside a scipy.LowLevelCallable): ctypes swallows its exceptions."""
-    if isinstance(obj, tuple) and type(obj).__name__ == "LowLevelCallable":
-        obj = tuple.__getitem__(obj, 1)
-    if not isinstance(obj, ctypes._CFuncPtr):
-        return False
-    objs = getattr(obj, "_objects", None)
-    return isinstance(objs, dict) and any(type(v).__name__ == "CThunkObject"
-                                          for v in objs.values())
-
-
-@contextlib.contextmanager
-def _catch_unraisable(caught: list):
-    """Collect into ``caught`` the exceptions ctypes would print and drop
-    (sys.unraisablehook) in this thread while the solve runs; the C core
-    checks the list after every call of the system and raises the first one
-    again."""
-    me = threading.get_ident()
-    prev = sys.unraisablehook
-
-    def hook(u):
-        if threading.get_ident() == me:
-            if not caught:
-                exc = u.exc_value if u.exc_value is not None else u.exc_type()
-                if u.exc_traceback is not None and exc.__traceback__ is None:
-                    exc = exc.with_traceback(u.exc_traceback)
-                caught.append(exc)
-        else:
-            prev(u)
-
-    sys.unraisablehook = hook
-    try:
-        yield caught
-    finally:
-        sys.unraisablehook = prev
-
-
-def _watch_list(system):
-    """An empty list to collect a ctypes callback's swallowed exceptions in,
-    or None when the system has no callback written in Python."""
-    if isinstance(system, SecondOrder):
-        obj = system.accel
-    else:  # a scene carries its torque callback (RigidBody) as _torque_fn
-        obj = getattr(system, "_torque_fn", system)
-    return [] if _python_backed(obj) else None
-
-
-def _system_spec(system, args, method):
-    if isinstance(system, SecondOrder):
-        c = _c_address(system.accel)
-        if c is not None:
-            return ("cfunc2", c[0], c[1]), None
-        return ("python2", system.accel, tuple(args)), None
-    if isinstance(system, Scene):
-        if args:
-            raise TypeError("args are not used with a scene: set its parameters instead")
-        # a scene may carry a C callback bound into its model (RigidBody's torque)
-        spec = getattr(system, "_spec", None)
-        if spec is not None:
-            return spec(method), system.dim
-        return ("scene", system._model, system._vector()), system.dim
-    c = _c_address(system)
-    if c is not None:
-        return ("cfunc", c[0], c[1]), None
-    if callable(system):
-        return ("python", system, tuple(args)), None
-    raise TypeError(f"system must be a scene, a callable f(t, y, *args) or a C callback, "
-                    f"got {type(system).__name__}")
-
-
-def _events_spec(events):
-    if events is None:
-        return None, None, None
-    if callable(events):
-        events = [events]
-    try:
-        evs = list(events)
-    except TypeError:
-        raise TypeError(f"events must be a callable or a sequence of callables, got "
-                        f"{type(events).__name__}") from None
-    if not evs:   # SciPy's events=[]: no event, empty t_events and y_events
-        return evs, None, None
-    term, dirs = [], []
-    for i, e in enumerate(evs):
-        if not callable(e):
-            raise TypeError(f"events[{i}] must be callable")
-        t = getattr(e, "terminal", False)
-        if t is None:  # SciPy treats None as False
-            t = False
-        if isinstance(t, (bool, np.bool_)):
-            term.append(1 if t else 0)
-        else:
-            term.append(as_int(t, f"events[{i}].terminal", minimum=0))
-        d = getattr(e, "direction", 0)
-        d = as_scalar(d, f"events[{i}].direction")
-        dirs.append(int(np.sign(d)))
-    return evs, np.array(term, dtype=np.intc), np.array(dirs, dtype=np.intc)
-
-
-def _as_args(args) -> tuple:
-    if isinstance(args, tuple):
-        return args
-    return tuple(args) if isinstance(args, list) else (args,)
 
 
 def _common(method, t_span, rtol, atol, n, h, first_step, max_step, max_steps,
@@ -438,7 +61,7 @@ def _common(method, t_span, rtol, atol, n, h, first_step, max_step, max_steps,
                          "finite t_span")
     if t0 == tf and not zero_span:
         raise ValueError(f"t_span must have t0 != tf, got ({t0}, {tf})")
-    if tf < t0 and ((info["symplectic"] and not info["implicit"]) or method.startswith("rigid:")):
+    if tf < t0 and ((info["symplectic"] and not info["implicit"]) or info["rigid"]):
         raise ValueError(f"method {method!r} integrates forwards in time only (t0 < tf); "
                          "for a backward solve use dop853, radau, gauss4, ...")
     if type(rtol) is float or np.ndim(rtol) == 0:
@@ -480,10 +103,10 @@ def _common(method, t_span, rtol, atol, n, h, first_step, max_step, max_steps,
     return method, t0, tf, rtol, atol_a, hh, fs, ms, budget
 
 
-def _options(t0, tf, rtol, atol, t_eval, h, first_step, max_step, max_steps) -> dict:
-    """The options ``_core.ode_solve`` and ``ode_solve_many`` share, by name."""
-    return dict(t0=t0, tf=tf, rtol=rtol, atol=atol, t_eval=t_eval, h=h, first_step=first_step,
-                max_step=max_step, max_steps=max_steps)
+def _options(t0, tf, rtol, atol, t_eval, h, first_step, max_step, max_steps) -> tuple:
+    """The options ``_core.ode_solve`` and ``ode_solve_many`` share, in the one
+    order the core parses them (py_ode.c's ode_args_from_argv)."""
+    return (t0, tf, rtol, atol, t_eval, h, first_step, max_step, max_steps)
 
 
 def _t_eval(t_eval, t0, tf):
@@ -497,14 +120,6 @@ def _t_eval(t_eval, t0, tf):
     if tf < t0 and np.any(d >= 0):
         raise ValueError("t_eval must be strictly decreasing (t_span is decreasing)")
     return tev
-
-
-def _rigid_split_check(method, system):
-    """The rigid-body splitting methods run on RigidBody scenes only."""
-    if method.startswith("rigid:"):
-        if not isinstance(system, RigidBody):
-            raise ValueError(f"method {method!r} integrates a RigidBody scene (torque-free or "
-                             f"a constant torque), not {type(system).__name__}")
 
 
 def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
@@ -659,8 +274,7 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
         if isinstance(jac, (str, bytes)):
             raise TypeError("jac must be callable or a constant (n, n) array")
         jac = as_array(jac, "jac", shape=(n, n))
-    if method[0] == "r" and method.startswith("rigid:"):
-        _rigid_split_check(method, system)
+    _rigid_split_check(method, system)
     spec, dim = _system_spec(system, args, method)
     if dim is not None and dim != n:
         raise ValueError(f"y0 must have {dim} values for {type(system).__name__}, got {n}")
@@ -676,8 +290,8 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
         return _no_step(t0, tf, y0a, tev, dense_output, evs)
 
     watch = _watch_list(system)
-    call = (method, spec, y0a, t0, tf, rtol, atol_a, tev, hh, fs, ms, budget, dense_output,
-            evs or None, term, dirs, args, jac, watch)
+    call = (method, spec, y0a, *_options(t0, tf, rtol, atol_a, tev, hh, fs, ms, budget),
+            dense_output, evs or None, term, dirs, args, jac, watch)
     if watch is None:
         r = _core.ode_solve(*call)
     else:
@@ -719,12 +333,6 @@ def _no_step(t0, tf, y0, tev, dense_output, evs) -> Solution:
                    message=_STATUS[0]["message"], success=True)
     object.__setattr__(out, "_code", 0)
     return out
-
-
-def _python_fun(system) -> bool:
-    """A Python callable system (not a scene, SecondOrder or C callback)."""
-    return (callable(system) and not isinstance(system, (Scene, SecondOrder))
-            and _c_address(system) is None)
 
 
 def _one_column(fun):
@@ -801,46 +409,6 @@ def _solve_complex(system, t_span, y0, kw) -> Solution:
     return r
 
 
-class EnsembleSolution(Solution):
-    """Result of :func:`solve_many`: ``t`` (m,), ``y`` (k, n, m), ``success``
-    (k,), ``status`` (k,), ``message`` (a list of k str), ``nfev`` (k,),
-    ``lanes`` (bool: the trajectories ran in SIMD lanes).
-
-    ``status[i]`` is what :func:`solve` reports for trajectory i: 0 end
-    reached, -1 step budget or step size, and with ``errors="status"`` the
-    other failures' numbers (-2 a NaN or inf, -3 a singular state, ...; the
-    table in :mod:`mechpy.errors`); ``message[i]`` says what happened where.
-    ``raise_for_status()`` raises the first failed trajectory's exception,
-    naming its index.
-
-    Examples
-    --------
-    Exponential decays y' = -c y with c = 1, 2, 3 (Python callable: c is the
-    per-trajectory parameter, the leading argument):
-
-    >>> e = mp.solve_many(lambda t, y, c: -c * y, (0, 1), [[1.0]] * 3, params=[[1.0], [2.0], [3.0]])
-    >>> e.success, e.status
-    (array([ True,  True,  True]), array([0, 0, 0]))
-    >>> np.round(e.y[:, 0, -1], 8), np.round(np.exp(-np.array([1.0, 2.0, 3.0])), 8)
-    (array([0.36787944, 0.13533528, 0.04978707]), array([0.36787944, 0.13533528, 0.04978707]))
-    """
-
-    def raise_for_status(self) -> None:
-        """Raise the exception of the first failed trajectory (by index), naming
-        it; return None when every trajectory succeeded.
-
-        Raises
-        ------
-        mechpy.MechpyError
-            The class the status table gives that trajectory's failure.
-        """
-        _raise_first(self.__dict__.get("_code", np.zeros(0, int)), self["message"], "raise")
-
-    def __repr__(self):
-        return (f"EnsembleSolution(k={self['y'].shape[0]}, n={self['y'].shape[1]}, "
-                f"m={self['t'].size}, all success={bool(np.all(self['success']))})")
-
-
 def _lanes_mode(lanes) -> int:
     """solve_many's ``lanes`` as the core takes it: -1 when possible, 0, 1."""
     if lanes is None:
@@ -848,26 +416,6 @@ def _lanes_mode(lanes) -> int:
     if not isinstance(lanes, (bool, np.bool_)):
         raise TypeError(f"lanes must be None, True or False, got {lanes!r}")
     return int(bool(lanes))
-
-
-def _raise_first(codes, messages, errors: str) -> None:
-    """Raise the first trajectory's failure that raises under ``errors``."""
-    for i, c in enumerate(np.asarray(codes).tolist()):
-        if _raises(c, errors):
-            raise _status_error(c, f"solve_many: trajectory {i}", messages[i])
-
-
-def _ensemble_params(system, params, k):
-    if params is None:
-        return None
-    if isinstance(params, dict):
-        if not isinstance(system, Scene):
-            raise TypeError("params as a dict of names needs a scene")
-        return system.ensemble_params(k, **params)
-    p = as_array(params, "params", ndim=2)
-    if p.shape[0] != k:
-        raise ValueError(f"params must have {k} rows (one per trajectory), got {p.shape}")
-    return p
 
 
 class _TqdmProgress:
@@ -907,7 +455,8 @@ def solve_many(system, t_span: Sequence[float], y0s, *, params=None, t_eval=None
                h: float | None = None, first_step: float | None = None,
                max_step: float = np.inf, max_steps: int = 10_000_000,
                errors: str = "auto", client=None, chunk_size: int | None = None,
-               lazy: bool = False, lanes: bool | None = None) -> EnsembleSolution:
+               lazy: bool = False, lanes: bool | None = None, events=None,
+               jac=None) -> EnsembleSolution:
     """Integrate k initial states (an ensemble) in C, on several threads.
 
     Parameters
@@ -959,6 +508,15 @@ def solve_many(system, t_span: Sequence[float], y0s, *, params=None, t_eval=None
         unless the environment variable ``MECHPY_LANES`` is ``0``; ``True``:
         in lanes or ``ValueError``; ``False``: one scalar solve per trajectory.
         ``EnsembleSolution.lanes`` says which ran.
+    events : callable or list of callables, optional
+        As for :func:`solve` (SciPy's ``terminal`` and ``direction``), each
+        called as ``g(t, y, *args)`` (with a Python system's row of
+        ``params`` before ``args``, as the system is); per trajectory, the
+        crossings come back in ``t_events[i]`` and ``y_events[i]``.  Event
+        functions written in Python run on one thread, on the scalar path.
+    jac : callable or array_like (n, n), optional
+        As for :func:`solve`: the Jacobian for the implicit methods, called as
+        the system is (a constant matrix runs in C on every thread).
     errors : {"auto", "raise", "status"}
         As for :func:`solve`, per trajectory: ``"auto"`` reports the step
         budget and step size in ``status`` and raises the first trajectory
@@ -971,7 +529,9 @@ def solve_many(system, t_span: Sequence[float], y0s, *, params=None, t_eval=None
     -------
     EnsembleSolution
         ``t`` (m,), ``y`` (k, n, m), ``success`` (k,), ``status`` (k,),
-        ``message`` (k str), ``nfev`` (k,), ``lanes`` (bool).
+        ``message`` (k str), ``nfev`` (k,), ``lanes`` (bool); with
+        ``events``, ``t_events`` and ``y_events``: per trajectory, a list of
+        one array per event function (as :func:`solve` gives them).
 
     Notes
     -----
@@ -1024,8 +584,7 @@ def solve_many(system, t_span: Sequence[float], y0s, *, params=None, t_eval=None
     """
     if client is not None or chunk_size is not None or lazy:
         given = dict(locals())              # every argument, new ones too
-        from .cluster import _solve_many    # dask is imported only here
-        return _solve_many(**given)
+        return _cluster._solve_many(local=solve_many, **given)   # dask is imported there
     Y0 = as_array(y0s, "y0s", ndim=2, allow_empty=True)
     k, n = Y0.shape
     if n == 0:
@@ -1034,12 +593,16 @@ def solve_many(system, t_span: Sequence[float], y0s, *, params=None, t_eval=None
         method, t_span, rtol, atol, n, h, first_step, max_step, max_steps)
     tev = np.array([tf]) if t_eval is None else _t_eval(t_eval, t0, tf)
     args = _as_args(args)
-    if method[0] == "r" and method.startswith("rigid:"):
-        _rigid_split_check(method, system)
+    _rigid_split_check(method, system)
     spec, dim = _system_spec(system, args, method)
     if dim is not None and dim != n:
         raise ValueError(f"y0s must have {dim} columns for {type(system).__name__}, got {n}")
     par = _ensemble_params(system, params, k)
+    evs, term, dirs = _events_spec(events)
+    if jac is not None and not callable(jac):
+        if isinstance(jac, (str, bytes)):
+            raise TypeError("jac must be callable or a constant (n, n) array")
+        jac = as_array(jac, "jac", shape=(n, n))
     errors = _errors_mode(errors)
     check = getattr(system, "_check_initial", None)   # e.g. constraints a scene imposes
     if check is not None and k:   # singular rows: statuses under errors="status"
@@ -1059,7 +622,8 @@ def solve_many(system, t_span: Sequence[float], y0s, *, params=None, t_eval=None
             r = _core.ode_solve_many(method, spec, Y0, opts, params=par, args=args,
                                      threads=int(nthreads),
                                      progress=bool(progress) if bar is None else bar.report,
-                                     watch=watch, lanes=want_lanes)
+                                     watch=watch, lanes=want_lanes, events=evs or None,
+                                     terminal=term, direction=dirs, jac=jac)
         if bar is not None:
             bar.report(k, k)    # the C side reports from one thread: it may miss the last
     finally:
@@ -1067,7 +631,12 @@ def solve_many(system, t_span: Sequence[float], y0s, *, params=None, t_eval=None
             bar.close()
     _raise_first(r["code"], r["message"], errors)
     status = np.array([_STATUS[c]["solve_status"] for c in r["code"].tolist()], dtype=int)
+    fields = {}
+    if evs is not None:
+        found = r["events"] or [[] for _ in range(k)]
+        fields = dict(t_events=[[te for te, _ in row] for row in found],
+                      y_events=[[ye for _, ye in row] for row in found])
     out = EnsembleSolution(t=tev, y=r["y"], success=status >= 0, status=status,
-                           message=r["message"], nfev=r["nfev"], lanes=r["lanes"])
+                           message=r["message"], nfev=r["nfev"], lanes=r["lanes"], **fields)
     object.__setattr__(out, "_code", r["code"])
     return out

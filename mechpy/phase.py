@@ -20,8 +20,11 @@ from typing import NamedTuple
 import numpy as np
 
 from ._validate import as_array, as_int, as_scalar
-from .errors import ConvergenceError
+from ._system import _is_scene as _is_mechpy_scene
+from .errors import ConvergenceError, NonFiniteError, StepBudgetError
 from .integrate import solve, solve_many
+from .tangent import _floquet
+from .tangent import _lyapunov_spectrum as _spectrum
 
 __all__ = ["FixedPoint", "vector_field", "fixed_points", "FIXED_POINT_STARTS",
            "MAX_SECTION_POINTS", "SECTION_MAX_STEPS", "limit_cycle", "poincare",
@@ -49,8 +52,7 @@ class LyapunovFloorWarning(UserWarning):
 
 
 def _is_scene(system) -> bool:
-    from .scenes import Scene
-    return isinstance(system, Scene)
+    return _is_mechpy_scene(system)
 
 
 def _callable(system):
@@ -600,7 +602,6 @@ def _section_end(te, period):
 def _check(s, what=""):
     if s.status < 0:
         if "max_steps" in s.message:
-            from .errors import StepBudgetError
             raise StepBudgetError(f"the integration{' ' + what if what else ''} needs more "
                                   "steps than its budget: "
                                   f"{s.message} Raise max_steps or shorten the span.")
@@ -673,7 +674,6 @@ def bifurcation(scene, param: str, values, y0, period, n: int, skip: int, *, t0:
                        max_steps=max_steps, errors="status")
         if not np.all(e.success):
             bad = int(np.flatnonzero(~e.success)[0])
-            from .errors import NonFiniteError, StepBudgetError
             if int(e.status[bad]) == -2:
                 raise NonFiniteError(f"bifurcation: the integration for {param} = "
                                      f"{float(vals[bad])!r} produced NaN or inf")
@@ -985,7 +985,6 @@ def lyapunov_spectrum(system, y0, t, *, dt: float = 1.0, transient: float = 0.0,
     >>> bool(np.isclose(lam.sum(), -0.3, atol=1e-8))
     True
     """
-    from .tangent import _lyapunov_spectrum as _spectrum
     return _spectrum(system, y0, t, dt=dt, transient=transient, method=method, rtol=rtol,
                      atol=atol, return_history=return_history)
 
@@ -1048,7 +1047,6 @@ def floquet(system, y0, *, period=None, tol: float = 1e-10, max_iter: int = 50,
     >>> round(T, 6)
     6.663287
     """
-    from .tangent import _floquet
     return _floquet(system, y0, period=period, tol=tol, max_iter=max_iter, method=method,
                     rtol=rtol, atol=atol, t_max=t_max)
 

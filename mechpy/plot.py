@@ -11,6 +11,8 @@ import numpy as np
 
 from . import _motion
 from ._validate import as_array, as_int, as_scalar
+from .integrate import solve
+from .scenes import Pendulum, Scene, VanDerPol
 
 __all__ = ["phase_portrait", "work_precision", "modes", "trajectory3d", "animate_field", "animate"]
 
@@ -52,7 +54,6 @@ def _func_animation(fig, func, **kw):
 def _state_labels(system):
     """Axis labels, with units, of a two-state system's (q, q_dot): from the
     scene's type, its coordinate names (compiled scenes), or generic ones."""
-    from .scenes import Pendulum, Scene, VanDerPol
     if isinstance(system, Pendulum):
         return r"$\theta$ (rad)", r"$\dot\theta$ (rad/s)"
     if isinstance(system, VanDerPol):
@@ -72,7 +73,6 @@ def _colorbar(ax, mappable, label):
 
 def _field(system, X, Y, t=0.0):
     """(U, V) of a 2-D system on the grid (X, Y)."""
-    from .scenes import Scene
     if isinstance(system, Scene):
         f = system.rhs(t, np.stack([X, Y]))
         return f[0], f[1]
@@ -169,7 +169,6 @@ def phase_portrait(system, xlim=(-2 * np.pi, 2 * np.pi), ylim=(-4.0, 4.0), *, t=
                            label=f"nullcline d{names[0]}/dt = 0"),
                     Line2D([], [], color="tab:orange", lw=0.8, ls="--",
                            label=f"nullcline d{names[1]}/dt = 0")]
-    from .integrate import solve
     for y0 in trajectories:
         s = solve(system, (0.0, t_max), as_array(y0, "trajectory start", shape=(2,)),
                   t_eval=np.linspace(0.0, t_max, 2000), rtol=1e-9)
@@ -183,7 +182,6 @@ def phase_portrait(system, xlim=(-2 * np.pi, 2 * np.pi), ylim=(-4.0, 4.0), *, t=
     ax.set_xlabel(labels[0])
     ax.set_ylabel(labels[1])
     if not ax.get_title():
-        from .scenes import Scene
         name = type(system).__name__ if isinstance(system, Scene) else "f(t, y)"
         ax.set_title(f"phase portrait of {name}")
     if colorbar:
@@ -409,7 +407,6 @@ def animate_field(system, xlim=(-2 * np.pi, 2 * np.pi), ylim=(-4.0, 4.0), *, par
         return _animate_field(system, xlim, ylim, particles=particles, frames=frames, dt=dt,
                               trail=trail, respawn=respawn, t=t, seed=seed, path=path,
                               interval=interval)
-    from .scenes import Scene
     if not isinstance(param, str):
         raise TypeError(f"param must be a parameter name (str), got {type(param).__name__}")
     if not isinstance(system, Scene):

@@ -23,7 +23,10 @@ import numpy as np
 
 from . import _core
 from ._callbacks import c_address
+from ._solution import DenseOutput, Solution
+from ._system import _method_names
 from ._validate import as_array, as_int, as_scalar
+from .integrate import solve
 from .modes import chain, normal_modes
 
 __all__ = ["Scene", "Pendulum", "VanDerPol", "Duffing", "Kepler", "RestrictedThreeBody", "Foucault",
@@ -119,6 +122,10 @@ class Scene:
     """
 
     _model: str = ""
+    #: the protocol mechpy._system recognises a scene by (no import of this module)
+    _is_mechpy_scene = True
+    #: the rigid-body splitting methods (rows with "rigid") run on this scene
+    _rigid_split = False
 
     def __init_subclass__(cls, **kwargs):
         super().__init_subclass__(**kwargs)
@@ -536,6 +543,8 @@ class RigidBody(Scene):
 
     _model = "RigidBody"
 
+    _rigid_split = True
+
     def __init__(self, moments=_row_defaults("RigidBody", 3), torque=None, orientation=False):
         m = as_array(moments, "moments", shape=(3,))
         self._torque_fn = self._torque_c = None
@@ -563,7 +572,7 @@ class RigidBody(Scene):
         spec = ("scene", self._model, self._vector())
         if self._torque_c is None:
             return spec
-        if method.startswith("rigid:"):
+        if _method_names()[method]["rigid"]:
             raise ValueError(f"method {method!r} needs a torque-free body or a constant torque; "
                              "with a torque callback use a general method (dop853, rk4, "
                              "radau, ...)")
@@ -968,7 +977,6 @@ class Rocket(Scene):
             appears once, with the mass exactly ``m_dry``), the counters
             summed, ``sol`` the joined dense output if asked for.
         """
-        from .integrate import DenseOutput, Solution, solve
         if "events" in options:
             raise TypeError("Rocket.fly does not take events (call mechpy.solve on the scene)")
         if np.shape(t_span) != (2,):

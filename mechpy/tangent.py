@@ -42,7 +42,7 @@ import numpy as np
 
 from ._validate import as_array, as_int, as_scalar
 from .errors import ConvergenceError
-from .integrate import Solution, solve
+from .integrate import Solution, solve, solve_many
 from .scenes import Scene, _row
 
 __all__ = ["sensitivity", "fit", "FitResult"]
@@ -284,7 +284,6 @@ def sensitivity(system, t_span, y0, params=(), *, t_eval=None, method: str = "do
     S0 = np.zeros((n, k + n))
     S0[:, k:] = np.eye(n)
     if y0.ndim == 2:
-        from .integrate import solve_many
         z0 = np.hstack([y0, np.broadcast_to(S0.ravel(), (y0.shape[0], S0.size))])
         e = solve_many(aug, t_span, z0, t_eval=t_eval, method=method, rtol=rtol, atol=atol,
                        **solve_kw)

@@ -20,7 +20,7 @@ int mp_rigid_rhs_torque_q(double t, const double *y, double *f, void *d);
 /* A body-frame torque given as a C function of the scene state y (omega, and
  * the quaternion with orientation): tau[0..2] = torque(t, y). */
 typedef void (*mp_rigid_torque_fn)(double t, const double *y, double *tau, void *user_data);
-typedef struct {
+typedef struct mp_rigid_torque {
     const double *params; /* the model's parameters (I1, I2, I3, ...) */
     mp_rigid_torque_fn fn;
     void *user_data;

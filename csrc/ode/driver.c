@@ -1,6 +1,7 @@
 /* The one driver loop of every integration method: step-size control,
  * budget, interrupts, output at t_eval from dense output, events, storage. */
 #include "ode/ode.h"
+#include "ode/control.h"
 #include "ode/fixed.h"
 
 #include <float.h>
@@ -53,13 +54,7 @@ int mp_ode_ws_jac(mp_ode_ws *w, double t, const double *y, const double *f0, dou
 
 double mp_ode_err_norm(const mp_ode_ws *w, const double *e, const double *y0, const double *y1)
 {
-    double s = 0.0;
-    for (size_t i = 0; i < w->n; i++) {
-        double sc = w->o->atol[i] + w->o->rtolv[i] * fmax(fabs(y0[i]), fabs(y1[i]));
-        double q = e[i] / sc;
-        s += q * q;
-    }
-    return sqrt(s / (double)w->n);
+    return mp_ode_rms_norm(w->o, w->n, 1, e, y0, y1);
 }
 
 void mp_ode_dense_eval(const double *coef, size_t ncoef, size_t n, double s, double *out)
@@ -336,20 +331,14 @@ static int ev_step(mp_ode_ws *w, mp_ode_result *r, const mp_ode_options *o, doub
 
 /* ---- the first step: Hairer's hinit ------------------------------------- */
 
+/* Contract: Hairer's first step (control.h's hinit, whose Euler probe runs
+ * here: a probe that overflows is retried ten times shorter, up to 20 times)
+ * from (t0, y, f), at most hmax and tf - t0.  MP_OK or the probe's failure. */
 static int first_step(mp_ode_ws *w, double t0, double tf, double hmax, double *h_out)
 {
     size_t n = w->n;
     const mp_ode_options *o = w->o;
-    double dnf = 0, dny = 0;
-    for (size_t i = 0; i < n; i++) {
-        double sk = o->atol[i] + o->rtolv[i] * fabs(w->y[i]);
-        dnf += (w->f[i] / sk) * (w->f[i] / sk);
-        dny += (w->y[i] / sk) * (w->y[i] / sk);
-    }
-    dnf /= (double)n;
-    dny /= (double)n;
-    double h = (dnf <= 1e-10 || dny <= 1e-10) ? 1e-6 : sqrt(dny / dnf) * 0.01;
-    h = fmin(h, fmin(hmax, tf - t0));
+    double dnf, h = mp_ode_hinit_trial(o, n, 1, w->y, w->f, hmax, tf - t0, &dnf);
     double *y1 = w->ynew, *f1 = w->fnew;
     int rc;
     for (int tries = 0;; tries++) { /* an explicit Euler trial that overflows: shorter */
@@ -360,17 +349,7 @@ static int first_step(mp_ode_ws *w, double t0, double tf, double hmax, double *h
         h *= 0.1;
     }
     if (rc != MP_OK) return rc;
-    double der2 = 0;
-    for (size_t i = 0; i < n; i++) {
-        double sk = o->atol[i] + o->rtolv[i] * fabs(w->y[i]);
-        double d = (f1[i] - w->f[i]) / sk;
-        der2 += d * d;
-    }
-    der2 = sqrt(der2 / (double)n) / h;
-    double der12 = fmax(fabs(der2), sqrt(dnf));
-    double h1 = der12 <= 1e-15 ? fmax(1e-6, h * 1e-3)
-                               : pow(0.01 / der12, 1.0 / (double)w->m->order);
-    *h_out = fmin(fmin(100.0 * h, h1), fmin(hmax, tf - t0));
+    *h_out = mp_ode_hinit_final(o, n, 1, w->y, w->f, f1, h, dnf, w->m->order, hmax, tf - t0);
     return MP_OK;
 }
 
@@ -396,37 +375,14 @@ static int output_step(mp_ode_result *r, const mp_ode_options *o, const mp_ode_w
 
 /* ---- step-size control and method switching ------------------------------ */
 
-/* The controller's memory between steps. */
-typedef struct {
-    double facold;      /* the last accepted error (Lund stabilisation) */
-    int rejected;       /* the last attempt was rejected */
-    int nonfinite;      /* ... because of a non-finite trial stage */
-    int stiff_count, calm_count; /* Hairer's stiffness test; the switching row's */
-} ode_control;
-
-/* Contract: Hairer's controller for a method with its own error estimate.
- * Returns 1 when the step (scaled error err) is accepted, with *hnew the next
- * step; 0 when rejected (also for a NaN err), with *h the step to retry. */
-static int control(const mp_ode_method *cur, ode_control *c, double err, double *h,
+/* Contract: control.h's controller for the scalar driver (the powers taken
+ * here).  1: accepted, *hnew the next step; 0: rejected, *h the retry. */
+static int control(const mp_ode_method *cur, mp_ode_ctl *c, double err, double *h,
                    double *hnew)
 {
-    if (!(err <= 1.0)) {
-        c->nonfinite = !isfinite(err);
-        double fac = isfinite(err) ? fmin(1.0 / cur->fac_min, pow(err, cur->expo) / cur->safety)
-                                   : 10.0;
-        *h /= fac;
-        c->rejected = 1;
-        return 0;
-    }
     double fac11 = pow(err, cur->expo);
-    /* Lund stabilisation only for methods with beta > 0 (dopri5) */
-    double fac = cur->beta > 0.0 ? fac11 / pow(c->facold, cur->beta) : fac11;
-    fac = fmax(1.0 / cur->fac_max, fmin(1.0 / cur->fac_min, fac / cur->safety));
-    *hnew = *h / fac;
-    c->facold = fmax(err, 1e-4);
-    if (c->rejected) *hnew = fmin(*hnew, *h);
-    c->rejected = c->nonfinite = 0;
-    return 1;
+    double fold = cur->beta > 0.0 ? pow(c->facold, cur->beta) : 1.0;
+    return mp_ode_control(cur, c, err, fac11, fold, h, hnew);
 }
 
 /* Contract: the switching row m after an accepted step ending at t, next step
@@ -435,7 +391,7 @@ static int control(const mp_ode_method *cur, ode_control *c, double err, double 
  * methods' states are swapped, the interpolant cleared, f(t, y) made current
  * and the controller restarted.  MP_OK or the right-hand side's failure. */
 static int switch_method(const mp_ode_method *m, mp_ode_ws *w, const mp_ode_method **cur,
-                         ode_control *c, double t, double h, mp_ode_result *r)
+                         mp_ode_ctl *c, double t, double h, mp_ode_result *r)
 {
     const mp_ode_method *next = *cur;
     if (*cur == m->nonstiff && c->stiff_count >= 15) next = m->stiff;
@@ -453,9 +409,7 @@ static int switch_method(const mp_ode_method *m, mp_ode_ws *w, const mp_ode_meth
     if (next->restart) next->restart(w);
     int rc = w->fnew_valid ? MP_OK : mp_ode_ws_rhs(w, t, w->y, w->f);
     if (rc != MP_OK) return rc;
-    c->stiff_count = c->calm_count = 0;
-    c->facold = 1e-4;
-    c->rejected = 0;
+    *c = mp_ode_ctl_start();
     r->nswitch++;
     return MP_OK;
 }
@@ -476,7 +430,7 @@ typedef struct {
     const mp_ode_options *o;
     mp_ode_result *r;
     mp_ode_ws w;
-    ode_control c;
+    mp_ode_ctl c;
     double t, tf, h, hmax;    /* where the solve is, its end, the next step, the largest */
     double t0;                /* its start */
     long nfixed;              /* fixed steps taken: the next starts at t0 + nfixed h */
@@ -617,12 +571,7 @@ static void stiffness_test(ode_run *s)
 {
     double rho_stiff = s->m->nonstiff ? MP_ODE_SWITCH_FRAC * s->cur->stiff_rho
                                       : s->cur->stiff_rho;
-    if (s->w.rho > rho_stiff) {
-        s->c.calm_count = 0;
-        if (++s->c.stiff_count >= 15) s->r->stiff = 1;
-    } else if (++s->c.calm_count >= 6) {
-        s->c.stiff_count = 0;
-    }
+    mp_ode_stiffness_test(&s->c, s->w.rho, rho_stiff, &s->r->stiff);
 }
 
 /* Contract: the rest of an accepted step [t, t + h] ending at tnew (tf on
@@ -740,13 +689,9 @@ static int run_loop(ode_run *s)
             (rc = o->interrupt(o->interrupt_ctx)) != MP_OK)
             break;
         s->attempts++;
-        int last = 0, controlled = cur->adaptive && !cur->self_controlled;
-        if (cur->adaptive ? t + 1.01 * h >= s->tf : t + h * (1.0 + 1e-9) >= s->tf) {
-            h = s->tf - t;
-            while (t + h > s->tf) h = nextafter(h, 0.0); /* no stage beyond tf */
-            last = 1;
-        }
-        if (controlled && h <= 16.0 * DBL_EPSILON * fmax(fabs(t), 1e-300)) {
+        int last, controlled = cur->adaptive && !cur->self_controlled;
+        h = mp_ode_step_span(cur->adaptive, t, h, s->tf, &last);
+        if (controlled && mp_ode_step_floor(t, h)) {
             rc = s->c.nonfinite ? MP_ENONFINITE : MP_ESTEP;
             break;
         }
@@ -756,8 +701,7 @@ static int run_loop(ode_run *s)
         rc = cur->step(w, t, h, &err);
         if (rc == MP_ENONFINITE && controlled) {
             /* a trial stage overflowed: reject and shrink as Hairer's codes do */
-            s->h = h / 10.0;
-            s->c.rejected = s->c.nonfinite = 1;
+            s->h = mp_ode_control_nonfinite(&s->c, h);
             r->nreject++;
             rc = MP_OK;
             continue;
@@ -828,7 +772,7 @@ static int solve_forward(const mp_ode_method *m, const mp_ode_problem *p, double
     s.o = o;
     s.r = r;
     s.tf = tf;
-    s.c = (ode_control){1e-4, 0, 0, 0, 0};
+    s.c = mp_ode_ctl_start();
     s.need_dense = o->n_eval > 0 || o->dense || o->n_events > 0;
     s.fast = m->block && p->replayable && o->n_events == 0 && !o->dense;
     if ((rc = alloc_events(&s)) == MP_OK && (rc = alloc_workspace(&s, p, t0, tf)) == MP_OK &&

@@ -6,6 +6,9 @@
 #define _POSIX_C_SOURCE 199309L /* clock_gettime */
 #include "ode/ensemble.h"
 
+#include "models/models.h"
+#include "models/rigid.h"
+
 #include <math.h>
 #include <pthread.h>
 #include <stdatomic.h>
@@ -28,6 +31,8 @@ typedef struct {
     const mp_ode_options *o;
     double *yout;
     mp_ode_outcome *out;
+    mp_ode_result *results;     /* keep each trajectory's result (or NULL) */
+    void *const *events_data;   /* trajectory i's events data (or NULL) */
     atomic_size_t next, done;
     atomic_int stop;    /* set on interrupt or a fatal error */
     atomic_int running; /* worker threads not yet finished */
@@ -125,13 +130,15 @@ static void *ens_run(void *argp)
         size_t i = atomic_fetch_add(&e->next, 1);
         if (i >= e->k) break;
         mp_ode_result r;
+        if (e->events_data) o.events_data = e->events_data[i];
         int rc = mp_ode_solve(e->m, &e->probs[i], e->t0, e->tf, e->y0s + i * e->n, &o, &r);
         mp_ode_result_outcome(&r, &e->out[i]);
         double *dst = e->yout + i * e->n * e->nt; /* (n, nt) block */
         for (size_t j = 0; j < e->nt; j++)
             for (size_t c = 0; c < e->n; c++)
                 dst[c * e->nt + j] = j < r.m ? r.y[j * e->n + c] : NAN;
-        mp_ode_result_free(&r);
+        if (e->results) e->results[i] = r; /* the caller frees it */
+        else mp_ode_result_free(&r);
         if (rc == MP_EINTR || rc == MP_ECALLBACK || rc == MP_ENOMEM) {
             if (!atomic_exchange(&e->stop, 1)) e->fatal = rc;
             break;
@@ -152,14 +159,12 @@ static void *ens_worker(void *argp)
     return NULL;
 }
 
-/* Contract: see lanes.h: dopri5, dop853 or rk4, t_eval given, no events or
- * dense output, and the checks solve_forward makes at its start pass (else
+/* Contract: see lanes.h: a row with a lane kernel, t_eval given, no events
+ * or dense output, and the checks solve_forward makes at its start pass (else
  * the scalar path reports them). */
 int mp_ode_lanes_supported(const mp_ode_method *m, const mp_ode_options *o, double t0, double tf)
 {
-    int method = strcmp(m->name, "dopri5") == 0 || strcmp(m->name, "dop853") == 0 ||
-                 strcmp(m->name, "rk4") == 0;
-    return method && o->n_eval > 0 && !o->dense && !o->n_events &&
+    return m->lanes != MP_LANE_NONE && o->n_eval > 0 && !o->dense && !o->n_events &&
            mp_ode_span_ok(m, t0, tf, o) == MP_OK;
 }
 
@@ -180,8 +185,8 @@ int mp_ode_lanes_run(const mp_ode_method *m, const mp_ode_problem *probs,
 int mp_ode_solve_many(const mp_ode_method *m, const mp_ode_problem *probs,
                       const mp_lane_system *lanes, size_t k, double t0, double tf,
                       const double *y0s, const mp_ode_options *o, int threads, double *yout,
-                      mp_ode_outcome *out, void (*progress)(size_t, size_t, void *),
-                      void *progress_ctx)
+                      mp_ode_outcome *out, mp_ode_result *results, void *const *events_data,
+                      void (*progress)(size_t, size_t, void *), void *progress_ctx)
 {
     if (k == 0) return MP_OK;
     ens_ctx e = {0};
@@ -197,6 +202,8 @@ int mp_ode_solve_many(const mp_ode_method *m, const mp_ode_problem *probs,
     e.o = o;
     e.yout = yout;
     e.out = out;
+    e.results = lanes ? NULL : results;
+    e.events_data = events_data;
     e.interrupt = o->interrupt;
     e.interrupt_ctx = o->interrupt_ctx;
     e.progress = progress;
@@ -234,4 +241,85 @@ int mp_ode_solve_many(const mp_ode_method *m, const mp_ode_problem *probs,
     free(tid);
     if (e.fatal) return e.fatal;
     return atomic_load(&e.stop) ? MP_EINTR : MP_OK;
+}
+
+/* ---- an ensemble's problems --------------------------------------------------- */
+
+int mp_ode_ensemble_build(mp_ode_ensemble *e, double t0, double tf, const mp_ode_options *o)
+{
+    const mp_model *mod = e->model;
+    size_t k = e->k;
+    e->probs = NULL;
+    e->torques = NULL;
+    e->lanes = NULL;
+    e->why = MP_ENS_OK;
+    memset(&e->ls, 0, sizeof e->ls);
+    if (e->m->symplectic && !e->m->implicit && e->base.nq == 0) {
+        e->why = MP_ENS_SEPARABLE;
+        return MP_EDOM;
+    }
+    if (e->rows && e->rows_kind == MP_ENS_ROWS_SCENE && !mod->dim_of && e->np != mod->nparams) {
+        e->why = MP_ENS_COLUMNS;
+        e->np_need = mod->nparams;
+        return MP_EDOM;
+    }
+    if (e->rows && e->rows_kind == MP_ENS_ROWS_DATA && e->np != e->nparams) {
+        e->why = MP_ENS_COLUMNS;
+        e->np_need = e->nparams;
+        return MP_EDOM;
+    }
+    if (!(e->probs = malloc((k ? k : 1) * sizeof *e->probs))) return MP_ENOMEM;
+    for (size_t i = 0; i < k; i++) e->probs[i] = e->base;
+    if (e->rows && e->rows_kind == MP_ENS_ROWS_SCENE) {
+        if (e->torque && !(e->torques = calloc(k ? k : 1, sizeof *e->torques))) return MP_ENOMEM;
+        for (size_t i = 0; i < k; i++) {
+            const double *row = e->rows + i * e->np;
+            size_t dim;
+            if (mp_model_prepare(mod, row, e->np, &dim) != MP_OK || dim != e->n) {
+                e->why = MP_ENS_ROW;
+                e->bad_row = i;
+                return MP_EDOM;
+            }
+            mod->bind(row, &e->probs[i]);
+            if (e->torque) {
+                e->torques[i] = *e->torque;
+                e->torques[i].params = row;
+                mp_rigid_bind_torque(mod, &e->torques[i], &e->probs[i]);
+            }
+        }
+    } else if (e->rows && e->rows_kind == MP_ENS_ROWS_DATA) {
+        for (size_t i = 0; i < k; i++) e->probs[i].data = (void *)(e->rows + i * e->np);
+    }
+    /* the lane system: the rows (or the one parameter vector) and a lane rhs */
+    mp_lane_system *ls = &e->ls;
+    size_t kk = k;
+    if (e->rows && e->rows_kind != MP_ENS_ROWS_CALLER) {
+        ls->params = e->rows;
+        ls->np = ls->pstride = e->np;
+    } else if (e->params) {
+        ls->params = e->params;
+        ls->np = e->nparams;
+        kk = 1;
+    }
+    /* lanes run a system in C: a scene, or a compiled system (its parameter
+     * vector); a callback's problem stays on the scalar path */
+    int scene_or_compiled = mod != NULL || e->params != NULL;
+    if (!mod && ls->params) ls->rhs = e->lane_rhs;
+    if (mod && !e->torque && mod->lanes && ls->params) ls->rhs = mod->lanes(ls->params, kk, ls->pstride);
+    int ok = !e->holds_python && scene_or_compiled && e->rows_kind != MP_ENS_ROWS_CALLER &&
+             mp_ode_lanes_supported(e->m, o, t0, tf);
+    if (e->want_lanes == 1 && !ok) {
+        e->why = MP_ENS_NO_LANES;
+        return MP_EDOM;
+    }
+    e->lanes = ok && e->want_lanes != 0 ? ls : NULL;
+    return MP_OK;
+}
+
+void mp_ode_ensemble_free(mp_ode_ensemble *e)
+{
+    free(e->probs);
+    free(e->torques);
+    e->probs = NULL;
+    e->torques = NULL;
 }

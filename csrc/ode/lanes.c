@@ -1,11 +1,12 @@
 /* The lane driver: MP_LANES trajectories of an ensemble in lock-step lanes of
  * one vectorised explicit Runge-Kutta step (dopri5, dop853, rk4).
  *
- * Each lane repeats exactly what driver.c's loop does for one trajectory
- * (Hairer's first step, the controller with the method row's constants, the
- * budget, rejection of non-finite trial stages, the step-size floor, t_eval
- * output from the method's interpolant, the stiffness test, the statuses);
- * only the arithmetic is done MP_LANES lanes at a time.  A lane whose
+ * Each lane runs driver.c's loop for one trajectory: the step-size policy is
+ * the one both drivers call (control.h: Hairer's first step, the controller
+ * with the method row's constants, rejection of non-finite trial stages, the
+ * step-size floor, the last step, the stiffness test, the error norm); the
+ * budget, t_eval output from the method's interpolant and the statuses are
+ * the driver's; only the stages are done MP_LANES lanes at a time.  A lane whose
  * trajectory ends takes the next one before the next step.
  *
  * This file is compiled twice (csrc/meson.build): with -mavx2 -mfma as
@@ -18,6 +19,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "ode/control.h"
 #include "ode/dop853_tableau.h"
 #include "ode/dopri5_tableau.h"
 #include "ode/fixed.h"
@@ -29,7 +31,8 @@
 #define W MP_LANES
 #define LANES_INTERRUPT_EVERY 256 /* lock-step attempts between interrupt polls */
 
-enum { LANE_RK4, LANE_DOPRI5, LANE_DOP853 };
+/* the row's lane kernel (ode.h's MP_LANE_*) */
+enum { LANE_RK4 = MP_LANE_RK4, LANE_DOPRI5 = MP_LANE_DOPRI5, LANE_DOP853 = MP_LANE_DOP853 };
 
 /* One thread's lane group: the SoA workspace and each lane's driver state. */
 typedef struct {
@@ -49,9 +52,10 @@ typedef struct {
     /* per lane */
     int active[W];
     size_t idx[W], ie[W], bad_index[W];
-    double t[W], h[W], facold[W];
+    double t[W], h[W];
     long attempts[W], nfev[W];
-    int rejected[W], nonfinite[W], stiff_count[W], calm_count[W], stiff[W], bad_what[W];
+    mp_ode_ctl ctl[W]; /* each lane's controller (control.h) */
+    int stiff[W], bad_what[W];
 } lane_group;
 
 /* ---- evaluation ------------------------------------------------------------ */
@@ -197,9 +201,9 @@ static void lane_output(lane_group *g, int l, double h, double tnew)
 
 /* ---- the start of a trajectory ----------------------------------------------- */
 
-/* Contract: Hairer's first step (driver.c's first_step) for the lanes in on,
- * whose y and f = f(s0, y) are set: h[l], or the lane ends with the failure
- * of its explicit Euler trial. */
+/* Contract: Hairer's first step (control.h's hinit, driver.c's first_step)
+ * for the lanes in on, whose y and f = f(s0, y) are set: h[l], or the lane
+ * ends with the failure of its explicit Euler trial. */
 static void lane_first_step(lane_group *g, int *on)
 {
     size_t n = g->n;
@@ -208,18 +212,7 @@ static void lane_first_step(lane_group *g, int *on)
     int pend[W], rc[W], ev[W];
     for (int l = 0; l < W; l++) {
         pend[l] = on[l];
-        if (!on[l]) continue;
-        double sf2 = 0.0, sy2 = 0.0;
-        for (size_t c = 0; c < n; c++) {
-            double sk = o->atol[c] + o->rtolv[c] * fabs(g->y[c * W + l]);
-            double qf = g->f[c * W + l] / sk, qy = g->y[c * W + l] / sk;
-            sf2 += qf * qf;
-            sy2 += qy * qy;
-        }
-        dnf[l] = sf2 / (double)n;
-        double dny = sy2 / (double)n;
-        double h = (dnf[l] <= 1e-10 || dny <= 1e-10) ? 1e-6 : sqrt(dny / dnf[l]) * 0.01;
-        g->h[l] = fmin(h, fmin(g->hmax, span));
+        if (on[l]) g->h[l] = mp_ode_hinit_trial(o, n, W, g->y + l, g->f + l, g->hmax, span, &dnf[l]);
     }
     for (int tries = 0;; tries++) { /* an explicit Euler trial that overflows: shorter */
         int any = 0;
@@ -247,20 +240,10 @@ static void lane_first_step(lane_group *g, int *on)
             }
         }
     }
-    for (int l = 0; l < W; l++) {
-        if (!on[l]) continue;
-        double der2 = 0.0, h = g->h[l];
-        for (size_t c = 0; c < n; c++) {
-            double sk = o->atol[c] + o->rtolv[c] * fabs(g->y[c * W + l]);
-            double d = (g->fnew[c * W + l] - g->f[c * W + l]) / sk;
-            der2 += d * d;
-        }
-        der2 = sqrt(der2 / (double)n) / h;
-        double der12 = fmax(fabs(der2), sqrt(dnf[l]));
-        double h1 = der12 <= 1e-15 ? fmax(1e-6, h * 1e-3)
-                                   : pow(0.01 / der12, 1.0 / (double)g->m->order);
-        g->h[l] = fmin(fmin(100.0 * h, h1), fmin(g->hmax, span));
-    }
+    for (int l = 0; l < W; l++)
+        if (on[l])
+            g->h[l] = mp_ode_hinit_final(o, n, W, g->y + l, g->f + l, g->fnew + l, g->h[l],
+                                         dnf[l], g->m->order, g->hmax, span);
 }
 
 /* Contract: the lanes in fresh have just been given trajectories idx[l]:
@@ -281,8 +264,7 @@ static void lane_start(lane_group *g, int *fresh)
         g->t[l] = g->s0;
         g->ie[l] = 0;
         g->attempts[l] = g->nfev[l] = 0;
-        g->facold[l] = 1e-4;
-        g->rejected[l] = g->nonfinite[l] = g->stiff_count[l] = g->calm_count[l] = 0;
+        g->ctl[l] = mp_ode_ctl_start();
         g->stiff[l] = g->bad_what[l] = 0;
         g->bad_index[l] = 0;
         int finite = 1;
@@ -356,19 +338,6 @@ static void rk4_lanes(lane_group *g, int *on, int *rc, double *err, double *rho)
         g->ynew[i] = y[i] + (g->h[i % W] / 6.0) * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i]);
 }
 
-/* Hairer's RMS error norm of lane l, e being h times the error weights' sum. */
-static double lane_err_norm(const lane_group *g, int l, const double *e)
-{
-    double s = 0.0;
-    for (size_t c = 0; c < g->n; c++) {
-        size_t i = c * W + (size_t)l;
-        double sc = g->o->atol[c] + g->o->rtolv[c] * fmax(fabs(g->y[i]), fabs(g->ynew[i]));
-        double q = e[i] / sc;
-        s += q * q;
-    }
-    return sqrt(s / (double)g->n);
-}
-
 /* The stage vectors of a dopri5 or dop853 step (kind) in kbuf: K[0] = f,
  * the FSAL stage (dopri5's 7th, dop853's 13th) fnew, dop853's three dense
  * output stages after it.  Inlined with a constant kind. */
@@ -415,7 +384,7 @@ static void dopri5_lanes(lane_group *g, int *on, int *rc, double *err, double *r
         MP_LANE_LOOP yt[c + l] = g->h[l] * e[l];
     }
     for (int l = 0; l < W; l++)
-        if (on[l]) err[l] = lane_err_norm(g, l, yt);
+        if (on[l]) err[l] = mp_ode_rms_norm(g->o, g->n, W, yt + l, g->y + l, g->ynew + l);
 }
 
 static void dop853_lanes(lane_group *g, int *on, int *rc, double *err, double *rho)
@@ -529,36 +498,11 @@ static void finish_lanes(lane_group *g, int *on, const int *dense, int *rc, doub
 
 /* ---- the controller and one lock-step attempt ------------------------------------ */
 
-/* Contract: driver.c's control() for lane l: 1 when the step (error err,
- * fac11 = err^expo, fold = facold^beta) is accepted with *hnew the next step,
- * 0 when rejected with h[l] the retry. */
-static int lane_control(lane_group *g, int l, double err, double fac11, double fold,
-                        double *hnew)
-{
-    const mp_ode_method *m = g->m;
-    double h = g->h[l];
-    if (!(err <= 1.0)) {
-        g->nonfinite[l] = !isfinite(err);
-        double fac = isfinite(err) ? fmin(1.0 / m->fac_min, fac11 / m->safety) : 10.0;
-        g->h[l] = h / fac;
-        g->rejected[l] = 1;
-        return 0;
-    }
-    double fac = m->beta > 0.0 ? fac11 / fold : fac11;
-    fac = fmax(1.0 / m->fac_max, fmin(1.0 / m->fac_min, fac / m->safety));
-    *hnew = h / fac;
-    g->facold[l] = fmax(err, 1e-4);
-    if (g->rejected[l]) *hnew = fmin(*hnew, h);
-    g->rejected[l] = g->nonfinite[l] = 0;
-    return 1;
-}
-
 /* Contract: one attempted step of every active lane, as one iteration of
  * driver.c's loop for each: budget, last step, step floor, the step, control,
  * finish, stiffness test, output, advance; a lane that ends calls lane_end. */
 static void lane_attempt(lane_group *g)
 {
-    const double eps16 = 16.0 * DBL_EPSILON;
     int on[W], rc[W], last[W] = {0}, acc[W], dense[W] = {0};
     double err[W] = {0.0}, rho[W], hnew[W] = {0.0}, tnew[W] = {0.0};
     for (int l = 0; l < W; l++) {
@@ -573,17 +517,10 @@ static void lane_attempt(lane_group *g)
             continue;
         }
         g->attempts[l]++;
-        double t = g->t[l], h = g->h[l];
-        last[l] = 0;
-        if (g->adaptive ? t + 1.01 * h >= g->sf : t + h * (1.0 + 1e-9) >= g->sf) {
-            h = g->sf - t;
-            while (t + h > g->sf) h = nextafter(h, 0.0); /* no stage beyond tf */
-            last[l] = 1;
-        }
-        g->h[l] = h;
-        if (g->adaptive && h <= eps16 * fmax(fabs(t), 1e-300)) {
+        g->h[l] = mp_ode_step_span(g->adaptive, g->t[l], g->h[l], g->sf, &last[l]);
+        if (g->adaptive && mp_ode_step_floor(g->t[l], g->h[l])) {
             on[l] = 0;
-            lane_end(g, l, g->nonfinite[l] ? MP_ENONFINITE : MP_ESTEP);
+            lane_end(g, l, g->ctl[l].nonfinite ? MP_ENONFINITE : MP_ESTEP);
         }
     }
     int att[W];
@@ -595,7 +532,7 @@ static void lane_attempt(lane_group *g)
     if (g->adaptive) {
         MP_LANE_LOOP fac11[l] = mp_lane_pow(err[l], expo);
         if (beta > 0.0) {
-            MP_LANE_LOOP fold[l] = mp_lane_pow(g->facold[l], beta);
+            MP_LANE_LOOP fold[l] = mp_lane_pow(g->ctl[l].facold, beta);
         } else {
             MP_LANE_LOOP fold[l] = 1.0;
         }
@@ -603,15 +540,16 @@ static void lane_attempt(lane_group *g)
     for (int l = 0; l < W; l++) {
         if (!att[l]) continue;
         if (rc[l] == MP_ENONFINITE && g->adaptive) { /* a trial stage overflowed */
-            g->h[l] /= 10.0;
-            g->rejected[l] = g->nonfinite[l] = 1;
+            g->h[l] = mp_ode_control_nonfinite(&g->ctl[l], g->h[l]);
             continue;
         }
         if (rc[l] != MP_OK) {
             lane_end(g, l, rc[l]);
             continue;
         }
-        if (g->adaptive && !lane_control(g, l, err[l], fac11[l], fold[l], &hnew[l])) continue;
+        if (g->adaptive &&
+            !mp_ode_control(g->m, &g->ctl[l], err[l], fac11[l], fold[l], &g->h[l], &hnew[l]))
+            continue;
         acc[l] = 1;
         /* a fixed step's end is counted, as driver.c counts it: s0 + (i + 1) h */
         tnew[l] = last[l]      ? g->sf
@@ -627,14 +565,8 @@ static void lane_attempt(lane_group *g)
             lane_end(g, l, rc[l]);
             continue;
         }
-        if (rho[l] > 0.0) { /* Hairer's stiffness test */
-            if (rho[l] > g->m->stiff_rho) {
-                g->calm_count[l] = 0;
-                if (++g->stiff_count[l] >= 15) g->stiff[l] = 1;
-            } else if (++g->calm_count[l] >= 6) {
-                g->stiff_count[l] = 0;
-            }
-        }
+        if (rho[l] > 0.0) /* Hairer's stiffness test */
+            mp_ode_stiffness_test(&g->ctl[l], rho[l], g->m->stiff_rho, &g->stiff[l]);
         lane_output(g, l, g->h[l], tnew[l]);
         for (size_t c = 0; c < g->n; c++) {
             size_t i = c * W + (size_t)l;
@@ -677,8 +609,7 @@ int MP_LANES_RUN(const mp_ode_method *m, const mp_ode_problem *probs, const mp_l
     lane_group g;
     memset(&g, 0, sizeof g);
     g.m = m;
-    g.kind = strcmp(m->name, "dopri5") == 0 ? LANE_DOPRI5
-           : strcmp(m->name, "dop853") == 0 ? LANE_DOP853 : LANE_RK4;
+    g.kind = m->lanes;
     g.adaptive = m->adaptive;
     g.probs = probs;
     g.ls = ls;

@@ -120,6 +120,10 @@ void mp_ode_result_outcome(const mp_ode_result *r, mp_ode_outcome *out);
 
 typedef struct mp_ode_ws mp_ode_ws;
 
+/* The lane kernels of the lane driver (lanes.c): a method row names the one
+ * that runs its step MP_LANES trajectories at a time, or none. */
+enum { MP_LANE_NONE = 0, MP_LANE_RK4, MP_LANE_DOPRI5, MP_LANE_DOP853 };
+
 /* One integration method: a row of the table in methods.c. */
 typedef struct mp_ode_method {
     const char *name;
@@ -129,6 +133,10 @@ typedef struct mp_ode_method {
     int symplectic;
     int needs_jacobian; /* uses df/dy (analytic or finite differences) */
     int dense_order;    /* order of its interpolant */
+    int lanes;          /* its lane kernel (MP_LANE_*): ensembles run it in SIMD lanes;
+                           MP_LANE_NONE: one trajectory at a time */
+    int rigid;          /* a rigid-body splitting: runs on the RigidBody scene only (its
+                           steps are the scene's exact free rotations) */
     size_t ncoef;       /* coefficient vectors of the interpolant */
     size_t nscratch;    /* n-vectors of scratch the step needs */
     /* step-size controller (Hairer): expo = 1/(q+1), beta (PI), bounds, safety */

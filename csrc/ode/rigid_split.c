@@ -163,13 +163,13 @@ static int split4_step(mp_ode_ws *w, double t, double h, double *err)
 /* Lie-Poisson integrators, not canonical ones: .symplectic stays 0 (that flag
  * means q'' = a(t, q) in this engine). */
 const mp_ode_method mp_ode_rigid_split = {
-    .name = "rigid:split", .order = 2, .adaptive = 0, .dense_order = 3, .ncoef = 4,
+    .name = "rigid:split", .rigid = 1, .order = 2, .adaptive = 0, .dense_order = 3, .ncoef = 4,
     .nscratch = 0, .alloc = split_alloc, .free = split_free, .step = split2_step,
     .finish = mp_ode_finish_fnew_hermite,
 };
 
 const mp_ode_method mp_ode_rigid_split4 = {
-    .name = "rigid:split4", .order = 4, .adaptive = 0, .dense_order = 3, .ncoef = 4,
+    .name = "rigid:split4", .rigid = 1, .order = 4, .adaptive = 0, .dense_order = 3, .ncoef = 4,
     .nscratch = 0, .alloc = split_alloc, .free = split_free, .step = split4_step,
     .finish = mp_ode_finish_fnew_hermite,
 };

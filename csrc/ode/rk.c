@@ -61,7 +61,7 @@ static int rk4_block(mp_ode_ws *w, double t0, long i0, double h, long k, double 
 }
 
 const mp_ode_method mp_ode_rk4 = {
-    .name = "rk4", .order = 4, .adaptive = 0, .dense_order = 3, .ncoef = 4, .nscratch = 4,
+    .name = "rk4", .order = 4, .adaptive = 0, .dense_order = 3, .lanes = MP_LANE_RK4, .ncoef = 4, .nscratch = 4,
     .step = rk4_step, .finish = mp_ode_finish_fnew_hermite, .block = rk4_block,
 };
 
@@ -128,7 +128,7 @@ static int dopri5_finish(mp_ode_ws *w, double t, double h, int need_dense)
 }
 
 const mp_ode_method mp_ode_dopri5 = {
-    .name = "dopri5", .order = 5, .adaptive = 1, .dense_order = 4, .ncoef = 5, .nscratch = 6,
+    .name = "dopri5", .order = 5, .adaptive = 1, .dense_order = 4, .lanes = MP_LANE_DOPRI5, .ncoef = 5, .nscratch = 6,
     .expo = 0.2, .beta = 0.04, .fac_min = 0.2, .fac_max = 10.0, .safety = 0.9,
     .stiff_rho = 3.25, .step = dopri5_step, .finish = dopri5_finish,
 };
@@ -212,7 +212,7 @@ static int dop853_finish(mp_ode_ws *w, double t, double h, int need_dense)
 }
 
 const mp_ode_method mp_ode_dop853 = {
-    .name = "dop853", .order = 8, .adaptive = 1, .dense_order = 7, .ncoef = 8, .nscratch = 15,
+    .name = "dop853", .order = 8, .adaptive = 1, .dense_order = 7, .lanes = MP_LANE_DOP853, .ncoef = 8, .nscratch = 15,
     .expo = 1.0 / 8.0, .beta = 0.0, .fac_min = 0.333, .fac_max = 6.0, .safety = 0.9,
     .stiff_rho = 6.1, .step = dop853_step, .finish = dop853_finish,
 };

@@ -241,6 +241,7 @@ typedef struct {
     mp_ode_problem prob;
     int holds_python;         /* calls Python: keep the GIL */
     PyArrayObject *params;    /* scene parameters (owned) */
+    const mp_model *model;    /* a scene's row (NULL: not a scene) */
     py_fn fn;
     c_fn2 cfn;
     mp_rigid_torque torque;   /* a scene's C torque callback (fn NULL: none) */
@@ -302,6 +303,7 @@ static int py_system_parse(PyObject *spec, size_t n, py_system *s)
             return -1;
         }
         m->bind(PyArray_DATA(s->params), &s->prob);
+        s->model = m;
         if (cb) {
             c_fn f;
             if (c_address(PyTuple_GET_ITEM(cb, 0), PyTuple_GET_ITEM(cb, 1), &f) < 0) return -1;
@@ -483,8 +485,9 @@ fail:
 }
 
 /* The options ode_solve and ode_solve_many share, as integrate.py hands them
- * over, parsed here and nowhere else: ode_solve_many's as one dict, ode_solve's
- * as positional arguments (its call is the one whose fixed cost counts). */
+ * over (its _options: nine values in one order), parsed here and nowhere
+ * else: ode_solve's as positional arguments (its call is the one whose fixed
+ * cost counts), ode_solve_many's as one tuple of the same nine. */
 typedef struct {
     double t0, tf, rtol, h, first_step, max_step; /* rtol: the least of the n */
     long max_steps;
@@ -566,37 +569,9 @@ static int ode_args_fill(PyObject *rtolo, PyObject *atolo, PyObject *tevo, size_
     return 0;
 }
 
-/* Contract: parse the dict {t0, tf, rtol, atol (n,), t_eval (m,) or None, h,
- * first_step, max_step, max_steps} into a and fill o from it (o points into
- * a's arrays: clear a after the solve).  0, or -1 with an exception set. */
-static int ode_args_parse(PyObject *opts, size_t n, ode_args *a, mp_ode_options *o)
-{
-    static char *kwlist[] = {"t0", "tf", "rtol", "atol", "t_eval", "h", "first_step",
-                             "max_step", "max_steps", NULL};
-    PyObject *rtolo, *atolo, *tevo, *empty = PyTuple_New(0);
-    memset(a, 0, sizeof *a);
-    if (!empty) return -1;
-    if (!PyDict_Check(opts)) {
-        Py_DECREF(empty);
-        PyErr_SetString(PyExc_TypeError, "options must be a dict");
-        return -1;
-    }
-    int ok = PyArg_ParseTupleAndKeywords(empty, opts, "|$ddOOOdddl", kwlist, &a->t0, &a->tf,
-                                         &rtolo, &atolo, &tevo, &a->h, &a->first_step,
-                                         &a->max_step, &a->max_steps);
-    Py_DECREF(empty);
-    if (!ok) return -1;
-    if (PyDict_Size(opts) != 9) {
-        PyErr_SetString(PyExc_TypeError, "options need t0, tf, rtol, atol, t_eval, h, "
-                                         "first_step, max_step and max_steps");
-        return -1;
-    }
-    return ode_args_fill(rtolo, atolo, tevo, n, a, o);
-}
-
-/* Contract: the options of ode_solve from its positional arguments argv[0..8]
- * (t0, tf, rtol, atol, t_eval, h, first_step, max_step, max_steps), as
- * ode_args_parse does from the dict.  0, or -1 with an exception set. */
+/* Contract: the options from argv[0..8] (t0, tf, rtol, atol, t_eval, h,
+ * first_step, max_step, max_steps) into a, and o filled from them (o points
+ * into a's arrays: clear a after the solve).  0, or -1 with an exception set. */
 static int ode_args_from_argv(PyObject *const *argv, size_t n, ode_args *a, mp_ode_options *o)
 {
     double *dst[8] = {&a->t0, &a->tf, NULL, NULL, NULL, &a->h, &a->first_step, &a->max_step};
@@ -609,6 +584,99 @@ static int ode_args_from_argv(PyObject *const *argv, size_t n, ode_args *a, mp_o
     a->max_steps = PyLong_AsLong(argv[8]);
     if (a->max_steps == -1 && PyErr_Occurred()) return -1;
     return ode_args_fill(argv[2], argv[3], argv[4], n, a, o);
+}
+
+/* ---- options solve and solve_many share ------------------------------------- */
+
+/* Contract: jaco as a Jacobian for n states: None (*jm NULL), a callable
+ * (*jm NULL) or a constant (n, n) finite matrix (*jm a new reference).  0, or
+ * -1 with an exception set. */
+static int jac_parse(PyObject *jaco, size_t n, PyArrayObject **jm)
+{
+    *jm = NULL;
+    if (jaco == Py_None || PyCallable_Check(jaco)) return 0;
+    if (!(*jm = mp_py_array(jaco, "jac", 2))) return -1;
+    if ((size_t)PyArray_DIM(*jm, 0) != n || (size_t)PyArray_DIM(*jm, 1) != n) {
+        PyErr_Format(PyExc_ValueError, "jac must have shape (%zu, %zu)", n, n);
+        return -1;
+    }
+    return mp_py_require_finite(*jm, "jac");
+}
+
+/* Contract: prob with the user's Jacobian (jac_parse's jaco, jm): the
+ * constant matrix through cj, or the callable jac(t, y, *args) through wj;
+ * returns 1 when it calls Python.  Nothing for None. */
+static int jac_wrap(mp_ode_problem *prob, PyObject *jaco, PyArrayObject *jm, PyObject *args,
+                    const_jac *cj, py_with_jac *wj)
+{
+    size_t n = prob->n;
+    if (jm) {
+        cj->inner = *prob;
+        cj->J = PyArray_DATA(jm);
+        prob->rhs = const_jac_rhs;
+        prob->jac = const_jac_jac;
+        prob->jac_const = 1;
+        prob->data = cj;
+        return 0;
+    }
+    if (jaco == Py_None) return 0;
+    wj->inner = *prob;
+    wj->jac = (py_fn){jaco, args, n, n * n, "jac"};
+    prob->rhs = py_jac_rhs;
+    prob->jac = py_jac;
+    prob->data = wj;
+    return 1;
+}
+
+/* The event functions of a solve: the callables' adapters, terminal and
+ * direction (owned). */
+typedef struct {
+    PyArrayObject *term, *dir;
+    Py_ssize_t count;
+} py_event_list;
+
+static void event_list_clear(py_event_list *el)
+{
+    Py_CLEAR(el->term);
+    Py_CLEAR(el->dir);
+}
+
+/* Contract: the event list evo (None or a list of callables) with terminal
+ * and direction (one int each) into el and o's event fields; o->events_data
+ * is left to the caller (event_fns).  0, or -1 with an exception set. */
+static int event_list_parse(PyObject *evo, PyObject *termo, PyObject *diro, py_event_list *el,
+                            mp_ode_options *o)
+{
+    memset(el, 0, sizeof *el);
+    if (evo == Py_None) return 0;
+    if ((el->count = PyList_Size(evo)) < 0) return -1;
+    if (el->count == 0) return 0;
+    el->term = (PyArrayObject *)PyArray_FROMANY(termo, NPY_INT, 1, 1, NPY_ARRAY_IN_ARRAY);
+    el->dir = (PyArrayObject *)PyArray_FROMANY(diro, NPY_INT, 1, 1, NPY_ARRAY_IN_ARRAY);
+    if (!el->term || !el->dir) return -1;
+    if (PyArray_SIZE(el->term) != el->count || PyArray_SIZE(el->dir) != el->count) {
+        PyErr_SetString(PyExc_ValueError, "terminal and direction need one value per event");
+        return -1;
+    }
+    o->n_events = (size_t)el->count;
+    o->events = py_events_eval;
+    o->terminal = PyArray_DATA(el->term);
+    o->direction = PyArray_DATA(el->dir);
+    return 0;
+}
+
+/* Contract: pe's adapters (fns, count; PyMem, the caller frees fns) of the
+ * event callables in evo, each called as g(t, y, *args). */
+static int event_fns(PyObject *evo, Py_ssize_t count, PyObject *args, size_t n, py_events *pe)
+{
+    pe->count = (size_t)count;
+    if (!(pe->fns = PyMem_Calloc((size_t)count, sizeof(py_fn)))) {
+        PyErr_NoMemory();
+        return -1;
+    }
+    for (Py_ssize_t k = 0; k < count; k++)
+        pe->fns[k] = (py_fn){PyList_GET_ITEM(evo, k), args, n, 1, "event function"};
+    return 0;
 }
 
 /* ---- ode_solve ------------------------------------------------------------ */
@@ -649,8 +717,9 @@ static PyObject *py_ode_solve(PyObject *self, PyObject *const *argv, Py_ssize_t 
         PyErr_Format(PyExc_ValueError, "unknown method %s", mname);
         return NULL;
     }
-    PyArrayObject *y0 = NULL, *term = NULL, *dir = NULL, *jm = NULL;
+    PyArrayObject *y0 = NULL, *jm = NULL;
     PyObject *result = NULL;
+    py_event_list el = {0};
     ode_args oa = {0};
     mp_ode_options o;
     py_system sys;
@@ -658,7 +727,6 @@ static PyObject *py_ode_solve(PyObject *self, PyObject *const *argv, Py_ssize_t 
     py_watched wd;
     const_jac cj;
     py_events pe = {NULL, 0};
-    int *iterm = NULL, *idir = NULL;
     memset(&sys, 0, sizeof sys);
 
     y0 = mp_py_array(y0o, "y0", 1);
@@ -683,55 +751,14 @@ static PyObject *py_ode_solve(PyObject *self, PyObject *const *argv, Py_ssize_t 
         watch_problem(&prob, &wd, watch);
         holds_python = 1;
     }
-    if (jaco != Py_None && !PyCallable_Check(jaco)) { /* a constant Jacobian */
-        if (!(jm = mp_py_array(jaco, "jac", 2))) goto out;
-        if ((size_t)PyArray_DIM(jm, 0) != n || (size_t)PyArray_DIM(jm, 1) != n) {
-            PyErr_Format(PyExc_ValueError, "jac must have shape (%zu, %zu)", n, n);
-            goto out;
-        }
-        if (mp_py_require_finite(jm, "jac") < 0) goto out;
-        cj.inner = prob;
-        cj.J = PyArray_DATA(jm);
-        prob.rhs = const_jac_rhs;
-        prob.jac = const_jac_jac;
-        prob.jac_const = 1;
-        prob.data = &cj;
-    } else if (jaco != Py_None) {
-        wj.inner = prob;
-        wj.jac = (py_fn){jaco, eargs, n, n * n, "jac"};
-        prob.rhs = py_jac_rhs;
-        prob.jac = py_jac;
-        prob.data = &wj;
-        holds_python = 1;
-    }
+    if (jac_parse(jaco, n, &jm) < 0) goto out;
+    holds_python |= jac_wrap(&prob, jaco, jm, eargs, &cj, &wj);
     o.dense = dense;
-    if (evo != Py_None) {
-        Py_ssize_t ne = PyList_Size(evo);
-        if (ne < 0) goto out;
-        if (ne > 0) {
-            term = (PyArrayObject *)PyArray_FROMANY(termo, NPY_INT, 1, 1, NPY_ARRAY_IN_ARRAY);
-            dir = (PyArrayObject *)PyArray_FROMANY(diro, NPY_INT, 1, 1, NPY_ARRAY_IN_ARRAY);
-            pe.fns = PyMem_Calloc((size_t)ne, sizeof(py_fn));
-            if (!term || !dir || !pe.fns) {
-                if (!PyErr_Occurred()) PyErr_NoMemory();
-                goto out;
-            }
-            if (PyArray_SIZE(term) != ne || PyArray_SIZE(dir) != ne) {
-                PyErr_SetString(PyExc_ValueError, "terminal and direction need one value per event");
-                goto out;
-            }
-            for (Py_ssize_t k = 0; k < ne; k++)
-                pe.fns[k] = (py_fn){PyList_GET_ITEM(evo, k), eargs, n, 1, "event function"};
-            pe.count = (size_t)ne;
-            o.n_events = (size_t)ne;
-            o.events = py_events_eval;
-            o.events_data = &pe;
-            iterm = PyArray_DATA(term);
-            idir = PyArray_DATA(dir);
-            o.terminal = iterm;
-            o.direction = idir;
-            holds_python = 1;
-        }
+    if (event_list_parse(evo, termo, diro, &el, &o) < 0) goto out;
+    if (el.count) {
+        if (event_fns(evo, el.count, eargs, n, &pe) < 0) goto out;
+        o.events_data = &pe;
+        holds_python = 1;
     }
 
     prob.replayable = !holds_python; /* plain C all through: a block may be run again */
@@ -751,9 +778,8 @@ out:
     py_system_clear(&sys);
     ode_args_clear(&oa);
     PyMem_Free(pe.fns);
+    event_list_clear(&el);
     Py_XDECREF(y0);
-    Py_XDECREF(term);
-    Py_XDECREF(dir);
     Py_XDECREF(jm);
     return result;
 }
@@ -788,48 +814,195 @@ static void many_progress(size_t done, size_t total, void *ctx)
     PyGILState_Release(g);
 }
 
-/* Contract: the lane system of an ensemble (lanes.h) of a scene or compiled
- * system: the scene row's lane rhs for these parameter rows, or the compiled
- * system's (NULL: the generic wrapper of each trajectory's scalar problem),
- * and the rows. */
-static void many_lane_system(const py_system *sys, const char *kind, PyObject *spec,
-                             PyArrayObject *par, size_t k, mp_lane_system *ls)
+/* Contract: the names of the methods whose rows run in lanes, for a message. */
+static void lane_method_names(char *buf, size_t len)
 {
-    memset(ls, 0, sizeof *ls);
-    if (par) {
-        ls->params = PyArray_DATA(par);
-        ls->np = ls->pstride = (size_t)PyArray_DIM(par, 1);
-    } else if (sys->params) {
-        ls->params = PyArray_DATA(sys->params);
-        ls->np = (size_t)PyArray_SIZE(sys->params);
-        k = 1;
+    size_t used = 0;
+    buf[0] = '\0';
+    for (size_t i = 0; mp_ode_methods[i] && used < len; i++)
+        if (mp_ode_methods[i]->lanes != MP_LANE_NONE)
+            used += (size_t)snprintf(buf + used, len - used, "%s%s", used ? ", " : "",
+                                     mp_ode_methods[i]->name);
+}
+
+/* Contract: the Python exception for mp_ode_ensemble_build's refusal. */
+static void ensemble_error(const mp_ode_ensemble *e, int rc, const char *kind)
+{
+    if (rc != MP_EDOM) {
+        mp_py_raise(rc, "solve_many");
+        return;
     }
-    if (strcmp(kind, "compiled") == 0 && ls->params) ls->rhs = sys->lanes;
-    if (strcmp(kind, "scene") != 0 || sys->torque.fn) return;
-    const mp_model *mod = mp_model_find(PyUnicode_AsUTF8(PyTuple_GET_ITEM(spec, 1)));
-    if (mod && mod->lanes && ls->params) ls->rhs = mod->lanes(ls->params, k, ls->pstride);
+    const char *scene = e->model ? e->model->name : "the system";
+    char names[128], ctx[128];
+    switch (e->why) {
+    case MP_ENS_SEPARABLE:
+        PyErr_Format(PyExc_ValueError, "method %s needs a separable system q'' = a(t, q)",
+                     e->m->name);
+        break;
+    case MP_ENS_COLUMNS:
+        PyErr_Format(PyExc_ValueError, "params must have %zu columns (%s's parameters)",
+                     e->np_need, scene);
+        break;
+    case MP_ENS_ROW:
+        snprintf(ctx, sizeof ctx, "params[%zu] (%s's parameters for a state of %zu)",
+                 e->bad_row, scene, e->n);
+        mp_py_raise(MP_EDOM, ctx);
+        break;
+    case MP_ENS_NO_LANES:
+        lane_method_names(names, sizeof names);
+        PyErr_Format(PyExc_ValueError, "lanes=True needs a scene or compiled system, a method "
+                     "that runs in lanes (%s) and no events or dense output (got %s with a "
+                     "%s system)", names, e->m->name, kind);
+        break;
+    default:
+        mp_py_raise(rc, "solve_many");
+    }
+}
+
+/* The per-trajectory adapters of an ensemble whose rows or callbacks are
+ * Python's: each trajectory's argument tuple (its row, then args), its
+ * Python or C callback, events, Jacobian and watch wrappers. */
+typedef struct {
+    size_t k;
+    PyObject **tuples;      /* k new references, or NULL */
+    py_fn *fns;
+    c_fn *cfns;
+    py_events *evs;
+    py_fn *evfns;           /* k * n_events */
+    void **evdata;          /* k pointers: &evs[i] (each trajectory's events_data) */
+    const_jac *cjs;
+    py_with_jac *wjs;
+    py_watched *watched;
+    mp_ode_result *results; /* with events: each trajectory's whole result */
+} many_adapters;
+
+static void many_adapters_clear(many_adapters *a)
+{
+    if (a->tuples)
+        for (size_t i = 0; i < a->k; i++) Py_XDECREF(a->tuples[i]);
+    if (a->results)
+        for (size_t i = 0; i < a->k; i++) mp_ode_result_free(&a->results[i]);
+    PyMem_Free(a->tuples);
+    PyMem_Free(a->fns);
+    PyMem_Free(a->cfns);
+    PyMem_Free(a->evs);
+    PyMem_Free(a->evfns);
+    PyMem_Free(a->evdata);
+    PyMem_Free(a->cjs);
+    PyMem_Free(a->wjs);
+    PyMem_Free(a->watched);
+    PyMem_Free(a->results);
+    memset(a, 0, sizeof *a);
+}
+
+/* Contract: trajectory i's rows of a Python system as leading extra
+ * arguments: tuples[i] = (*row, *eargs).  0, or -1 with an exception set. */
+static int many_row_tuples(many_adapters *a, const double *rows, size_t np, PyObject *eargs)
+{
+    if (!(a->tuples = PyMem_Calloc(a->k, sizeof *a->tuples))) {
+        PyErr_NoMemory();
+        return -1;
+    }
+    Py_ssize_t na = PyTuple_GET_SIZE(eargs);
+    for (size_t i = 0; i < a->k; i++) {
+        PyObject *tup = PyTuple_New((Py_ssize_t)np + na);
+        if (!tup) return -1;
+        a->tuples[i] = tup;
+        for (size_t j = 0; j < np; j++) {
+            PyObject *v = PyFloat_FromDouble(rows[i * np + j]);
+            if (!v) return -1;
+            PyTuple_SET_ITEM(tup, (Py_ssize_t)j, v);
+        }
+        for (Py_ssize_t j = 0; j < na; j++)
+            PyTuple_SET_ITEM(tup, (Py_ssize_t)np + j, Py_NewRef(PyTuple_GET_ITEM(eargs, j)));
+    }
+    return 0;
+}
+
+/* Contract: an ensemble's trajectory table, events and samples as Python
+ * objects: {"y": (k, n, m), "code": (k,) C statuses, "message": k str,
+ * "nfev": (k,), "lanes": bool, "events": k lists [(t, y) per event function]
+ * or None}. */
+static PyObject *many_result(const py_system *sys, const mp_ode_outcome *outc,
+                             const mp_ode_result *results, size_t k, PyArrayObject *yout,
+                             int lanes, long max_steps)
+{
+    npy_intp ks[1] = {(npy_intp)k};
+    PyArrayObject *st = (PyArrayObject *)PyArray_SimpleNew(1, ks, NPY_INT);
+    PyArrayObject *nf = (PyArrayObject *)PyArray_SimpleNew(1, ks, NPY_LONG);
+    PyObject *msgs = PyList_New((Py_ssize_t)k), *evs = NULL, *result = NULL;
+    if (!st || !nf || !msgs) goto out;
+    for (size_t i = 0; i < k; i++) {
+        ((int *)PyArray_DATA(st))[i] = outc[i].status;
+        ((long *)PyArray_DATA(nf))[i] = outc[i].nfev;
+        PyObject *msg = ode_message(sys, &outc[i], max_steps);
+        if (!msg) goto out;
+        PyList_SET_ITEM(msgs, (Py_ssize_t)i, msg);
+    }
+    if (results) {
+        if (!(evs = PyList_New((Py_ssize_t)k))) goto out;
+        for (size_t i = 0; i < k; i++) {
+            const mp_ode_result *r = &results[i];
+            PyObject *lst = PyList_New((Py_ssize_t)r->n_events);
+            if (!lst) goto out;
+            PyList_SET_ITEM(evs, (Py_ssize_t)i, lst);
+            for (size_t q = 0; q < r->n_events; q++) {
+                npy_intp c = r->ev_count ? (npy_intp)r->ev_count[q] : 0;
+                npy_intp e1[1] = {c}, e2[2] = {c, (npy_intp)r->n};
+                PyObject *et = array_from(c ? r->ev_t[q] : NULL, 1, e1);
+                PyObject *ey = array_from(c ? r->ev_y[q] : NULL, 2, e2);
+                PyObject *pair = (et && ey) ? Py_BuildValue("(NN)", et, ey) : NULL;
+                if (!pair) {
+                    Py_XDECREF(et);
+                    Py_XDECREF(ey);
+                    goto out;
+                }
+                PyList_SET_ITEM(lst, (Py_ssize_t)q, pair);
+            }
+        }
+    } else {
+        evs = Py_NewRef(Py_None);
+    }
+    result = Py_BuildValue("{s:O,s:O,s:O,s:O,s:O,s:O}", "y", yout, "code", st, "message", msgs,
+                           "nfev", nf, "lanes", lanes ? Py_True : Py_False, "events", evs);
+out:
+    Py_XDECREF(st);
+    Py_XDECREF(nf);
+    Py_XDECREF(msgs);
+    Py_XDECREF(evs);
+    return result;
 }
 
 /* Contract: ode_solve_many(method, system, y0s, options, *, params, args,
- * threads, progress, watch, lanes) -> {"y": (k, n, m), "code": (k,) C
- * statuses, "message": k str, "nfev": (k,), "lanes": whether the ensemble ran
- * in SIMD lanes}.  lanes: -1 when possible (a scene or compiled system, an
- * explicit method lanes.c has), 0 never, 1 always (ValueError when not
- * possible).  options must hold a t_eval.  An ensemble stopped by a
- * callback's exception, Ctrl-C or memory raises. */
+ * threads, progress, watch, lanes, events, terminal, direction, jac) -> see
+ * many_result.  options: the nine values of ode_solve's options (integrate.py's
+ * _options; t_eval required); events, terminal, direction and jac as
+ * ode_solve takes them (an event function and jac are called as fun is, with
+ * a trajectory's row before args).  lanes: -1 when possible, 0 never, 1
+ * always (ValueError when not possible).  The binding parses and translates;
+ * the ensemble's problems and its lanes are mp_ode_ensemble_build's.  An
+ * ensemble stopped by a callback's exception, Ctrl-C or memory raises. */
 static PyObject *py_ode_solve_many(PyObject *self, PyObject *args, PyObject *kw)
 {
     (void)self;
     static char *kwlist[] = {"method", "system", "y0s", "options", "params", "args", "threads",
-                             "progress", "watch", "lanes", NULL};
+                             "progress", "watch", "lanes", "events", "terminal", "direction",
+                             "jac", NULL};
     const char *mname;
     PyObject *spec, *y0o, *opts, *paro = Py_None, *eargs = NULL, *watch = Py_None;
+    PyObject *evo = Py_None, *termo = Py_None, *diro = Py_None, *jaco = Py_None;
     int threads = 1, want_lanes = -1;
     PyObject *progress = Py_False; /* False, True (a stderr line) or a callable report(done, total) */
-    if (!PyArg_ParseTupleAndKeywords(args, kw, "sOOO|$OO!iOOi", kwlist, &mname, &spec, &y0o,
-                                     &opts, &paro, &PyTuple_Type, &eargs, &threads, &progress,
-                                     &watch, &want_lanes))
+    if (!PyArg_ParseTupleAndKeywords(args, kw, "sOOO!|$OO!iOOiOOOO", kwlist, &mname, &spec,
+                                     &y0o, &PyTuple_Type, &opts, &paro, &PyTuple_Type, &eargs,
+                                     &threads, &progress, &watch, &want_lanes, &evo, &termo,
+                                     &diro, &jaco))
         return NULL;
+    if (PyTuple_GET_SIZE(opts) != 9) {
+        PyErr_SetString(PyExc_TypeError, "options: t0, tf, rtol, atol, t_eval, h, first_step, "
+                                         "max_step and max_steps");
+        return NULL;
+    }
     if (watch != Py_None && !PyList_Check(watch)) {
         PyErr_SetString(PyExc_TypeError, "watch must be a list");
         return NULL;
@@ -839,29 +1012,26 @@ static PyObject *py_ode_solve_many(PyObject *self, PyObject *args, PyObject *kw)
     if (!eargs) eargs = PyTuple_New(0);
     else Py_INCREF(eargs);
     if (!eargs) return NULL;
-    PyArrayObject *y0s = NULL, *par = NULL, *yout = NULL, *st = NULL, *nf = NULL;
-    PyObject *result = NULL, **tuples = NULL, *msgs = NULL;
+    PyArrayObject *y0s = NULL, *par = NULL, *yout = NULL, *jm = NULL;
+    PyObject *result = NULL;
     ode_args oa = {0};
     mp_ode_options o;
     mp_ode_outcome *outc = NULL;
-    mp_ode_problem *probs = NULL;
-    py_fn *fns = NULL;
-    c_fn *cfns = NULL;
-    mp_rigid_torque *torques = NULL;
-    py_watched *watched = NULL;
+    py_event_list el = {0};
+    many_adapters ad = {0};
+    mp_ode_ensemble ens = {0};
     py_system sys;
     memset(&sys, 0, sizeof sys);
     size_t k = 0, np = 0;
 
     if (!(y0s = mp_py_array(y0o, "y0s", 2))) goto out;
-    k = (size_t)PyArray_DIM(y0s, 0);
+    k = ad.k = (size_t)PyArray_DIM(y0s, 0);
     size_t n = (size_t)PyArray_DIM(y0s, 1);
-    if (ode_args_parse(opts, n, &oa, &o) < 0) goto out;
+    if (ode_args_from_argv(&PyTuple_GET_ITEM(opts, 0), n, &oa, &o) < 0) goto out;
     if (!oa.tev) {
         PyErr_SetString(PyExc_ValueError, "solve_many needs t_eval");
         goto out;
     }
-    size_t nt = o.n_eval;
     if (paro != Py_None) {
         if (!(par = mp_py_array(paro, "params", 2))) goto out;
         if ((size_t)PyArray_DIM(par, 0) != k) {
@@ -871,173 +1041,110 @@ static PyObject *py_ode_solve_many(PyObject *self, PyObject *args, PyObject *kw)
         np = (size_t)PyArray_DIM(par, 1);
     }
     if (py_system_parse(spec, n, &sys) < 0) goto out;
-    if (m->symplectic && !m->implicit && sys.prob.nq == 0) {
-        PyErr_Format(PyExc_ValueError, "method %s needs a separable system q'' = a(t, q)", m->name);
+    const char *kind = PyUnicode_AsUTF8(PyTuple_GET_ITEM(spec, 0));
+    if (par && !sys.model && !sys.params && !sys.holds_python && sys.cfn.nq) {
+        PyErr_SetString(PyExc_ValueError, "params are not supported for SecondOrder C callbacks");
         goto out;
     }
-    probs = PyMem_Calloc(k ? k : 1, sizeof *probs);
-    outc = PyMem_Calloc(k ? k : 1, sizeof *outc);
-    if (!probs || !outc) {
-        PyErr_NoMemory();
+    if (jac_parse(jaco, n, &jm) < 0 || event_list_parse(evo, termo, diro, &el, &o) < 0)
+        goto out;
+    const double *rows = par ? PyArray_DATA(par) : NULL;
+    ens = (mp_ode_ensemble){
+        .m = m, .base = sys.prob, .k = k, .n = n, .rows = rows, .np = np,
+        .rows_kind = !par ? MP_ENS_ROWS_NONE : sys.model ? MP_ENS_ROWS_SCENE
+                   : sys.params ? MP_ENS_ROWS_DATA : MP_ENS_ROWS_CALLER,
+        .model = sys.model, .params = sys.params ? PyArray_DATA(sys.params) : NULL,
+        .nparams = sys.params ? (size_t)PyArray_SIZE(sys.params) : 0,
+        .torque = sys.torque.fn ? &sys.torque : NULL, .lane_rhs = sys.lanes,
+        .holds_python = sys.holds_python || watch != Py_None || (jaco != Py_None && !jm) ||
+                        el.count,
+        .want_lanes = want_lanes};
+    int rc = mp_ode_ensemble_build(&ens, oa.t0, oa.tf, &o);
+    if (rc != MP_OK) {
+        ensemble_error(&ens, rc, kind);
         goto out;
     }
-    const char *spec_kind = PyUnicode_AsUTF8(PyTuple_GET_ITEM(spec, 0));
-    for (size_t i = 0; i < k; i++) probs[i] = sys.prob;
-    if (par && strcmp(spec_kind, "scene") == 0) {
-        const mp_model *mod = mp_model_find(PyUnicode_AsUTF8(PyTuple_GET_ITEM(spec, 1)));
-        if (!mod->dim_of && np != mod->nparams) {
-            PyErr_Format(PyExc_ValueError, "params must have %zu columns (%s's parameters)",
-                         mod->nparams, mod->name);
-            goto out;
-        }
-        for (size_t i = 0; i < k; i++) {
-            const double *row = (const double *)PyArray_DATA(par) + i * np;
-            size_t dim;
-            if (mp_model_prepare(mod, row, np, &dim) != MP_OK || dim != n) {
-                char ctx[80];
-                snprintf(ctx, sizeof ctx, "params[%zu] (%s's parameters for a state of %zu)", i,
-                         mod->name, n);
-                mp_py_raise(MP_EDOM, ctx);
-                goto out;
+    /* the caller's part: Python rows and callbacks, events, Jacobians, watches */
+    if (par && ens.rows_kind == MP_ENS_ROWS_CALLER) {
+        if (sys.holds_python) {
+            if (many_row_tuples(&ad, rows, np, eargs) < 0) goto out;
+            if (!(ad.fns = PyMem_Calloc(k, sizeof *ad.fns))) goto nomem;
+            for (size_t i = 0; i < k; i++) {
+                ad.fns[i] = sys.fn;
+                ad.fns[i].args = ad.tuples[i];
+                ens.probs[i].data = &ad.fns[i];
             }
-            mod->bind(row, &probs[i]);
-            if (sys.torque.fn) {
-                if (!torques && !(torques = PyMem_Calloc(k, sizeof *torques))) {
-                    PyErr_NoMemory();
-                    goto out;
-                }
-                torques[i] = sys.torque;
-                torques[i].params = row;
-                mp_rigid_bind_torque(mod, &torques[i], &probs[i]);
+        } else { /* a C callback gets a pointer to its row as user_data */
+            if (!(ad.cfns = PyMem_Calloc(k, sizeof *ad.cfns))) goto nomem;
+            for (size_t i = 0; i < k; i++) {
+                ad.cfns[i] = sys.cfn.fn;
+                ad.cfns[i].user_data = (double *)rows + i * np;
+                ens.probs[i].data = &ad.cfns[i];
             }
-        }
-    } else if (par && strcmp(spec_kind, "compiled") == 0) {
-        /* a compiled system gets its row as its parameter vector */
-        if (np != (size_t)PyArray_SIZE(sys.params)) {
-            PyErr_Format(PyExc_ValueError, "params must have %zd columns (the scene's "
-                         "parameters)", (Py_ssize_t)PyArray_SIZE(sys.params));
-            goto out;
-        }
-        for (size_t i = 0; i < k; i++) probs[i].data = (double *)PyArray_DATA(par) + i * np;
-    } else if (par && sys.holds_python) {
-        /* a Python system gets its row as leading extra arguments */
-        fns = PyMem_Calloc(k, sizeof *fns);
-        tuples = PyMem_Calloc(k, sizeof *tuples);
-        if (!fns || !tuples) {
-            PyErr_NoMemory();
-            goto out;
-        }
-        Py_ssize_t na = PyTuple_GET_SIZE(eargs);
-        for (size_t i = 0; i < k; i++) {
-            const double *row = (const double *)PyArray_DATA(par) + i * np;
-            PyObject *tup = PyTuple_New((Py_ssize_t)np + na);
-            if (!tup) goto out;
-            tuples[i] = tup;
-            for (size_t j = 0; j < np; j++) {
-                PyObject *v = PyFloat_FromDouble(row[j]);
-                if (!v) goto out;
-                PyTuple_SET_ITEM(tup, (Py_ssize_t)j, v);
-            }
-            for (Py_ssize_t j = 0; j < na; j++) {
-                PyObject *v = PyTuple_GET_ITEM(eargs, j);
-                Py_INCREF(v);
-                PyTuple_SET_ITEM(tup, (Py_ssize_t)np + j, v);
-            }
-            fns[i] = sys.fn;
-            fns[i].args = tup;
-            probs[i].data = &fns[i];
-        }
-    } else if (par) {
-        /* a C callback gets a pointer to its row as user_data */
-        if (sys.cfn.nq) {
-            PyErr_SetString(PyExc_ValueError, "params are not supported for SecondOrder C callbacks");
-            goto out;
-        }
-        cfns = PyMem_Calloc(k, sizeof *cfns);
-        if (!cfns) {
-            PyErr_NoMemory();
-            goto out;
-        }
-        for (size_t i = 0; i < k; i++) {
-            cfns[i] = sys.cfn.fn;
-            cfns[i].user_data = (double *)PyArray_DATA(par) + i * np;
-            probs[i].data = &cfns[i];
         }
     }
-    int holds_python = sys.holds_python;
-    if (watch != Py_None && k > 0) { /* a ctypes callback that runs Python: see py_watched */
-        if (!(watched = PyMem_Calloc(k, sizeof *watched))) {
-            PyErr_NoMemory();
-            goto out;
+    if (k && watch != Py_None) { /* a ctypes callback that runs Python: see py_watched */
+        if (!(ad.watched = PyMem_Calloc(k, sizeof *ad.watched))) goto nomem;
+        for (size_t i = 0; i < k; i++) watch_problem(&ens.probs[i], &ad.watched[i], watch);
+    }
+    if (k && jaco != Py_None) {
+        if (!(ad.cjs = PyMem_Calloc(k, sizeof *ad.cjs)) ||
+            !(ad.wjs = PyMem_Calloc(k, sizeof *ad.wjs)))
+            goto nomem;
+        for (size_t i = 0; i < k; i++)
+            jac_wrap(&ens.probs[i], jaco, jm, ad.tuples ? ad.tuples[i] : eargs, &ad.cjs[i],
+                     &ad.wjs[i]);
+    }
+    if (k && el.count) { /* each trajectory's event adapters (its args) and whole result */
+        if (!(ad.evs = PyMem_Calloc(k, sizeof *ad.evs)) ||
+            !(ad.evfns = PyMem_Calloc(k * (size_t)el.count, sizeof *ad.evfns)) ||
+            !(ad.evdata = PyMem_Calloc(k, sizeof *ad.evdata)) ||
+            !(ad.results = PyMem_Calloc(k, sizeof *ad.results)))
+            goto nomem;
+        for (size_t i = 0; i < k; i++) {
+            ad.evs[i] = (py_events){ad.evfns + i * (size_t)el.count, (size_t)el.count};
+            ad.evdata[i] = &ad.evs[i];
+            for (Py_ssize_t q = 0; q < el.count; q++)
+                ad.evs[i].fns[q] = (py_fn){PyList_GET_ITEM(evo, q),
+                                           ad.tuples ? ad.tuples[i] : eargs, n, 1,
+                                           "event function"};
         }
-        for (size_t i = 0; i < k; i++) watch_problem(&probs[i], &watched[i], watch);
-        holds_python = 1;
     }
-    /* SIMD lanes: a system that runs in C without the GIL and a method lanes.c has */
-    int lanes_ok = !holds_python && (strcmp(spec_kind, "scene") == 0 ||
-                                     strcmp(spec_kind, "compiled") == 0) &&
-                   mp_ode_lanes_supported(m, &o, oa.t0, oa.tf);
-    if (want_lanes == 1 && !lanes_ok) {
-        PyErr_Format(PyExc_ValueError, "lanes=True needs a scene or compiled system and method "
-                     "dopri5, dop853 or rk4 (got %s with a %s system)", m->name, spec_kind);
-        goto out;
-    }
-    mp_lane_system lsys;
-    many_lane_system(&sys, spec_kind, spec, par, k, &lsys);
-    const mp_lane_system *lanes = lanes_ok && want_lanes != 0 ? &lsys : NULL;
-    npy_intp shape[3] = {(npy_intp)k, (npy_intp)n, (npy_intp)nt};
+    if (!(outc = PyMem_Calloc(k ? k : 1, sizeof *outc))) goto nomem;
+    npy_intp shape[3] = {(npy_intp)k, (npy_intp)n, (npy_intp)o.n_eval};
     if (!(yout = mp_py_empty(3, shape))) goto out;
     many_progress_ctx pctx = {0, PyCallable_Check(progress) ? progress : NULL};
-    int want_progress = pctx.report || PyObject_IsTrue(progress) == 1;
-    int rc;
-    if (holds_python) {
-        rc = mp_ode_solve_many(m, probs, NULL, k, oa.t0, oa.tf, PyArray_DATA(y0s), &o, 1,
-                               PyArray_DATA(yout), outc, want_progress ? many_progress : NULL,
-                               &pctx);
+    void (*report)(size_t, size_t, void *) =
+        pctx.report || PyObject_IsTrue(progress) == 1 ? many_progress : NULL;
+    if (ens.holds_python) {
+        rc = mp_ode_solve_many(m, ens.probs, NULL, k, oa.t0, oa.tf, PyArray_DATA(y0s), &o, 1,
+                               PyArray_DATA(yout), outc, ad.results, ad.evdata, report, &pctx);
     } else {
         Py_BEGIN_ALLOW_THREADS
-        rc = mp_ode_solve_many(m, probs, lanes, k, oa.t0, oa.tf, PyArray_DATA(y0s), &o, threads,
-                               PyArray_DATA(yout), outc, want_progress ? many_progress : NULL,
-                               &pctx);
+        rc = mp_ode_solve_many(m, ens.probs, ens.lanes, k, oa.t0, oa.tf, PyArray_DATA(y0s), &o,
+                               threads, PyArray_DATA(yout), outc, NULL, NULL, report, &pctx);
         Py_END_ALLOW_THREADS
     }
     if (rc != MP_OK) {
         mp_py_raise(rc, "solve_many");
         goto out;
     }
-    npy_intp ks[1] = {(npy_intp)k};
-    st = (PyArrayObject *)PyArray_SimpleNew(1, ks, NPY_INT);
-    nf = (PyArrayObject *)PyArray_SimpleNew(1, ks, NPY_LONG);
-    if (!st || !nf) goto out;
-    if (!(msgs = PyList_New((Py_ssize_t)k))) goto out;
-    for (size_t i = 0; i < k; i++) {
-        ((int *)PyArray_DATA(st))[i] = outc[i].status;
-        ((long *)PyArray_DATA(nf))[i] = outc[i].nfev;
-        PyObject *msg = ode_message(&sys, &outc[i], oa.max_steps);
-        if (!msg) goto out;
-        PyList_SET_ITEM(msgs, (Py_ssize_t)i, msg);
-    }
-    result = Py_BuildValue("{s:O,s:O,s:O,s:O,s:O}", "y", yout, "code", st, "message", msgs,
-                           "nfev", nf, "lanes", lanes ? Py_True : Py_False);
+    result = many_result(&sys, outc, ad.results, k, yout, ens.lanes != NULL, oa.max_steps);
+    goto out;
+nomem:
+    PyErr_NoMemory();
 out:
-    if (tuples)
-        for (size_t i = 0; i < k; i++) Py_XDECREF(tuples[i]);
-    PyMem_Free(tuples);
-    PyMem_Free(fns);
-    PyMem_Free(cfns);
-    PyMem_Free(torques);
-    PyMem_Free(watched);
-    PyMem_Free(probs);
+    many_adapters_clear(&ad);
+    mp_ode_ensemble_free(&ens);
     PyMem_Free(outc);
     py_system_clear(&sys);
     ode_args_clear(&oa);
+    event_list_clear(&el);
     Py_XDECREF(eargs);
-    Py_XDECREF(msgs);
     Py_XDECREF(y0s);
     Py_XDECREF(par);
     Py_XDECREF(yout);
-    Py_XDECREF(st);
-    Py_XDECREF(nf);
+    Py_XDECREF(jm);
     return result;
 }
 
@@ -1085,10 +1192,12 @@ static PyObject *py_ode_methods(PyObject *self, PyObject *unused)
     for (size_t i = 0; mp_ode_methods[i]; i++) {
         const mp_ode_method *m = mp_ode_methods[i];
         PyObject *d = Py_BuildValue(
-            "{s:s,s:i,s:O,s:O,s:O,s:O,s:i}", "name", m->name, "order", m->order, "adaptive",
-            m->adaptive ? Py_True : Py_False, "implicit", m->implicit ? Py_True : Py_False,
-            "symplectic", m->symplectic ? Py_True : Py_False, "needs_jacobian",
-            m->needs_jacobian ? Py_True : Py_False, "dense_output", m->dense_order);
+            "{s:s,s:i,s:O,s:O,s:O,s:O,s:i,s:O,s:O}", "name", m->name, "order", m->order,
+            "adaptive", m->adaptive ? Py_True : Py_False, "implicit",
+            m->implicit ? Py_True : Py_False, "symplectic", m->symplectic ? Py_True : Py_False,
+            "needs_jacobian", m->needs_jacobian ? Py_True : Py_False, "dense_output",
+            m->dense_order, "lanes", m->lanes != MP_LANE_NONE ? Py_True : Py_False, "rigid",
+            m->rigid ? Py_True : Py_False);
         if (!d || PyList_Append(lst, d) < 0) {
             Py_XDECREF(d);
             Py_DECREF(lst);

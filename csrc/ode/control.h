@@ -1,0 +1,155 @@
+/* The engine's step-size policy, written once for both widths: the driver
+ * (driver.c, one trajectory) and the lane driver (lanes.c, MP_LANES
+ * trajectories in lock-step) call these for each trajectory, so that a lane
+ * repeats the scalar loop's arithmetic bit for bit.
+ *
+ * Vectors are read with a stride: 1 for the driver's contiguous state,
+ * MP_LANES for a lane of the lane driver's structure-of-arrays state (lane l's
+ * component c at c * MP_LANES + l).  Everything here is inline: the functions
+ * run on every step of every trajectory. */
+#ifndef MP_ODE_CONTROL_H
+#define MP_ODE_CONTROL_H
+
+#include <float.h>
+#include <math.h>
+#include <stddef.h>
+
+#include "ode/ode.h"
+
+/* The controller's memory between the steps of one trajectory. */
+typedef struct mp_ode_ctl {
+    double facold;      /* the last accepted error (Lund stabilisation) */
+    int rejected;       /* the last attempt was rejected */
+    int nonfinite;      /* ... because of a non-finite trial stage */
+    int stiff_count, calm_count; /* Hairer's stiffness test; a switching row's */
+} mp_ode_ctl;
+
+/* The controller at a trajectory's start (and after a switching row's switch). */
+static inline mp_ode_ctl mp_ode_ctl_start(void) { return (mp_ode_ctl){1e-4, 0, 0, 0, 0}; }
+
+/* Contract: Hairer's controller for a method with its own error estimate.
+ * fac11 = err^expo and fold = facold^beta (1 when beta = 0) are the caller's
+ * (the lanes take the powers of eight lanes at once).  Returns 1 when the
+ * step (scaled error err) is accepted, with *hnew the next step; 0 when
+ * rejected (also for a NaN err), with *h the step to retry. */
+static inline int mp_ode_control(const mp_ode_method *m, mp_ode_ctl *c, double err,
+                                 double fac11, double fold, double *h, double *hnew)
+{
+    if (!(err <= 1.0)) {
+        c->nonfinite = !isfinite(err);
+        double fac = isfinite(err) ? fmin(1.0 / m->fac_min, fac11 / m->safety) : 10.0;
+        *h /= fac;
+        c->rejected = 1;
+        return 0;
+    }
+    /* Lund stabilisation only for methods with beta > 0 (dopri5) */
+    double fac = m->beta > 0.0 ? fac11 / fold : fac11;
+    fac = fmax(1.0 / m->fac_max, fmin(1.0 / m->fac_min, fac / m->safety));
+    *hnew = *h / fac;
+    c->facold = fmax(err, 1e-4);
+    if (c->rejected) *hnew = fmin(*hnew, *h);
+    c->rejected = c->nonfinite = 0;
+    return 1;
+}
+
+/* Contract: a trial stage was not finite: reject the step and retry with a
+ * tenth of it, as Hairer's codes do (a step floor reached after this is
+ * reported as MP_ENONFINITE, see mp_ode_step_floor). */
+static inline double mp_ode_control_nonfinite(mp_ode_ctl *c, double h)
+{
+    c->rejected = c->nonfinite = 1;
+    return h / 10.0;
+}
+
+/* Contract: Hairer's stiffness test after an accepted explicit step whose
+ * estimate h |lambda| is rho > 0: beyond rho_stiff for 15 of the recent steps
+ * sets *stiff; 6 calm steps in a row forget the count. */
+static inline void mp_ode_stiffness_test(mp_ode_ctl *c, double rho, double rho_stiff, int *stiff)
+{
+    if (rho > rho_stiff) {
+        c->calm_count = 0;
+        if (++c->stiff_count >= 15) *stiff = 1;
+    } else if (++c->calm_count >= 6) {
+        c->stiff_count = 0;
+    }
+}
+
+/* Contract: the step to attempt from t with the planned step h towards tf:
+ * the rest of the interval (never a stage beyond tf) when this is the last
+ * step (*last = 1): an adaptive step within 1% of tf, a fixed one within
+ * 1e-9 h of it; else h. */
+static inline double mp_ode_step_span(int adaptive, double t, double h, double tf, int *last)
+{
+    *last = 0;
+    if (adaptive ? t + 1.01 * h >= tf : t + h * (1.0 + 1e-9) >= tf) {
+        h = tf - t;
+        while (t + h > tf) h = nextafter(h, 0.0); /* no stage beyond tf */
+        *last = 1;
+    }
+    return h;
+}
+
+/* Contract: 1 when an adaptive step h at t is too small to advance t (the
+ * step-size floor: the solve ends with MP_ESTEP, or MP_ENONFINITE when the
+ * steps shrank because trial stages were not finite). */
+static inline int mp_ode_step_floor(double t, double h)
+{
+    return h <= 16.0 * DBL_EPSILON * fmax(fabs(t), 1e-300);
+}
+
+/* Hairer's RMS error norm sqrt(mean((e_i / (atol_i + rtol_i max(|y0_i|,
+ * |y1_i|)))^2)) over n components at stride s. */
+static inline double mp_ode_rms_norm(const mp_ode_options *o, size_t n, size_t s,
+                                     const double *e, const double *y0, const double *y1)
+{
+    double sum = 0.0;
+    for (size_t i = 0; i < n; i++) {
+        double sc = o->atol[i] + o->rtolv[i] * fmax(fabs(y0[i * s]), fabs(y1[i * s]));
+        double q = e[i * s] / sc;
+        sum += q * q;
+    }
+    return sqrt(sum / (double)n);
+}
+
+/* Contract: the first half of Hairer's first-step guess (hinit) from (y, f)
+ * at stride s: the trial step for the explicit Euler probe, at most hmax and
+ * span = tf - t0; *dnf = the mean square of f scaled by the tolerances (for
+ * mp_ode_hinit_final). */
+static inline double mp_ode_hinit_trial(const mp_ode_options *o, size_t n, size_t s,
+                                        const double *y, const double *f, double hmax,
+                                        double span, double *dnf)
+{
+    double sf2 = 0.0, sy2 = 0.0;
+    for (size_t i = 0; i < n; i++) {
+        double sk = o->atol[i] + o->rtolv[i] * fabs(y[i * s]);
+        double qf = f[i * s] / sk, qy = y[i * s] / sk;
+        sf2 += qf * qf;
+        sy2 += qy * qy;
+    }
+    *dnf = sf2 / (double)n;
+    double dny = sy2 / (double)n;
+    double h = (*dnf <= 1e-10 || dny <= 1e-10) ? 1e-6 : sqrt(dny / *dnf) * 0.01;
+    return fmin(h, fmin(hmax, span));
+}
+
+/* Contract: the second half of hinit: from the Euler probe of step h (f1 =
+ * f(t0 + h, y + h f)) the estimate of the second derivative, and the first
+ * step of a method of the given order, at most 100 h, hmax and span. */
+static inline double mp_ode_hinit_final(const mp_ode_options *o, size_t n, size_t s,
+                                        const double *y, const double *f, const double *f1,
+                                        double h, double dnf, int order, double hmax,
+                                        double span)
+{
+    double der2 = 0.0;
+    for (size_t i = 0; i < n; i++) {
+        double sk = o->atol[i] + o->rtolv[i] * fabs(y[i * s]);
+        double d = (f1[i * s] - f[i * s]) / sk;
+        der2 += d * d;
+    }
+    der2 = sqrt(der2 / (double)n) / h;
+    double der12 = fmax(fabs(der2), sqrt(dnf));
+    double h1 = der12 <= 1e-15 ? fmax(1e-6, h * 1e-3) : pow(0.01 / der12, 1.0 / (double)order);
+    return fmin(fmin(100.0 * h, h1), fmin(hmax, span));
+}
+
+#endif
