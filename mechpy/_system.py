@@ -57,7 +57,9 @@ class SecondOrder:
 
 def methods() -> list[dict]:
     """Every integration method: name, order, adaptive, implicit, symplectic,
-    needs_jacobian, dense_output (the order of its interpolant).
+    needs_jacobian, dense_output (the order of its interpolant), lanes
+    (:func:`solve_many` runs it in SIMD lanes) and rigid (a rigid-body
+    splitting: the ``RigidBody`` scene only).
 
     GSL's steppers have no interpolant of their own: the one-step rows of
     order >= 4 use a quintic Hermite interpolant (the midpoint from a half
@@ -81,6 +83,8 @@ def methods() -> list[dict]:
     (8, True, True)
     >>> rows["radau"]["implicit"], rows["radau"]["order"]         # Radau IIA, order 5
     (True, 5)
+    >>> sorted(name for name, row in rows.items() if row["lanes"])  # the lane kernels
+    ['dop853', 'dopri5', 'rk4']
     """
     return _core.ode_methods()
 

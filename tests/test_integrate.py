@@ -263,7 +263,7 @@ def test_methods_table():
     assert table["dop853"]["order"] == 8 and table["dop853"]["dense_output"] == 7
     assert table["gsl:msbdf"]["needs_jacobian"] and table["gsl:msbdf"]["implicit"]
     assert set(table["dopri5"]) == {"name", "order", "adaptive", "implicit", "symplectic",
-                                    "needs_jacobian", "dense_output"}
+                                    "needs_jacobian", "dense_output", "lanes", "rigid"}
 
 
 def test_user_jacobian_is_used():
