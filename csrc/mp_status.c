@@ -31,6 +31,8 @@ const mp_status_info mp_status_table[MP_NSTATUS] = {
     {MP_EGSL, "MP_EGSL", "GSLError", "RuntimeError", "GSL reported an error", -6, 1},
     {MP_EUNSTABLE, "MP_EUNSTABLE", "UnstableSystemError", "ValueError",
      "the system is unstable (a negative stiffness eigenvalue)", -9, 1},
+    {MP_EEVENT, "MP_EEVENT", "EventError", "RuntimeError",
+     "an event's action left the state where the event fires again at once", -14, 1},
     {MP_TERMINATED, "MP_TERMINATED", NULL, NULL, "A termination event occurred.", 1, 0},
 };
 

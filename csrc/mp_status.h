@@ -25,6 +25,7 @@ enum mp_status {
     MP_EMESH,       /* a mesh is open, non-manifold, inside out or degenerate */
     MP_EGSL,        /* GSL returned an unexpected error */
     MP_EUNSTABLE,   /* a physical system is unstable (negative stiffness eigenvalue) */
+    MP_EEVENT,      /* an event's action left the state where the event fires again at once */
     /* Not a failure and returned by no function: the table's row for a solve
      * that a terminal event ended (mp_ode_result.terminated). */
     MP_TERMINATED,

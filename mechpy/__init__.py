@@ -47,7 +47,7 @@ from .errors import *  # noqa: F401,F403
 from .errors import __all__ as _errors_all
 from . import integrate, plot, scenes  # noqa: F401
 from . import inertia, modes, rotation, stress, variational  # noqa: F401
-from . import frames, live, particles, phase, rigid  # noqa: F401
+from . import events, frames, live, particles, phase, rigid  # noqa: F401
 from .integrate import (DenseOutput, EnsembleSolution, SecondOrder, Solution,  # noqa: F401
                         methods, solve, solve_many)
 from .symbolic import coordinates, equations, lagrangian  # noqa: F401  (SymPy loads on call)
@@ -61,5 +61,5 @@ __all__ = ["integrate", "scenes", "inertia", "stress", "rotation", "rigid", "mod
            "frames", "particles", "variational", "plot", "live", "errors", "symbolic",
            "solve", "solve_many", "methods", "Solution", "EnsembleSolution", "DenseOutput",
            "SecondOrder", "coordinates", "lagrangian", "equations", "CompileError",
-           "tangent", "sensitivity", "fit", "FitResult",
+           "tangent", "sensitivity", "fit", "FitResult", "events",
            *_errors_all]

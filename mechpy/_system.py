@@ -179,7 +179,11 @@ def _system_spec(system, args, method):
                     f"got {type(system).__name__}")
 
 
-def _events_spec(events):
+def _events_spec(events, system=None, n=0, k=None):
+    """The event list as the C core takes it: per event a callable g, a pair
+    (g, action) or an impact's C entry (mechpy.events.Impact), and the
+    terminal counts and directions.  ``system`` and ``n`` resolve an impact's
+    coordinate; ``k`` (solve_many) allows a restitution per trajectory."""
     if events is None:
         return None, None, None
     if callable(events):
@@ -191,7 +195,7 @@ def _events_spec(events):
                         f"{type(events).__name__}") from None
     if not evs:   # SciPy's events=[]: no event, empty t_events and y_events
         return evs, None, None
-    term, dirs = [], []
+    term, dirs, entries = [], [], []
     for i, e in enumerate(evs):
         if not callable(e):
             raise TypeError(f"events[{i}] must be callable")
@@ -199,13 +203,34 @@ def _events_spec(events):
         if t is None:  # SciPy treats None as False
             t = False
         if isinstance(t, (bool, np.bool_)):
-            term.append(1 if t else 0)
+            count = 1 if t else 0
         else:
-            term.append(as_int(t, f"events[{i}].terminal", minimum=0))
+            count = as_int(t, f"events[{i}].terminal", minimum=0)
+        action = getattr(e, "action", None)
+        if action is not None and not callable(action):
+            raise TypeError(f"events[{i}].action must be callable action(t, y) -> y_new, "
+                            f"got {type(action).__name__}")
+        most = getattr(e, "max_events", None)
+        if most is not None:
+            if action is None:
+                raise ValueError(f"events[{i}].max_events is for an event with an action "
+                                 "(a plain event counts with terminal)")
+            if count:
+                raise ValueError(f"events[{i}] has both terminal and max_events: a terminal "
+                                 "event stops at its crossing, max_events after that many "
+                                 "actions")
+            count = as_int(most, f"events[{i}].max_events", minimum=1)
+        term.append(count)
         d = getattr(e, "direction", 0)
         d = as_scalar(d, f"events[{i}].direction")
         dirs.append(int(np.sign(d)))
-    return evs, np.array(term, dtype=np.intc), np.array(dirs, dtype=np.intc)
+        if hasattr(e, "_c_entry"):      # an impact: event and action in C
+            entries.append(e._c_entry(system, n, k))
+        elif action is not None:
+            entries.append((e, action))
+        else:
+            entries.append(e)
+    return entries, np.array(term, dtype=np.intc), np.array(dirs, dtype=np.intc)
 
 
 def _as_args(args) -> tuple:

@@ -35,6 +35,7 @@ from ._core import (  # noqa: F401
     STATUS_TABLE as _TABLE,
     ConvergenceError,
     DomainError,
+    EventError,
     GSLError,
     MechpyError,
     MeshError,
@@ -49,7 +50,7 @@ from ._core import (  # noqa: F401
 __all__ = [
     "MechpyError", "DomainError", "NonFiniteError", "SingularityError", "MeshError",
     "UnstableSystemError", "NotPositiveDefiniteError", "StepBudgetError", "StepSizeError",
-    "ConvergenceError", "GSLError",
+    "ConvergenceError", "GSLError", "EventError",
 ]
 
 

@@ -278,7 +278,7 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
     spec, dim = _system_spec(system, args, method)
     if dim is not None and dim != n:
         raise ValueError(f"y0 must have {dim} values for {type(system).__name__}, got {n}")
-    evs, term, dirs = _events_spec(events)
+    evs, term, dirs = _events_spec(events, system, n)
     if math.isinf(tf) and n and not (term is not None and term.any()):
         raise ValueError(f"t_span = ({t0}, {tf}): an infinite t_span needs a terminal event "
                          "to end the solve (events with terminal = True)")
@@ -598,7 +598,7 @@ def solve_many(system, t_span: Sequence[float], y0s, *, params=None, t_eval=None
     if dim is not None and dim != n:
         raise ValueError(f"y0s must have {dim} columns for {type(system).__name__}, got {n}")
     par = _ensemble_params(system, params, k)
-    evs, term, dirs = _events_spec(events)
+    evs, term, dirs = _events_spec(events, system, n, k)
     if jac is not None and not callable(jac):
         if isinstance(jac, (str, bytes)):
             raise TypeError("jac must be callable or a constant (n, n) array")

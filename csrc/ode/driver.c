@@ -183,6 +183,11 @@ void mp_ode_result_outcome(const mp_ode_result *r, mp_ode_outcome *out)
     out->bad_index = r->bad_index;
     out->t_fail = r->t_fail;
     out->nfev = r->nfev;
+    out->stop_reason = r->stop_reason;
+    out->stop_event = r->stop_event;
+    out->n_actions = r->n_actions;
+    out->stop_count = r->stop_count;
+    out->zeno_gap = r->zeno_gap;
 }
 
 int mp_ode_result_dense_eval(size_t n, size_t ncoef, size_t nseg, const double *seg_t,
@@ -269,18 +274,21 @@ static int ev_cmp(const void *a, const void *b)
 }
 
 /* Find every crossing in the accepted step [t, t + h]; g_old holds g at t and
- * is updated to g at the step end.  Sets *s_stop < 1 when a terminal event
- * fires (the step is truncated there).  On the first step (first != 0) an
+ * is updated to g at the step end.  Sets *s_stop <= 1 when a terminal event
+ * fires or an action event crosses (the step is truncated there; *act = the
+ * action event's index, else -1; a terminal count reached stops instead,
+ * *act = -1, r->stop_reason saying which).  On the first step (first != 0) an
  * event that is exactly zero at t0 occurs at t0 when it leaves zero in its
  * direction (any way for direction 0), as SciPy's solve_ivp reports it; a
  * zero at a later step's start is the crossing the step before reported. */
 static int ev_step(mp_ode_ws *w, mp_ode_result *r, const mp_ode_options *o, double t, double h,
                    int first, double *g_old, double *g_sub, double *ytmp, double *gtmp,
-                   ev_hit *hits, double *s_stop)
+                   ev_hit *hits, double *s_stop, long *act)
 {
     size_t ne = o->n_events, nh = 0;
     ev_ctx c = {w, o, t, h, ytmp, gtmp};
     *s_stop = 2.0;
+    *act = -1;
     for (int j = 1; j <= MP_ODE_EVENT_SUBDIV; j++) {
         double s0 = (double)(j - 1) / MP_ODE_EVENT_SUBDIV, s1 = (double)j / MP_ODE_EVENT_SUBDIV;
         int rc;
@@ -321,8 +329,17 @@ static int ev_step(mp_ode_ws *w, mp_ode_result *r, const mp_ode_options *o, doub
         mp_ode_dense_eval(w->coef, w->ncoef, w->n, s, ytmp);
         int rc = push_event(r, k, t + s * h, ytmp);
         if (rc != MP_OK) return rc;
+        int with_action = o->has_action && o->has_action[k];
         if (o->terminal[k] > 0 && r->ev_count[k] >= (size_t)o->terminal[k]) {
             *s_stop = s;
+            r->stop_reason = with_action ? MP_ODE_STOP_MAX_EVENTS : MP_ODE_STOP_TERMINAL;
+            r->stop_event = k;
+            r->stop_count = (long)r->ev_count[k];
+            break;
+        }
+        if (with_action) {
+            *s_stop = s;
+            *act = (long)k;
             break;
         }
     }
@@ -441,6 +458,8 @@ typedef struct {
     long checked_until;       /* ... not before this many attempts (a block replayed) */
     double *buf, *ytmp, *save;                  /* the vectors: one block */
     double *g_old, *g_sub, *gtmp; ev_hit *hits; /* events: one block, and the hits */
+    double *act_t;            /* per event: the time of its last action (with act_n) */
+    long *act_n;              /* per event: its actions applied */
 } ode_run;
 
 int mp_ode_span_ok(const mp_ode_method *m, double t0, double tf, const mp_ode_options *o)
@@ -480,10 +499,13 @@ static int alloc_events(ode_run *s)
     r->ev_cap = calloc(ne, sizeof(size_t));
     r->ev_t = calloc(ne, sizeof(double *));
     r->ev_y = calloc(ne, sizeof(double *));
-    s->g_old = malloc(3 * ne * sizeof(double));
+    s->g_old = malloc(4 * ne * sizeof(double));
     s->hits = malloc(ne * MP_ODE_EVENT_SUBDIV * sizeof(ev_hit));
-    if (!r->ev_count || !r->ev_cap || !r->ev_t || !r->ev_y || !s->g_old || !s->hits)
+    s->act_n = calloc(ne, sizeof(long));
+    if (!r->ev_count || !r->ev_cap || !r->ev_t || !r->ev_y || !s->g_old || !s->hits ||
+        !s->act_n)
         return MP_ENOMEM;
+    s->act_t = s->g_old + 3 * ne;
     s->g_sub = s->g_old + ne;
     s->gtmp = s->g_sub + ne;
     return MP_OK;
@@ -574,6 +596,75 @@ static void stiffness_test(ode_run *s)
     mp_ode_stiffness_test(&s->c, s->w.rho, rho_stiff, &s->r->stiff);
 }
 
+/* Accumulation of an action event's crossings (Zeno): two actions closer in
+ * t than this fraction of the time since the solve's start end it there. */
+#define MP_ODE_ZENO_FRAC 1e-12
+
+/* Contract: event k's action at (s->t, w->y), the state just before it: the
+ * action replaces y in place (a non-finite value is MP_ENONFINITE, naming
+ * the action), the state after it is a sample (with no t_eval), and the
+ * integration restarts there: f(t, y), g(t, y), the controller and the
+ * first step afresh (a fixed-step method counts its steps from t), the
+ * method's history forgotten.  An action that leaves the state where event k
+ * fires again at once (two actions within the root finder's tolerance) is
+ * MP_EEVENT; crossings accumulating (Zeno: the gap between two actions below
+ * MP_ODE_ZENO_FRAC of the time since the start) end the solve at that point,
+ * as a terminal event does (r->stop_reason MP_ODE_STOP_ZENO).  MP_OK or the
+ * failure. */
+static int apply_action(ode_run *s, size_t k)
+{
+    mp_ode_ws *w = &s->w;
+    mp_ode_result *r = s->r;
+    const mp_ode_options *o = s->o;
+    size_t n = w->n, ne = o->n_events;
+    double t = s->t;
+    int rc;
+    if (s->act_n[k] > 0) {
+        double gap = t - s->act_t[k];
+        double tol = 8.0 * DBL_EPSILON * (fabs(t) + fabs(s->h));
+        r->stop_event = k;
+        if (gap <= tol) return MP_EEVENT;
+        if (gap <= MP_ODE_ZENO_FRAC * (t - w->t_start)) {
+            r->stop_reason = MP_ODE_STOP_ZENO;
+            r->stop_count = (long)r->ev_count[k];
+            r->zeno_gap = gap;
+            r->terminated = 1;
+            return MP_OK;
+        }
+    }
+    if ((rc = o->action(t, w->y, k, o->action_data)) != MP_OK) return rc;
+    for (size_t i = 0; i < n; i++)
+        if (!isfinite(w->y[i])) {
+            w->bad_what = MP_ODE_BAD_ACTION;
+            w->bad_index = k;
+            return MP_ENONFINITE;
+        }
+    s->act_t[k] = t;
+    s->act_n[k]++;
+    r->n_actions++;
+    if (o->n_eval == 0 && (rc = push_sample(r, t, w->y)) != MP_OK) return rc;
+    /* restart from (t, y): as at the start, the history forgotten */
+    if ((rc = mp_ode_ws_rhs(w, t, w->y, w->f)) != MP_OK) return rc;
+    if ((rc = o->events(t, w->y, s->g_old, o->events_data)) != MP_OK) return rc;
+    for (size_t q = 0; q < ne; q++)
+        if (!isfinite(s->g_old[q])) {
+            w->bad_what = MP_ODE_BAD_EVENT;
+            w->bad_index = q;
+            return MP_ENONFINITE;
+        }
+    s->c = mp_ode_ctl_start();
+    memset(w->coef, 0, w->ncoef * n * sizeof(double));
+    if (s->cur->restart) s->cur->restart(w);
+    s->t0 = t;
+    s->nfixed = 0;
+    s->hmax = fmin(o->max_step, s->tf - t);
+    if (!s->cur->adaptive) s->h = o->h;
+    else if (o->first_step > 0) s->h = o->first_step;
+    else if ((rc = first_step(w, t, s->tf, s->hmax, &s->h)) != MP_OK) return rc;
+    s->h = fmin(s->h, s->hmax);
+    return MP_OK;
+}
+
 /* Contract: the rest of an accepted step [t, t + h] ending at tnew (tf on
  * the last step), the next one to be hnew (adaptive): the method's finish
  * (with the interpolant only when a t_eval point, events or dense output need
@@ -592,19 +683,23 @@ static int accept_step(ode_run *s, double h, double hnew, double tnew)
     if ((rc = s->cur->finish(w, t, h, dense_now)) != MP_OK) return rc;
     if (w->rho > 0.0) stiffness_test(s);
     double s_stop = 2.0;
+    long act = -1;
     if (o->n_events && (rc = ev_step(w, r, o, t, h, r->nsteps == 0, s->g_old, s->g_sub,
-                                     s->ytmp, s->gtmp, s->hits, &s_stop)) != MP_OK)
+                                     s->ytmp, s->gtmp, s->hits, &s_stop, &act)) != MP_OK)
         return rc;
     double tend = s_stop <= 1.0 ? t + s_stop * h : tnew;
     if ((rc = output_step(r, o, w, t, h, tnew, tend, &s->ie, s->ytmp)) != MP_OK) return rc;
     r->nsteps++;
-    if (s_stop <= 1.0) { /* a terminal event: the solve ends at its point */
+    if (s_stop <= 1.0) { /* the step ends at the event's point: the state just before it */
         mp_ode_dense_eval(w->coef, w->ncoef, n, s_stop, s->ytmp);
         if (o->n_eval == 0 && (rc = push_sample(r, tend, s->ytmp)) != MP_OK) return rc;
         memcpy(w->y, s->ytmp, n * sizeof(double));
         s->t = tend;
-        r->terminated = 1;
-        return MP_OK;
+        if (act < 0) { /* a terminal event: the solve ends here */
+            r->terminated = 1;
+            return MP_OK;
+        }
+        return apply_action(s, (size_t)act);
     }
     if (o->n_eval == 0 && (rc = push_sample(r, tnew, w->ynew)) != MP_OK) return rc;
     double *sw = w->y; w->y = w->ynew; w->ynew = sw;
@@ -750,6 +845,7 @@ static void free_run(ode_run *s, int rc)
     free(s->buf);
     free(s->g_old);
     free(s->hits);
+    free(s->act_n);
 }
 
 /* Contract: the forward solve (t0 < tf) of mp_ode_solve: the arguments
@@ -814,6 +910,13 @@ static int neg_events(double s, const double *y, double *g, void *data)
     return c->o->events(-s, y, g, c->o->events_data);
 }
 
+/* the action at t = -s */
+static int neg_action(double s, double *y, size_t k, void *data)
+{
+    const neg_ctx *c = data;
+    return c->o->action(-s, y, k, c->o->action_data);
+}
+
 int mp_ode_solve(const mp_ode_method *m, const mp_ode_problem *p, double t0, double tf,
                  const double *y0, const mp_ode_options *o, mp_ode_result *r)
 {
@@ -840,6 +943,10 @@ int mp_ode_solve(const mp_ode_method *m, const mp_ode_problem *p, double t0, dou
     if (o->n_events) {
         on.events = neg_events;
         on.events_data = &c;
+    }
+    if (o->action) {
+        on.action = neg_action;
+        on.action_data = &c;
     }
     int rc = solve_forward(m, &pn, -t0, -tf, y0, &on, r);
     free(sev);

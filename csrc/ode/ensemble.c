@@ -130,7 +130,7 @@ static void *ens_run(void *argp)
         size_t i = atomic_fetch_add(&e->next, 1);
         if (i >= e->k) break;
         mp_ode_result r;
-        if (e->events_data) o.events_data = e->events_data[i];
+        if (e->events_data) o.events_data = o.action_data = e->events_data[i];
         int rc = mp_ode_solve(e->m, &e->probs[i], e->t0, e->tf, e->y0s + i * e->n, &o, &r);
         mp_ode_result_outcome(&r, &e->out[i]);
         double *dst = e->yout + i * e->n * e->nt; /* (n, nt) block */

@@ -15,7 +15,7 @@
  * one mp_ode_solve per trajectory.  With results (not NULL; the scalar path)
  * each trajectory's whole result is kept in results[i] (its events; the
  * caller frees each with mp_ode_result_free), and with events_data trajectory
- * i's event functions get events_data[i] as their data.  Returns MP_OK, or
+ * i's event functions and actions get events_data[i] as their data.  Returns MP_OK, or
  * MP_EINTR / MP_ECALLBACK / MP_ENOMEM when the ensemble was stopped. */
 /* An ensemble as the caller describes it: one system (base, a scene row's
  * or a compiled system's or a callback's problem) and k parameter rows, and

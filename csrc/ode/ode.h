@@ -19,6 +19,10 @@ typedef int (*mp_ode_rhs)(double t, const double *y, double *dydt, void *data);
 typedef int (*mp_ode_jac)(double t, const double *y, double *jac, void *data);
 /* All event functions at once: g[k] = g_k(t, y). */
 typedef int (*mp_ode_events)(double t, const double *y, double *g, void *data);
+/* An event's action: at the located crossing of event k the state y (n
+ * values) is replaced in place, and the integration restarts from it.
+ * MP_OK or a status that stops the solve. */
+typedef int (*mp_ode_action)(double t, double *y, size_t k, void *data);
 /* Interrupt check, called every few hundred steps; non-zero stops the solve. */
 typedef int (*mp_ode_interrupt)(void *ctx);
 
@@ -74,12 +78,24 @@ typedef struct mp_ode_options {
     void *events_data;
     const int *terminal;      /* per event: 0 never, k > 0 stop at the k-th occurrence */
     const int *direction;     /* per event: -1, 0, +1 (SciPy's meaning) */
+    /* per event: 1 when it has an action (NULL: none has).  An action event
+     * replaces the state at each crossing and the integration restarts there;
+     * its terminal count k > 0 (max_events) ends the solve at the k-th crossing,
+     * the action not applied. */
+    const unsigned char *has_action;
+    mp_ode_action action;
+    void *action_data;
     mp_ode_interrupt interrupt;
     void *interrupt_ctx;
 } mp_ode_options;
 
 /* What produced a non-finite value (mp_ode_result.bad_what). */
-enum { MP_ODE_BAD_RHS = 0, MP_ODE_BAD_EVENT = 1, MP_ODE_BAD_JAC = 2 };
+enum { MP_ODE_BAD_RHS = 0, MP_ODE_BAD_EVENT = 1, MP_ODE_BAD_JAC = 2, MP_ODE_BAD_ACTION = 3 };
+
+/* Why events ended a solve (mp_ode_result.stop_reason): a terminal event; an
+ * action event's count (max_events); its crossings accumulating (Zeno: the
+ * solve ends at the accumulation point, as at a terminal event). */
+enum { MP_ODE_STOP_NONE = 0, MP_ODE_STOP_TERMINAL, MP_ODE_STOP_MAX_EVENTS, MP_ODE_STOP_ZENO };
 
 /* Growable output storage of one solve.  Freed by mp_ode_result_free. */
 typedef struct mp_ode_result {
@@ -91,6 +107,11 @@ typedef struct mp_ode_result {
     double t_fail;            /* where a failure happened */
     int bad_what;             /* MP_ENONFINITE: MP_ODE_BAD_RHS, _EVENT or _JAC */
     size_t bad_index;         /* ... and the component (or event) that was not finite */
+    int stop_reason;          /* a terminal or action event ended it (MP_ODE_STOP_*) */
+    size_t stop_event;        /* ... which event (and, for MP_EEVENT, the one re-firing) */
+    long n_actions;           /* actions applied (every event) */
+    long stop_count;          /* the stopping event's crossings */
+    double zeno_gap;          /* MP_ODE_STOP_ZENO: the last two crossings' distance in t */
     int backward;             /* t0 > tf: times are t, dense segments are in s = -t */
     size_t n;
     /* samples: rows of (t, y[n]); with t_eval these are the t_eval points reached */
@@ -113,6 +134,10 @@ typedef struct mp_ode_outcome {
     size_t bad_index;
     double t_fail;    /* where it failed */
     long nfev;
+    int stop_reason;  /* see mp_ode_result */
+    size_t stop_event;
+    long n_actions, stop_count;
+    double zeno_gap;
 } mp_ode_outcome;
 
 /* The outcome of a finished solve. */

@@ -102,19 +102,56 @@ static int py_jac(double t, const double *y, double *J, void *data)
     return py_call(&((const py_with_jac *)data)->jac, t, y, J);
 }
 
+/* An impact (mechpy.events.impact) in C: g = side (y[iq] - wall), and the
+ * action y[iv] = -e y[iv], y[iq] = wall (the coordinate exactly at the wall,
+ * its velocity reflected and scaled by the restitution e). */
+typedef struct {
+    size_t iq, iv;
+    double wall, e, side;
+    long e_param; /* >= 0: e is the system's parameter of this index (per trajectory) */
+} c_impact;
+
+/* The event functions of one solve (one trajectory): per event a Python
+ * function g(t, y, *args) (fns[k].fun) or a C impact (fns[k].fun NULL:
+ * imp[k]), and per event its action: a Python callable action(t, y, *args)
+ * -> y_new (acts[k].fun), an impact's own, or none. */
 typedef struct {
     py_fn *fns;
-    size_t count;
+    py_fn *acts;
+    c_impact *imp;
+    const double *params; /* the trajectory's parameter vector (an impact's e_param) */
+    size_t count, n;
+    char (*names)[32];    /* "events[k]", "events[k].action": for messages */
 } py_events;
 
 static int py_events_eval(double t, const double *y, double *g, void *data)
 {
     const py_events *e = data;
     for (size_t k = 0; k < e->count; k++) {
+        if (!e->fns[k].fun) {
+            const c_impact *im = &e->imp[k];
+            g[k] = im->side * (y[im->iq] - im->wall);
+            continue;
+        }
         int rc = py_call(&e->fns[k], t, y, &g[k]);
         if (rc != MP_OK) return rc;
     }
     return MP_OK;
+}
+
+/* mp_ode_action of the events: the impact's reflection in C, or the Python
+ * action's new state (checked: n values; its finiteness is the driver's). */
+static int py_events_action(double t, double *y, size_t k, void *data)
+{
+    const py_events *e = data;
+    if (!e->fns[k].fun) {
+        const c_impact *im = &e->imp[k];
+        double rest = im->e_param >= 0 ? e->params[im->e_param] : im->e;
+        y[im->iv] = -rest * y[im->iv];
+        y[im->iq] = im->wall;
+        return MP_OK;
+    }
+    return py_call(&e->acts[k], t, y, y);
 }
 
 /* ---- C callbacks: void f(double t, const double *y, double *dydt, void *ud) -- */
@@ -389,11 +426,29 @@ static PyObject *ode_message(const py_system *sys, const mp_ode_outcome *out, lo
     size_t i = out->bad_index;
     double t = out->t_fail;
     int st = out->status;
+    if (st == MP_TERMINATED && out->stop_reason == MP_ODE_STOP_MAX_EVENTS) {
+        snprintf(detail, sizeof detail, "events[%zu] reached max_events=%ld at t = %.17g",
+                 out->stop_event, out->stop_count, t);
+        return PyUnicode_FromFormat("%s (%s)", mp_status_message(st), detail);
+    }
+    if (st == MP_TERMINATED && out->stop_reason == MP_ODE_STOP_ZENO) {
+        snprintf(detail, sizeof detail, "events[%zu] accumulate (Zeno): %ld crossings, the "
+                 "last two %.3g apart in t; the solve ends at their accumulation point t = "
+                 "%.17g", out->stop_event, out->stop_count, out->zeno_gap, t);
+        return PyUnicode_FromFormat("%s (%s)", mp_status_message(st), detail);
+    }
     if (st == MP_OK || st == MP_TERMINATED) return PyUnicode_FromString(mp_status_message(st));
     if (st == MP_EMAXSTEPS) {
         snprintf(detail, sizeof detail, "max_steps=%ld, at t = %.17g", max_steps, t);
+    } else if (st == MP_EEVENT) {
+        snprintf(detail, sizeof detail, "events[%zu] at t = %.17g: after its action the event "
+                 "fires again at once; an action must move the state off the event surface "
+                 "(reverse the velocity towards it)", out->stop_event, t);
     } else if (st != MP_ENONFINITE) {
         snprintf(detail, sizeof detail, "at t = %.17g", t);
+    } else if (out->bad_what == MP_ODE_BAD_ACTION) {
+        snprintf(detail, sizeof detail, "events[%zu].action returned NaN or inf at t = %.17g",
+                 i, t);
     } else if (out->bad_what == MP_ODE_BAD_EVENT) {
         snprintf(detail, sizeof detail, "events[%zu] returned NaN or inf at t = %.17g", i, t);
     } else if (out->bad_what == MP_ODE_BAD_JAC) {
@@ -628,22 +683,36 @@ static int jac_wrap(mp_ode_problem *prob, PyObject *jaco, PyArrayObject *jm, PyO
     return 1;
 }
 
-/* The event functions of a solve: the callables' adapters, terminal and
- * direction (owned). */
+/* The event list of a solve as integrate.py hands it over: terminal and
+ * direction (owned), which events have an action, and whether every event
+ * runs in C (impacts alone: no GIL needed). */
 typedef struct {
     PyArrayObject *term, *dir;
+    unsigned char *has_action; /* PyMem */
     Py_ssize_t count;
+    int all_c;
 } py_event_list;
 
 static void event_list_clear(py_event_list *el)
 {
     Py_CLEAR(el->term);
     Py_CLEAR(el->dir);
+    PyMem_Free(el->has_action);
+    el->has_action = NULL;
 }
 
-/* Contract: the event list evo (None or a list of callables) with terminal
- * and direction (one int each) into el and o's event fields; o->events_data
- * is left to the caller (event_fns).  0, or -1 with an exception set. */
+/* Whether entry is a C impact: ("impact", iq, iv, wall, e, side, e_param). */
+static int is_impact(PyObject *entry)
+{
+    if (!PyTuple_Check(entry) || PyTuple_GET_SIZE(entry) != 7) return 0;
+    PyObject *tag = PyTuple_GET_ITEM(entry, 0);
+    return PyUnicode_Check(tag) && PyUnicode_CompareWithASCIIString(tag, "impact") == 0;
+}
+
+/* Contract: the event list evo (None or a list of entries: a callable g, a
+ * pair (g, action) or a C impact tuple) with terminal and direction (one int
+ * each) into el and o's event fields; o->events_data and o->action_data are
+ * left to the caller (event_fns).  0, or -1 with an exception set. */
 static int event_list_parse(PyObject *evo, PyObject *termo, PyObject *diro, py_event_list *el,
                             mp_ode_options *o)
 {
@@ -658,25 +727,103 @@ static int event_list_parse(PyObject *evo, PyObject *termo, PyObject *diro, py_e
         PyErr_SetString(PyExc_ValueError, "terminal and direction need one value per event");
         return -1;
     }
+    if (!(el->has_action = PyMem_Calloc((size_t)el->count, 1))) {
+        PyErr_NoMemory();
+        return -1;
+    }
+    el->all_c = 1;
+    for (Py_ssize_t k = 0; k < el->count; k++) {
+        PyObject *entry = PyList_GET_ITEM(evo, k);
+        int imp = is_impact(entry), pair = !imp && PyTuple_Check(entry);
+        if (pair && (PyTuple_GET_SIZE(entry) != 2 ||
+                     !PyCallable_Check(PyTuple_GET_ITEM(entry, 0)) ||
+                     !PyCallable_Check(PyTuple_GET_ITEM(entry, 1)))) {
+            PyErr_Format(PyExc_TypeError, "events[%zd] must be callable", k);
+            return -1;
+        }
+        el->has_action[k] = (unsigned char)(imp || pair);
+        el->all_c &= imp;
+    }
     o->n_events = (size_t)el->count;
     o->events = py_events_eval;
     o->terminal = PyArray_DATA(el->term);
     o->direction = PyArray_DATA(el->dir);
+    o->has_action = el->has_action;
+    o->action = py_events_action;
     return 0;
 }
 
-/* Contract: pe's adapters (fns, count; PyMem, the caller frees fns) of the
- * event callables in evo, each called as g(t, y, *args). */
-static int event_fns(PyObject *evo, Py_ssize_t count, PyObject *args, size_t n, py_events *pe)
+/* Contract: pe's adapters of the entries in evo for states of n: each Python
+ * event and action called with (t, y, *args), each impact's parameters (with
+ * e_rows (the trajectory's restitution per event, or NULL) and params, the
+ * trajectory's parameter vector).  pe->fns, acts, imp are PyMem (the caller
+ * frees them with event_fns_free).  0, or -1 with an exception set. */
+static int event_fns(PyObject *evo, Py_ssize_t count, PyObject *args, size_t n,
+                     const double *params, size_t nparams, size_t row, py_events *pe)
 {
+    memset(pe, 0, sizeof *pe);
     pe->count = (size_t)count;
-    if (!(pe->fns = PyMem_Calloc((size_t)count, sizeof(py_fn)))) {
+    pe->n = n;
+    pe->params = params;
+    pe->fns = PyMem_Calloc((size_t)count, sizeof(py_fn));
+    pe->acts = PyMem_Calloc((size_t)count, sizeof(py_fn));
+    pe->imp = PyMem_Calloc((size_t)count, sizeof(c_impact));
+    pe->names = PyMem_Calloc(2 * (size_t)count, sizeof *pe->names);
+    if (!pe->fns || !pe->acts || !pe->imp || !pe->names) {
         PyErr_NoMemory();
         return -1;
     }
-    for (Py_ssize_t k = 0; k < count; k++)
-        pe->fns[k] = (py_fn){PyList_GET_ITEM(evo, k), args, n, 1, "event function"};
+    for (Py_ssize_t k = 0; k < count; k++) {
+        PyObject *entry = PyList_GET_ITEM(evo, k);
+        if (is_impact(entry)) {
+            Py_ssize_t iq, iv;
+            long ep;
+            double wall, side;
+            PyObject *eo;
+            const char *tag;
+            if (!PyArg_ParseTuple(entry, "snndOdl", &tag, &iq, &iv, &wall, &eo, &side, &ep))
+                return -1;
+            if (iq < 0 || iv < 0 || (size_t)iq >= n || (size_t)iv >= n ||
+                (ep >= 0 && (size_t)ep >= nparams)) {
+                PyErr_Format(PyExc_ValueError, "events[%zd]: an impact's coordinate, velocity "
+                             "or restitution parameter is out of range", k);
+                return -1;
+            }
+            double e = 0.0;
+            if (ep < 0 && PyFloat_Check(eo)) {
+                e = PyFloat_AS_DOUBLE(eo);
+            } else if (ep < 0) { /* one restitution per trajectory */
+                PyArrayObject *ea = mp_py_array(eo, "restitution", 1);
+                if (!ea) return -1;
+                if ((size_t)PyArray_SIZE(ea) <= row) {
+                    Py_DECREF(ea);
+                    PyErr_Format(PyExc_ValueError, "events[%zd]: restitution needs one value "
+                                 "per trajectory", k);
+                    return -1;
+                }
+                e = ((const double *)PyArray_DATA(ea))[row];
+                Py_DECREF(ea);
+            }
+            pe->imp[k] = (c_impact){(size_t)iq, (size_t)iv, wall, e, side, ep};
+            continue;
+        }
+        PyObject *g = PyTuple_Check(entry) ? PyTuple_GET_ITEM(entry, 0) : entry;
+        snprintf(pe->names[2 * k], sizeof pe->names[0], "events[%zd]", k);
+        snprintf(pe->names[2 * k + 1], sizeof pe->names[0], "events[%zd].action", k);
+        pe->fns[k] = (py_fn){g, args, n, 1, pe->names[2 * k]};
+        if (PyTuple_Check(entry))
+            pe->acts[k] = (py_fn){PyTuple_GET_ITEM(entry, 1), args, n, n, pe->names[2 * k + 1]};
+    }
     return 0;
+}
+
+static void event_fns_free(py_events *pe)
+{
+    PyMem_Free(pe->fns);
+    PyMem_Free(pe->acts);
+    PyMem_Free(pe->imp);
+    PyMem_Free(pe->names);
+    memset(pe, 0, sizeof *pe);
 }
 
 /* ---- ode_solve ------------------------------------------------------------ */
@@ -726,7 +873,8 @@ static PyObject *py_ode_solve(PyObject *self, PyObject *const *argv, Py_ssize_t 
     py_with_jac wj;
     py_watched wd;
     const_jac cj;
-    py_events pe = {NULL, 0};
+    py_events pe;
+    memset(&pe, 0, sizeof pe);
     memset(&sys, 0, sizeof sys);
 
     y0 = mp_py_array(y0o, "y0", 1);
@@ -756,9 +904,11 @@ static PyObject *py_ode_solve(PyObject *self, PyObject *const *argv, Py_ssize_t 
     o.dense = dense;
     if (event_list_parse(evo, termo, diro, &el, &o) < 0) goto out;
     if (el.count) {
-        if (event_fns(evo, el.count, eargs, n, &pe) < 0) goto out;
-        o.events_data = &pe;
-        holds_python = 1;
+        if (event_fns(evo, el.count, eargs, n, sys.params ? PyArray_DATA(sys.params) : NULL,
+                      sys.params ? (size_t)PyArray_SIZE(sys.params) : 0, 0, &pe) < 0)
+            goto out;
+        o.events_data = o.action_data = &pe;
+        holds_python |= !el.all_c; /* impacts alone run in C */
     }
 
     prob.replayable = !holds_python; /* plain C all through: a block may be run again */
@@ -777,7 +927,7 @@ static PyObject *py_ode_solve(PyObject *self, PyObject *const *argv, Py_ssize_t 
 out:
     py_system_clear(&sys);
     ode_args_clear(&oa);
-    PyMem_Free(pe.fns);
+    event_fns_free(&pe);
     event_list_clear(&el);
     Py_XDECREF(y0);
     Py_XDECREF(jm);
@@ -868,7 +1018,6 @@ typedef struct {
     py_fn *fns;
     c_fn *cfns;
     py_events *evs;
-    py_fn *evfns;           /* k * n_events */
     void **evdata;          /* k pointers: &evs[i] (each trajectory's events_data) */
     const_jac *cjs;
     py_with_jac *wjs;
@@ -886,7 +1035,8 @@ static void many_adapters_clear(many_adapters *a)
     PyMem_Free(a->fns);
     PyMem_Free(a->cfns);
     PyMem_Free(a->evs);
-    PyMem_Free(a->evfns);
+    if (a->evs)
+        for (size_t i = 0; i < a->k; i++) event_fns_free(&a->evs[i]);
     PyMem_Free(a->evdata);
     PyMem_Free(a->cjs);
     PyMem_Free(a->wjs);
@@ -1057,7 +1207,7 @@ static PyObject *py_ode_solve_many(PyObject *self, PyObject *args, PyObject *kw)
         .nparams = sys.params ? (size_t)PyArray_SIZE(sys.params) : 0,
         .torque = sys.torque.fn ? &sys.torque : NULL, .lane_rhs = sys.lanes,
         .holds_python = sys.holds_python || watch != Py_None || (jaco != Py_None && !jm) ||
-                        el.count,
+                        (el.count && !el.all_c),
         .want_lanes = want_lanes};
     int rc = mp_ode_ensemble_build(&ens, oa.t0, oa.tf, &o);
     if (rc != MP_OK) {
@@ -1097,17 +1247,17 @@ static PyObject *py_ode_solve_many(PyObject *self, PyObject *args, PyObject *kw)
     }
     if (k && el.count) { /* each trajectory's event adapters (its args) and whole result */
         if (!(ad.evs = PyMem_Calloc(k, sizeof *ad.evs)) ||
-            !(ad.evfns = PyMem_Calloc(k * (size_t)el.count, sizeof *ad.evfns)) ||
             !(ad.evdata = PyMem_Calloc(k, sizeof *ad.evdata)) ||
             !(ad.results = PyMem_Calloc(k, sizeof *ad.results)))
             goto nomem;
+        size_t npar = rows && ens.rows_kind != MP_ENS_ROWS_CALLER ? np : ens.nparams;
         for (size_t i = 0; i < k; i++) {
-            ad.evs[i] = (py_events){ad.evfns + i * (size_t)el.count, (size_t)el.count};
+            const double *pv = rows && ens.rows_kind != MP_ENS_ROWS_CALLER ? rows + i * np
+                                                                            : ens.params;
+            if (event_fns(evo, el.count, ad.tuples ? ad.tuples[i] : eargs, n, pv, npar, i,
+                          &ad.evs[i]) < 0)
+                goto out;
             ad.evdata[i] = &ad.evs[i];
-            for (Py_ssize_t q = 0; q < el.count; q++)
-                ad.evs[i].fns[q] = (py_fn){PyList_GET_ITEM(evo, q),
-                                           ad.tuples ? ad.tuples[i] : eargs, n, 1,
-                                           "event function"};
         }
     }
     if (!(outc = PyMem_Calloc(k ? k : 1, sizeof *outc))) goto nomem;
@@ -1122,7 +1272,8 @@ static PyObject *py_ode_solve_many(PyObject *self, PyObject *args, PyObject *kw)
     } else {
         Py_BEGIN_ALLOW_THREADS
         rc = mp_ode_solve_many(m, ens.probs, ens.lanes, k, oa.t0, oa.tf, PyArray_DATA(y0s), &o,
-                               threads, PyArray_DATA(yout), outc, NULL, NULL, report, &pctx);
+                               threads, PyArray_DATA(yout), outc, ad.results, ad.evdata, report,
+                               &pctx);
         Py_END_ALLOW_THREADS
     }
     if (rc != MP_OK) {

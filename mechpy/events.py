@@ -1,0 +1,210 @@
+"""Events that change the state: impacts, bounces, switches.
+
+An event function given to :func:`mechpy.solve` or :func:`mechpy.solve_many`
+may carry an ``action``, a callable ``action(t, y, *args) -> y_new``: at the
+located crossing the state is replaced and the integration restarts from
+there (the first step and the step-size control afresh; a fixed-step method
+counts its steps from the event).  ``sol.t_events`` / ``sol.y_events`` hold
+the states just before each action; without ``t_eval`` the solution has both
+the state before and the state after at the event's time.
+
+SciPy's ``terminal`` and ``direction`` keep their meaning: a terminal event
+stops instead; an integer count on an action event (``max_events``) stops the
+solve at that crossing (status 1, the message naming the event).  Crossings
+that accumulate (Zeno: a ball bouncing with restitution e < 1 comes to rest
+after infinitely many bounces in a finite time) end the solve at their
+accumulation point, also with status 1 and a message naming the event; an
+action that leaves the state where its event fires again at once raises
+:class:`mechpy.errors.EventError`.
+
+:func:`impact` is the common case written in C: the velocity of one coordinate
+reflected and scaled by a coefficient of restitution at a wall.  It runs
+without the GIL (``solve_many`` on every thread) and takes its restitution
+per trajectory from an array or from a parameter of the system.
+
+Examples
+--------
+A ball dropped from 1 m bouncing with e = 0.9: the k-th flight lasts
+e^k times the first, 2 v1 / g with v1 = sqrt(2 g h).
+
+>>> import sympy as sp
+>>> x, v = mp.coordinates("x v")
+>>> g = sp.Symbol("g")
+>>> ball = mp.equations([v, -g], [x, v], params={"g": 9.81})      # x'' = -g
+>>> sol = mp.solve(ball, (0, 3), [1.0, 0.0], events=mp.events.impact("x", restitution=0.9),
+...                rtol=1e-12, atol=1e-12)
+>>> tb = sol.t_events[0]
+>>> v1 = np.sqrt(2 * 9.81 * 1.0)
+>>> round(float(tb[0]), 10), round(float(np.sqrt(2 / 9.81)), 10)  # the first landing
+(0.451523641, 0.451523641)
+>>> np.round(np.diff(tb[:4]) / (2 * v1 / 9.81), 10)              # e, e^2, e^3
+array([0.9  , 0.81 , 0.729])
+"""
+from __future__ import annotations
+
+import numbers
+
+import numpy as np
+
+from ._system import _is_scene
+from ._validate import as_array, as_int, as_scalar
+
+__all__ = ["impact", "Impact"]
+
+
+class Impact:
+    """An impact at a wall (see :func:`impact`): an event function with its
+    action, both also run in C.
+
+    Calling it gives the event function ``side * (y[i] - wall)`` (for a state
+    whose coordinate index is known: an int ``coordinate``); ``action(t, y)``
+    the state after the impact.  ``direction`` (-1: towards the wall),
+    ``terminal`` (False) and ``max_events`` (None: no limit) may be set as on
+    any event function.
+
+    Examples
+    --------
+    >>> wall = mp.events.impact(0, wall=0.0, restitution=0.5)
+    >>> wall(0.0, [0.2, -1.0]), wall.action(0.0, [0.0, -1.0]).tolist()
+    (0.2, [0.0, 0.5])
+    """
+
+    def __init__(self, coordinate, wall, restitution, side):
+        self.coordinate = coordinate
+        self.wall = wall
+        self.restitution = restitution
+        self.side = side
+        self.direction = -1
+        self.terminal = False
+        self.max_events = None
+
+    def __repr__(self):
+        return (f"impact({self.coordinate!r}, wall={self.wall!r}, "
+                f"restitution={self.restitution!r}, side={self.side:+d})")
+
+    def _indices(self, system, n):
+        """(coordinate index, its velocity's index) in a state of n values."""
+        c = self.coordinate
+        if isinstance(c, str):
+            names = list(getattr(system, "coordinates", None) or _SCENE_COORDINATES.get(
+                type(system).__name__, ()))
+            if c not in names:
+                raise ValueError(f"impact: {c!r} is not a coordinate of the system "
+                                 f"(its coordinates: {names or 'unnamed: give an index'})")
+            iq = names.index(c)
+        else:
+            iq = as_int(c, "coordinate", minimum=0)
+        vel = _SCENE_VELOCITY.get(type(system).__name__) if _is_scene(system) else None
+        if vel is not None:
+            if iq not in vel:
+                raise ValueError(f"impact: coordinate {iq} of {type(system).__name__} has no "
+                                 "velocity in its state")
+            return iq, vel[iq]
+        if n % 2 or iq >= n // 2:
+            raise ValueError(f"impact: coordinate {iq} needs a state (q, v) with q of at least "
+                             f"{iq + 1} values and v after it (got {n} values)")
+        return iq, iq + n // 2
+
+    def __call__(self, t, y, *args):
+        iq, _ = self._indices(None, np.shape(y)[0])
+        return self.side * (float(np.asarray(y)[iq]) - self.wall)
+
+    def action(self, t, y, *args):
+        """The state after the impact: the coordinate at the wall, its velocity
+        reflected and scaled by the restitution (a number)."""
+        y = np.array(y, dtype=float)
+        iq, iv = self._indices(None, y.shape[0])
+        if not isinstance(self.restitution, numbers.Real):
+            raise TypeError("impact.action(t, y) takes a numeric restitution")
+        y[iv] = -float(self.restitution) * y[iv]
+        y[iq] = self.wall
+        return y
+
+    def _c_entry(self, system, n, k=None):
+        """The entry the C core takes: ("impact", iq, iv, wall, e, side, e_param):
+        e a float, a (k,) array (per trajectory), or e_param the index of a
+        system parameter (then e is unused)."""
+        iq, iv = self._indices(system, n)
+        e, e_param = self.restitution, -1
+        if isinstance(e, str):
+            names = list(getattr(system, "params", {}) or {})
+            if e not in names:
+                raise ValueError(f"impact: restitution {e!r} is not a parameter of the system "
+                                 f"(its parameters: {names})")
+            e_param, e = names.index(e), 0.0
+        elif np.ndim(e) == 0:
+            e = as_scalar(e, "restitution")
+            if not 0.0 <= e:
+                raise ValueError(f"impact: restitution must be >= 0, got {e}")
+        else:
+            if k is None:
+                raise ValueError("impact: restitution as an array is for solve_many (one per "
+                                 "trajectory); solve takes a number")
+            e = as_array(e, "restitution", shape=(k,), nonnegative=True)
+        return ("impact", iq, iv, float(self.wall), e, float(self.side), e_param)
+
+
+#: Built-in scenes' coordinate names and, for the scenes whose state is not
+#: (q, v) with v after q, where each coordinate's velocity sits.
+_SCENE_COORDINATES = {"Pendulum": ("theta",), "Duffing": ("x",), "VanDerPol": ("x",),
+                      "Kepler": ("x", "y"), "RestrictedThreeBody": ("x", "y"),
+                      "Foucault": ("x", "y"), "Rocket": ("height",)}
+_SCENE_VELOCITY = {"Rocket": {0: 1}, "RigidBody": {}, "HeavyTop": {0: 3, 1: 4, 2: 5}}
+
+
+def impact(coordinate, wall=0.0, restitution=1.0, side=+1) -> Impact:
+    r"""An impact at a wall: the event ``side * (q - wall) = 0`` reached
+    towards the wall, and its action ``q -> wall``, :math:`\dot q \to -e\,\dot q`.
+
+    Parameters
+    ----------
+    coordinate : int or str
+        The coordinate q: its index in the state (its velocity is the
+        matching component of the second half, as in every (q, v) state), or
+        its name (a compiled system's ``coordinates``; ``"theta"`` of a
+        Pendulum, ``"height"`` of a Rocket, ...).
+    wall : float
+        Where the wall is (in q's units).
+    restitution : float, (k,) array or str
+        Coefficient of restitution e >= 0 (1: elastic, 0: the velocity
+        stops): a number; in :func:`mechpy.solve_many` one value per
+        trajectory; or the name of a parameter of the system (then swept
+        through ``params``).
+    side : {+1, -1}
+        The side the motion is on: +1 for q >= wall (a floor), -1 for
+        q <= wall (a ceiling).
+
+    Returns
+    -------
+    Impact
+        An event function with ``direction = -1`` and its ``action``; pass it
+        in ``events`` (with others).  It runs in C for every system: scenes,
+        compiled systems, Python callables.
+
+    Examples
+    --------
+    A pendulum released at 1 rad strikes a wall at theta = 0 after a quarter
+    period 4 K(sin^2(theta0/2)) sqrt(L/g) / 4, and rebounds with e^2 of its
+    energy.
+
+    >>> from scipy.special import ellipk
+    >>> pend = mp.scenes.Pendulum()
+    >>> sol = mp.solve(pend, (0, 1.0), [1.0, 0.0], rtol=1e-12, atol=1e-12,
+    ...                events=mp.events.impact("theta", restitution=0.5))
+    >>> K = ellipk(np.sin(0.5) ** 2) / np.sqrt(9.81)
+    >>> round(float(sol.t_events[0][0]), 9), round(float(K), 9)
+    (0.5347844, 0.5347844)
+    >>> E = pend.energy(sol.y) - pend.energy(np.zeros(2))   # above the lowest point
+    >>> round(float(E[-1] / E[0]), 9)                            # e^2
+    0.25
+    """
+    if side not in (1, -1):
+        raise ValueError(f"side must be +1 or -1, got {side!r}")
+    w = as_scalar(wall, "wall")
+    if not isinstance(restitution, str) and np.ndim(restitution) == 0:
+        e = as_scalar(restitution, "restitution")
+        if e < 0:
+            raise ValueError(f"restitution must be >= 0, got {e}")
+    if not isinstance(coordinate, str):
+        as_int(coordinate, "coordinate", minimum=0)
+    return Impact(coordinate, w, restitution, int(side))
