@@ -1034,9 +1034,9 @@ static void many_adapters_clear(many_adapters *a)
     PyMem_Free(a->tuples);
     PyMem_Free(a->fns);
     PyMem_Free(a->cfns);
-    PyMem_Free(a->evs);
     if (a->evs)
         for (size_t i = 0; i < a->k; i++) event_fns_free(&a->evs[i]);
+    PyMem_Free(a->evs);
     PyMem_Free(a->evdata);
     PyMem_Free(a->cjs);
     PyMem_Free(a->wjs);

@@ -1,0 +1,244 @@
+"""Events that change the state (mp.events, an event's action): bouncing balls,
+a pendulum striking a wall, Newton's cradle, against their closed forms."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import sympy as sp
+from scipy.special import ellipk
+
+import mechpy as mp
+
+G = 9.81
+
+
+@pytest.fixture(scope="module")
+def ball():
+    """A ball in free fall, x'' = -g, compiled: state (x, v)."""
+    x, v = mp.coordinates("x v")
+    g, e = sp.symbols("g e")
+    # e, the impact's restitution (swept through params), is a parameter of the
+    # system: a term that is 0 for every e >= 0 keeps it in the field
+    zero = sp.Piecewise((0, e >= 0), (1, True))
+    return mp.equations([v, -g + zero], [x, v], params={"g": G, "e": 0.9})
+
+
+def _bounce_times(h0, e, k):
+    """t_1 = sqrt(2 h0 / g), t_{j+1} = t_j + 2 e^j v1 / g."""
+    v1 = np.sqrt(2 * G * h0)
+    t = [np.sqrt(2 * h0 / G)]
+    for j in range(1, k):
+        t.append(t[-1] + 2 * e**j * v1 / G)
+    return np.array(t), v1
+
+
+def test_bouncing_ball_times_energy_and_rest(ball):
+    e = 0.9
+    sol = mp.solve(ball, (0, 20), [1.0, 0.0], events=mp.events.impact("x", restitution=e),
+                   rtol=1e-12, atol=1e-12)
+    tb, yb = sol.t_events[0], sol.y_events[0]
+    want, v1 = _bounce_times(1.0, e, 20)
+    # the first 20 bounce times to 1e-10 relative (4e-14 measured)
+    assert np.max(np.abs(tb[:20] - want) / want) < 1e-10
+    # the states before each action: at the floor, falling at e^j v1: the energy
+    # after each bounce e^2 times the energy before (flights conserve it)
+    assert np.max(np.abs(yb[:20, 0])) < 1e-12
+    np.testing.assert_allclose(-yb[:20, 1], v1 * e ** np.arange(20), rtol=1e-10)
+    Eb = 0.5 * yb[:, 1] ** 2
+    np.testing.assert_allclose(Eb[1:20] / Eb[:19], e**2, rtol=1e-9)
+    # past the accumulation time t_inf = t1 + 2 v1 e / (g (1 - e)) the solve ends
+    # there, as at a terminal event, naming the event
+    t_inf = want[0] + 2 * v1 * e / (G * (1 - e))
+    assert sol.status == 1 and sol.success
+    assert "events[0] accumulate (Zeno)" in sol.message
+    assert abs(sol.t[-1] - t_inf) < 1e-9 * t_inf        # 8.8e-12 relative measured
+    assert sol.nfev < 20000                              # 242 bounces, ~3k evaluations
+    # every sample between bounces is above the floor, each flight a parabola
+    assert np.all(sol.y[0] > -1e-12)
+
+
+def test_elastic_ball_keeps_its_energy_and_period(ball):
+    sol = mp.solve(ball, (0, 10), [1.0, 0.0], events=mp.events.impact(0, restitution=1.0),
+                   rtol=1e-12, atol=1e-12, dense_output=True)
+    T = 2 * np.sqrt(2 * 1.0 / G)                          # a bounce's period
+    tb = sol.t_events[0]
+    np.testing.assert_allclose(np.diff(tb), T, rtol=1e-10)
+    assert sol.status == 0 and len(tb) == int((10 - T / 2) // T) + 1
+    h = sol.y[0] + sol.y[1] ** 2 / (2 * G)                # height the energy reaches
+    assert np.max(np.abs(h - 1.0)) < 1e-10
+    # the dense output is piecewise: each piece a parabola between bounces
+    tq = tb[3] + np.linspace(0.01, T - 0.01, 7)
+    xq = sol.sol(tq)[0]
+    np.testing.assert_allclose(xq, np.sqrt(2 * G) * (tq - tb[3]) - G / 2 * (tq - tb[3]) ** 2,
+                               rtol=1e-9, atol=1e-12)
+
+
+@pytest.mark.parametrize("method", ["dop853", "dopri5", "radau", "rk4"])
+def test_solve_many_restitutions_equal_each_solve(ball, method):
+    """1000 restitutions through params (and as an array): each row equals its
+    single solve, bit for bit."""
+    k = 1000 if method == "dop853" else 40
+    es = np.linspace(0.3, 0.95, k)
+    kw = {"h": 1e-3} if method == "rk4" else {}
+    te = np.linspace(0, 2, 5)
+    imp = mp.events.impact("x", restitution="e")
+    many = mp.solve_many(ball, (0, 2), np.tile([1.0, 0.0], (k, 1)), params={"e": es},
+                         events=imp, t_eval=te, method=method, rtol=1e-10, atol=1e-12, **kw)
+    arr = mp.solve_many(ball, (0, 2), np.tile([1.0, 0.0], (k, 1)),
+                        events=mp.events.impact("x", restitution=es), t_eval=te,
+                        method=method, rtol=1e-10, atol=1e-12, **kw)
+    assert np.array_equal(many.y, arr.y, equal_nan=True)
+    for i in (0, k // 2, k - 1):
+        s = mp.solve(ball.replace(e=es[i]), (0, 2), [1.0, 0.0], events=imp, t_eval=te,
+                     method=method, rtol=1e-10, atol=1e-12, **kw)
+        m = s.y.shape[1]             # a ball at rest (Zeno) before t = 2: NaN after
+        assert np.array_equal(s.y, many.y[i][:, :m]) and np.isnan(many.y[i][:, m:]).all()
+        assert s.nfev == many.nfev[i] and s.status == many.status[i]
+        assert s.message == many.message[i]
+        assert np.array_equal(s.t_events[0], many.t_events[i][0])
+    # against the closed form: the second bounce at t1 + 2 e v1 / g
+    t1, v1 = np.sqrt(2 / G), np.sqrt(2 * G)
+    second = np.array([te_[0][1] for te_ in many.t_events])
+    tol = 1e-6 if method == "rk4" else 1e-8
+    np.testing.assert_allclose(second, t1 + 2 * es * v1 / G, rtol=tol)
+
+
+def test_pendulum_striking_a_wall():
+    """From 1 rad onto a wall at theta = 0: the first impact after the exact
+    quarter period K(sin^2(1/2)) sqrt(L/g); the rebound reaches the amplitude
+    whose energy is e^2 times the first."""
+    pend = mp.scenes.Pendulum()
+    e = 0.6
+    up = lambda t, y: y[1]            # noqa: E731  theta_dot = 0: the turning points
+    up.direction = -1
+    sol = mp.solve(pend, (0, 1.5), [1.0, 0.0], rtol=1e-12, atol=1e-12,
+                   events=[mp.events.impact("theta", restitution=e), up])
+    K = ellipk(np.sin(0.5) ** 2) / np.sqrt(G)
+    assert abs(sol.t_events[0][0] - K) < 1e-10 * K
+    after = sol.t_events[1] > sol.t_events[0][0]   # (the release at t = 0 is one too)
+    amp = sol.y_events[1][after][0][0]             # the first turning point after the rebound
+    # 1 - cos(amp) = e^2 (1 - cos 1)
+    assert abs((1 - np.cos(amp)) - e**2 * (1 - np.cos(1.0))) < 1e-11
+    # and it is reached a quarter period of that amplitude after the impact
+    Ka = ellipk(np.sin(amp / 2) ** 2) / np.sqrt(G)
+    assert abs(sol.t_events[1][after][0] - sol.t_events[0][0] - Ka) < 1e-9
+
+
+@pytest.fixture(scope="module")
+def cradle():
+    """Three equal point masses on a line, free between collisions."""
+    xs = mp.coordinates("x1 x2 x3 v1 v2 v3")
+    return mp.equations([xs[3], xs[4], xs[5], 0, 0, 0], list(xs))
+
+
+def _collision(i, e):
+    """Balls i and i+1 (equal masses) meet: the gap x_{i+1} - x_i reaches 0."""
+    def gap(t, y):
+        return y[i + 1] - y[i]
+
+    def action(t, y):
+        y = np.array(y)
+        a, b = y[3 + i], y[4 + i]
+        y[3 + i] = 0.5 * ((1 - e) * a + (1 + e) * b)
+        y[4 + i] = 0.5 * ((1 + e) * a + (1 - e) * b)
+        y[i + 1] = y[i]                 # exactly in contact
+        return y
+
+    gap.direction, gap.action = -1, action
+    return gap
+
+
+@pytest.mark.parametrize("e", [1.0, 0.7])
+def test_newtons_cradle(cradle, e):
+    """Ball 1 at 1 m/s hits balls 2 and 3 at rest: momentum is conserved through
+    every collision; each one keeps (1 + e^2)/2 of the pair's relative... the
+    closed forms: e = 1 hands the velocity on (ball 3 leaves at 1 m/s, the
+    others at rest); e < 1 loses (1 - e^2)/4 m v_rel^2 per collision."""
+    y0 = [-1.0, 0.0, 0.5, 1.0, 0.0, 0.0]
+    sol = mp.solve(cradle, (0, 5), y0, events=[_collision(0, e), _collision(1, e)],
+                   rtol=1e-12, atol=1e-12)
+    v = sol.y[3:]
+    np.testing.assert_allclose(v.sum(axis=0), 1.0, rtol=0, atol=1e-14)     # momentum
+    E = 0.5 * (v**2).sum(axis=0)
+    # the energy lost at each collision: (1 - e^2)/4 v_rel^2 (equal unit masses)
+    lost = 0.0
+    for k, (tk, yk) in enumerate(zip(sol.t_events, sol.y_events)):
+        for y in yk:
+            lost += (1 - e**2) / 4 * (y[3 + k] - y[4 + k]) ** 2
+    assert abs(E[-1] - (0.5 - lost)) < 1e-13
+    assert np.all(np.diff(sol.y[:3], axis=0)[:, -1] >= -1e-12)   # never pass each other
+    if e == 1.0:
+        np.testing.assert_allclose(sol.t_events[0], [1.0], rtol=1e-12)
+        np.testing.assert_allclose(sol.t_events[1], [1.5], rtol=1e-12)
+        np.testing.assert_allclose(v[:, -1], [0.0, 0.0, 1.0], atol=1e-13)
+    else:   # the first collision: the closed form of a target at rest
+        assert abs(E[np.searchsorted(sol.t, 1.2)] - 0.5 * (1 + e**2) / 2) < 1e-13
+
+
+def test_max_events_and_terminal(ball):
+    imp = mp.events.impact("x", restitution=0.9)
+    imp.max_events = 5
+    sol = mp.solve(ball, (0, 20), [1.0, 0.0], events=imp, rtol=1e-10)
+    assert sol.status == 1 and len(sol.t_events[0]) == 5
+    assert "events[0] reached max_events=5" in sol.message
+    want, _ = _bounce_times(1.0, 0.9, 5)
+    assert abs(sol.t[-1] - want[-1]) < 1e-8
+    # a terminal event with an action stops instead (the action not applied)
+    imp2 = mp.events.impact("x", restitution=0.9)
+    imp2.terminal = True
+    s2 = mp.solve(ball, (0, 20), [1.0, 0.0], events=imp2, rtol=1e-10)
+    assert s2.status == 1 and s2.y[1, -1] < 0 and len(s2.t_events[0]) == 1
+    with pytest.raises(ValueError, match="both terminal and max_events"):
+        imp2.max_events = 3
+        mp.solve(ball, (0, 20), [1.0, 0.0], events=imp2)
+
+
+def test_bad_actions_name_the_event(ball):
+    def g(t, y):
+        return y[0]
+    g.direction = -1
+
+    g.action = lambda t, y: [0.0, 1.0, 2.0]
+    with pytest.raises(ValueError, match=r"events\[0\]\.action returned shape \(3,\)"):
+        mp.solve(ball, (0, 2), [1.0, 0.0], events=g)
+    g.action = lambda t, y: [np.nan, 1.0]
+    with pytest.raises(mp.NonFiniteError, match=r"events\[0\]\.action returned NaN"):
+        mp.solve(ball, (0, 2), [1.0, 0.0], events=g)
+    # an action that leaves the ball above the floor still falling: it fires again at once
+    g.action = lambda t, y: [abs(y[0]), y[1]]
+    with pytest.raises(mp.EventError, match=r"events\[0\] at t = 0\.45"):
+        mp.solve(ball, (0, 2), [1.0, 0.0], events=g)
+    g.action = 3.0
+    with pytest.raises(TypeError, match=r"events\[0\]\.action must be callable"):
+        mp.solve(ball, (0, 2), [1.0, 0.0], events=g)
+    with pytest.raises(ValueError, match="not a coordinate"):
+        mp.solve(ball, (0, 2), [1.0, 0.0], events=mp.events.impact("y"))
+    with pytest.raises(ValueError, match="not a parameter"):
+        mp.solve(ball, (0, 2), [1.0, 0.0], events=mp.events.impact("x", restitution="mu"))
+    with pytest.raises(ValueError, match="restitution must be >= 0"):
+        mp.events.impact("x", restitution=-0.5)
+    with pytest.raises(ValueError, match="side"):
+        mp.events.impact("x", side=2)
+    with pytest.raises(ValueError, match="for solve_many"):
+        mp.solve(ball, (0, 2), [1.0, 0.0], events=mp.events.impact("x", restitution=[0.5]))
+
+
+def test_python_action_and_backward_solve():
+    """A harmonic oscillator x'' = -x reflected at x = 0 (e = 1): |x| of the free
+    oscillator; backwards in time the same reflection, the events mirrored."""
+    def f(t, y):
+        return [y[1], -y[0]]
+
+    def wall(t, y):
+        return y[0]
+    wall.direction = -1
+    wall.action = lambda t, y: np.array([0.0, -y[1]])
+    sol = mp.solve(f, (0, 10), [1.0, 0.0], events=wall, rtol=1e-12, atol=1e-12,
+                   t_eval=np.linspace(0, 10, 101))
+    np.testing.assert_allclose(sol.y[0], np.abs(np.cos(sol.t)), atol=1e-9)
+    np.testing.assert_allclose(sol.t_events[0], np.pi / 2 + np.pi * np.arange(3), rtol=1e-11)
+    back = mp.solve(f, (0, -10), [1.0, 0.0], events=wall, rtol=1e-12, atol=1e-12,
+                    t_eval=np.linspace(0, -10, 101))
+    np.testing.assert_allclose(back.y[0], np.abs(np.cos(back.t)), atol=1e-9)
+    np.testing.assert_allclose(back.t_events[0], -(np.pi / 2 + np.pi * np.arange(3)),
+                               rtol=1e-11)
