@@ -957,15 +957,25 @@ class Rocket(Scene):
                          self._params["m0"]])
 
     def fly(self, t_span, y0=None, **options):
-        """Integrate with :func:`mechpy.solve`, breaking ``t_span`` at burn-out.
+        """A flight from the launch pad to the ground: :func:`mechpy.solve`
+        with the pad and the landing.
+
+        A rocket on the pad (height 0, not rising) whose thrust ``u b`` does
+        not exceed its weight ``m g`` stays there, burning, until the mass has
+        fallen to ``u b / g`` (the pad holds it: it does not sink); it never
+        lifts off when that mass is below ``m_dry`` (the message says so).
+        In flight, burn-out is the scene's switch (any solve crosses it; here
+        the interval is also broken at the burn-out time, so that it appears
+        once, with the mass exactly ``m_dry``), and the flight ends when the
+        rocket comes back to the ground (a terminal event: ``status`` 1, the
+        message giving the landing time and speed).
 
         Parameters
         ----------
         t_span : (t0, tf)
             Forward interval (s).
         y0 : array_like (3,), optional
-            State at t0 (the launch state at rest by default); burn-out comes
-            when its mass has fallen to ``m_dry``, after (m - m_dry)/burn_rate.
+            State at t0 (the launch state at rest by default).
         **options
             Passed to :func:`mechpy.solve` (``method``, ``rtol``, ``atol``,
             ``t_eval``, ``dense_output``, ...; not ``events``).
@@ -973,9 +983,8 @@ class Rocket(Scene):
         Returns
         -------
         Solution
-            The two pieces joined: ``t`` (m,), ``y`` (3, m) (the burn-out time
-            appears once, with the mass exactly ``m_dry``), the counters
-            summed, ``sol`` the joined dense output if asked for.
+            The pieces joined: ``t`` (m,), ``y`` (3, m), the counters summed,
+            ``sol`` the joined dense output if asked for.
         """
         if "events" in options:
             raise TypeError("Rocket.fly does not take events (call mechpy.solve on the scene)")
@@ -986,29 +995,126 @@ class Rocket(Scene):
             raise ValueError(f"t_span must be increasing, got ({t0}, {tf})")
         y = self.initial_state() if y0 is None else as_array(y0, "y0", shape=(3,)).copy()
         p = self._params
-        tb = t0 + (y[2] - p["m_dry"]) / p["burn_rate"] if (
-            y[2] > p["m_dry"] and p["burn_rate"] > 0) else t0
-        if not t0 < tb < tf:
-            return solve(self, (t0, tf), y, **options)
+        u, b, md, g = p["exhaust_speed"], p["burn_rate"], p["m_dry"], p["g"]
         t_eval = options.pop("t_eval", None)
         te = None if t_eval is None else as_array(t_eval, "t_eval", ndim=1)
-        a = solve(self, (t0, tb), y, t_eval=None if te is None else te[te <= tb], **options)
-        y1 = a.y[:, -1].copy()
-        y1[2] = p["m_dry"]                       # exactly empty: the coast branch from here
-        b = solve(self, (tb, tf), y1, t_eval=None if te is None else te[te > tb], **options)
-        keep = slice(1, None) if te is None else slice(None)
-        out = Solution(b)
-        out.t = np.concatenate([a.t, b.t[keep]])
-        out.y = np.concatenate([a.y, b.y[:, keep]], axis=1)
-        if te is None:
-            out.y[2, a.t.size - 1] = p["m_dry"]
-        for k in ("nfev", "njev", "nlu", "nsteps", "nreject"):
-            out[k] = a[k] + b[k]
-        if a.sol is not None and b.sol is not None:
-            segs = [np.concatenate([sa, sb]) for sa, sb in zip(a.sol._seg, b.sol._seg)]
-            out.sol = DenseOutput(*segs)
-        if a.status < 0:
-            return a
+        pieces, note = [], None
+        if y[0] <= 0.0 and y[1] <= 0.0 and u * b <= y[2] * g and y[2] > 0:   # on the pad
+            m_lift = u * b / g if g > 0 else np.inf
+            lifts = b > 0 and m_lift > md
+            t_lift = t0 + (y[2] - m_lift) / b if lifts else np.inf
+            t_end = min(t_lift, tf)
+            pieces.append(self._on_pad(t0, t_end, y[2], te, options.get("dense_output")))
+            if not lifts:
+                note = (f"the rocket never lifts off: its thrust u b = {u * b:.6g} N stays "
+                        f"below its weight, {md * g:.6g} N even at burn-out (m_dry g); it "
+                        "rests on the pad")
+            if t_end >= tf:
+                out = pieces[0]
+                if note:
+                    out["message"] = f"{out['message']} ({note})"
+                return out
+            t0, y = t_lift, np.array([0.0, 0.0, m_lift])
+            te = None if te is None else te[te > t0]
+
+        def ground(t, yy):
+            return yy[0]
+
+        ground.terminal, ground.direction = True, -1
+        tb = t0 + (y[2] - md) / b if (y[2] > md and b > 0) else t0
+        spans = [(t0, tb), (tb, tf)] if t0 < tb < tf else [(t0, tf)]
+        for i, (a_, b_) in enumerate(spans):
+            sel, extra = None, False
+            if te is not None:   # the piece's samples, and its end (the next start)
+                sel = te[(te >= a_) & (te <= b_)] if i == 0 else te[(te > a_) & (te <= b_)]
+                extra = sel.size == 0 or sel[-1] != b_
+                sel = np.append(sel, b_) if extra else sel
+            piece = solve(self, (a_, b_), y, t_eval=sel, events=ground, **options)
+            y = piece.y[:, -1].copy()
+            if extra and piece.t.size and piece.t[-1] == b_:
+                piece.t, piece.y = piece.t[:-1], piece.y[:, :-1]
+            pieces.append(piece)
+            if piece.status != 0:
+                break
+            if i == 0 and len(spans) == 2:
+                y[2] = md                      # exactly empty: the coast branch from here
+        out = _join_pieces(pieces, te is None)
+        last = pieces[-1]
+        if last.status == 1:                   # the ground
+            tl, vl = last.t_events[0][0], last.y_events[0][0][1]
+            out["message"] = (f"The rocket lands at t = {tl:.10g} s at {abs(vl):.6g} m/s "
+                              "(a terminal event: height 0 reached descending).")
+        elif note:
+            out["message"] = f"{out['message']} ({note})"
         return out
 
+    def _on_pad(self, t0, t1, m0, te, dense):
+        """The rocket resting on the pad from t0 to t1, burning from mass m0."""
+        b, md = self._params["burn_rate"], self._params["m_dry"]
+        t = np.array([t0, t1]) if te is None else te[(te >= t0) & (te <= t1)]
+        m = np.maximum(m0 - b * (t - t0), md)
+        y = np.vstack([np.zeros_like(t), np.zeros_like(t), m])
+        sol = _PadDense(t0, t1, m0, b, md) if dense else None
+        return Solution(t=t, y=y, sol=sol, t_events=None, y_events=None, nfev=0, njev=0,
+                        nlu=0, nsteps=0, nreject=0, status=0, success=True,
+                        message="The solver successfully reached the end of the integration "
+                                "interval.")
 
+
+class _PadDense(DenseOutput):
+    """The dense output of a rocket resting on the pad: h = v = 0, the mass
+    falling at the burn rate to the dry mass."""
+
+    def __init__(self, t0, t1, m0, b, md):
+        self.t_min, self.t_max, self.n_segments = t0, t1, 1
+        self._m0, self._b, self._md = m0, b, md
+
+    def __call__(self, t):
+        t = np.asarray(t, dtype=np.float64)
+        m = np.maximum(self._m0 - self._b * (t - self.t_min), self._md)
+        return np.stack([np.zeros_like(m), np.zeros_like(m), m])
+
+
+class _JoinedDense(DenseOutput):
+    """Dense outputs of consecutive pieces of one solve, joined in time."""
+
+    def __init__(self, parts):
+        self._parts = parts
+        self.t_min, self.t_max = parts[0].t_min, parts[-1].t_max
+        self.n_segments = sum(q.n_segments for q in parts)
+
+    def __call__(self, t):
+        t = np.asarray(t, dtype=np.float64)
+        flat = t.reshape(-1)
+        out = np.empty((3, flat.size))
+        starts = np.array([q.t_min for q in self._parts])
+        which = np.clip(np.searchsorted(starts, flat, side="right") - 1, 0, len(self._parts) - 1)
+        for i, q in enumerate(self._parts):
+            sel = which == i
+            if sel.any():
+                out[:, sel] = q(flat[sel])
+        return out.reshape((3,) + t.shape)
+
+
+def _join_pieces(pieces, every_step):
+    """One Solution from consecutive pieces of a flight: samples in order (a
+    piece's first sample, its start, dropped when it repeats the previous end),
+    counters summed, dense outputs joined; the last piece's status."""
+    out = Solution(pieces[-1])
+    ts, ys = [pieces[0].t], [pieces[0].y]
+    for q in pieces[1:]:
+        keep = slice(1, None) if every_step and q.t.size and ts[-1].size and \
+            q.t[0] == ts[-1][-1] else slice(None)
+        if every_step and q.t.size and ts[-1].size and q.t[0] == ts[-1][-1]:
+            ys[-1] = ys[-1].copy()
+            ys[-1][:, -1] = q.y[:, 0]          # the state after a switch (the mass exact)
+        ts.append(q.t[keep])
+        ys.append(q.y[:, keep])
+    out.t = np.concatenate(ts)
+    out.y = np.concatenate(ys, axis=1)
+    for k in ("nfev", "njev", "nlu", "nsteps", "nreject"):
+        out[k] = sum(q[k] for q in pieces)
+    if all(q.sol is not None for q in pieces):
+        out.sol = _JoinedDense([q.sol for q in pieces])
+    failed = [q for q in pieces if q.status < 0]
+    return failed[0] if failed else out

@@ -53,11 +53,20 @@ def _gsl():                 # kc^2 underflows: GSL's R_F(0, 0, 1) is a domain er
     mp._core.ellipk_complement(1e-200)
 
 
+def _event():               # an action leaving the state where its event fires at once
+    def floor(t, y):
+        return y[0]
+    floor.direction = -1
+    floor.action = lambda t, y: [abs(y[0]), y[1]]    # still falling: crosses again at once
+    mp.solve(lambda t, y: [y[1], -9.81], (0, 1), [1.0, 0.0], events=floor)
+
+
 PROVOKE = {
     "MechpyError": _singular, "DomainError": _domain, "NonFiniteError": _nonfinite,
     "SingularityError": _singular, "MeshError": _mesh, "UnstableSystemError": _unstable,
     "NotPositiveDefiniteError": _not_spd, "StepBudgetError": _solve_budget,
     "StepSizeError": _solve_step, "ConvergenceError": _convergence, "GSLError": _gsl,
+    "EventError": _event,
 }
 
 
@@ -77,7 +86,7 @@ def test_each_class_is_raised_for_real(name):
     ("MeshError", ValueError), ("UnstableSystemError", ValueError),
     ("NotPositiveDefiniteError", np.linalg.LinAlgError), ("StepBudgetError", RuntimeError),
     ("StepSizeError", RuntimeError), ("ConvergenceError", RuntimeError),
-    ("GSLError", RuntimeError)])
+    ("GSLError", RuntimeError), ("EventError", RuntimeError)])
 def test_dual_inheritance(name, builtin):
     cls = getattr(errors, name)
     assert issubclass(cls, errors.MechpyError) and issubclass(cls, builtin)

@@ -242,3 +242,57 @@ def test_python_action_and_backward_solve():
     np.testing.assert_allclose(back.y[0], np.abs(np.cos(back.t)), atol=1e-9)
     np.testing.assert_allclose(back.t_events[0], -(np.pi / 2 + np.pi * np.arange(3)),
                                rtol=1e-11)
+
+
+U, B, M0, MD = 2500.0, 10.0, 1000.0, 200.0
+
+
+def test_any_solve_of_the_rocket_crosses_burn_out():
+    """Burn-out is a switch the engine crosses: a plain solve past it (no t_span
+    break) gives Tsiolkovsky's v = u ln(m0/m_dry) and then coasts."""
+    r = mp.scenes.Rocket(exhaust_speed=U, burn_rate=B, m0=M0, m_dry=MD)
+    for method in ("dop853", "dopri5", "radau"):
+        s = mp.solve(r, (0, 85), [0, 0, M0], method=method, rtol=1e-10, atol=1e-10,
+                     t_eval=[40.0, 85.0])
+        assert s.success and s.status == 0
+        np.testing.assert_allclose(s.y[1], U * np.log(M0 / np.array([M0 - B * 40, MD])),
+                                   rtol=1e-8)
+        assert s.y[2, -1] == MD                     # the mass exactly dry after the switch
+    # in an ensemble too (the scalar path: a switch is an event)
+    e = mp.solve_many(r, (0, 85), [[0, 0, M0], [0, 0, 600.0]], rtol=1e-10, atol=1e-10)
+    np.testing.assert_allclose(e.y[:, 1, -1], U * np.log(np.array([M0, 600.0]) / MD),
+                               rtol=1e-8)
+    assert not e.lanes
+
+
+def test_rocket_lands_sits_and_never_lifts_off():
+    g = 9.81
+    # lands: a terminal event at height 0 on the way down, after a ballistic coast
+    r = mp.scenes.Rocket(exhaust_speed=U, burn_rate=B, m0=M0, m_dry=MD, g=g)
+    s = r.fly((0, 2000))
+    tb = 80.0
+    vb = U * np.log(M0 / MD) - g * tb
+    hb = U / B * (M0 - MD - MD * np.log(M0 / MD)) - 0.5 * g * tb**2
+    t_land = tb + (vb + np.sqrt(vb**2 + 2 * g * hb)) / g
+    assert s.status == 1 and "lands" in s.message
+    assert abs(s.t[-1] - t_land) < 1e-6 * t_land and abs(s.y[0, -1]) < 1e-6
+    assert np.all(s.y[0] > -1e-6)
+    # thrust 2500*2 = 5000 N below the launch weight 9810 N: it sits on the pad
+    # until m = u b / g, then lifts off (never below the ground)
+    slow = mp.scenes.Rocket(exhaust_speed=U, burn_rate=2.0, m0=M0, m_dry=MD, g=g)
+    t = np.linspace(0, 300, 31)
+    s = slow.fly((0, 300), t_eval=t, rtol=1e-10, atol=1e-8)
+    m_lift = U * 2.0 / g
+    t_lift = (M0 - m_lift) / 2.0
+    assert np.all(s.y[0] >= 0) and np.all(s.y[0][t <= t_lift] == 0)
+    np.testing.assert_allclose(s.y[2], np.maximum(M0 - 2.0 * t, MD), rtol=1e-12)
+    # after lift-off v' = u b / m - g with m = m_lift - b (t - t_lift):
+    # v = u ln(m_lift / m) - g (t - t_lift)
+    k = t > t_lift
+    m = M0 - 2.0 * t[k]
+    np.testing.assert_allclose(s.y[1][k], U * np.log(m_lift / m) - g * (t[k] - t_lift),
+                               rtol=1e-8, atol=1e-8)
+    # thrust never above the weight, not even dry: it rests, and says so
+    heavy = mp.scenes.Rocket(exhaust_speed=U, burn_rate=0.5, m0=M0, m_dry=MD, g=g)
+    s = heavy.fly((0, 100))
+    assert s.success and np.all(s.y[:2] == 0) and "never lifts off" in s.message

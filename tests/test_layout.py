@@ -518,6 +518,13 @@ def _phase_tangent():
             ("floquet period", T, ()), ("floquet multipliers", mu, (2,))]
 
 
+def _impact():
+    imp = mp.events.impact(0, restitution=0.5)
+    sol = mp.solve(mp.scenes.Pendulum(), (0.0, 1.0), [1.0, 0.0], events=imp)
+    return [("impact action", imp.action(0.0, [0.0, -1.0]), (2,)),
+            ("impact y_events", sol.y_events[0], (1, 2))]
+
+
 def _drop():
     r, t = mp.frames.drop(100.0, 45.0)
     r2, t2 = mp.frames.projectile([10.0, 0.0, 10.0], 45.0)
@@ -635,6 +642,9 @@ TABLE = {
     # tangent
     **{f"mechpy.tangent.{n}": (SINGLE, _single(_tangent_flow)) for n in (
         "sensitivity", "fit", "FitResult")},
+    # events
+    "mechpy.events.impact": (SINGLE, _single(_impact)),
+    "mechpy.events.Impact": (SINGLE, _single(_impact)),
     # particles
     "mechpy.particles.collide": (STACK, _collide_case),
     "mechpy.particles.to_cm": (STACK, _cm_case),
@@ -693,6 +703,7 @@ METHODS = {
     "CompiledScene.symbolic": None,
     **{f"PhasePortrait.{n}": None for n in ("html", "precompute", "save")},
     "Solution.raise_for_status": None, "EnsembleSolution.raise_for_status": None,
+    "Impact.action": "mechpy.events.impact",
     "Pendulum.period": _SCENE, "Kepler.initial_state": _SCENE,
     "Foucault.precession_rate": _SCENE,
     **{f"Rocket.{n}": _SCENE for n in ("burnout_time", "fly", "initial_state")},

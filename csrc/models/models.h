@@ -129,6 +129,7 @@ static inline void mp_model_set(mp_ode_problem *prob, size_t n, mp_ode_rhs rhs, 
     prob->data = (void *)params;
     prob->nq = nq;
     prob->blocks = NULL;
+    prob->sw = NULL;
 }
 
 /* mp_model_set for a right-hand side with its own fixed-step blocks

@@ -8,8 +8,11 @@
  * State (height, speed, mass) in m, m/s, kg; parameters exhaust_speed u
  * (m/s), burn_rate b (kg/s), m0 (kg, the launch mass: the Python face's
  * initial state), m_dry (kg, 0 < m_dry <= m0), g (m/s^2), drag k (kg/m).
- * Burn-out is a switch on the mass, a kink in time at (m0 - m_dry)/b: the
- * Python face breaks t_span there (Rocket.fly), so no step straddles it. */
+ * Burn-out is a switch the engine crosses (ode.h's mp_ode_switch): the
+ * burning branch runs until the mass reaches m_dry, located as an event, where
+ * the mass is set to m_dry exactly and the coasting branch takes over, so no
+ * step straddles the kink in time at (m0 - m_dry)/b.  A state is on the
+ * branch of its mass (mp_ode_problem_at: what the scene's rhs evaluates). */
 #include "models/models.h"
 
 #include <math.h>
@@ -33,30 +36,36 @@ static int rocket_check(const double *p, char *why, size_t len)
     return MP_EDOM;
 }
 
-/* 1 while propellant is left in state y (mass above the dry mass). */
-static int rocket_burning(const double *p, const double *y) { return y[2] > p[RMD]; }
-
-/* f = (v, T/m - g - (k/m) v|v|, -b or 0); the state's mass must be > 0
- * (MP_EDOM otherwise: a state the rocket never reaches). */
-static int rocket_rhs(double t, const double *y, double *f, void *d)
+/* The branches the engine integrates: burning (thrust on for every mass > 0,
+ * so that a step's stages past burn-out see the same smooth field) and
+ * coasting. */
+static int rocket_branch(const double *p, const double *y, double *f, double thrust,
+                         double dm)
 {
-    const double *p = d;
-    const int burn = rocket_burning(p, y);
-    (void)t;
     if (!(y[2] > 0)) return MP_EDOM;
     f[0] = y[1];
-    f[1] = ((burn ? p[RU] * p[RB] : 0.0) - p[RK] * y[1] * fabs(y[1])) / y[2] - p[RG];
-    f[2] = burn ? -p[RB] : 0.0;
+    f[1] = (thrust - p[RK] * y[1] * fabs(y[1])) / y[2] - p[RG];
+    f[2] = dm;
     return MP_OK;
 }
 
-/* df/dy (row-major 3x3) on the branch (burning or coasting) of state y. */
-static int rocket_jac(double t, const double *y, double *J, void *d)
+static int rocket_rhs_burn(double t, const double *y, double *f, void *d)
 {
     const double *p = d;
-    const double thrust = rocket_burning(p, y) ? p[RU] * p[RB] : 0.0;
-    const double m = y[2];
     (void)t;
+    return rocket_branch(p, y, f, p[RU] * p[RB], -p[RB]);
+}
+
+static int rocket_rhs_coast(double t, const double *y, double *f, void *d)
+{
+    (void)t;
+    return rocket_branch(d, y, f, 0.0, 0.0);
+}
+
+/* df/dy of a branch with the given thrust */
+static int rocket_jac_branch(const double *p, const double *y, double *J, double thrust)
+{
+    const double m = y[2];
     if (!(m > 0)) return MP_EDOM;
     for (int i = 0; i < 9; i++) J[i] = 0.0;
     J[0 * 3 + 1] = 1.0;
@@ -65,11 +74,46 @@ static int rocket_jac(double t, const double *y, double *J, void *d)
     return MP_OK;
 }
 
-/* Bind the one right-hand side (terms that are zero cost a multiply); not
- * separable: the mass is not a position. */
+static int rocket_jac_burn(double t, const double *y, double *J, void *d)
+{
+    const double *p = d;
+    (void)t;
+    return rocket_jac_branch(p, y, J, p[RU] * p[RB]);
+}
+
+static int rocket_jac_coast(double t, const double *y, double *J, void *d)
+{
+    (void)t;
+    return rocket_jac_branch(d, y, J, 0.0);
+}
+
+/* burn-out: the propellant above the dry mass reaches 0; the mass is then
+ * exactly the dry mass */
+static double rocket_fuel(double t, const double *y, const void *d)
+{
+    const double *p = d;
+    (void)t;
+    return y[2] - p[RMD];
+}
+
+static void rocket_burnout(double t, double *y, const void *d)
+{
+    const double *p = d;
+    (void)t;
+    y[2] = p[RMD];
+}
+
+static const mp_ode_switch rocket_switch = {
+    .g = rocket_fuel, .act = rocket_burnout, .rhs = rocket_rhs_coast, .jac = rocket_jac_coast,
+};
+
+/* Bind the burning branch with burn-out ahead (the engine takes the coasting
+ * branch at once for a state already at the dry mass); not separable: the
+ * mass is not a position. */
 static void rocket_bind(const double *p, mp_ode_problem *prob)
 {
-    mp_model_set(prob, 3, rocket_rhs, rocket_jac, p, 0);
+    mp_model_set(prob, 3, rocket_rhs_burn, rocket_jac_burn, p, 0);
+    prob->sw = &rocket_switch;
 }
 
 /* the vehicle's mechanical energy m v^2/2 + m g h (J): not conserved (the

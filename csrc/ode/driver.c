@@ -14,6 +14,16 @@
 
 /* ---- small helpers ------------------------------------------------------ */
 
+void mp_ode_problem_at(mp_ode_problem *p, double t, const double *y)
+{
+    while (p->sw && !(p->sw->g(t, y, p->data) > 0.0)) {
+        p->rhs = p->sw->rhs;
+        p->jac = p->sw->jac;
+        p->blocks = NULL;
+        p->sw = p->sw->next;
+    }
+}
+
 int mp_ode_ws_bad_rhs(mp_ode_ws *w, size_t i)
 {
     w->bad_what = MP_ODE_BAD_RHS;
@@ -274,23 +284,53 @@ static int ev_cmp(const void *a, const void *b)
 }
 
 /* Find every crossing in the accepted step [t, t + h]; g_old holds g at t and
- * is updated to g at the step end.  Sets *s_stop <= 1 when a terminal event
+ * is updated to g at the step end (first: t is the solve's start or where an
+ * action restarted it).  Sets *s_stop <= 1 when a terminal event
  * fires or an action event crosses (the step is truncated there; *act = the
  * action event's index, else -1; a terminal count reached stops instead,
  * *act = -1, r->stop_reason saying which).  On the first step (first != 0) an
  * event that is exactly zero at t0 occurs at t0 when it leaves zero in its
  * direction (any way for direction 0), as SciPy's solve_ivp reports it; a
- * zero at a later step's start is the crossing the step before reported. */
+ * zero at a later step's start is the crossing the step before reported (but
+ * after an action the state is new: first again). */
 static int ev_step(mp_ode_ws *w, mp_ode_result *r, const mp_ode_options *o, double t, double h,
-                   int first, double *g_old, double *g_sub, double *ytmp, double *gtmp,
-                   ev_hit *hits, double *s_stop, long *act)
+                   int first, double probe, double *g_old, double *g_sub, double *ytmp,
+                   double *gtmp, ev_hit *hits, double *s_stop, long *act)
 {
     size_t ne = o->n_events, nh = 0;
     ev_ctx c = {w, o, t, h, ytmp, gtmp};
     *s_stop = 2.0;
     *act = -1;
+    double s_from = 0.0; /* where the search starts (after a restart's probe) */
+    if (first == 2) {
+        /* After an action the state is new: an event exactly zero there is
+         * probed just after it (at t + probe, far inside the shortest interval
+         * between two actions that is not an accumulation), and occurs there
+         * when g has left zero in its direction (the action left the state on
+         * the event surface, moving across it); otherwise its search starts at
+         * the probe (a bounce shorter than a sub-interval is found). */
+        int zero = 0;
+        for (size_t k = 0; k < ne; k++) zero |= g_old[k] == 0.0;
+        if (zero) {
+            s_from = fmin(probe / h, 0.5 / MP_ODE_EVENT_SUBDIV);
+            mp_ode_dense_eval(w->coef, w->ncoef, w->n, s_from, ytmp);
+            int rc = o->events(t + s_from * h, ytmp, g_sub, o->events_data);
+            if (rc != MP_OK) return rc;
+            for (size_t k = 0; k < ne; k++) {
+                if (g_old[k] != 0.0) continue;
+                int dk = o->direction[k];
+                if (dk == 0 ? g_sub[k] != 0.0 : dk > 0 ? g_sub[k] > 0.0 : g_sub[k] < 0.0) {
+                    hits[nh].s = 0.0;
+                    hits[nh].k = k;
+                    nh++;
+                }
+                g_old[k] = g_sub[k];
+            }
+        }
+    }
     for (int j = 1; j <= MP_ODE_EVENT_SUBDIV; j++) {
         double s0 = (double)(j - 1) / MP_ODE_EVENT_SUBDIV, s1 = (double)j / MP_ODE_EVENT_SUBDIV;
+        if (j == 1) s0 = s_from;
         int rc;
         if (j == MP_ODE_EVENT_SUBDIV) rc = o->events(t + h, w->ynew, g_sub, o->events_data);
         else {
@@ -305,7 +345,7 @@ static int ev_step(mp_ode_ws *w, mp_ode_result *r, const mp_ode_options *o, doub
                 return MP_ENONFINITE;
             }
             int dk = o->direction[k];
-            if (first && j == 1 && g_old[k] == 0.0) { /* zero at t0 */
+            if (first == 1 && j == 1 && g_old[k] == 0.0) { /* zero at t0 */
                 if (dk == 0 || (dk > 0 ? g_sub[k] >= 0.0 : g_sub[k] <= 0.0)) {
                     hits[nh].s = 0.0;
                     hits[nh].k = k;
@@ -327,7 +367,7 @@ static int ev_step(mp_ode_ws *w, mp_ode_result *r, const mp_ode_options *o, doub
         size_t k = hits[i].k;
         double s = hits[i].s;
         mp_ode_dense_eval(w->coef, w->ncoef, w->n, s, ytmp);
-        int rc = push_event(r, k, t + s * h, ytmp);
+        int rc = k < r->n_events ? push_event(r, k, t + s * h, ytmp) : MP_OK; /* a switch: not */
         if (rc != MP_OK) return rc;
         int with_action = o->has_action && o->has_action[k];
         if (o->terminal[k] > 0 && r->ev_count[k] >= (size_t)o->terminal[k]) {
@@ -460,6 +500,12 @@ typedef struct {
     double *g_old, *g_sub, *gtmp; ev_hit *hits; /* events: one block, and the hits */
     double *act_t;            /* per event: the time of its last action (with act_n) */
     long *act_n;              /* per event: its actions applied */
+    int restarted;            /* an action restarted the solve: its point is a new start */
+    mp_ode_problem prob;      /* the problem on its current branch (switches taken) */
+    const mp_ode_options *user; /* the caller's options (s->o: with the switch as an event) */
+    mp_ode_options swo;       /* ... the options with it */
+    int *sw_int;              /* its terminal and direction arrays (2 (ne + 1)) */
+    unsigned char *sw_act;    /* its has_action array (ne + 1) */
 } ode_run;
 
 int mp_ode_span_ok(const mp_ode_method *m, double t0, double tf, const mp_ode_options *o)
@@ -641,8 +687,12 @@ static int apply_action(ode_run *s, size_t k)
         }
     s->act_t[k] = t;
     s->act_n[k]++;
-    r->n_actions++;
-    if (o->n_eval == 0 && (rc = push_sample(r, t, w->y)) != MP_OK) return rc;
+    if (k < r->n_events) { /* an event's action: the state before and after are samples */
+        r->n_actions++;
+        if (o->n_eval == 0 && (rc = push_sample(r, t, w->y)) != MP_OK) return rc;
+    } else if (o->n_eval == 0) { /* a switch: the sample at its time is the state after it */
+        memcpy(r->y + (r->m - 1) * n, w->y, n * sizeof(double));
+    }
     /* restart from (t, y): as at the start, the history forgotten */
     if ((rc = mp_ode_ws_rhs(w, t, w->y, w->f)) != MP_OK) return rc;
     if ((rc = o->events(t, w->y, s->g_old, o->events_data)) != MP_OK) return rc;
@@ -653,6 +703,7 @@ static int apply_action(ode_run *s, size_t k)
             return MP_ENONFINITE;
         }
     s->c = mp_ode_ctl_start();
+    s->restarted = 1;
     memset(w->coef, 0, w->ncoef * n * sizeof(double));
     if (s->cur->restart) s->cur->restart(w);
     s->t0 = t;
@@ -684,8 +735,16 @@ static int accept_step(ode_run *s, double h, double hnew, double tnew)
     if (w->rho > 0.0) stiffness_test(s);
     double s_stop = 2.0;
     long act = -1;
-    if (o->n_events && (rc = ev_step(w, r, o, t, h, r->nsteps == 0, s->g_old, s->g_sub,
-                                     s->ytmp, s->gtmp, s->hits, &s_stop, &act)) != MP_OK)
+    /* a zero of g at the start (or where an action restarted the solve) that g
+     * leaves in its direction is an event there */
+    int fresh = r->nsteps == 0 ? 1 : s->restarted ? 2 : 0;
+    s->restarted = 0;
+    /* the probe after an action: 1% of the shortest gap between two actions
+     * that is not an accumulation, and never within round-off of t */
+    double probe = fmax(0.01 * MP_ODE_ZENO_FRAC * (t - w->t_start),
+                        64.0 * DBL_EPSILON * fabs(t));
+    if (o->n_events && (rc = ev_step(w, r, o, t, h, fresh, probe, s->g_old, s->g_sub, s->ytmp,
+                                     s->gtmp, s->hits, &s_stop, &act)) != MP_OK)
         return rc;
     double tend = s_stop <= 1.0 ? t + s_stop * h : tnew;
     if ((rc = output_step(r, o, w, t, h, tnew, tend, &s->ie, s->ytmp)) != MP_OK) return rc;
@@ -846,6 +905,67 @@ static void free_run(ode_run *s, int rc)
     free(s->g_old);
     free(s->hits);
     free(s->act_n);
+    free(s->sw_int);
+    free(s->sw_act);
+}
+
+/* The events of a solve whose problem has a switch: the caller's events, then
+ * the switch's g (1 once no switch is ahead). */
+static int sw_events(double t, const double *y, double *g, void *data)
+{
+    const ode_run *s = data;
+    size_t ne = s->user->n_events;
+    if (ne) {
+        int rc = s->user->events(t, y, g, s->user->events_data);
+        if (rc != MP_OK) return rc;
+    }
+    g[ne] = s->prob.sw ? s->prob.sw->g(t, y, s->prob.data) : 1.0;
+    return MP_OK;
+}
+
+/* The caller's actions, or the switch's: its act, then the branch after it. */
+static int sw_action(double t, double *y, size_t k, void *data)
+{
+    ode_run *s = data;
+    if (k < s->user->n_events) return s->user->action(t, y, k, s->user->action_data);
+    const mp_ode_switch *sw = s->prob.sw;
+    if (sw->act) sw->act(t, y, s->prob.data);
+    s->prob.rhs = sw->rhs;
+    s->prob.jac = sw->jac;
+    s->prob.blocks = NULL;
+    s->prob.sw = sw->next;
+    return MP_OK;
+}
+
+/* Contract: s->o for a problem with a switch ahead: the caller's options with
+ * the switch as one more event (downwards, with an action, never terminal,
+ * not reported).  MP_OK or MP_ENOMEM (freed by free_run). */
+static int switch_options(ode_run *s)
+{
+    const mp_ode_options *o = s->user;
+    size_t ne = o->n_events;
+    s->sw_int = malloc(2 * (ne + 1) * sizeof(int));
+    s->sw_act = calloc(ne + 1, 1);
+    if (!s->sw_int || !s->sw_act) return MP_ENOMEM;
+    for (size_t k = 0; k < ne; k++) {
+        s->sw_int[k] = o->terminal[k];
+        s->sw_int[ne + 1 + k] = o->direction[k];
+        s->sw_act[k] = o->has_action ? o->has_action[k] : 0;
+    }
+    s->sw_int[ne] = 0;
+    s->sw_int[2 * ne + 1] = -1;
+    s->sw_act[ne] = 1;
+    s->swo = *o;
+    s->swo.n_events = ne + 1;
+    s->swo.events = sw_events;
+    s->swo.events_data = s;
+    s->swo.terminal = s->sw_int;
+    s->swo.direction = s->sw_int + ne + 1;
+    s->swo.has_action = s->sw_act;
+    s->swo.action = sw_action;
+    s->swo.action_data = s;
+    s->o = &s->swo;
+    return MP_OK;
 }
 
 /* Contract: the forward solve (t0 < tf) of mp_ode_solve: the arguments
@@ -865,13 +985,18 @@ static int solve_forward(const mp_ode_method *m, const mp_ode_problem *p, double
     if (rc != MP_OK) return r->status = rc;
     s.m = m;
     s.cur = m->nonstiff ? m->nonstiff : m; /* a switching row runs its two methods in turn */
-    s.o = o;
+    s.o = s.user = o;
     s.r = r;
     s.tf = tf;
     s.c = mp_ode_ctl_start();
+    s.prob = *p;
+    mp_ode_problem_at(&s.prob, t0, y0); /* the branch y0 is on */
+    if (s.prob.sw) rc = switch_options(&s); /* a switch ahead: crossed as an event */
+    o = s.o;
     s.need_dense = o->n_eval > 0 || o->dense || o->n_events > 0;
     s.fast = m->block && p->replayable && o->n_events == 0 && !o->dense;
-    if ((rc = alloc_events(&s)) == MP_OK && (rc = alloc_workspace(&s, p, t0, tf)) == MP_OK &&
+    if (rc == MP_OK && (rc = alloc_events(&s)) == MP_OK &&
+        (rc = alloc_workspace(&s, &s.prob, t0, tf)) == MP_OK &&
         (rc = start_run(&s, t0, y0)) == MP_OK)
         rc = run_loop(&s);
     free_run(&s, rc);
@@ -923,10 +1048,15 @@ int mp_ode_solve(const mp_ode_method *m, const mp_ode_problem *p, double t0, dou
     if (!(tf < t0)) return solve_forward(m, p, t0, tf, y0, o, r);
     /* Contract: integrate backwards by the substitution s = -t; the result's
      * times are t (decreasing), its dense segments in s (r->backward). */
-    neg_ctx c = {p, o};
-    mp_ode_problem pn = *p;
+    /* a switch is crossed forwards only: backwards the problem keeps the
+     * branch of (t0, y0) (a rocket coasting back never refuels) */
+    mp_ode_problem pb = *p;
+    mp_ode_problem_at(&pb, t0, y0);
+    pb.sw = NULL;
+    neg_ctx c = {&pb, o};
+    mp_ode_problem pn = pb;
     pn.rhs = neg_rhs;
-    pn.jac = p->jac ? neg_jac : NULL;
+    pn.jac = pb.jac ? neg_jac : NULL;
     pn.data = &c;
     pn.nq = 0; /* y' = -f is not of the form q' = v */
     mp_ode_options on = *o;

@@ -306,8 +306,9 @@ int mp_ode_ensemble_build(mp_ode_ensemble *e, double t0, double tf, const mp_ode
     int scene_or_compiled = mod != NULL || e->params != NULL;
     if (!mod && ls->params) ls->rhs = e->lane_rhs;
     if (mod && !e->torque && mod->lanes && ls->params) ls->rhs = mod->lanes(ls->params, kk, ls->pstride);
+    /* a problem with a switch ahead crosses it as an event: the scalar path */
     int ok = !e->holds_python && scene_or_compiled && e->rows_kind != MP_ENS_ROWS_CALLER &&
-             mp_ode_lanes_supported(e->m, o, t0, tf);
+             !e->base.sw && mp_ode_lanes_supported(e->m, o, t0, tf);
     if (e->want_lanes == 1 && !ok) {
         e->why = MP_ENS_NO_LANES;
         return MP_EDOM;

@@ -41,6 +41,20 @@ typedef struct mp_ode_blocks {
                    double *y, double *f, double *ts, double *ys, double *discarded);
 } mp_ode_blocks;
 
+/* A switch of a problem's right-hand side: a scene's discontinuity that the
+ * engine crosses (a rocket's burn-out).  When g(t, y) reaches 0 from above
+ * (located as an event: no step straddles it) the action act replaces the
+ * state in place (may be NULL), and the problem continues with rhs and jac,
+ * and with the switch next (NULL: none).  A state with g <= 0 is already past
+ * the switch (mp_ode_problem_at).  g and act take the problem's data. */
+typedef struct mp_ode_switch {
+    double (*g)(double t, const double *y, const void *data);
+    void (*act)(double t, double *y, const void *data);
+    mp_ode_rhs rhs;
+    mp_ode_jac jac;
+    const struct mp_ode_switch *next;
+} mp_ode_switch;
+
 typedef struct mp_ode_problem {
     size_t n;         /* dimension */
     mp_ode_rhs rhs;
@@ -60,7 +74,15 @@ typedef struct mp_ode_problem {
     int replayable;
     /* optional: the scene's own fixed-step blocks (used while rhs is theirs) */
     const mp_ode_blocks *blocks;
+    /* optional: the switch ahead (NULL: none); rhs and jac are the branch
+     * before it */
+    const mp_ode_switch *sw;
 } mp_ode_problem;
+
+/* Contract: the problem p on the branch of the state (t, y): the switches it is
+ * past (g <= 0) taken, without their actions (a state given past a switch is
+ * where it is). */
+void mp_ode_problem_at(mp_ode_problem *p, double t, const double *y);
 
 typedef struct mp_ode_options {
     double rtol;              /* > 0: the least of rtolv (Newton's and GSL's one tolerance) */

@@ -441,9 +441,9 @@ static PyObject *ode_message(const py_system *sys, const mp_ode_outcome *out, lo
     if (st == MP_EMAXSTEPS) {
         snprintf(detail, sizeof detail, "max_steps=%ld, at t = %.17g", max_steps, t);
     } else if (st == MP_EEVENT) {
-        snprintf(detail, sizeof detail, "events[%zu] at t = %.17g: after its action the event "
-                 "fires again at once; an action must move the state off the event surface "
-                 "(reverse the velocity towards it)", out->stop_event, t);
+        snprintf(detail, sizeof detail, "events[%zu] at t = %.17g; an action must move the "
+                 "state off the event surface (reverse the velocity towards it)",
+                 out->stop_event, t);
     } else if (st != MP_ENONFINITE) {
         snprintf(detail, sizeof detail, "at t = %.17g", t);
     } else if (out->bad_what == MP_ODE_BAD_ACTION) {

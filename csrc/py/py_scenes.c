@@ -165,8 +165,10 @@ static PyObject *py_scene_eval(PyObject *self, PyObject *args)
     for (npy_intp i = 0; i < cnt && bad < 0; i++) {
         const double *yi = yy + i * d;
         double *oi = oo + i * per;
-        if (kind == 0) rc = prob.rhs(t, yi, oi, prob.data);
-        else if (kind == 1) rc = prob.jac(t, yi, oi, prob.data);
+        mp_ode_problem at = prob; /* the branch of this state (past a switch or not) */
+        mp_ode_problem_at(&at, t, yi);
+        if (kind == 0) rc = at.rhs(t, yi, oi, at.data);
+        else if (kind == 1) rc = at.jac(t, yi, oi, at.data);
         else oi[0] = m->energy(pp, yi);
         if (rc != MP_OK) {
             bad = i;
