@@ -327,7 +327,7 @@ def mechanics_parts(method, params, specified=None, baumgarte=None):
             if bodies and frame is not None:
                 energy = kinetic_energy(frame, *bodies) + potential_energy(*bodies) + V
         else:
-            L = m._L
+            L = m._L[0] if isinstance(m._L, sp.MatrixBase) else sp.sympify(m._L)
             qd = [qi.diff(t) for qi in q]
             energy = sum(v * sp.diff(L, v) for v in qd) - L + V
     ex = [] if energy is None else [plain(energy, "the energy")]
