@@ -878,12 +878,19 @@ int mp_gen_lagrangian(size_t m, const double *t, const double *q, const double *
     return "\n".join(parts)
 
 
+#: A mechanics model's lane right-hand side is emitted below this size (its
+#: loop compiled twice, AVX2 and portable: the bicycle's, 71k characters,
+#: cost 5 s of compilation for ensembles that the engine's generic lane
+#: wrapper runs on the scalar rhs anyway).
+LANE_MAX_MECHANICS = 40_000
+
+
 def _lanes_mechanics(ir):
     """mp_gen_lanes of a mechanics model, or '' (none: see _lane_loop): A and b
     across the lanes, LANE_SOLVER's solve, dy/dt the first NS unknowns."""
     B = ir.blocks
     loop = _lane_loop(ir, [(B["A"], "A"), (B["b"], "b")], "A and b at each lane's (t, y, p)")
-    if loop is None:
+    if loop is None or len(loop) > LANE_MAX_MECHANICS:
         return ""
     return (LANE_SOLVER + _LANE_DOC + f"MP_LANE_FN void mp_gen_lanes({_LANE_ARGS})\n{{\n"
             "    double A[NA * NA * MP_LANES], b[NA * MP_LANES];\n    (void)p;\n" + loop
