@@ -324,3 +324,63 @@ def test_singular_mass_matrix_at_y0():
     pend = mp.mechanics(kane, {**PARAMS, "m": 0.0})
     with pytest.raises(mp.SingularityError, match="mass matrix"):
         mp.solve(pend, (0, 1), [0.1, 0.0])
+
+
+def test_lagrange_with_a_holonomic_constraint():
+    """The pendulum in Cartesian coordinates (x down, y across) on the circle
+    x^2 + y^2 = l^2, by LagrangesMethod with a multiplier: its angle moves as
+    the scene's, the constraint and its rate are held, and the energy is kept."""
+    x, y = dynamicsymbols("x y")
+    g, l, m = sp.symbols("g l m", positive=True)
+    N = ReferenceFrame("N")
+    O = Point("O")
+    O.set_vel(N, 0)
+    P = O.locatenew("P", x * N.x + y * N.y)
+    P.set_vel(N, x.diff() * N.x + y.diff() * N.y)
+    bob = Particle("bob", P, m)
+    bob.potential_energy = -m * g * x
+    lm = LagrangesMethod(Lagrangian(N, bob), [x, y], hol_coneqs=[x**2 + y**2 - l**2])
+    lm.form_lagranges_equations()
+    scene = mp.mechanics(lm, PARAMS)
+    th0, w0 = 1.0, 0.4
+    y0 = [L * np.cos(th0), L * np.sin(th0), -L * w0 * np.sin(th0), L * w0 * np.cos(th0)]
+    s = mp.solve(scene, (0, 5), y0, rtol=1e-11, atol=1e-12, t_eval=[5.0])
+    ref = mp.solve(mp.scenes.Pendulum(g=G, length=L), (0, 5), [th0, w0], rtol=1e-11,
+                   atol=1e-12, t_eval=[5.0])
+    xs, ys, us, vs = s.y[:, -1]
+    assert abs(np.arctan2(ys, xs) - ref.y[0, -1]) < 1e-8                 # measured 1e-10
+    assert abs((xs * vs - ys * us) / L**2 - ref.y[1, -1]) < 1e-8
+    full = mp.solve(scene, (0, 5), y0)
+    assert scene.coordinates == ["x", "y", "x'", "y'"]
+    assert np.abs(scene.constraint_residual(full.y)).max() < 1e-7        # measured 1.0e-8
+    E = scene.energy(full.y)
+    assert np.ptp(E) < 1e-7                                              # measured 2e-9
+    # linearised about the bottom, x dependent: the pendulum's [[0, 1], [-g/l, 0]]
+    A, _ = scene.linearize([L, 0.0, 0.0, 0.0], independent=["y", "y'"])
+    assert np.allclose(A, [[0, 1], [-G / L, 0]], rtol=1e-12, atol=1e-12)
+
+
+def test_disc_implicit_method_ensemble_and_events(disc):
+    """Every path of the engine: Radau with the analytic Jacobian (checked by
+    central differences), solve_many in lanes, an event."""
+    _, _, scene = disc
+    y0 = scene.project(np.array([0.0, 0.3, 0.0, 0.0, 0.0, 0.5, 0.2, 4.0, 0.0, 0.0]))
+    J = scene.jacobian(0.0, y0)
+    h = 1e-6
+    Jfd = np.column_stack([(scene.rhs(0.0, y0 + h * e) - scene.rhs(0.0, y0 - h * e)) / (2 * h)
+                           for e in np.eye(10)])
+    assert np.allclose(J, Jfd, rtol=1e-6, atol=1e-7)          # measured 3e-9
+    ref = mp.solve(scene, (0, 3), y0, rtol=1e-12, atol=1e-12)
+    rad = mp.solve(scene, (0, 3), y0, method="radau", rtol=1e-10, atol=1e-10)
+    assert np.abs(rad.y[:, -1] - ref.y[:, -1]).max() < 1e-6   # measured 4e-9
+    y0s = np.array([scene.project(y0 * f) for f in (0.8, 1.0, 1.2)])
+    ens = mp.solve_many(scene, (0, 3), y0s, rtol=1e-10, atol=1e-12)
+    for i in range(3):
+        one = mp.solve(scene, (0, 3), y0s[i], rtol=1e-10, atol=1e-12)
+        assert np.abs(ens.y[i][:, -1] - one.y[:, -1]).max() < 1e-8
+
+    def spin_turn(t, y):          # the spin angle passes 2 pi
+        return y[2] - 2 * np.pi
+    spin_turn.terminal = True
+    s = mp.solve(scene, (0, 10), y0, events=spin_turn, rtol=1e-10, atol=1e-12)
+    assert s.status == 1 and abs(s.y_events[0][0][2] - 2 * np.pi) < 1e-9

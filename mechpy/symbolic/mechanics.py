@@ -132,6 +132,8 @@ def _method(method):
 
 
 def _name(f):
+    if isinstance(f, sp.Derivative) and isinstance(f.expr, sp.core.function.AppliedUndef):
+        return _name(f.expr) + "'" * f.derivative_count
     return f.func.__name__ if isinstance(f, sp.core.function.AppliedUndef) else str(f)
 
 
