@@ -280,6 +280,9 @@ def test_n_link_cart_against_solve_ivp(n):
     c2 = mp.mechanics(kane, params, specified={"F": lambda t, y: 0.7})
     Y = np.random.default_rng(1).uniform(-1, 1, (2 * (n + 1), 3))
     assert np.allclose(c1.rhs(0.0, Y), c2.rhs(0.0, Y), rtol=1e-14, atol=1e-14)
+    # a driven model has no energy of its own
+    with pytest.raises(AttributeError, match="no energy"):
+        c1.energy(Y)
     # B of the linearisation: the force's column, against a difference of rhs
     A, B = c1.linearize(np.zeros(2 * (n + 1)))
     d = (c1.replace(F=1.0).rhs(0.0, np.zeros(2 * (n + 1)))

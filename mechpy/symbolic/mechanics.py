@@ -468,6 +468,15 @@ class MechanicsScene(CompiledScene):
                                        ctx)[0]
         return ("python", rhs, ())
 
+    def symbolic(self):
+        """Not available: the right-hand side solves M x' = F numerically at
+        each evaluation (a symbolic solve is what this path avoids); the
+        method object has the equations (``mass_matrix_full``,
+        ``forcing_full``).  ValueError."""
+        raise ValueError("a mechanics model has no symbolic field: its right-hand side "
+                         "solves the mass-matrix system numerically; the equations are the "
+                         "method's mass_matrix_full and forcing_full")
+
     def constraint_residual(self, y, t: float = 0.0) -> np.ndarray:
         """The constraint residuals at states y (dim, ...) -> (k, ...): the
         configuration constraints f_h(q) first, then the velocity constraints
