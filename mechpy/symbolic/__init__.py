@@ -1,4 +1,5 @@
-"""A user's own system, compiled: ``mp.coordinates``, ``mp.lagrangian``, ``mp.equations``.
+"""A user's own system, compiled: ``mp.coordinates``, ``mp.lagrangian``, ``mp.equations``,
+and ``mp.mechanics`` (SymPy's KanesMethod, LagrangesMethod or System, see :mod:`.mechanics`).
 
 The equations of motion are derived with SymPy (:mod:`.derive`), printed as
 C99 (:mod:`.codegen`), compiled once by the C compiler Python was built with
