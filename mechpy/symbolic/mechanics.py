@@ -535,7 +535,13 @@ class MechanicsScene(CompiledScene):
                                  "give independent= with as many dependent states as "
                                  "constraints")
             Gd, Gi = G[:, dep], G[:, ind]
-            Tm[dep] = -np.linalg.solve(Gd, Gi)
+            try:
+                Tm[dep] = -np.linalg.solve(Gd, Gi)
+            except np.linalg.LinAlgError:
+                names = [self._meta["names"][i] for i in dep]
+                raise ValueError(f"linearize: the dependent states {names} cannot be solved "
+                                 "from the constraints at y0 (their Jacobian there is "
+                                 "singular): choose others with independent=[...]") from None
         return J[ind] @ Tm, B[ind]
 
     def project(self, y, t: float = 0.0, *, independent=None, tol: float = 1e-13,
