@@ -390,7 +390,6 @@ def mechanics(method, params=None, *, specified=None, baumgarte=None):
     [[0.0, 1.0], [-9.81, 0.0]]
     """
     import hashlib
-    import sympy as sp  # noqa: F401
 
     from .. import _core
     from . import build
