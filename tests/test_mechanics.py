@@ -415,3 +415,11 @@ def test_pydy_n_link_cart_against_pydys_integration(n):
                          specified={"F": lambda t, y: 0.5 * np.sin(2 * t)})
     ours = mp.solve(scene, (0, 2), y0, rtol=1e-12, atol=1e-12).y[:, -1]
     assert np.abs(ours - theirs).max() < 5e-10       # measured 2.1e-11 (n = 5), 5.2e-11 (10)
+
+
+def test_building_leaves_the_function_in_place():
+    """The implementation's module is imported when a model is built; it must
+    not replace the public function mechpy.symbolic.mechanics (a submodule of
+    that name would)."""
+    mp.mechanics(_pendulum_kane(), PARAMS)
+    assert callable(mp.symbolic.mechanics) and mp.symbolic.mechanics is mp.mechanics

@@ -1,5 +1,5 @@
 """A user's own system, compiled: ``mp.coordinates``, ``mp.lagrangian``, ``mp.equations``,
-and ``mp.mechanics`` (SymPy's KanesMethod, LagrangesMethod or System, see :mod:`.mechanics`).
+and ``mp.mechanics`` (SymPy's KanesMethod, LagrangesMethod or System, see :mod:`.multibody`).
 
 The equations of motion are derived with SymPy (:mod:`.derive`), printed as
 C99 (:mod:`.codegen`), compiled once by the C compiler Python was built with
@@ -393,7 +393,7 @@ def mechanics(method, params=None, *, specified=None, baumgarte=None):
 
     from .. import _core
     from . import build
-    from .mechanics import MechanicsScene, _digest, finish, mechanics_parts
+    from .multibody import MechanicsScene, _digest, finish, mechanics_parts
     params = _check_params(params)
     if specified is not None and not isinstance(specified, dict):
         raise TypeError("specified must be a dict {input name: value or f(t, y)}, got "
@@ -402,7 +402,7 @@ def mechanics(method, params=None, *, specified=None, baumgarte=None):
                                          not isinstance(k, str) else k): v
             for k, v in (specified or {}).items()}
     ir, info, parts = mechanics_parts(method, params, spec, baumgarte)
-    with open(os.path.join(os.path.dirname(__file__), "mechanics.py"), "rb") as f:
+    with open(os.path.join(os.path.dirname(__file__), "multibody.py"), "rb") as f:
         parts.append(hashlib.sha256(f.read()).hexdigest())
     values = dict(params)
     functions = {}

@@ -961,7 +961,7 @@ def _chunked(text):
 
 
 def _mechanics_source(ir, status):
-    """A model of SymPy's mechanics (see mechanics.py): A z = b solved by
+    """A model of SymPy's mechanics (see multibody.py): A z = b solved by
     mp_lu at each evaluation, dy/dt = z[:NS]; the Jacobian and the input
     matrix from D after the same factorisation."""
     B = ir.blocks

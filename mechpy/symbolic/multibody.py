@@ -1,5 +1,8 @@
 """Models as SymPy's mechanics module writes them, compiled: ``mp.mechanics``.
 
+(Named ``multibody``, not ``mechanics``: a submodule of that name would replace
+the function ``mechpy.symbolic.mechanics`` once imported.)
+
 A :class:`sympy.physics.mechanics.KanesMethod` (after ``kanes_equations``), a
 :class:`~sympy.physics.mechanics.LagrangesMethod` (after
 ``form_lagranges_equations``) or a :class:`~sympy.physics.mechanics.System`
