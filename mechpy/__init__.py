@@ -50,7 +50,7 @@ from . import inertia, modes, rotation, stress, variational  # noqa: F401
 from . import events, frames, live, particles, phase, rigid  # noqa: F401
 from .integrate import (DenseOutput, EnsembleSolution, SecondOrder, Solution,  # noqa: F401
                         methods, solve, solve_many)
-from .symbolic import coordinates, equations, lagrangian  # noqa: F401  (SymPy loads on call)
+from .symbolic import coordinates, equations, lagrangian, mechanics  # noqa: F401  (SymPy loads on call)
 from .symbolic.build import CompileError  # noqa: F401
 from . import tangent  # noqa: F401
 from .tangent import FitResult, fit, sensitivity  # noqa: F401
@@ -60,6 +60,6 @@ __version__ = "0.1.0"
 __all__ = ["integrate", "scenes", "inertia", "stress", "rotation", "rigid", "modes", "phase",
            "frames", "particles", "variational", "plot", "live", "errors", "symbolic",
            "solve", "solve_many", "methods", "Solution", "EnsembleSolution", "DenseOutput",
-           "SecondOrder", "coordinates", "lagrangian", "equations", "CompileError",
+           "SecondOrder", "coordinates", "lagrangian", "equations", "mechanics", "CompileError",
            "tangent", "sensitivity", "fit", "FitResult", "events",
            *_errors_all]

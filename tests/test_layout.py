@@ -144,6 +144,20 @@ def _equations_case(b):
     return _scene_case(sc, b)
 
 
+@functools.lru_cache(maxsize=None)
+def _mechanics_disc():
+    from mechpy.symbolic.models import rolling_disc
+    return mp.mechanics(*rolling_disc())
+
+
+def _mechanics_case(b):
+    sc = _mechanics_disc()
+    y = _r(10, *b)
+    extra = [] if b != () else [("linearize A", sc.linearize(sc.project(_r(10)))[0], (8, 8))]
+    return extra + _scene_case(sc, b) + [("constraint_residual", sc.constraint_residual(y),
+                                          (2,) + b)]
+
+
 def _solve_case(b):
     s = mp.solve(mp.scenes.Pendulum(), (0, 1), [0.3, 0.0], t_eval=np.linspace(0, 1, 5),
                  dense_output=True)
@@ -583,6 +597,7 @@ TABLE = {
     # compiled scenes
     "mechpy.symbolic.lagrangian": (STATE, _lagrangian_case),
     "mechpy.symbolic.equations": (STATE, _equations_case),
+    "mechpy.symbolic.mechanics": (STATE, _mechanics_case),
     "mechpy.symbolic.coordinates": (SINGLE, _single(_coordinates)),
     "mechpy.symbolic.CompileError": (NONE, None),
     # inertia

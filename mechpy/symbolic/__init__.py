@@ -1,4 +1,5 @@
-"""A user's own system, compiled: ``mp.coordinates``, ``mp.lagrangian``, ``mp.equations``.
+"""A user's own system, compiled: ``mp.coordinates``, ``mp.lagrangian``, ``mp.equations``,
+and ``mp.mechanics`` (SymPy's KanesMethod, LagrangesMethod or System, see :mod:`.multibody`).
 
 The equations of motion are derived with SymPy (:mod:`.derive`), printed as
 C99 (:mod:`.codegen`), compiled once by the C compiler Python was built with
@@ -10,7 +11,7 @@ from __future__ import annotations
 
 import os
 
-__all__ = ["coordinates", "lagrangian", "equations", "CompileError"]
+__all__ = ["coordinates", "lagrangian", "equations", "mechanics", "CompileError"]
 
 _SOURCES = ("derive.py", "codegen.py")
 _GEN_HASH = None
@@ -299,3 +300,128 @@ def equations(rhs, y, params=None, *, energy=None, backend: str = "c"):
              "none" if energy is None else sp.sympify(energy)]
     return _make("equations", lambda: equations_ir(rl, y, params, energy), parts, params,
                  backend)
+
+
+def mechanics(method, params=None, *, specified=None, baumgarte=None):
+    r"""A compiled scene from SymPy's mechanics: Kane's or Lagrange's method, or a System.
+
+    The model's mass matrix and forcing vector, :math:`M(q, u, t)\,x' = F(q, u, t)`
+    (SymPy's ``mass_matrix_full`` and ``forcing_full``, or the kinematical and
+    dynamic parts), are printed as C and solved by a dense LU at each
+    evaluation (never inverted symbolically), compiled and cached.  The
+    state is ``(q..., u...)`` in the method's order, independent then
+    dependent (for Lagrange, ``(q..., q'...)``).  Constraint drift is held
+    down in the equations themselves: for Kane, the velocity constraints
+    :math:`g_v = B u + c` obey :math:`\dot g_v = -2\alpha g_v` (their rows of
+    the mass matrix) and the configuration constraints :math:`f_h(q)`,
+    :math:`\dot f_h = -\beta f_h` (the kinematical equations projected onto
+    their tangent, :math:`\dot q = f_k + C^T\mu`, :math:`C\dot q = -\beta
+    f_h`, :math:`C = \partial f_h/\partial q`); for Lagrange, Baumgarte's
+    :math:`\ddot g + 2\alpha\dot g + \beta^2 g = 0` on the constraint rows.
+
+    Parameters
+    ----------
+    method : KanesMethod, LagrangesMethod or System
+        After ``kanes_equations``, ``form_lagranges_equations`` or
+        ``form_eoms``; with configuration constraints and dependent
+        coordinates, velocity (nonholonomic) constraints and dependent speeds.
+    params : dict
+        A value for every constant (free symbol other than t), keyed by name.
+    specified : dict, optional
+        ``{name: value or f(t, y)}`` for each specified input (a dynamic
+        symbol of the equations that is neither a coordinate nor a speed,
+        such as a torque ``T(t)``), keyed by its name.  A value becomes a
+        parameter of the scene (``replace``, ``solve_many(params=...)``); a
+        callable is called at each evaluation (a Python right-hand side:
+        slower).
+    baumgarte : (alpha, beta), optional
+        Stabilisation rates (1/s), default (5, 5).
+
+    Returns
+    -------
+    MechanicsScene
+        A :class:`mechpy.scenes.Scene` of the one engine (``mp.solve`` with
+        every method, ``mp.solve_many`` in lanes, events, pickling, the cache)
+        with ``rhs``, ``jacobian`` (analytic, through the same solve),
+        ``constraint_residual(y)`` (the configuration then the velocity
+        constraints, ``constraint_names``), ``linearize(y0)`` -> (A, B) in the
+        independent states (the dependent ones eliminated through the
+        constraints' Jacobian, as SymPy's Linearizer does), ``energy(y)`` when
+        every load is a constant force (T + V; for Lagrange the Jacobi
+        integral of L plus V), ``inputs`` and ``c_source``.  ``mp.solve``
+        checks that y0 satisfies the constraints (naming the one it violates
+        and by how much) and that the mass matrix is regular there.
+
+    Raises
+    ------
+    TypeError
+        ``method`` is not one of the three.
+    ValueError
+        The equations were never formed, a constant has no value (named), a
+        specified input has no value (named), a parameter or input names
+        nothing in the equations, or an expression cannot be compiled.
+    CompileError
+        No C compiler, or it failed.
+
+    Examples
+    --------
+    A pendulum by Kane's method equals the built-in scene:
+
+    >>> import sympy
+    >>> from sympy.physics.mechanics import (KanesMethod, Particle, Point, ReferenceFrame,
+    ...                                      dynamicsymbols)
+    >>> th, w = dynamicsymbols("theta omega")
+    >>> g, l, m = sympy.symbols("g l m", positive=True)
+    >>> N = ReferenceFrame("N"); A = N.orientnew("A", "Axis", (th, N.z))
+    >>> A.set_ang_vel(N, w * N.z)
+    >>> O = Point("O"); O.set_vel(N, 0)
+    >>> P = O.locatenew("P", l * A.x); P.v2pt_theory(O, N, A)
+    l*omega(t)*A.y
+    >>> kane = KanesMethod(N, [th], [w], kd_eqs=[th.diff() - w])
+    >>> _ = kane.kanes_equations([Particle("bob", P, m)], [(P, m * g * N.x)])
+    >>> pend = mp.mechanics(kane, {"g": 9.81, "l": 1.0, "m": 1.0})
+    >>> s = mp.solve(pend, (0, 2), [1.0, 0.0], rtol=1e-10, atol=1e-12)
+    >>> ref = mp.solve(mp.scenes.Pendulum(g=9.81, length=1.0), (0, 2), [1.0, 0.0],
+    ...                rtol=1e-10, atol=1e-12)
+    >>> bool(np.abs(s.y[:, -1] - ref.y[:, -1]).max() < 1e-8)
+    True
+    >>> A, B = pend.linearize([0.0, 0.0])
+    >>> np.round(A, 6).tolist()                  # [[0, 1], [-g/l, 0]]
+    [[0.0, 1.0], [-9.81, 0.0]]
+    """
+    import hashlib
+
+    from .. import _core
+    from . import build
+    from .multibody import MechanicsScene, _digest, finish, mechanics_parts
+    params = _check_params(params)
+    if specified is not None and not isinstance(specified, dict):
+        raise TypeError("specified must be a dict {input name: value or f(t, y)}, got "
+                        f"{type(specified).__name__}")
+    spec = {getattr(k, "name", None) or (k.func.__name__ if hasattr(k, "func") and
+                                         not isinstance(k, str) else k): v
+            for k, v in (specified or {}).items()}
+    ir, info, parts = mechanics_parts(method, params, spec, baumgarte)
+    with open(os.path.join(os.path.dirname(__file__), "multibody.py"), "rb") as f:
+        parts.append(hashlib.sha256(f.read()).hexdigest())
+    values = dict(params)
+    functions = {}
+    for nm in info["inputs"]:
+        v = spec[nm]
+        if callable(v):
+            functions[nm] = v
+            values[nm] = 0.0
+        else:
+            values[nm] = v
+    h = hashlib.sha256()
+    _digest([e for part in parts[:4] for e in part], h)
+    key = _key("mechanics", [h.hexdigest()] + parts[4:], ir.param_names)
+    meta = build.load_meta(key)
+    if meta is None or meta.get("param_names") != ir.param_names or "mechanics" not in meta:
+        from . import codegen
+        finish(ir, info)
+        source = codegen.c_source(ir, _core.STATUS)
+        meta = _meta(ir, source)
+        meta["mechanics"] = info
+        build.store_meta(key, meta)
+    return MechanicsScene(meta, values, functions=functions)

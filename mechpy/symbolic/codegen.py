@@ -878,9 +878,220 @@ int mp_gen_lagrangian(size_t m, const double *t, const double *q, const double *
     return "\n".join(parts)
 
 
+#: A mechanics model's lane right-hand side is emitted below this size (its
+#: loop compiled twice, AVX2 and portable: the bicycle's, 71k characters,
+#: cost 5 s of compilation for ensembles that the engine's generic lane
+#: wrapper runs on the scalar rhs anyway).
+LANE_MAX_MECHANICS = 40_000
+
+
+def _lanes_mechanics(ir):
+    """mp_gen_lanes of a mechanics model, or '' (none: see _lane_loop): A and b
+    across the lanes, LANE_SOLVER's solve, dy/dt the first NS unknowns."""
+    B = ir.blocks
+    loop = _lane_loop(ir, [(B["A"], "A"), (B["b"], "b")], "A and b at each lane's (t, y, p)")
+    if loop is None or len(loop) > LANE_MAX_MECHANICS:
+        return ""
+    return (LANE_SOLVER + _LANE_DOC + f"MP_LANE_FN void mp_gen_lanes({_LANE_ARGS})\n{{\n"
+            "    double A[NA * NA * MP_LANES], b[NA * MP_LANES];\n    (void)p;\n" + loop
+            + r"""
+    mp_lu_lanes(A, b, status);
+    for (int i = 0; i < NS; i++)
+        MP_LANE_LOOP f[i * MP_LANES + l] = b[i * MP_LANES + l];
+}
+""")
+
+
+#: A block whose text is over this many characters is printed as functions
+#: of about CHUNK characters each, its common subexpressions kept in an array
+#: (one function of thousands of temporaries costs the compiler's register
+#: allocator tens of seconds: the bicycle's Jacobian took 32 s at -O1 as one
+#: function, 7.4 s in chunks of 12k characters, 4.0-5.9 s in chunks of 4k).
+CHUNKED = 60_000
+CHUNK = 4_000
+
+
+def _chunked(text):
+    """The block function ``text`` (as :func:`_block` prints it) as a driver
+    and static functions of about CHUNK characters, the temporaries mp_cK in
+    the driver's array w[K]; ``text`` itself when it is short."""
+    if len(text) <= CHUNKED:
+        return text
+    lines = text.split("\n")
+    start = next(i for i, x in enumerate(lines) if x == "{")
+    sig = lines[start - 1]
+    comment = lines[:start - 1]
+    body = [x for x in lines[start + 1:-1]
+            if not re.match(r"    const double mp_[ypz]\d+ = [ypz]\[\d+\];$", x)
+            and not x.startswith("    (void)t;")]
+    temps = re.findall(r"const double (mp_c\d+) = ", "\n".join(body))
+    index = {t: i for i, t in enumerate(temps)}
+    sub = re.compile(r"\b(mp_c\d+)\b")
+
+    def arr(m):
+        return f"w[{index[m.group(1)]}]"
+
+    body = [sub.sub(arr, x.replace("const double ", "", 1) if x.startswith(
+        "    const double mp_c") else x) for x in body]
+    name = re.search(r"void (\w+)\(", sig).group(1)
+    args = sig[sig.index("(") + 1:sig.rindex(")")]
+    argn = [a.split()[-1].lstrip("*") for a in args.split(",")]
+    chunks, cur, size = [], [], 0
+    for x in body:
+        cur.append(x)
+        size += len(x)
+        if size > CHUNK:
+            chunks.append(cur)
+            cur, size = [], 0
+    if cur:
+        chunks.append(cur)
+    out = []
+    for k, ch in enumerate(chunks):
+        txt = "\n".join(ch)
+        used = sorted(set(re.findall(r"\bmp_[ypz]\d+\b", txt)),
+                      key=lambda v: (v[3], int(v[4:])))
+        decl = [f"    const double {v} = {v[3]}[{v[4:]}];" for v in used]
+        out.append(f"static void {name}_{k}({args}, double *w)\n{{\n" + "\n".join(decl)
+                   + "\n" + txt + "\n    " + " ".join(f"(void){a};" for a in argn)
+                   + " (void)w;\n}")
+    call_args = ", ".join(argn)
+    driver = "\n".join(comment) + f"\n{sig}\n{{\n    double w[{max(1, len(temps))}];\n" + "".join(
+        f"    {name}_{k}({call_args}, w);\n" for k in range(len(chunks))) + "}"
+    return "\n".join(out) + "\n" + driver
+
+
+def _mechanics_source(ir, status):
+    """A model of SymPy's mechanics (see multibody.py): A z = b solved by
+    mp_lu at each evaluation, dy/dt = z[:NS]; the Jacobian and the input
+    matrix from D after the same factorisation."""
+    B = ir.blocks
+    nv = len(B["D"]) // len(B["b"])          # NS states + the specified inputs
+    blocks = [_block("gen_A", B["A"], ir, _ARGS, "the mass matrix"),
+              _block("gen_b", B["b"], ir, _ARGS, "the forcing vector"),
+              _block("gen_G", B["G"] or [0], ir, _ARGS, "the constraints"),
+              _block("gen_GJ", B["GJ"] or [0], ir, _ARGS, "the constraints' Jacobian")]
+    if "energy" in B:
+        blocks.append(_block("gen_energy", B["energy"], ir, _ARGS, "the energy"))
+    blocks = [_chunked(x) for x in blocks]
+    jac = _chunked(_block("gen_D", B["D"], ir, _ARGS_Z, "the Jacobian", static=False))
+    na = len(B["b"])
+    header = re.sub(r"\n#define NA \d+ ", f"\n#define NA {na} ", _header(ir, status))
+    head = [header, f"#define NV {nv}   /* columns of D: states, inputs */"]
+    if len(jac) + sum(map(len, blocks)) > SPLIT:
+        parts = head + ["#if defined(__GNUC__)\n#define MP_HIDDEN "
+                        "__attribute__((visibility(\"hidden\")))\n#else\n#define MP_HIDDEN"
+                        f"\n#endif\nMP_HIDDEN void gen_D({_ARGS_Z});", build.UNIT,
+                        _dims(ir), RUNTIME] + blocks
+        lanes = _lanes_mechanics(ir)
+        tail = [build.UNIT, jac] + ([build.UNIT, lanes] if lanes else [])
+    else:
+        lanes = None
+        parts = head + [_dims(ir), RUNTIME,
+                        jac.replace("\nvoid gen_D(", "\nstatic void gen_D(")] + blocks
+        tail = []
+    parts.append(r"""
+/* Solve A z = b at (t, y); LU, piv, dinv receive the factors. */
+static inline int gen_solve(double t, const double *y, const double *p, double *LU,
+                            int *piv, double *dinv, double *z)
+{
+    gen_A(t, y, p, LU);
+    int rc = mp_lu(LU, piv, dinv);
+    if (rc != MP_OK) return rc;
+    gen_b(t, y, p, z);
+    mp_lu_solve(LU, piv, dinv, z);
+    for (int i = 0; i < NA; i++)
+        if (!isfinite(z[i])) return MP_ENONFINITE;
+    return MP_OK;
+}
+
+/* dy/dt = z[:NS] at (t, y); params: the parameter vector. */
+int mp_gen_rhs(double t, const double *y, double *dydt, void *params)
+{
+    double LU[NA * NA], dinv[NA], z[NA];
+    int piv[NA];
+    int rc = gen_solve(t, y, (const double *)params, LU, piv, dinv, z);
+    if (rc != MP_OK) return rc;
+    for (int i = 0; i < NS; i++) dydt[i] = z[i];
+    return MP_OK;
+}
+
+/* out (NS x ncol, row-major) = the first NS rows of A^-1 D[:, :ncol]: the
+ * Jacobian (ncol = NS) or, with the inputs' columns, (df/dy, df/dr). */
+static int gen_lin(double t, const double *y, const double *p, double *out, int ncol)
+{
+    double LU[NA * NA], dinv[NA], z[NA], D[NA * NV], col[NA];
+    int piv[NA];
+    int rc = gen_solve(t, y, p, LU, piv, dinv, z);
+    if (rc != MP_OK) return rc;
+    gen_D(t, y, p, z, D);
+    for (int c = 0; c < ncol; c++) {
+        for (int r = 0; r < NA; r++) col[r] = D[r * NV + c];
+        mp_lu_solve(LU, piv, dinv, col);
+        for (int i = 0; i < NS; i++) out[i * ncol + c] = col[i];
+    }
+    return MP_OK;
+}
+
+/* Row-major NS x NS Jacobian of mp_gen_rhs. */
+int mp_gen_jac(double t, const double *y, double *jac, void *params)
+{
+    return gen_lin(t, y, (const double *)params, jac, NS);
+}
+
+/* out = (df/dy | df/dr), NS x NV row-major (the inputs r are the last
+ * parameters). */
+int mp_gen_linear(double t, const double *y, double *out, void *params)
+{
+    return gen_lin(t, y, (const double *)params, out, NV);
+}
+
+/* out = the constraint residuals (configuration, then velocity). */
+int mp_gen_residual(double t, const double *y, double *out, void *params)
+{
+    gen_G(t, y, (const double *)params, out);
+    return MP_OK;
+}
+
+/* out = their Jacobian d(residuals)/dy, row-major. */
+int mp_gen_residual_jac(double t, const double *y, double *out, void *params)
+{
+    gen_GJ(t, y, (const double *)params, out);
+    return MP_OK;
+}
+""")
+    if "energy" in B:
+        parts.append(r"""
+/* out[0] = the energy. */
+int mp_gen_energy(double t, const double *y, double *out, void *params)
+{
+    gen_energy(t, y, (const double *)params, out);
+    return MP_OK;
+}
+""")
+    else:
+        parts.append(_absent("mp_gen_energy"))
+    parts.append(_absent("mp_gen_momenta") + _absent("mp_gen_multipliers")
+                 + _absent("mp_gen_constraint_forces"))
+    parts.append("""
+/* Not defined for a mechanics model: returns MP_EDOM. */
+int mp_gen_lagrangian(size_t m, const double *t, const double *q, const double *qd,
+                      double *out, void *params)
+{
+    (void)m; (void)t; (void)q; (void)qd; (void)out; (void)params;
+    return MP_EDOM;
+}
+""")
+    if lanes is None:
+        parts.append(_lanes_mechanics(ir))
+    parts.append(_fixed_blocks(ir))
+    return "\n".join(parts + tail)
+
+
 def c_source(ir, status: dict) -> str:
     """The C source of the system ``ir``; ``status`` maps the C core's status
     names (``MP_OK``, ...) to their values (``mechpy._core.STATUS``)."""
     if ir.kind == "lagrangian":
         return _lagrangian_source(ir, status)
+    if ir.kind == "mechanics":
+        return _mechanics_source(ir, status)
     return _equations_source(ir, status)

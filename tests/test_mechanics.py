@@ -1,0 +1,425 @@
+"""mp.mechanics: SymPy's KanesMethod, LagrangesMethod and System, compiled.
+
+References nobody here wrote: the built-in pendulum scene, SymPy's own
+equations (KanesMethod.rhs and mass_matrix_full / forcing_full, lambdified,
+and its Linearizer), the published eigenvalues and self-stability speeds of
+the benchmark bicycle (Meijaard, Papadopoulos, Ruina, Schwab 2007, Proc. R.
+Soc. A 463, Table 2), SciPy's solve_ivp at tight tolerance, and the
+conservation of energy.
+"""
+from __future__ import annotations
+
+import os
+import pickle
+
+import numpy as np
+import pytest
+import sympy as sp
+from scipy.integrate import solve_ivp
+from scipy.optimize import brentq
+from sympy.physics.mechanics import (KanesMethod, LagrangesMethod, Lagrangian, Particle,
+                                     Point, ReferenceFrame, RigidBody, dynamicsymbols)
+
+import mechpy as mp
+from mechpy.symbolic.models import n_link_cart, rolling_disc, whipple_bicycle, whipple_state
+
+
+@pytest.fixture(scope="module", autouse=True)
+def cache(tmp_path_factory):
+    """A fresh cache folder for this module (the first build compiles)."""
+    d = str(tmp_path_factory.mktemp("mechpy_cache"))
+    old = os.environ.get("MECHPY_CACHE_DIR")
+    os.environ["MECHPY_CACHE_DIR"] = d
+    yield d
+    if old is None:
+        os.environ.pop("MECHPY_CACHE_DIR", None)
+    else:
+        os.environ["MECHPY_CACHE_DIR"] = old
+
+
+G, L = 9.81, 1.3
+
+
+def _pendulum_kane(formed=True):
+    th, w = dynamicsymbols("theta omega")
+    g, l, m = sp.symbols("g l m", positive=True)
+    N = ReferenceFrame("N")
+    A = N.orientnew("A", "Axis", (th, N.z))
+    A.set_ang_vel(N, w * N.z)
+    O = Point("O")
+    O.set_vel(N, 0)
+    P = O.locatenew("P", l * A.x)
+    P.v2pt_theory(O, N, A)
+    kane = KanesMethod(N, [th], [w], kd_eqs=[th.diff() - w])
+    if formed:
+        kane.kanes_equations([Particle("bob", P, m)], [(P, m * g * N.x)])
+    return kane
+
+
+def _pendulum_lagrange():
+    th = dynamicsymbols("theta")
+    g, l, m = sp.symbols("g l m", positive=True)
+    N = ReferenceFrame("N")
+    A = N.orientnew("A", "Axis", (th, N.z))
+    O = Point("O")
+    O.set_vel(N, 0)
+    P = O.locatenew("P", l * A.x)
+    P.v2pt_theory(O, N, A)
+    bob = Particle("bob", P, m)
+    bob.potential_energy = -m * g * l * sp.cos(th)
+    lm = LagrangesMethod(Lagrangian(N, bob), [th])
+    lm.form_lagranges_equations()
+    return lm
+
+
+def _pendulum_system():
+    from sympy.physics.mechanics import PinJoint, System
+    g, l, m = sp.symbols("g l m", positive=True)
+    th, w = dynamicsymbols("theta omega")
+    ceiling = RigidBody("ceiling")
+    bob = Particle("bob", mass=m)
+    sys_ = System.from_newtonian(ceiling)
+    N = ceiling.frame
+    bob_frame = ReferenceFrame("bobframe")
+    pin = PinJoint("pin", ceiling, bob, coordinates=th, speeds=w,
+                   child_point=-l * bob_frame.x, child_interframe=bob_frame,
+                   joint_axis=N.z)
+    sys_.add_joints(pin)
+    sys_.add_loads((bob.masscenter, m * g * N.x))
+    sys_.form_eoms()
+    return sys_
+
+
+PARAMS = {"g": G, "l": L, "m": 2.0}
+
+
+@pytest.mark.parametrize("make", [_pendulum_kane, _pendulum_lagrange, _pendulum_system],
+                         ids=["kane", "lagrange", "system"])
+def test_pendulum_equals_the_scene(make):
+    pend = mp.mechanics(make(), PARAMS)
+    ref_scene = mp.scenes.Pendulum(g=G, length=L)
+    y0 = [1.2, -0.3]
+    s = mp.solve(pend, (0, 5), y0, rtol=1e-11, atol=1e-12, t_eval=np.linspace(0, 5, 11))
+    ref = mp.solve(ref_scene, (0, 5), y0, rtol=1e-11, atol=1e-12, t_eval=np.linspace(0, 5, 11))
+    assert np.abs(s.y - ref.y).max() < 1e-12     # measured 1.0e-14
+    Y = np.random.default_rng(0).uniform(-2, 2, (2, 7))
+    assert np.allclose(pend.rhs(0.0, Y), ref_scene.rhs(0.0, Y), rtol=1e-13, atol=1e-13)
+    assert np.allclose(pend.jacobian(0.0, Y), ref_scene.jacobian(0.0, Y), rtol=1e-12,
+                       atol=1e-12)
+    # energy: m (E of the scene per unit mass) up to a constant
+    e = pend.energy(s.y) - PARAMS["m"] * ref_scene.energy(s.y)
+    assert np.ptp(e) < 1e-13                     # measured 7e-15
+    A, B = pend.linearize([0.0, 0.0])
+    assert np.allclose(A, [[0, 1], [-G / L, 0]], rtol=1e-14, atol=1e-14)
+    assert B.shape == (2, 0)
+
+
+def test_pickle_replace_and_lanes():
+    pend = mp.mechanics(_pendulum_kane(), PARAMS)
+    back = pickle.loads(pickle.dumps(pend))
+    y = np.array([0.4, 0.1])
+    assert np.array_equal(back.rhs(0.0, y), pend.rhs(0.0, y))
+    short = pend.replace(l=0.5)
+    assert np.isclose(short.rhs(0.0, [np.pi / 2, 0.0])[1], -G / 0.5)
+    lengths = np.array([0.5, 1.0, 1.5, 2.0, 2.5, 3.0, 3.5, 4.0, 4.5])
+    ens = mp.solve_many(pend, (0, 2), np.tile([0.3, 0.0], (9, 1)), params={"l": lengths},
+                        rtol=1e-10, atol=1e-12)
+    for i, li in enumerate(lengths):
+        one = mp.solve(mp.scenes.Pendulum(g=G, length=li), (0, 2), [0.3, 0.0], rtol=1e-10,
+                       atol=1e-12)
+        assert np.abs(ens.y[i][:, -1] - one.y[:, -1]).max() < 1e-8
+
+
+# ---------------------------------------------------------------- rolling disc
+
+@pytest.fixture(scope="module")
+def disc():
+    kane, params = rolling_disc()
+    return kane, params, mp.mechanics(kane, params)
+
+
+def test_disc_rhs_equals_sympys(disc):
+    kane, params, scene = disc
+    rhs = kane.rhs()                     # SymPy's own first-order form
+    byname = {s.name: s for s in rhs.free_symbols}
+    x = list(kane.q) + list(kane.u)
+    f = sp.lambdify([x, [byname[k] for k in params]], rhs, "numpy")
+    rng = np.random.default_rng(3)
+    for _ in range(10):
+        y = scene.project(rng.uniform(-1.5, 1.5, 10))   # on the rolling constraints
+        assert np.abs(scene.constraint_residual(y)).max() < 1e-14
+        ref = np.asarray(f(y, list(params.values())), dtype=float).ravel()
+        assert np.allclose(scene.rhs(0.0, y), ref, rtol=1e-13, atol=1e-13)  # measured 2e-15
+
+
+def test_disc_conserves_energy_and_holds_constraints(disc):
+    _, _, scene = disc
+    y0 = scene.project(np.array([0.0, 0.2, 0.0, 0.0, 0.0, 0.3, 0.1, 5.0, 0.0, 0.0]))
+    s = mp.solve(scene, (0, 10), y0)
+    E = scene.energy(s.y)
+    assert np.abs(E - E[0]).max() < 3e-8              # measured 3.3e-9
+    assert np.abs(scene.constraint_residual(s.y)).max() < 1e-7   # measured 1.5e-8
+    # over 100 s the stabilised residual stays bounded; without the
+    # stabilisation the rolling constraints drift away linearly
+    s = mp.solve(scene, (0, 100), y0)
+    end = np.abs(scene.constraint_residual(s.y[:, -1])).max()
+    assert end < 1e-8                                 # measured 7.8e-10
+    loose = mp.mechanics(*rolling_disc(), baumgarte=(0.0, 0.0))
+    s2 = mp.solve(loose, (0, 100), y0)
+    assert np.abs(loose.constraint_residual(s2.y[:, -1])).max() > 3e-8   # measured 6.1e-8
+
+
+def test_disc_linearize_equals_sympys_linearizer(disc):
+    kane, params, scene = disc
+    u = kane.u
+    y0 = scene.project(np.array([0.3, 0.0, 0.2, 0.1, -0.2, 0.0, 0.0, 4.0, 0.0, 0.0]))
+    q = kane.q
+    op = {**{qi: v for qi, v in zip(q, y0[:5])}, **{ui: v for ui, v in zip(u, y0[5:])},
+          **{ui.diff(): 0 for ui in u}}
+    byname = {s.name: s for s in kane.forcing_full.free_symbols}
+    A_sym, B_sym, _ = kane.linearize(A_and_B=True, op_point=op)
+    A_ref = np.array(A_sym.xreplace({byname[k]: v for k, v in params.items() if k in byname}),
+                     dtype=float)
+    A, B = scene.linearize(y0)
+    assert A.shape == A_ref.shape == (8, 8)
+    assert np.allclose(A, A_ref, rtol=1e-11, atol=1e-11)
+
+
+# ---------------------------------------------------------------- the bicycle
+
+@pytest.fixture(scope="module")
+def bike():
+    return mp.mechanics(*whipple_bicycle())
+
+
+#: Meijaard et al. (2007), Table 2: eigenvalues of the lean and steer motion.
+TABLE2 = {0.0: [-5.53094371765393, -3.13164324790656, 3.13164324790656, 5.53094371765393],
+          4.0: [-12.15861426576447, -1.42944427361326, 0.41325331521125 - 3.07910818603206j,
+                0.41325331521125 + 3.07910818603206j],
+          5.0: [-14.07838969279822, -0.32286642900409, -0.77534188219585 - 4.46486771378823j,
+                -0.77534188219585 + 4.46486771378823j],
+          10.0: [-24.62459635017404, 0.16105338653172, -3.72016840437287 - 10.90681139476287j,
+                 -3.72016840437287 + 10.90681139476287j]}
+#: the same paper: weave and capsize speeds (m/s)
+WEAVE, CAPSIZE = 4.29238253634111, 6.02426201538837
+LEAN_STEER = [1, 2, 3, 5]          # q2 roll, q5 steer, u2 roll rate, u5 steer rate
+
+
+def _eig(bike, v):
+    A, _ = bike.linearize(whipple_state(v))
+    return np.linalg.eigvals(A[np.ix_(LEAN_STEER, LEAN_STEER)])
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("v", sorted(TABLE2))
+def test_bicycle_benchmark_eigenvalues(bike, v):
+    got = np.sort_complex(_eig(bike, v))
+    want = np.sort_complex(np.array(TABLE2[v], dtype=complex))
+    assert np.abs(got - want).max() < 1e-12      # measured 2.3e-14 (v = 5)
+
+
+@pytest.mark.slow
+def test_bicycle_weave_and_capsize_speeds(bike):
+    def abscissa(v):
+        return float(np.max(_eig(bike, v).real))
+    weave = brentq(abscissa, 4.0, 5.0, xtol=1e-12)
+    capsize = brentq(abscissa, 5.5, 7.0, xtol=1e-12)
+    assert abs(weave - WEAVE) < 1e-11 and abs(capsize - CAPSIZE) < 1e-11   # measured 1.3e-14
+    # the remaining modes of the full linearisation (yaw, rear wheel) are neutral
+    A, _ = bike.linearize(whipple_state(5.0))
+    ev = np.sort(np.abs(np.linalg.eigvals(A)))
+    assert ev[0] < 1e-12 and ev[1] < 1e-12
+
+
+@pytest.mark.slow
+def test_bicycle_nonlinear_run_stays_on_its_constraints(bike):
+    y0 = bike.project(np.array(whipple_state(4.6, roll=0.2, steer=0.1, roll_rate=0.5)))
+    s = mp.solve(bike, (0, 10), y0)
+    assert s.status == 0
+    res = np.abs(bike.constraint_residual(s.y)).max()
+    assert res < 1e-8                        # measured 7.9e-10 (default rtol, baumgarte)
+    E = bike.energy(s.y)
+    assert np.ptp(E) < 3e-11 * abs(E[0])     # measured 2.4e-12 relative
+    # self-stable at 4.6 m/s: the lean decays
+    assert abs(s.y[1, -1]) < 0.05 * abs(y0[1]) + 0.01
+
+
+# ---------------------------------------------------------------- n-link cart
+
+def _reference(kane, params, y0, force, t_end):
+    """SymPy's mass_matrix_full and forcing_full lambdified, solved by NumPy,
+    integrated by solve_ivp at tight tolerance."""
+    x = list(kane.q) + list(kane.u)
+    F = dynamicsymbols("F")
+    syms = {s.name: s for s in kane.forcing_full.free_symbols | kane.mass_matrix_full.free_symbols}
+    consts = [syms[k] for k in params if k in syms]
+    vals = [params[k] for k in params if k in syms]
+    Mf = sp.lambdify([x, consts, [F]], kane.mass_matrix_full, "numpy")
+    Ff = sp.lambdify([x, consts, [F]], kane.forcing_full, "numpy")
+
+    def f(t, y):
+        r = [force(t, y)]
+        return np.linalg.solve(np.asarray(Mf(y, vals, r), float),
+                               np.asarray(Ff(y, vals, r), float).ravel())
+    return solve_ivp(f, (0, t_end), y0, method="DOP853", rtol=1e-12, atol=1e-12)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("n", [5, 10])
+def test_n_link_cart_against_solve_ivp(n):
+    kane, params = n_link_cart(n)
+    drive = lambda t, y: 0.5 * np.sin(2 * t)  # noqa: E731
+    y0 = np.zeros(2 * (n + 1))
+    y0[1:n + 1] = np.linspace(0.1, 0.3, n)
+    ref = _reference(kane, params, y0, drive, 2.0)
+    cart = mp.mechanics(kane, params, specified={"F": drive})
+    s = mp.solve(cart, (0, 2), y0, rtol=1e-12, atol=1e-12)
+    assert np.abs(s.y[:, -1] - ref.y[:, -1]).max() < 3e-11  # measured 1.5e-13, 2.4e-12 (10)
+    # a constant force as a value equals the same force as a callable
+    c1 = mp.mechanics(kane, params, specified={"F": 0.7})
+    c2 = mp.mechanics(kane, params, specified={"F": lambda t, y: 0.7})
+    Y = np.random.default_rng(1).uniform(-1, 1, (2 * (n + 1), 3))
+    assert np.allclose(c1.rhs(0.0, Y), c2.rhs(0.0, Y), rtol=1e-14, atol=1e-14)
+    # a driven model has no energy of its own
+    with pytest.raises(AttributeError, match="no energy"):
+        c1.energy(Y)
+    # B of the linearisation: the force's column, against a difference of rhs
+    A, B = c1.linearize(np.zeros(2 * (n + 1)))
+    d = (c1.replace(F=1.0).rhs(0.0, np.zeros(2 * (n + 1)))
+         - c1.replace(F=0.0).rhs(0.0, np.zeros(2 * (n + 1))))
+    assert np.allclose(B[:, 0], d, rtol=1e-12, atol=1e-12)
+
+
+# ---------------------------------------------------------------- bad input
+
+def test_equations_never_formed():
+    with pytest.raises(ValueError, match="kanes_equations"):
+        mp.mechanics(_pendulum_kane(formed=False), PARAMS)
+    with pytest.raises(TypeError, match="KanesMethod, LagrangesMethod"):
+        mp.mechanics("pendulum", PARAMS)
+
+
+def test_missing_constant_is_named():
+    with pytest.raises(ValueError, match=r"\['l'\] have no value"):
+        mp.mechanics(_pendulum_kane(), {"g": G, "m": 1.0})
+    with pytest.raises(ValueError, match=r"params \['k'\] name no constant"):
+        mp.mechanics(_pendulum_kane(), {**PARAMS, "k": 1.0})
+
+
+def test_specified_input_without_value():
+    kane, params = n_link_cart(1)
+    with pytest.raises(ValueError, match=r"specified input\(s\) \['F'\] have no value"):
+        mp.mechanics(kane, params)
+    with pytest.raises(ValueError, match="name no input"):
+        mp.mechanics(kane, params, specified={"F": 0.0, "Q": 1.0})
+
+
+def test_initial_state_off_the_constraints(disc):
+    _, _, scene = disc
+    # rolling at u3 = 5 rad/s but the contact at rest: the first constraint is off by -r u3
+    y0 = np.array([0.0, 0.2, 0.0, 0.0, 0.0, 0.3, 0.1, 5.0, 0.0, 0.0])
+    with pytest.raises(ValueError, match=r"velocity constraint 0 .* by -2\.5"):
+        mp.solve(scene, (0, 1), y0)
+
+
+def test_singular_mass_matrix_at_y0():
+    kane = _pendulum_kane()
+    pend = mp.mechanics(kane, {**PARAMS, "m": 0.0})
+    with pytest.raises(mp.SingularityError, match="mass matrix"):
+        mp.solve(pend, (0, 1), [0.1, 0.0])
+
+
+def test_lagrange_with_a_holonomic_constraint():
+    """The pendulum in Cartesian coordinates (x down, y across) on the circle
+    x^2 + y^2 = l^2, by LagrangesMethod with a multiplier: its angle moves as
+    the scene's, the constraint and its rate are held, and the energy is kept."""
+    x, y = dynamicsymbols("x y")
+    g, l, m = sp.symbols("g l m", positive=True)
+    N = ReferenceFrame("N")
+    O = Point("O")
+    O.set_vel(N, 0)
+    P = O.locatenew("P", x * N.x + y * N.y)
+    P.set_vel(N, x.diff() * N.x + y.diff() * N.y)
+    bob = Particle("bob", P, m)
+    bob.potential_energy = -m * g * x
+    lm = LagrangesMethod(Lagrangian(N, bob), [x, y], hol_coneqs=[x**2 + y**2 - l**2])
+    lm.form_lagranges_equations()
+    scene = mp.mechanics(lm, PARAMS)
+    th0, w0 = 1.0, 0.4
+    y0 = [L * np.cos(th0), L * np.sin(th0), -L * w0 * np.sin(th0), L * w0 * np.cos(th0)]
+    s = mp.solve(scene, (0, 5), y0, rtol=1e-11, atol=1e-12, t_eval=[5.0])
+    ref = mp.solve(mp.scenes.Pendulum(g=G, length=L), (0, 5), [th0, w0], rtol=1e-11,
+                   atol=1e-12, t_eval=[5.0])
+    xs, ys, us, vs = s.y[:, -1]
+    assert abs(np.arctan2(ys, xs) - ref.y[0, -1]) < 1e-8                 # measured 1e-10
+    assert abs((xs * vs - ys * us) / L**2 - ref.y[1, -1]) < 1e-8
+    full = mp.solve(scene, (0, 5), y0)
+    assert scene.coordinates == ["x", "y", "x'", "y'"]
+    assert np.abs(scene.constraint_residual(full.y)).max() < 1e-7        # measured 1.0e-8
+    E = scene.energy(full.y)
+    assert np.ptp(E) < 1e-7                                              # measured 2e-9
+    # linearised about the bottom, x dependent: the pendulum's [[0, 1], [-g/l, 0]]
+    with pytest.raises(ValueError, match=r"dependent states \['y', \"y'\"\] cannot be solved"):
+        scene.linearize([L, 0.0, 0.0, 0.0])          # x independent: dg/dy = 0 at the bottom
+    A, _ = scene.linearize([L, 0.0, 0.0, 0.0], independent=["y", "y'"])
+    assert np.allclose(A, [[0, 1], [-G / L, 0]], rtol=1e-12, atol=1e-12)
+
+
+def test_disc_implicit_method_ensemble_and_events(disc):
+    """Every path of the engine: Radau with the analytic Jacobian (checked by
+    central differences), solve_many in lanes, an event."""
+    _, _, scene = disc
+    y0 = scene.project(np.array([0.0, 0.3, 0.0, 0.0, 0.0, 0.5, 0.2, 4.0, 0.0, 0.0]))
+    J = scene.jacobian(0.0, y0)
+    h = 1e-6
+    Jfd = np.column_stack([(scene.rhs(0.0, y0 + h * e) - scene.rhs(0.0, y0 - h * e)) / (2 * h)
+                           for e in np.eye(10)])
+    assert np.allclose(J, Jfd, rtol=1e-6, atol=1e-7)          # measured 3e-9
+    ref = mp.solve(scene, (0, 3), y0, rtol=1e-12, atol=1e-12)
+    rad = mp.solve(scene, (0, 3), y0, method="radau", rtol=1e-10, atol=1e-10)
+    assert np.abs(rad.y[:, -1] - ref.y[:, -1]).max() < 1e-6   # measured 4e-9
+    y0s = np.array([scene.project(y0 * f) for f in (0.8, 1.0, 1.2)])
+    ens = mp.solve_many(scene, (0, 3), y0s, rtol=1e-10, atol=1e-12)
+    for i in range(3):
+        one = mp.solve(scene, (0, 3), y0s[i], rtol=1e-10, atol=1e-12)
+        assert np.abs(ens.y[i][:, -1] - one.y[:, -1]).max() < 1e-8
+
+    def spin_turn(t, y):          # the spin angle passes 2 pi
+        return y[2] - 2 * np.pi
+    spin_turn.terminal = True
+    s = mp.solve(scene, (0, 10), y0, events=spin_turn, rtol=1e-10, atol=1e-12)
+    assert s.status == 1 and abs(s.y_events[0][0][2] - 2 * np.pi) < 1e-9
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("n", [5, 10])
+def test_pydy_n_link_cart_against_pydys_integration(n):
+    """PyDy's own model (pydy.models) integrated by PyDy's System.integrate
+    (its generated rhs and odeint at tight tolerance) against mp.mechanics
+    of the same KanesMethod; skipped without PyDy (pip install pydy)."""
+    pytest.importorskip("pydy")
+    from pydy.models import n_link_pendulum_on_cart
+    sys_ = n_link_pendulum_on_cart(n, cart_force=True, joint_torques=False)
+    consts = {s: (9.81 if s.name == "g" else 1.0 + 0.1 * i)
+              for i, s in enumerate(sorted(sys_.constants_symbols, key=lambda s: s.name))}
+    F = next(iter(sys_.specifieds_symbols))
+    sys_.constants = consts
+    sys_.specifieds = {F: lambda x, t: 0.5 * np.sin(2 * t)}
+    y0 = np.zeros(2 * (n + 1))
+    y0[1:n + 1] = np.linspace(0.1, 0.3, n)
+    sys_.initial_conditions = dict(zip(sys_.coordinates + sys_.speeds, y0))
+    sys_.times = np.linspace(0, 2, 3)
+    sys_.integrator = "odeint"
+    theirs = sys_.integrate(rtol=1e-12, atol=1e-12, mxstep=10**6)[-1]
+    scene = mp.mechanics(sys_.eom_method, {s.name: v for s, v in consts.items()},
+                         specified={"F": lambda t, y: 0.5 * np.sin(2 * t)})
+    ours = mp.solve(scene, (0, 2), y0, rtol=1e-12, atol=1e-12).y[:, -1]
+    assert np.abs(ours - theirs).max() < 5e-10       # measured 2.1e-11 (n = 5), 5.2e-11 (10)
+
+
+def test_building_leaves_the_function_in_place():
+    """The implementation's module is imported when a model is built; it must
+    not replace the public function mechpy.symbolic.mechanics (a submodule of
+    that name would)."""
+    mp.mechanics(_pendulum_kane(), PARAMS)
+    assert callable(mp.symbolic.mechanics) and mp.symbolic.mechanics is mp.mechanics
