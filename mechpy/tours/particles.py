@@ -4,6 +4,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import sympy as sp
 from scipy.integrate import solve_ivp
 
 import mechpy as mp
@@ -52,3 +53,18 @@ def run(out: Path) -> None:
     t_sp = median_time(scipy_flight, repeat=3)
     line("rocket with gravity and drag, height at 200 s", f"{ours[0]:.3f} m", ref=f"{ref[0]:.3f}",
          err=abs(ours[0] - ref[0]), t_mp=t_mp, t_ref=t_sp)
+    # events that change the state: a ball bouncing with e = 0.9, and the
+    # burn-out a plain solve crosses (a switch of the scene)
+    x, vv = mp.coordinates("x v")
+    ball = mp.equations([vv, -sp.Symbol("g")], [x, vv], params={"g": 9.81})
+    bounce = mp.events.impact("x", restitution=0.9)
+    sb = mp.solve(ball, (0.0, 20.0), [1.0, 0.0], events=bounce, rtol=1e-12, atol=1e-12)
+    v1, t1 = np.sqrt(2 * 9.81), np.sqrt(2 / 9.81)
+    t_inf = t1 + 2 * v1 * 0.9 / (9.81 * 0.1)
+    line(f"bouncing ball, e = 0.9: {len(sb.t_events[0])} bounces, at rest (Zeno) at",
+         f"{sb.t[-1]:.10f} s", ref=f"{t_inf:.10f}", err=abs(sb.t[-1] - t_inf),
+         t_mp=median_time(lambda: mp.solve(ball, (0.0, 20.0), [1.0, 0.0], events=bounce,
+                                           rtol=1e-12, atol=1e-12), repeat=3))
+    plain = mp.solve(r, (0.0, 85.0), [0.0, 0.0, m0], rtol=1e-12, atol=1e-12)
+    line("rocket, one plain solve across burn-out (a switch), speed at 85 s",
+         f"{plain.y[1, -1]:.9f} m/s", ref=f"{v:.9f}", err=abs(plain.y[1, -1] - v))
