@@ -110,8 +110,19 @@ def _options(t0, tf, rtol, atol, t_eval, h, first_step, max_step, max_steps) -> 
 
 
 def _t_eval(t_eval, t0, tf):
-    tev = as_array(t_eval, "t_eval", ndim=1, allow_empty=True)
     lo, hi = min(t0, tf), max(t0, tf)
+    if type(t_eval) in (list, tuple) and len(t_eval) <= 8 and \
+            all(type(v) is float for v in t_eval):
+        # a few plain floats (t_eval=[tf], the common case): checked without
+        # NumPy's reductions, which cost more than a short solve
+        for a, b in zip(t_eval, t_eval[1:]):
+            if not (b > a if tf > t0 else b < a):
+                raise ValueError("t_eval must be strictly increasing" if tf > t0 else
+                                 "t_eval must be strictly decreasing (t_span is decreasing)")
+        if not all(lo <= v <= hi for v in t_eval):
+            raise ValueError("t_eval must lie within t_span")
+        return np.array(t_eval)
+    tev = as_array(t_eval, "t_eval", ndim=1, allow_empty=True)
     if tev.size and (tev.min() < lo or tev.max() > hi):
         raise ValueError("t_eval must lie within t_span")
     d = np.diff(tev)
