@@ -134,7 +134,9 @@ sdist_pass() {
     cp -r tests notebooks README.md pyproject.toml csrc "$run/"
     find "$run" -name __pycache__ -prune -exec rm -rf {} +
     say "the test suite against mechpy installed from $(basename "$(ls "$out"/mechpy_classical-*.tar.gz)")"
-    (cd "$run" && PYTHONSAFEPATH=1 MECHPY_INSTALLED_COPY=1 "$OLDPWD/$env/bin/python" -m pytest -q \
+    # MECHPY_SOURCE_DIR: the checkout, for the test that builds a clone of it
+    (cd "$run" && PYTHONSAFEPATH=1 MECHPY_INSTALLED_COPY=1 MECHPY_SOURCE_DIR="$OLDPWD" \
+        "$OLDPWD/$env/bin/python" -m pytest -q \
         -p no:cacheprovider --rootdir=. "$@")
 }
 

@@ -31,7 +31,8 @@ import threading
 #: mp_gen_dims); part of every library's cache key.
 ABI_VERSION = 2
 
-__all__ = ["CompileError", "cache_dir", "compiler", "build", "load_meta", "store_meta"]
+__all__ = ["CompileError", "cache_dir", "compiler", "have_compiler", "build", "load_meta",
+           "store_meta"]
 
 #: -fopenmp-simd: the lane right-hand side's ``#pragma omp simd`` loops (no
 #: OpenMP runtime); -fno-math-errno: sqrt becomes one instruction (a vector one
@@ -147,6 +148,16 @@ def compiler() -> list:
     import sysconfig
     cc = os.environ.get("MECHPY_CC") or sysconfig.get_config_var("CC") or "cc"
     return shlex.split(cc)
+
+
+def have_compiler() -> bool:
+    """Whether the compiler command (:func:`compiler`) names a program that
+    exists: an absolute or relative path to a file, or a name on PATH.  Where
+    it does not, ``backend="c"`` takes the numba build (:mod:`.jit`) with one
+    warning, if numba is installed."""
+    import shutil
+    cmd = compiler()
+    return bool(cmd) and shutil.which(cmd[0]) is not None
 
 
 def _flags(source: str) -> tuple:
