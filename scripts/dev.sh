@@ -80,7 +80,7 @@ vpy=.venv/bin/python
 # 3. The package: an editable install, pip run only when build files change --
 extras="test"
 [ "$job" = bench ] && extras="test,bench"
-buildfiles() { cat pyproject.toml; find . -name meson.build -not -path './.venv/*' -not -path './build/*' | sort | xargs cat; }
+buildfiles() { cat pyproject.toml; find . -name meson.build -not -path './.venv/*' -not -path './build/*' -not -path './subprojects/gsl/*' | sort | xargs cat; }
 stamp=$( (buildfiles; echo "$extras") | sha256sum | cut -c1-16)
 if [ "$(cat .venv/.mechpy-stamp 2>/dev/null)" != "$stamp" ] || [ ! -f build/editable/build.ninja ]; then
     say "installing mechpy[$extras] into .venv (editable, built in build/editable)"

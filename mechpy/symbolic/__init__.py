@@ -157,7 +157,7 @@ def _no_compiler() -> str:
         import warnings
         _WARNED.append(True)
         warnings.warn(f"no C compiler ({cmd!r} is not found): compiled systems are built "
-                      "with numba instead (backend='numba'; about 0.4x the C build's "
+                      "with numba instead (backend='numba'; about 0.7x the C build's "
                       "speed for a double pendulum, docs/install.md)", RuntimeWarning,
                       stacklevel=4)
     return "numba"
