@@ -186,13 +186,14 @@ def _path_without_compilers(folder):
     tools the editable install's rebuild check runs stay)."""
     folder.mkdir()
     for d in os.environ.get("PATH", "").split(os.pathsep):
+        d = os.path.abspath(d or ".")
         try:
             names = os.listdir(d)
         except OSError:
             continue
         for name in names:
             src = os.path.join(d, name)
-            if (_COMPILER.search(name) or (folder / name).exists()
+            if (_COMPILER.search(name) or os.path.lexists(folder / name)
                     or not (os.path.isfile(src) and os.access(src, os.X_OK))):
                 continue
             (folder / name).symlink_to(src)

@@ -151,11 +151,14 @@ def compiler() -> list:
 
 
 def have_compiler() -> bool:
-    """Whether the compiler command (:func:`compiler`) names a program that
-    exists: an absolute or relative path to a file, or a name on PATH.  Where
-    it does not, ``backend="c"`` takes the numba build (:mod:`.jit`) with one
-    warning, if numba is installed."""
+    """Whether there is a C compiler to build with: ``MECHPY_CC`` when set (a
+    compiler asked for by name counts as there: a missing one is the
+    CompileError that names it), else whether sysconfig's ``CC`` (or ``cc``)
+    names a program on PATH.  Where there is none, ``backend="c"`` takes the
+    numba build (:mod:`.jit`) with one warning, if numba is installed."""
     import shutil
+    if os.environ.get("MECHPY_CC"):
+        return True
     cmd = compiler()
     return bool(cmd) and shutil.which(cmd[0]) is not None
 
