@@ -333,15 +333,26 @@ class CFuncs(dict):
         return f
 
 
+#: The systems built in this process, by their description's hash (a scene's
+#: ``replace`` and a second ``mp.lagrangian`` of the same system reuse them).
+_MADE: dict = {}
+
+
 def cfuncs(meta: dict) -> CFuncs:
     """The system's numba cfuncs (:class:`CFuncs`), from the module written to
     (or found in) the cache folder."""
     import hashlib
     import importlib.util
+    import json
     import sys
 
     from .. import _core
     from . import build
+    mkey = hashlib.sha256(json.dumps([meta[k] for k in ("kind", "n", "nc", "k", "names",
+                                                       "param_names", "blocks")],
+                                     sort_keys=True).encode()).hexdigest()
+    if mkey in _MADE:
+        return _MADE[mkey]
     source = module_source(meta, _core.STATUS)
     import numba
     key = hashlib.sha256((source + "\0" + numba.__version__).encode()).hexdigest()[:32]
@@ -372,4 +383,5 @@ def cfuncs(meta: dict) -> CFuncs:
         sys.modules[modname] = mod
     out = CFuncs(mod)
     out["rhs"], out["jac"]    # noqa: B018 (compiled now: the engine takes their addresses)
+    _MADE[mkey] = out
     return out
