@@ -69,6 +69,9 @@ if [ ${#missing[@]} -gt 0 ]; then
         { say "apt-get could not install ${missing[*]}"; exit 1; }
 fi
 
+# MECHPY_SETUP_SYSTEM_ONLY=1: this step alone (tests/test_install.py checks what it says)
+[ -n "${MECHPY_SETUP_SYSTEM_ONLY:-}" ] && exit 0
+
 # 2. Virtual environment ----------------------------------------------------
 py=${PYTHON:-python3}
 if [ ! -x .venv/bin/python ]; then

@@ -65,6 +65,37 @@ def test_gsl_wrap_names_its_source_and_checksum():
     assert (overlay / "meson.build").is_file() and (overlay / "config.h").is_file()
 
 
+# -- set-up without root -----------------------------------------------------------------
+
+@pytest.mark.skipif(sys.platform != "linux", reason="dev.sh: Debian")
+def test_setup_without_root_skips_apt_and_says_what_it_uses(tmp_path):
+    """scripts/dev.sh as a user without root or sudo, where pkg-config finds nothing: no
+    apt-get, and it names the fallbacks it builds with."""
+    script = SOURCE / "scripts" / "dev.sh"
+    if not script.is_file():
+        pytest.skip("needs the source tree's scripts/dev.sh")
+    shims = tmp_path / "shims"
+    shims.mkdir()
+    calls = tmp_path / "calls"
+    for name, body in (("id", 'if [ "$1" = -u ]; then echo 1000; else exec /usr/bin/id "$@"; fi'),
+                       ("sudo", f'echo sudo "$@" >> {calls}; exit 1'),
+                       ("apt-get", f'echo apt-get "$@" >> {calls}; exit 1')):
+        (shims / name).write_text(f"#!/bin/sh\n{body}\n")
+        (shims / name).chmod(0o755)
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    env = dict(os.environ, PATH=f"{shims}{os.pathsep}{os.environ['PATH']}",
+               PKG_CONFIG_LIBDIR=str(empty), PKG_CONFIG_PATH=str(empty),
+               MECHPY_SETUP_SYSTEM_ONLY="1")
+    r = subprocess.run(["bash", str(script), "test"], env=env, capture_output=True, text=True,
+                       timeout=120, stdin=subprocess.DEVNULL)
+    assert r.returncode == 0, r.stdout + r.stderr
+    called = calls.read_text() if calls.exists() else ""
+    assert "apt-get" not in called, called     # (sudo -n true: the probe for sudo)
+    assert "no root and no sudo: using GSL 2.7.1 built from subprojects/gsl.wrap" in r.stdout
+    assert "OpenBLAS from the scipy-openblas32 wheel (PyPI)" in r.stdout
+
+
 # -- a clean clone, no system libraries ------------------------------------------------
 
 #: the core test files run against the fallback build: the GSL steppers and LAPACK
