@@ -54,7 +54,7 @@ def _block(name: str, exprs, with_z: bool = False) -> str:
     text = "\n".join(body)
     import re
     used = sorted(set(re.findall(r"\bmp_[ypz]\d+\b", text)), key=lambda s: (s[3], int(s[4:])))
-    head = [f"    {u} = {'y' if u[3] == 'y' else u[3]}[{u[4:]}]" for u in used]
+    head = [f"    {u} = {u[3]}[{u[4:]}]" for u in used]     # mp_y3 = y[3], mp_p0 = p[0]
     if re.search(r"\bmp_t\b", text):
         head.append("    mp_t = t")
     args = "t, y, p, z, out" if with_z else "t, y, p, out"
