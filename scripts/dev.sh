@@ -12,7 +12,9 @@
 #   bash scripts/dev.sh bench    # set up (with the bench extras), then: python -m mechpy bench
 #
 # Set-up installs what is missing and nothing twice: Debian's libgsl-dev,
-# libopenblas-dev and pkg-config (apt-get, as root or through sudo), a virtual
+# libopenblas-dev and pkg-config (apt-get, as root or through sudo; without
+# either, or off Debian, none: GSL is then built from subprojects/gsl.wrap and
+# LAPACK comes from the scipy-openblas32 wheel, and the script says so), a virtual
 # environment in .venv, and mechpy in it as an editable meson-python install
 # (build directory build/editable) with its extras.  The editable install
 # rebuilds the C core on import whenever csrc/ changes (in every interpreter
@@ -39,19 +41,36 @@ if command -v dpkg-query >/dev/null 2>&1; then
     for p in "${debs[@]}"; do
         dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q 'install ok installed' || missing+=("$p")
     done
-elif ! pkg-config --exists gsl 2>/dev/null; then
-    say "GSL not found and this is not a Debian system: install GSL (>= 2.5), LAPACK and pkg-config"
-    exit 1
+fi
+# Without root (and no sudo), or off Debian: no apt-get; the build takes what pkg-config
+# finds, else GSL from subprojects/gsl.wrap (built into mechpy) and LAPACK from the
+# scipy-openblas32 wheel (meson.build); tests that need Chromium skip without it.
+if [ "$(id -u)" = 0 ]; then sudo=""
+elif command -v sudo >/dev/null 2>&1 && { [ -t 0 ] || sudo -n true 2>/dev/null; }; then
+    sudo="sudo"   # (asks for a password at a terminal)
+else sudo="none"; fi
+if ! command -v dpkg-query >/dev/null 2>&1 || [ "$sudo" = none ]; then
+    why="not a Debian system"; command -v dpkg-query >/dev/null 2>&1 && why="no root and no sudo"
+    if pkg-config --exists gsl 2>/dev/null; then gsl_from="the system's GSL (pkg-config)"
+    else gsl_from="GSL 2.7.1 built from subprojects/gsl.wrap (source from deb.debian.org)"; fi
+    if pkg-config --exists lapack 2>/dev/null || pkg-config --exists openblas 2>/dev/null; then
+        lapack_from="the system's LAPACK (pkg-config)"
+    else lapack_from="OpenBLAS from the scipy-openblas32 wheel (PyPI)"; fi
+    [ ${#missing[@]} -gt 0 ] && say "$why: not installing ${missing[*]} (apt-get)"
+    say "$why: using $gsl_from and $lapack_from"
+    missing=()
 fi
 if [ ${#missing[@]} -gt 0 ]; then
     say "installing Debian packages: ${missing[*]}"
-    if [ "$(id -u)" = 0 ]; then sudo=""; elif command -v sudo >/dev/null; then sudo="sudo"; else
-        say "cannot install ${missing[*]}: run 'apt-get install ${missing[*]}' as root"; exit 1; fi
+    [ "$sudo" = "" ] || say "(through sudo)"
     export DEBIAN_FRONTEND=noninteractive
     $sudo apt-get update -qq || { say "apt-get update failed; install ${missing[*]} by hand"; exit 1; }
     $sudo apt-get install -y -qq "${missing[@]}" >/dev/null ||
         { say "apt-get could not install ${missing[*]}"; exit 1; }
 fi
+
+# MECHPY_SETUP_SYSTEM_ONLY=1: this step alone (tests/test_install.py checks what it says)
+[ -n "${MECHPY_SETUP_SYSTEM_ONLY:-}" ] && exit 0
 
 # 2. Virtual environment ----------------------------------------------------
 py=${PYTHON:-python3}
@@ -64,13 +83,17 @@ vpy=.venv/bin/python
 # 3. The package: an editable install, pip run only when build files change --
 extras="test"
 [ "$job" = bench ] && extras="test,bench"
-buildfiles() { cat pyproject.toml; find . -name meson.build -not -path './.venv/*' -not -path './build/*' | sort | xargs cat; }
+buildfiles() { cat pyproject.toml; find . -name meson.build -not -path './.venv/*' -not -path './build/*' -not -path './subprojects/gsl/*' | sort | xargs cat; }
 stamp=$( (buildfiles; echo "$extras") | sha256sum | cut -c1-16)
 if [ "$(cat .venv/.mechpy-stamp 2>/dev/null)" != "$stamp" ] || [ ! -f build/editable/build.ninja ]; then
     say "installing mechpy[$extras] into .venv (editable, built in build/editable)"
     "$vpy" -m pip install -q --upgrade pip >/dev/null
     # the build tools in .venv itself: the editable install rebuilds with them on import
-    "$vpy" -m pip install -q "meson-python>=0.18" "meson>=1.1" ninja "numpy>=2.0"
+    "$vpy" -m pip install -q "meson-python>=0.18" "meson>=1.1" ninja "numpy>=2.0" \
+        "scipy-openblas32>=0.3.27"
+    # the distribution was called mechpy before it was mechpy-classical: one editable
+    # install of the package, not two
+    "$vpy" -m pip uninstall -q -y mechpy >/dev/null 2>&1 || true
     # numbalsoda (bench extra) is built from source with its own build tools:
     # install it with build isolation before mechpy's isolation-free install
     [ "$job" = bench ] && "$vpy" -m pip install -q numbalsoda
@@ -93,11 +116,11 @@ sdist_pass() {
         "$vpy" -m pip install -q build
         "$vpy" -m build --sdist --outdir "$out" . >"$out/build.log" 2>&1 ||
             { tail -30 "$out/build.log"; say "python -m build --sdist failed"; return 1; }
-        local sd; sd=$(ls "$out"/mechpy-*.tar.gz)
+        local sd; sd=$(ls "$out"/mechpy_classical-*.tar.gz)
         # the files the build needs are in the sdist (it holds what git tracks)
         local listing; listing=$(tar -tzf "$sd")
         for f in LICENSE meson.build csrc/meson.build csrc/check_sources.py mechpy/py.typed; do
-            grep -qx "mechpy-[^/]*/$f" <<<"$listing" || { say "$f is missing from $sd"; return 1; }
+            grep -qx "mechpy_classical-[^/]*/$f" <<<"$listing" || { say "$f is missing from $sd"; return 1; }
         done
         "$vpy" -m venv "$env"
         "$env/bin/python" -m pip install -q --upgrade pip >/dev/null
@@ -113,8 +136,10 @@ sdist_pass() {
     rm -rf "$run"; mkdir -p "$run"
     cp -r tests notebooks README.md pyproject.toml csrc "$run/"
     find "$run" -name __pycache__ -prune -exec rm -rf {} +
-    say "the test suite against mechpy installed from $(basename "$(ls "$out"/mechpy-*.tar.gz)")"
-    (cd "$run" && PYTHONSAFEPATH=1 MECHPY_INSTALLED_COPY=1 "$OLDPWD/$env/bin/python" -m pytest -q \
+    say "the test suite against mechpy installed from $(basename "$(ls "$out"/mechpy_classical-*.tar.gz)")"
+    # MECHPY_SOURCE_DIR: the checkout, for the test that builds a clone of it
+    (cd "$run" && PYTHONSAFEPATH=1 MECHPY_INSTALLED_COPY=1 MECHPY_SOURCE_DIR="$OLDPWD" \
+        "$OLDPWD/$env/bin/python" -m pytest -q \
         -p no:cacheprovider --rootdir=. "$@")
 }
 
@@ -139,7 +164,7 @@ if [ "$job" = docs ]; then
     # formulas render offline with Debian's MathJax, when it can be installed
     if command -v dpkg-query >/dev/null 2>&1 &&
        ! dpkg-query -W -f='${Status}' libjs-mathjax 2>/dev/null | grep -q 'install ok installed'; then
-        if [ "$(id -u)" = 0 ]; then sudo=""; else sudo="sudo"; fi
+        if [ "$sudo" = none ]; then sudo="false"; fi
         say "installing Debian's libjs-mathjax (formulas without a network)"
         DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq libjs-mathjax >/dev/null 2>&1 ||
             say "libjs-mathjax not installed: the site loads MathJax from its CDN"

@@ -241,7 +241,8 @@ class Tree:
         (site / "sitecustomize.py").write_text(
             "import sys\n"
             "sys.meta_path[:] = [f for f in sys.meta_path\n"
-            "                    if not type(f).__module__.startswith('_mechpy_editable_loader')]\n")
+            "                    if not (type(f).__module__.startswith('_mechpy')\n"
+            "                            and type(f).__module__.endswith('_editable_loader'))]\n")
         self.env = dict(os.environ, PYTHONPATH=f"{self.dir}{os.pathsep}{site}",
                         PYTHONDONTWRITEBYTECODE="1", PYTHONSAFEPATH="1")
         self.env.pop("MECHPY_SANITIZED", None)

@@ -43,8 +43,10 @@ cp "$out"/meson/_core*.so "$out/mechpy/"
 mkdir -p "$out/site"
 cat > "$out/site/sitecustomize.py" <<'PY'
 import sys
+# (meson-python names the hook after the distribution: _mechpy_classical_editable_loader)
 sys.meta_path[:] = [f for f in sys.meta_path
-                    if not type(f).__module__.startswith("_mechpy_editable_loader")]
+                    if not (type(f).__module__.startswith("_mechpy")
+                            and type(f).__module__.endswith("_editable_loader"))]
 PY
 
 libasan=$(gcc -print-file-name=libasan.so)

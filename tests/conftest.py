@@ -16,7 +16,7 @@ def _test_extra():
     """Import names of mechpy's `test` extra (``pytest-timeout`` -> ``pytest_timeout``),
     from the installed distribution's metadata (the sdist run has no pyproject.toml)."""
     from importlib import metadata
-    reqs = [r.split(";")[0] for r in metadata.requires("mechpy") or []
+    reqs = [r.split(";")[0] for r in metadata.requires("mechpy-classical") or []
             if re.search(r"""extra\s*==\s*["']test["']""", r)]
     if not reqs:
         raise RuntimeError("mechpy's installed metadata lists no `test` extra")

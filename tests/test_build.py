@@ -54,7 +54,7 @@ def test_package_is_typed_and_whole():
 
 def _distribution():
     from importlib import metadata
-    dist = metadata.distribution("mechpy")
+    dist = metadata.distribution("mechpy-classical")   # the import name is mechpy
     url = dist.read_text("direct_url.json") or "{}"
     import json
     return dist, json.loads(url).get("dir_info", {}).get("editable", False)
@@ -67,7 +67,7 @@ def test_installed_files_are_the_package_only():
         pytest.skip("editable install: the wheel's files are checked on the sdist-installed copy")
     files = [str(f) for f in dist.files]
     tops = {f.split("/")[0] for f in files}
-    assert tops <= {"mechpy", f"mechpy-{dist.version}.dist-info"}, sorted(tops)
+    assert tops <= {"mechpy", f"mechpy_classical-{dist.version}.dist-info"}, sorted(tops)
     assert not [f for f in files if "/tests/" in f or Path(f).name.startswith(("ref_", "test_"))]
     assert "mechpy/py.typed" in files
     assert any(f.endswith(".dist-info/licenses/LICENSE") for f in files), files

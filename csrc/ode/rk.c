@@ -13,7 +13,7 @@
  * operations).  Always inlined: called with a constant tableau row and stage
  * count, the zero tests fold away and the stage loop unrolls into the
  * explicit formulas of Hairer's codes. */
-static inline __attribute__((always_inline)) void
+MP_ODE_INLINE void
 stage_point(size_t n, const double *y, double h, const double *a, double *const *K, size_t ns,
             double *out)
 {

@@ -31,7 +31,8 @@ import threading
 #: mp_gen_dims); part of every library's cache key.
 ABI_VERSION = 2
 
-__all__ = ["CompileError", "cache_dir", "compiler", "build", "load_meta", "store_meta"]
+__all__ = ["CompileError", "cache_dir", "compiler", "have_compiler", "build", "load_meta",
+           "store_meta"]
 
 #: -fopenmp-simd: the lane right-hand side's ``#pragma omp simd`` loops (no
 #: OpenMP runtime); -fno-math-errno: sqrt becomes one instruction (a vector one
@@ -147,6 +148,19 @@ def compiler() -> list:
     import sysconfig
     cc = os.environ.get("MECHPY_CC") or sysconfig.get_config_var("CC") or "cc"
     return shlex.split(cc)
+
+
+def have_compiler() -> bool:
+    """Whether there is a C compiler to build with: ``MECHPY_CC`` when set (a
+    compiler asked for by name counts as there: a missing one is the
+    CompileError that names it), else whether sysconfig's ``CC`` (or ``cc``)
+    names a program on PATH.  Where there is none, ``backend="c"`` takes the
+    numba build (:mod:`.jit`) with one warning, if numba is installed."""
+    import shutil
+    if os.environ.get("MECHPY_CC"):
+        return True
+    cmd = compiler()
+    return bool(cmd) and shutil.which(cmd[0]) is not None
 
 
 def _flags(source: str) -> tuple:

@@ -139,13 +139,21 @@ class CompiledScene(Scene):
                 ctypes.cast(self._lib.mp_gen_compose, ctypes.c_void_p).value
                 if int(meta["nq"]) else None)
             self._np = None
+        elif backend == "numba":
+            from .jit import cfuncs
+            self._jit = cfuncs(meta)     # kept: the addresses live as long as they do
+            self._addr = _JitAddresses(self._jit)
+            self._addr_lanes = None          # ensembles: one trajectory at a time
+            self._addr_blocks = (None, None)  # fixed steps call the rhs
+            self._np = None
+            self._compiled = False
         elif backend == "numpy":
             if numpy_fns is None:
                 numpy_fns = _numpy_from_meta(meta)
             self._np = numpy_fns
             self._compiled = False
         else:
-            raise ValueError(f"backend must be 'c' or 'numpy', got {backend!r}")
+            raise ValueError(f"backend must be 'c', 'numba' or 'numpy', got {backend!r}")
 
     # -- the scene interface --------------------------------------------------
     @property
@@ -171,7 +179,7 @@ class CompiledScene(Scene):
         scalar rhs, the Jacobian, the second-order split, the lane rhs or None,
         the fixed-step blocks rk4 and compose or None)."""
         nq = int(self._meta["nq"])
-        if self._backend == "c":
+        if self._backend in ("c", "numba"):
             return ("compiled", (self._addr["rhs"], self._addr["jac"], nq, self._addr_lanes,
                                  *self._addr_blocks), self._vector())
         if nq:
@@ -219,7 +227,7 @@ class CompiledScene(Scene):
         with the parameter vector ``vec`` (default: the scene's)."""
         nout = _FUNCS[what][1](self._dim, self._nc, self._k)
         vec = self._vec if vec is None else vec
-        if self._backend == "c":
+        if self._backend in ("c", "numba"):
             return _core.compiled_eval(self._addr[what], vec, t, Y, nout, self._context[what])
         return np.array([self._np(what, t, row, vec) for row in Y]).reshape(-1, nout)
 
@@ -404,6 +412,9 @@ class CompiledScene(Scene):
         qd = np.ascontiguousarray(qd, dtype=float)
         if self._backend == "numpy":
             return np.array(self._np("lag", t, np.concatenate([q, qd]), self._vec))
+        if self._backend == "numba":
+            return _core.compiled_eval(self._addr["lag"], self._vec, float(t),
+                                       np.concatenate([q, qd])[None, :], K, "L")[0]
         out = np.zeros(K)
         dp = ctypes.POINTER(ctypes.c_double)
         f = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_size_t, dp, dp, dp, dp,
@@ -441,7 +452,7 @@ class CompiledScene(Scene):
     def __repr__(self):
         args = ", ".join(f"{k}={v!r}" for k, v in self._params.items())
         return (f"CompiledScene({self._meta['kind']}, states={self._meta['names']}, {args}"
-                f"{', backend=numpy' if self._backend == 'numpy' else ''})")
+                f"{'' if self._backend == 'c' else ', backend=' + self._backend})")
 
     def __eq__(self, other):
         return (type(other) is CompiledScene and self._meta["source"] == other._meta["source"]
@@ -453,10 +464,23 @@ class CompiledScene(Scene):
 
     def __reduce__(self):
         meta = self._meta
-        if self._backend == "numpy" and "blocks" not in meta:
+        if self._backend in ("numpy", "numba") and "blocks" not in meta:
             raise TypeError("a numpy-backend scene made in this process pickles only with "
                             "its blocks: rebuild it with mp.lagrangian on the other side")
         return (_rebuild_compiled, (meta, self._params, self._backend))
+
+
+class _JitAddresses(dict):
+    """A numba build's function addresses by name, each compiled when first
+    asked for (see jit.CFuncs)."""
+
+    def __init__(self, fns):
+        super().__init__()
+        self._fns = fns
+
+    def __missing__(self, what):
+        addr = self[what] = self._fns[what].address
+        return addr
 
 
 def _rebuild_compiled(meta, params, backend):

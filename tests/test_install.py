@@ -1,0 +1,317 @@
+"""Installs anywhere: without system GSL or LAPACK, without a C compiler.
+
+- The build's fallbacks (meson.build): GSL from subprojects/gsl.wrap, LAPACK
+  from the scipy-openblas32 wheel, whose symbols meson.build renames; a clean
+  clone built in a fresh environment where pkg-config finds nothing links no
+  system libgsl and passes the core test files (slow: one build, minutes).
+- Compiled systems where no C compiler is found: the numba build (mechpy.
+  symbolic.jit) gives the C build's solution to round-off, at its speed.
+"""
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import mechpy as mp
+
+SANITIZED = bool(os.environ.get("MECHPY_SANITIZED"))
+# numba's JIT-compiled code is not instrumented: the sanitizer pass checks the C core
+jit = pytest.mark.skipif(SANITIZED, reason="numba's code is not instrumented")
+
+ROOT = Path(__file__).resolve().parent.parent
+# the source tree: under dev.sh's sdist pass the tests run from a copy, and dev.sh names
+# the checkout in MECHPY_SOURCE_DIR
+SOURCE = Path(os.environ.get("MECHPY_SOURCE_DIR") or ROOT)
+
+
+def _meson_build():
+    path = SOURCE / "meson.build"
+    if not path.is_file():
+        pytest.skip("needs the source tree's meson.build (MECHPY_SOURCE_DIR)")
+    return path.read_text()
+
+
+def test_scipy_openblas_renames_every_lapack_routine_csrc_calls():
+    """meson.build renames the LAPACK routines to scipy-openblas32's prefixed symbols:
+    a routine csrc/ declares and the list lacks would be an undefined symbol at import."""
+    listed = re.search(r"lapack_routines = \[([^\]]*)\]", _meson_build())
+    assert listed, "meson.build has no lapack_routines list"
+    names = set(re.findall(r"'(\w+_)'", listed.group(1)))
+    declared = set()
+    for f in (SOURCE / "csrc").rglob("*.c"):
+        declared |= set(re.findall(r"extern\s+void\s+([a-z]\w*_)\s*\(", f.read_text()))
+    assert declared, "no LAPACK declarations found in csrc/"
+    assert names == declared
+
+
+def test_gsl_wrap_names_its_source_and_checksum():
+    wrap = (SOURCE / "subprojects" / "gsl.wrap")
+    if not wrap.is_file():
+        pytest.skip("needs the source tree")
+    text = wrap.read_text()
+    assert re.search(r"^source_url = http://deb\.debian\.org/debian/pool/main/g/gsl/"
+                     r"gsl_2\.7\.1\+dfsg\.orig\.tar\.gz$", text, re.M)
+    # the sha256 Debian's signed gsl_2.7.1+dfsg-5+deb12u1.dsc gives for that file
+    assert re.search(r"^source_hash = e560d6b9c6e254e46769bbb03583c00ecafbdd51b062c55db2"
+                     r"3b3b9612868567$", text, re.M)
+    overlay = SOURCE / "subprojects" / "packagefiles" / "gsl"
+    assert (overlay / "meson.build").is_file() and (overlay / "config.h").is_file()
+
+
+# -- set-up without root -----------------------------------------------------------------
+
+@pytest.mark.skipif(sys.platform != "linux", reason="dev.sh: Debian")
+def test_setup_without_root_skips_apt_and_says_what_it_uses(tmp_path):
+    """scripts/dev.sh as a user without root or sudo, where pkg-config finds nothing: no
+    apt-get, and it names the fallbacks it builds with."""
+    script = SOURCE / "scripts" / "dev.sh"
+    if not script.is_file():
+        pytest.skip("needs the source tree's scripts/dev.sh")
+    shims = tmp_path / "shims"
+    shims.mkdir()
+    calls = tmp_path / "calls"
+    for name, body in (("id", 'if [ "$1" = -u ]; then echo 1000; else exec /usr/bin/id "$@"; fi'),
+                       ("sudo", f'echo sudo "$@" >> {calls}; exit 1'),
+                       ("apt-get", f'echo apt-get "$@" >> {calls}; exit 1')):
+        (shims / name).write_text(f"#!/bin/sh\n{body}\n")
+        (shims / name).chmod(0o755)
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    env = dict(os.environ, PATH=f"{shims}{os.pathsep}{os.environ['PATH']}",
+               PKG_CONFIG_LIBDIR=str(empty), PKG_CONFIG_PATH=str(empty),
+               MECHPY_SETUP_SYSTEM_ONLY="1")
+    r = subprocess.run(["bash", str(script), "test"], env=env, capture_output=True, text=True,
+                       timeout=120, stdin=subprocess.DEVNULL)
+    assert r.returncode == 0, r.stdout + r.stderr
+    called = calls.read_text() if calls.exists() else ""
+    assert "apt-get" not in called, called     # (sudo -n true: the probe for sudo)
+    assert "no root and no sudo: using GSL 2.7.1 built from subprojects/gsl.wrap" in r.stdout
+    assert "OpenBLAS from the scipy-openblas32 wheel (PyPI)" in r.stdout
+
+
+# -- a clean clone, no system libraries ------------------------------------------------
+
+#: the core test files run against the fallback build: the GSL steppers and LAPACK
+#: methods (integrate), the elliptic functions (rigid), the scenes, LAPACK's
+#: eigensolvers (modes, less its interrupt test)
+CORE = ["tests/test_integrate.py", "tests/test_rigid.py", "tests/test_scenes.py",
+        "tests/test_modes.py"]
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(sys.platform != "linux", reason="ldd: Linux")
+def test_clean_clone_builds_without_system_gsl_or_lapack(tmp_path):
+    if not (SOURCE / ".git").exists() or shutil.which("git") is None:
+        pytest.skip("needs a git checkout of mechpy (MECHPY_SOURCE_DIR under dev.sh)")
+    if SANITIZED:
+        pytest.skip("a build of its own: not under the sanitizers")
+    clone = tmp_path / "clone"
+    subprocess.run(["git", "clone", "-q", "--no-hardlinks", str(SOURCE), str(clone)],
+                   check=True, timeout=120)
+    cache = SOURCE / "subprojects" / "packagecache"
+    if cache.is_dir():   # the GSL tarball, if a build here has downloaded it (sha256-checked)
+        shutil.copytree(cache, clone / "subprojects" / "packagecache")
+    empty = tmp_path / "pkgconfig-empty"
+    empty.mkdir()
+    env = dict(os.environ, PKG_CONFIG_LIBDIR=str(empty), PKG_CONFIG_PATH=str(empty),
+               PIP_DISABLE_PIP_VERSION_CHECK="1")
+    for k in ("PYTHONPATH", "MECHPY_INSTALLED_COPY", "VIRTUAL_ENV"):
+        env.pop(k, None)
+    venv = tmp_path / "venv"
+    base = getattr(sys, "_base_executable", sys.executable)
+    subprocess.run([base, "-m", "venv", str(venv)], check=True, timeout=300)
+    py = str(venv / "bin" / "python")
+    t0 = time.perf_counter()
+    r = subprocess.run([py, "-m", "pip", "install", "-q", str(clone)], env=env,
+                       capture_output=True, text=True, timeout=1500)
+    build_s = time.perf_counter() - t0
+    assert r.returncode == 0, r.stdout[-3000:] + r.stderr[-3000:]
+    r = subprocess.run([py, "-c", "import json, mechpy, mechpy._core as c; print(json.dumps("
+                        "[c.__file__, c.gsl_version]))"], env=env, cwd=tmp_path,
+                       capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    so, gsl_version = json.loads(r.stdout)
+    assert gsl_version == "2.7.1"   # the subproject's, not the system's headers
+    ldd = subprocess.run(["ldd", so], capture_output=True, text=True, check=True).stdout
+    assert "libgsl" not in ldd, ldd
+    assert "libopenblas" not in ldd.replace("libscipy_openblas", ""), ldd
+    assert re.search(r"libscipy_openblas\S* => \S*site-packages/\S*scipy_openblas32/lib/", ldd), ldd
+    # the core test files against that copy, from a folder without the source tree
+    run = tmp_path / "run"
+    run.mkdir()
+    for name in ("tests", "pyproject.toml", "README.md", "csrc"):
+        src = clone / name
+        (shutil.copytree if src.is_dir() else shutil.copy)(src, run / name)
+    r = subprocess.run([py, "-m", "pip", "install", "-q", "pytest", "pytest-timeout",
+                        "scipy", "hypothesis"], env=env, capture_output=True, text=True,
+                       timeout=900)
+    assert r.returncode == 0, r.stderr[-3000:]
+    r = subprocess.run([py, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-x",
+                        "-k", "not interrupt", *CORE], cwd=run,
+                       env=dict(env, PYTHONSAFEPATH="1"), capture_output=True, text=True,
+                       timeout=1500)
+    assert r.returncode == 0, r.stdout[-4000:] + r.stderr[-2000:]
+    assert re.search(r"\d+ passed", r.stdout), r.stdout[-2000:]
+    print(f"fallback build: pip install {build_s:.0f} s")
+
+
+# -- no C compiler -----------------------------------------------------------------------
+
+_DOUBLE_PENDULUM = r"""
+import json, sys, time, warnings
+import sympy as sp
+import mechpy as mp
+
+th1, th2 = mp.coordinates("theta1 theta2")
+m1, m2, l1, l2, g = sp.symbols("m1 m2 l1 l2 g", positive=True)
+t = sp.Symbol("t")
+x1, y1 = l1 * sp.sin(th1), -l1 * sp.cos(th1)
+x2, y2 = x1 + l2 * sp.sin(th2), y1 - l2 * sp.cos(th2)
+T = (m1 * (x1.diff(t)**2 + y1.diff(t)**2) + m2 * (x2.diff(t)**2 + y2.diff(t)**2)) / 2
+L = T - (m1 * g * y1 + m2 * g * y2)
+with warnings.catch_warnings(record=True) as w:
+    warnings.simplefilter("always")
+    s = mp.lagrangian(L, [th1, th2], dict(m1=1.0, m2=2.0, l1=1.0, l2=0.5, g=9.81),
+                      backend=sys.argv[1])
+    mp.lagrangian(L, [th1, th2], dict(m1=1.0, m2=2.0, l1=1.0, l2=0.5, g=9.81))
+y0 = [1.0, -0.5, 0.0, 0.5]
+kw = dict(rtol=1e-10, atol=1e-12)
+sol = mp.solve(s, (0, 5), y0, method="DOP853", **kw)
+best = float("inf")
+for _ in range(7):
+    t0 = time.perf_counter()
+    sol = mp.solve(s, (0, 5), y0, method="DOP853", **kw)
+    best = min(best, time.perf_counter() - t0)
+rad = mp.solve(s, (0, 1), y0, method="Radau", **kw)   # the Jacobian
+print(json.dumps(dict(y=sol.y[:, -1].tolist(), nfev=int(sol.nfev), time=best,
+                      radau=rad.y[:, -1].tolist(), backend=s._backend,
+                      energy=[float(s.energy(y0)), float(s.energy(sol.y[:, -1]))],
+                      warnings=[str(x.message) for x in w])))
+"""
+
+
+def _run_double_pendulum(tmp_path, backend, env_extra=None):
+    script = tmp_path / "dp.py"
+    script.write_text(_DOUBLE_PENDULUM)
+    env = dict(os.environ, MECHPY_CACHE_DIR=str(tmp_path / "cache"), **(env_extra or {}))
+    if env_extra:
+        env.pop("MECHPY_CC", None)   # the compiler command comes from CC and PATH alone
+    r = subprocess.run([sys.executable, str(script), backend], env=env, cwd=tmp_path,
+                       capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr[-3000:]
+    return json.loads(r.stdout.strip().splitlines()[-1])
+
+
+_COMPILER = re.compile(r"^(cc|c89|c99|gcc|clang|tcc|icc|icx|cl)(-[\d.]+)?$|-(gcc|cc|clang)(-[\d.]+)?$")
+
+
+def _path_without_compilers(folder):
+    """A PATH of one folder: links to every program on PATH but the C compilers (the
+    tools the editable install's rebuild check runs stay)."""
+    folder.mkdir()
+    for d in os.environ.get("PATH", "").split(os.pathsep):
+        d = os.path.abspath(d or ".")
+        try:
+            names = os.listdir(d)
+        except OSError:
+            continue
+        for name in names:
+            src = os.path.join(d, name)
+            if (_COMPILER.search(name) or os.path.lexists(folder / name)
+                    or not (os.path.isfile(src) and os.access(src, os.X_OK))):
+                continue
+            (folder / name).symlink_to(src)
+    return str(folder)
+
+
+@jit
+def test_double_pendulum_without_a_compiler_matches_the_c_build(tmp_path):
+    """PATH without a compiler and CC pointing nowhere: backend="c" takes numba, with one
+    warning; the solution is the C build's to 1e-10, in at most 3x its time."""
+    pytest.importorskip("numba")
+    from mechpy.symbolic import build
+    if not build.have_compiler():
+        pytest.skip("no C compiler here to compare with")
+    c = _run_double_pendulum(tmp_path, "c")
+    assert c["backend"] == "c" and not c["warnings"]
+    env = {"PATH": _path_without_compilers(tmp_path / "bin"),
+           "CC": str(tmp_path / "nowhere" / "cc")}
+    nb = _run_double_pendulum(tmp_path, "c", env)
+    assert nb["backend"] == "numba"
+    assert len(nb["warnings"]) == 1 and "no C compiler" in nb["warnings"][0], nb["warnings"]
+    assert nb["nfev"] == c["nfev"]
+    np.testing.assert_allclose(nb["y"], c["y"], rtol=0, atol=1e-10)
+    np.testing.assert_allclose(nb["radau"], c["radau"], rtol=0, atol=1e-10)
+    # the energy is conserved by both to the tolerance's order
+    assert abs(nb["energy"][1] - nb["energy"][0]) < 1e-7 * abs(nb["energy"][0])
+    assert nb["time"] <= 3 * c["time"], (nb["time"], c["time"])
+
+
+@jit
+def test_numba_backend_in_process_gives_the_scene_functions(tmp_path, monkeypatch):
+    """Every function of a constrained Lagrangian's scene from the numba build equals the
+    C build's: a pendulum as a particle on a circle (x^2 + y^2 = l^2)."""
+    pytest.importorskip("numba")
+    import sympy as sp
+    from mechpy.symbolic import build
+    if not build.have_compiler():
+        pytest.skip("no C compiler here to compare with")
+    monkeypatch.setenv("MECHPY_CACHE_DIR", str(tmp_path / "cache"))
+    x, y = mp.coordinates("x y")
+    g, l = sp.symbols("g l", positive=True)
+    L = (x.diff()**2 + y.diff()**2) / 2 - g * y
+    P = dict(g=9.81, l=1.5)
+    s = {be: mp.lagrangian(L, [x, y], P, constraints=[x**2 + y**2 - l**2], backend=be)
+         for be in ("c", "numba")}
+    y0 = [1.5 * np.sin(0.7), -1.5 * np.cos(0.7), 0.0, 0.0]
+    sol = mp.solve(s["c"], (0, 2), y0, rtol=1e-10, atol=1e-12)
+    Y = sol.y[:, ::7]
+    T = sol.t[::7]
+    for name, args in (("rhs", (T, Y)), ("jacobian", (T, Y)), ("multipliers", (T, Y)),
+                       ("constraint_forces", (T, Y)), ("constraints", (T, Y)),
+                       ("energy", (Y,)), ("momenta", (Y,))):
+        a = getattr(s["c"], name)(*args)
+        b = getattr(s["numba"], name)(*args)
+        np.testing.assert_allclose(b, a, rtol=1e-13, atol=1e-13, err_msg=name)
+    nb = mp.solve(s["numba"], (0, 2), y0, rtol=1e-10, atol=1e-12)
+    np.testing.assert_allclose(nb.y[:, -1], sol.y[:, -1], rtol=0, atol=1e-10)
+    assert "backend=numba" in repr(s["numba"])
+    # small oscillations through L's derivatives: an unconstrained pendulum, sqrt(g/l)
+    th, = mp.coordinates("theta")
+    pend = mp.lagrangian(l**2 * th.diff()**2 / 2 + g * l * sp.cos(th), [th], P,
+                         backend="numba")
+    assert abs(pend.small_oscillations([0.0]).omega[0] - np.sqrt(9.81 / 1.5)) < 1e-12
+
+
+def test_backend_is_checked():
+    import sympy as sp
+    x, = mp.coordinates("x")
+    with pytest.raises(ValueError, match="backend must be 'c', 'numba' or 'numpy'"):
+        mp.lagrangian(x.diff()**2 / 2 - x**2 / 2, [x], {}, backend="fortran")
+    del sp
+
+
+def test_no_compiler_and_no_numba_says_what_to_install(tmp_path):
+    """Neither a C compiler nor numba: a CompileError naming both ways out."""
+    code = ("import sys; sys.modules['numba'] = None\n"
+            "import mechpy as mp\n"
+            "x, = mp.coordinates('x')\n"
+            "try:\n"
+            "    mp.lagrangian(x.diff()**2 / 2 - x**2 / 2, [x], {})\n"
+            "except mp.symbolic.CompileError as e:\n"
+            "    print('CompileError:', e)\n")
+    env = dict(os.environ, PATH=_path_without_compilers(tmp_path / "bin"),
+               CC=str(tmp_path / "nowhere" / "cc"), MECHPY_CACHE_DIR=str(tmp_path / "cache"))
+    env.pop("MECHPY_CC", None)
+    r = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
+                       timeout=300)
+    assert r.returncode == 0, r.stderr[-2000:]
+    assert "CompileError: no C compiler" in r.stdout, r.stdout
+    assert "pip install numba" in r.stdout and "backend='numpy'" in r.stdout
