@@ -152,4 +152,64 @@ static inline double mp_ode_hinit_final(const mp_ode_options *o, size_t n, size_
     return fmin(fmin(100.0 * h, h1), fmin(hmax, span));
 }
 
+/* Contract: the root of g on [a, b] in step fraction s, g(a) and g(b) of
+ * opposite signs (or g(b) == 0), for a step from t of size h: the Illinois
+ * variant of regula falsi, to round-off in t; g(ctx, s, &gs) returns MP_OK or
+ * a status that stops the search.  *root is on the side past the crossing
+ * (the sign of g has changed there).  The event location of both drivers. */
+static inline int mp_ode_event_root(int (*g)(void *ctx, double s, double *gs), void *ctx,
+                                    double t, double h, double a, double ga, double b,
+                                    double gb, double *root)
+{
+    double tol = 4.0 * DBL_EPSILON * (fabs(t) + fabs(h)) / fabs(h);
+    int side = 0;
+    if (gb == 0.0) {
+        *root = b;
+        return MP_OK;
+    }
+    for (int it = 0; it < 200 && (b - a) > tol; it++) {
+        double s = (a * gb - b * ga) / (gb - ga);
+        if (!(s > a && s < b)) s = 0.5 * (a + b);
+        double gs;
+        int rc = g(ctx, s, &gs);
+        if (rc != MP_OK) return rc;
+        if (gs == 0.0) {
+            a = b = s;
+            break;
+        }
+        if ((gs > 0) == (gb > 0)) {
+            b = s;
+            gb = gs;
+            if (side == -1) ga *= 0.5;
+            side = -1;
+        } else {
+            a = s;
+            ga = gs;
+            if (side == 1) gb *= 0.5;
+            side = 1;
+        }
+    }
+    *root = b;
+    return MP_OK;
+}
+
+/* Accumulation of an action event's crossings (Zeno): two actions closer in
+ * t than this fraction of the time since the solve's start end it there. */
+#define MP_ODE_ZENO_FRAC 1e-12
+
+/* What an action event's new crossing at t means, its previous action at
+ * t_prev (n_prev actions before), the solve started at t_start, the step h:
+ * MP_OK (apply the action), MP_EEVENT (it fires again at once: within the
+ * root finder's tolerance of the last action) or MP_TERMINATED (Zeno: the
+ * gap below MP_ODE_ZENO_FRAC of the time since the start; *gap set). */
+static inline int mp_ode_action_gap(double t, double t_prev, long n_prev, double t_start,
+                                    double h, double *gap)
+{
+    if (n_prev <= 0) return MP_OK;
+    *gap = t - t_prev;
+    if (*gap <= 8.0 * DBL_EPSILON * (fabs(t) + fabs(h))) return MP_EEVENT;
+    if (*gap <= MP_ODE_ZENO_FRAC * (t - t_start)) return MP_TERMINATED;
+    return MP_OK;
+}
+
 #endif

@@ -165,6 +165,24 @@ static int push_event(mp_ode_result *r, size_t k, double t, const double *y)
     return MP_OK;
 }
 
+int mp_ode_result_events_init(mp_ode_result *r, size_t n, size_t n_events)
+{
+    memset(r, 0, sizeof *r);
+    r->n = n;
+    r->n_events = n_events;
+    if (!n_events) return MP_OK;
+    r->ev_count = calloc(n_events, sizeof(size_t));
+    r->ev_cap = calloc(n_events, sizeof(size_t));
+    r->ev_t = calloc(n_events, sizeof(double *));
+    r->ev_y = calloc(n_events, sizeof(double *));
+    return r->ev_count && r->ev_cap && r->ev_t && r->ev_y ? MP_OK : MP_ENOMEM;
+}
+
+int mp_ode_result_push_event(mp_ode_result *r, size_t k, double t, const double *y)
+{
+    return push_event(r, k, t, y);
+}
+
 void mp_ode_result_free(mp_ode_result *r)
 {
     free(r->t);
@@ -241,32 +259,23 @@ static int ev_at(ev_ctx *c, double s, size_t k, double *gk)
     return MP_ENONFINITE;
 }
 
-/* Root of g_k on [a, b] in step-fraction s, g(a) and g(b) of opposite signs
- * (or g(b) == 0): the Illinois variant of regula falsi, to round-off in t. */
+/* g_k at step fraction s for mp_ode_event_root */
+typedef struct {
+    ev_ctx *c;
+    size_t k;
+} ev_root_ctx;
+
+static int ev_root_g(void *ctx, double s, double *gs)
+{
+    ev_root_ctx *r = ctx;
+    return ev_at(r->c, s, r->k, gs);
+}
+
+/* Root of g_k on [a, b] in step-fraction s (control.h's mp_ode_event_root). */
 static int ev_root(ev_ctx *c, size_t k, double a, double ga, double b, double gb, double *root)
 {
-    double tol = 4.0 * DBL_EPSILON * (fabs(c->t) + fabs(c->h)) / fabs(c->h);
-    int side = 0;
-    if (gb == 0.0) { *root = b; return MP_OK; }
-    for (int it = 0; it < 200 && (b - a) > tol; it++) {
-        double s = (a * gb - b * ga) / (gb - ga);
-        if (!(s > a && s < b)) s = 0.5 * (a + b);
-        double gs;
-        int rc = ev_at(c, s, k, &gs);
-        if (rc != MP_OK) return rc;
-        if (gs == 0.0) { a = b = s; break; }
-        if ((gs > 0) == (gb > 0)) {
-            b = s; gb = gs;
-            if (side == -1) ga *= 0.5;
-            side = -1;
-        } else {
-            a = s; ga = gs;
-            if (side == 1) gb *= 0.5;
-            side = 1;
-        }
-    }
-    *root = b;  /* the side past the crossing: sign(g) has changed there */
-    return MP_OK;
+    ev_root_ctx rc = {c, k};
+    return mp_ode_event_root(ev_root_g, &rc, c->t, c->h, a, ga, b, gb, root);
 }
 
 static int crosses(double g0, double g1, int dir)
@@ -642,10 +651,6 @@ static void stiffness_test(ode_run *s)
     mp_ode_stiffness_test(&s->c, s->w.rho, rho_stiff, &s->r->stiff);
 }
 
-/* Accumulation of an action event's crossings (Zeno): two actions closer in
- * t than this fraction of the time since the solve's start end it there. */
-#define MP_ODE_ZENO_FRAC 1e-12
-
 /* Contract: event k's action at (s->t, w->y), the state just before it: the
  * action replaces y in place (a non-finite value is MP_ENONFINITE, naming
  * the action), the state after it is a sample (with no t_eval), and the
@@ -665,18 +670,16 @@ static int apply_action(ode_run *s, size_t k)
     size_t n = w->n, ne = o->n_events;
     double t = s->t;
     int rc;
-    if (s->act_n[k] > 0) {
-        double gap = t - s->act_t[k];
-        double tol = 8.0 * DBL_EPSILON * (fabs(t) + fabs(s->h));
-        r->stop_event = k;
-        if (gap <= tol) return MP_EEVENT;
-        if (gap <= MP_ODE_ZENO_FRAC * (t - w->t_start)) {
-            r->stop_reason = MP_ODE_STOP_ZENO;
-            r->stop_count = (long)r->ev_count[k];
-            r->zeno_gap = gap;
-            r->terminated = 1;
-            return MP_OK;
-        }
+    double gap = 0.0;
+    rc = mp_ode_action_gap(t, s->act_t[k], s->act_n[k], w->t_start, s->h, &gap);
+    if (rc != MP_OK) r->stop_event = k;
+    if (rc == MP_EEVENT) return rc;
+    if (rc == MP_TERMINATED) {
+        r->stop_reason = MP_ODE_STOP_ZENO;
+        r->stop_count = (long)r->ev_count[k];
+        r->zeno_gap = gap;
+        r->terminated = 1;
+        return MP_OK;
     }
     if ((rc = o->action(t, w->y, k, o->action_data)) != MP_OK) return rc;
     for (size_t i = 0; i < n; i++)

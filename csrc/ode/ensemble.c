@@ -110,7 +110,7 @@ static void ens_run_lanes(ens_arg *a)
     ens_ctx *e = a->e;
     mp_lane_feed feed = {lane_take, lane_done, lane_interrupt, a};
     int rc = mp_ode_lanes_run(e->m, e->probs, e->lanes, e->k, e->t0, e->tf, e->y0s, e->o,
-                              e->yout, e->out, &feed);
+                              e->yout, e->out, e->results, &feed);
     if (rc != MP_OK && !atomic_exchange(&e->stop, 1)) e->fatal = rc;
 }
 
@@ -159,12 +159,13 @@ static void *ens_worker(void *argp)
     return NULL;
 }
 
-/* Contract: see lanes.h: a row with a lane kernel, t_eval given, no events
- * or dense output, and the checks solve_forward makes at its start pass (else
- * the scalar path reports them). */
-int mp_ode_lanes_supported(const mp_ode_method *m, const mp_ode_options *o, double t0, double tf)
+/* Contract: see lanes.h: a row with a lane kernel, t_eval given, no dense
+ * output, events only when the lanes run them, and the checks solve_forward
+ * makes at its start pass (else the scalar path reports them). */
+int mp_ode_lanes_supported(const mp_ode_method *m, const mp_ode_options *o, double t0, double tf,
+                           int lane_events)
 {
-    return m->lanes != MP_LANE_NONE && o->n_eval > 0 && !o->dense && !o->n_events &&
+    return m->lanes != MP_LANE_NONE && o->n_eval > 0 && (lane_events || !o->n_events) && !o->dense &&
            mp_ode_span_ok(m, t0, tf, o) == MP_OK;
 }
 
@@ -173,13 +174,13 @@ int mp_ode_lanes_supported(const mp_ode_method *m, const mp_ode_options *o, doub
 int mp_ode_lanes_run(const mp_ode_method *m, const mp_ode_problem *probs,
                      const mp_lane_system *ls, size_t k, double t0, double tf, const double *y0s,
                      const mp_ode_options *o, double *yout, mp_ode_outcome *out,
-                     const mp_lane_feed *feed)
+                     mp_ode_result *results, const mp_lane_feed *feed)
 {
 #if defined(MP_LANES_HAVE_AVX2)
     if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma"))
-        return mp_ode_lanes_run_avx2(m, probs, ls, k, t0, tf, y0s, o, yout, out, feed);
+        return mp_ode_lanes_run_avx2(m, probs, ls, k, t0, tf, y0s, o, yout, out, results, feed);
 #endif
-    return mp_ode_lanes_run_base(m, probs, ls, k, t0, tf, y0s, o, yout, out, feed);
+    return mp_ode_lanes_run_base(m, probs, ls, k, t0, tf, y0s, o, yout, out, results, feed);
 }
 
 int mp_ode_solve_many(const mp_ode_method *m, const mp_ode_problem *probs,
@@ -202,7 +203,7 @@ int mp_ode_solve_many(const mp_ode_method *m, const mp_ode_problem *probs,
     e.o = o;
     e.yout = yout;
     e.out = out;
-    e.results = lanes ? NULL : results;
+    e.results = results;
     e.events_data = events_data;
     e.interrupt = o->interrupt;
     e.interrupt_ctx = o->interrupt_ctx;
@@ -308,11 +309,13 @@ int mp_ode_ensemble_build(mp_ode_ensemble *e, double t0, double tf, const mp_ode
     if (mod && !e->torque && mod->lanes && ls->params) ls->rhs = mod->lanes(ls->params, kk, ls->pstride);
     /* a problem with a switch ahead crosses it as an event: the scalar path */
     int ok = !e->holds_python && scene_or_compiled && e->rows_kind != MP_ENS_ROWS_CALLER &&
-             !e->base.sw && mp_ode_lanes_supported(e->m, o, t0, tf);
+             !e->base.sw && mp_ode_lanes_supported(e->m, o, t0, tf, e->n_impacts > 0);
     if (e->want_lanes == 1 && !ok) {
         e->why = MP_ENS_NO_LANES;
         return MP_EDOM;
     }
+    ls->impacts = e->impacts;
+    ls->n_impacts = e->n_impacts;
     e->lanes = ok && e->want_lanes != 0 ? ls : NULL;
     return MP_OK;
 }

@@ -12,9 +12,9 @@
  * Interrupts: o->interrupt is called from the calling thread only; a stop
  * reaches the other threads through a flag.  With lanes (not NULL; only when
  * mp_ode_lanes_supported) each thread runs a lane group (lanes.h) instead of
- * one mp_ode_solve per trajectory.  With results (not NULL; the scalar path)
- * each trajectory's whole result is kept in results[i] (its events; the
- * caller frees each with mp_ode_result_free), and with events_data trajectory
+ * one mp_ode_solve per trajectory.  With results (not NULL) each
+ * trajectory's result is kept in results[i] (the scalar path: whole; in
+ * lanes: its event lists; the caller frees each with mp_ode_result_free), and with events_data trajectory
  * i's event functions and actions get events_data[i] as their data.  Returns MP_OK, or
  * MP_EINTR / MP_ECALLBACK / MP_ENOMEM when the ensemble was stopped. */
 /* An ensemble as the caller describes it: one system (base, a scene row's
@@ -55,6 +55,8 @@ typedef struct mp_ode_ensemble {
     const struct mp_rigid_torque *torque; /* a RigidBody scene's C torque (NULL: none) */
     mp_lane_rhs lane_rhs;                 /* a compiled system's lane rhs (NULL: none) */
     int holds_python;                     /* a trajectory calls Python: no lanes, one thread */
+    const mp_lane_impact *impacts;        /* the events, when they are all impacts (or NULL) */
+    size_t n_impacts;
     int want_lanes;                       /* -1 when possible, 0 never, 1 always */
     /* out */
     mp_ode_problem *probs;                /* k problems */
@@ -73,8 +75,8 @@ typedef struct mp_ode_ensemble {
  * to the caller (probs[i] = base).  Then the lane system (the scene's lane
  * rhs for these rows, or the compiled system's; the generic wrapper
  * otherwise) and whether lanes run: a system in C, a method row with a lane
- * kernel and options the lanes take (mp_ode_lanes_supported), unless
- * want_lanes is 0.  MP_OK; MP_EDOM with e->why; MP_ENOMEM. */
+ * kernel and options the lanes take (mp_ode_lanes_supported: events only as
+ * impacts, which the lane system then carries), unless want_lanes is 0.  MP_OK; MP_EDOM with e->why; MP_ENOMEM. */
 int mp_ode_ensemble_build(mp_ode_ensemble *e, double t0, double tf, const mp_ode_options *o);
 void mp_ode_ensemble_free(mp_ode_ensemble *e);
 

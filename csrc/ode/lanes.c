@@ -30,6 +30,7 @@
 
 #define W MP_LANES
 #define LANES_INTERRUPT_EVERY 256 /* lock-step attempts between interrupt polls */
+#define LANE_EVENT_SUBDIV 4       /* sub-intervals searched for impacts (driver.c's) */
 
 /* the row's lane kernel (ode.h's MP_LANE_*) */
 enum { LANE_RK4 = MP_LANE_RK4, LANE_DOPRI5 = MP_LANE_DOPRI5, LANE_DOP853 = MP_LANE_DOP853 };
@@ -47,12 +48,19 @@ typedef struct {
     const double *y0s, *sev;  /* sev: t_eval in s */
     double *yout;
     mp_ode_outcome *out;
+    mp_ode_result *results;   /* with impacts: each trajectory's event lists */
+    size_t nimp;              /* impacts (ls->n_impacts) */
+    double *g_old, *act_t;    /* per impact and lane [q * W + l]: g at t, the last action */
+    long *act_n;              /* ... and the actions applied */
     double *y, *ynew, *f, *fnew, *kbuf, *coef, *par, *gy, *gf;
     int stop, exhausted;
     /* per lane */
     int active[W];
     size_t idx[W], ie[W], bad_index[W];
     double t[W], h[W];
+    double tz[W];             /* where the lane's fixed steps are counted from (t0, an action) */
+    long nfix[W];             /* ... and how many it took since */
+    int restarted[W];         /* an action restarted the lane: a zero of g there is new */
     long attempts[W], nfev[W];
     mp_ode_ctl ctl[W]; /* each lane's controller (control.h) */
     int stiff[W], bad_what[W];
@@ -159,15 +167,19 @@ static void lane_sample(lane_group *g, int l, size_t j, const double *v)
     for (size_t c = 0; c < g->n; c++) dst[c * g->nt + j] = v[c * W + l];
 }
 
-/* Contract: lane l's trajectory ends with status st at its current time:
+/* Contract: lane l's trajectory ends with status st at its current time
+ * (reason, k, gap: events that ended it, as mp_ode_result's stop_reason):
  * its outcome, NaN for the samples not reached, the lane idle; then the
  * feed's done (a stop request sets g->stop). */
-static void lane_end(lane_group *g, int l, int st)
+static void lane_end_ev(lane_group *g, int l, int st, int reason, size_t k, double gap)
 {
     size_t i = g->idx[l];
+    long count = g->results && reason ? (long)g->results[i].ev_count[k] : 0, acts = 0;
+    for (size_t q = 0; q < g->nimp; q++) acts += g->act_n[q * W + (size_t)l];
     g->out[i] = (mp_ode_outcome){.status = st, .stiff = g->stiff[l], .bad_what = g->bad_what[l],
                                  .bad_index = g->bad_index[l], .t_fail = g->dir * g->t[l],
-                                 .nfev = g->nfev[l]};
+                                 .nfev = g->nfev[l], .stop_reason = reason, .stop_event = k,
+                                 .n_actions = acts, .stop_count = count, .zeno_gap = gap};
     double *dst = g->yout + i * g->n * g->nt;
     for (size_t j = g->ie[l]; j < g->nt; j++)
         for (size_t c = 0; c < g->n; c++) dst[c * g->nt + j] = NAN;
@@ -175,17 +187,33 @@ static void lane_end(lane_group *g, int l, int st)
     if (g->feed->done(g->feed->ctx, i) != 0) g->stop = 1;
 }
 
+/* Contract: lane l's trajectory ends with status st at its current time:
+ * its outcome, NaN for the samples not reached, the lane idle; then the
+ * feed's done (a stop request sets g->stop). */
+static void lane_end(lane_group *g, int l, int st) { lane_end_ev(g, l, st, 0, 0, 0.0); }
+
+/* Component c of lane l's interpolant at step fraction s (mp_ode_dense_eval's
+ * form). */
+static double lane_interp(const lane_group *g, int l, size_t c, double s)
+{
+    size_t nc = g->m->ncoef, nW = g->nW, o = c * W + (size_t)l;
+    double s1 = 1.0 - s, acc = g->coef[(nc - 1) * nW + o];
+    for (size_t q = nc - 1; q-- > 0;) acc = g->coef[q * nW + o] + ((q % 2 == 0) ? s : s1) * acc;
+    return acc;
+}
+
 /* Contract: the t_eval samples of lane l's accepted step [t, t + h] ending at
- * tnew: the step end itself exactly, the others from the interpolant in coef
- * (mp_ode_dense_eval's form, lane by lane). */
-static void lane_output(lane_group *g, int l, double h, double tnew)
+ * tnew (or cut at tend < tnew by an event, exact_end 0): the step end itself
+ * exactly, the others from the interpolant in coef (mp_ode_dense_eval's form,
+ * lane by lane). */
+static void lane_output(lane_group *g, int l, double h, double tnew, int exact_end)
 {
     size_t nc = g->m->ncoef, nW = g->nW;
     for (; g->ie[l] < g->nt && g->sev[g->ie[l]] <= tnew; g->ie[l]++) {
         size_t j = g->ie[l];
         double te = g->sev[j];
         double *dst = g->yout + g->idx[l] * g->n * g->nt;
-        if (te == tnew) {
+        if (te == tnew && exact_end) {
             lane_sample(g, l, j, g->ynew);
             continue;
         }
@@ -208,11 +236,13 @@ static void lane_first_step(lane_group *g, int *on)
 {
     size_t n = g->n;
     const mp_ode_options *o = g->o;
-    double dnf[W] = {0}, ts[W], span = g->sf - g->s0;
+    double dnf[W] = {0}, ts[W], span[W];
     int pend[W], rc[W], ev[W];
-    for (int l = 0; l < W; l++) {
+    for (int l = 0; l < W; l++) { /* from the lane's time: the start, or an action's */
         pend[l] = on[l];
-        if (on[l]) g->h[l] = mp_ode_hinit_trial(o, n, W, g->y + l, g->f + l, g->hmax, span, &dnf[l]);
+        span[l] = g->sf - g->t[l];
+        if (on[l])
+            g->h[l] = mp_ode_hinit_trial(o, n, W, g->y + l, g->f + l, g->hmax, span[l], &dnf[l]);
     }
     for (int tries = 0;; tries++) { /* an explicit Euler trial that overflows: shorter */
         int any = 0;
@@ -220,10 +250,10 @@ static void lane_first_step(lane_group *g, int *on)
             ev[l] = pend[l];
             if (!pend[l]) continue;
             any = 1;
-            while (g->s0 + g->h[l] > g->sf) g->h[l] = nextafter(g->h[l], 0.0);
+            while (g->t[l] + g->h[l] > g->sf) g->h[l] = nextafter(g->h[l], 0.0);
             for (size_t c = 0; c < n; c++)
                 g->ynew[c * W + l] = g->y[c * W + l] + g->h[l] * g->f[c * W + l];
-            ts[l] = g->s0 + g->h[l];
+            ts[l] = g->t[l] + g->h[l];
         }
         if (!any) break;
         lane_eval(g, ts, g->ynew, g->fnew, ev, rc);
@@ -243,7 +273,7 @@ static void lane_first_step(lane_group *g, int *on)
     for (int l = 0; l < W; l++)
         if (on[l])
             g->h[l] = mp_ode_hinit_final(o, n, W, g->y + l, g->f + l, g->fnew + l, g->h[l],
-                                         dnf[l], g->m->order, g->hmax, span);
+                                         dnf[l], g->m->order, g->hmax, span[l]);
 }
 
 /* Contract: the lanes in fresh have just been given trajectories idx[l]:
@@ -261,9 +291,18 @@ static void lane_start(lane_group *g, int *fresh)
         size_t i = g->idx[l];
         const double *y0 = g->y0s + i * n, *row = g->ls->params + i * g->ls->pstride;
         for (size_t j = 0; j < np; j++) g->par[j * W + l] = row[j];
-        g->t[l] = g->s0;
+        g->t[l] = g->tz[l] = g->s0;
+        g->nfix[l] = 0;
+        g->restarted[l] = 0;
         g->ie[l] = 0;
         g->attempts[l] = g->nfev[l] = 0;
+        for (size_t q = 0; q < g->nimp; q++) {
+            const mp_lane_impact *im = &g->ls->impacts[q];
+            g->g_old[q * W + (size_t)l] = im->side * (y0[im->iq] - im->wall);
+            g->act_n[q * W + (size_t)l] = 0;
+        }
+        if (g->results && mp_ode_result_events_init(&g->results[i], n, g->nimp) != MP_OK)
+            g->stop = 1; /* out of memory: the group stops (MP_EINTR's path) */
         g->ctl[l] = mp_ode_ctl_start();
         g->stiff[l] = g->bad_what[l] = 0;
         g->bad_index[l] = 0;
@@ -498,12 +537,154 @@ static void finish_lanes(lane_group *g, int *on, const int *dense, int *rc, doub
 
 /* ---- the controller and one lock-step attempt ------------------------------------ */
 
+/* ---- impacts ------------------------------------------------------------------------ */
+
+/* impact q's g on lane l's interpolant at step fraction s */
+typedef struct {
+    const lane_group *g;
+    int l;
+    const mp_lane_impact *im;
+} lane_g_ctx;
+
+static int lane_g_at(void *ctx, double s, double *gs)
+{
+    const lane_g_ctx *c = ctx;
+    *gs = c->im->side * (lane_interp(c->g, c->l, c->im->iq, s) - c->im->wall);
+    return MP_OK;
+}
+
+/* Contract: the impacts of lane l's accepted step [t, t + h] ending at tnew,
+ * as driver.c's events and actions do them: the first crossing (downwards;
+ * a zero where an action restarted the lane counts when g leaves it
+ * downwards) located on the interpolant; the samples up to it, the state just
+ * before it in the trajectory's event list; then max_events, an accumulation
+ * (Zeno) or a re-firing at once end the lane; else the action, and the lane
+ * is left at the impact with its state after it, to restart (lane_restart).
+ * Returns 1 when the lane restarts there, 2 when it ended, 0 when no impact
+ * cut the step (the impacts' g moved to the step end). */
+static int lane_impacts(lane_group *g, int l, double tnew)
+{
+    size_t n = g->n, i = g->idx[l];
+    double t = g->t[l], h = g->h[l], s_hit = 2.0;
+    size_t k_hit = 0;
+    int fresh = g->restarted[l];
+    g->restarted[l] = 0;
+    /* where a zero left by an action is probed (driver.c's ev_step) */
+    double probe = fmax(0.01 * MP_ODE_ZENO_FRAC * (t - g->s0), 64.0 * DBL_EPSILON * fabs(t));
+    for (size_t q = 0; q < g->nimp; q++) {
+        const mp_lane_impact *im = &g->ls->impacts[q];
+        lane_g_ctx c = {g, l, im};
+        double g0 = g->g_old[q * W + (size_t)l], s_from = 0.0;
+        if (fresh && g0 == 0.0) {
+            s_from = fmin(probe / h, 0.5 / LANE_EVENT_SUBDIV);
+            lane_g_at(&c, s_from, &g0);
+            if (g0 < 0.0) { /* left the wall downwards at once */
+                s_hit = 0.0;
+                k_hit = q;
+                continue;
+            }
+        }
+        for (int j = 1; j <= LANE_EVENT_SUBDIV; j++) { /* the scalar driver's sub-intervals */
+            double s0 = j == 1 ? s_from : (double)(j - 1) / LANE_EVENT_SUBDIV;
+            double s1 = (double)j / LANE_EVENT_SUBDIV, g1;
+            if (j == LANE_EVENT_SUBDIV) g1 = im->side * (g->ynew[im->iq * W + (size_t)l] - im->wall);
+            else lane_g_at(&c, s1, &g1);
+            if (g0 > 0.0 && g1 <= 0.0) {
+                double root;
+                mp_ode_event_root(lane_g_at, &c, t, h, s0, g0, s1, g1, &root);
+                if (root < s_hit) {
+                    s_hit = root;
+                    k_hit = q;
+                }
+                break;
+            }
+            g0 = g1;
+        }
+    }
+    if (s_hit > 1.0) { /* no impact: g at the step end */
+        for (size_t q = 0; q < g->nimp; q++) {
+            const mp_lane_impact *im = &g->ls->impacts[q];
+            g->g_old[q * W + (size_t)l] = im->side * (g->ynew[im->iq * W + (size_t)l] - im->wall);
+        }
+        return 0;
+    }
+    double tend = s_hit >= 1.0 ? tnew : t + s_hit * h;
+    lane_output(g, l, h, tend, 0);
+    for (size_t c = 0; c < n; c++) g->gy[c] = lane_interp(g, l, c, s_hit);
+    g->t[l] = tend;
+    const mp_lane_impact *im = &g->ls->impacts[k_hit];
+    size_t a = k_hit * W + (size_t)l;
+    if (g->results &&
+        mp_ode_result_push_event(&g->results[i], k_hit, g->dir * tend, g->gy) != MP_OK) {
+        g->stop = 1;
+        return 2;
+    }
+    if (im->max_events > 0 && g->results &&
+        g->results[i].ev_count[k_hit] >= (size_t)im->max_events) {
+        for (size_t c = 0; c < n; c++) g->y[c * W + (size_t)l] = g->gy[c];
+        lane_end_ev(g, l, MP_TERMINATED, MP_ODE_STOP_MAX_EVENTS, k_hit, 0.0);
+        return 2;
+    }
+    double gap = 0.0;
+    int st = mp_ode_action_gap(tend, g->act_t[a], g->act_n[a], g->s0, h, &gap);
+    if (st != MP_OK) {
+        for (size_t c = 0; c < n; c++) g->y[c * W + (size_t)l] = g->gy[c];
+        lane_end_ev(g, l, st, st == MP_TERMINATED ? MP_ODE_STOP_ZENO : 0, k_hit, gap);
+        return 2;
+    }
+    double e = im->e_param >= 0 ? g->par[(size_t)im->e_param * W + (size_t)l]
+             : im->e_rows ? im->e_rows[i] : im->e;
+    g->gy[im->iv] = -e * g->gy[im->iv];
+    g->gy[im->iq] = im->wall;
+    for (size_t c = 0; c < n; c++) g->y[c * W + (size_t)l] = g->gy[c];
+    for (size_t q = 0; q < g->nimp; q++) {
+        const mp_lane_impact *iq = &g->ls->impacts[q];
+        g->g_old[q * W + (size_t)l] = iq->side * (g->gy[iq->iq] - iq->wall);
+    }
+    g->act_t[a] = tend;
+    g->act_n[a]++;
+    return 1;
+}
+
+/* Contract: the lanes in act, left at an impact with their state after it
+ * (lane_impacts), restart there as driver.c's apply_action restarts a solve:
+ * f afresh, the controller and the first step afresh, fixed steps counted
+ * from the impact; a lane whose f fails ends. */
+static void lane_restart(lane_group *g, int *act)
+{
+    int rc[W];
+    double ts[W];
+    for (int l = 0; l < W; l++) ts[l] = g->t[l];
+    lane_eval(g, ts, g->y, g->fnew, act, rc);
+    for (int l = 0; l < W; l++) {
+        if (!act[l]) continue;
+        if (rc[l] != MP_OK) {
+            lane_end(g, l, rc[l]);
+            act[l] = 0;
+            continue;
+        }
+        for (size_t c = 0; c < g->n; c++) g->f[c * W + l] = g->fnew[c * W + l];
+        g->ctl[l] = mp_ode_ctl_start();
+        g->tz[l] = g->t[l];
+        g->nfix[l] = 0;
+        g->restarted[l] = 1;
+        if (!g->adaptive) g->h[l] = g->o->h;
+        else if (g->o->first_step > 0) g->h[l] = g->o->first_step;
+    }
+    if (g->adaptive && !(g->o->first_step > 0)) lane_first_step(g, act);
+    for (int l = 0; l < W; l++)
+        if (act[l]) {
+            g->h[l] = fmin(g->h[l], fmin(g->o->max_step, g->sf - g->t[l]));
+            if (!(g->t[l] < g->sf)) lane_end(g, l, MP_OK);
+        }
+}
+
 /* Contract: one attempted step of every active lane, as one iteration of
  * driver.c's loop for each: budget, last step, step floor, the step, control,
  * finish, stiffness test, output, advance; a lane that ends calls lane_end. */
 static void lane_attempt(lane_group *g)
 {
-    int on[W], rc[W], last[W] = {0}, acc[W], dense[W] = {0};
+    int on[W], rc[W], last[W] = {0}, acc[W], dense[W] = {0}, act[W] = {0};
     double err[W] = {0.0}, rho[W], hnew[W] = {0.0}, tnew[W] = {0.0};
     for (int l = 0; l < W; l++) {
         on[l] = g->active[l];
@@ -551,11 +732,12 @@ static void lane_attempt(lane_group *g)
             !mp_ode_control(g->m, &g->ctl[l], err[l], fac11[l], fold[l], &g->h[l], &hnew[l]))
             continue;
         acc[l] = 1;
-        /* a fixed step's end is counted, as driver.c counts it: s0 + (i + 1) h */
+        /* a fixed step's end is counted, as driver.c counts it: t0 + (i + 1) h, from
+         * the start or the last action */
         tnew[l] = last[l]      ? g->sf
                 : g->adaptive ? g->t[l] + g->h[l]
-                              : mp_ode_fixed_time(g->s0, g->attempts[l], g->h[l]);
-        dense[l] = g->ie[l] < g->nt && g->sev[g->ie[l]] < tnew[l];
+                              : mp_ode_fixed_time(g->tz[l], g->nfix[l] + 1, g->h[l]);
+        dense[l] = g->nimp > 0 || (g->ie[l] < g->nt && g->sev[g->ie[l]] < tnew[l]);
     }
     memcpy(on, acc, sizeof on);
     finish_lanes(g, on, dense, rc, rho);
@@ -567,16 +749,25 @@ static void lane_attempt(lane_group *g)
         }
         if (rho[l] > 0.0) /* Hairer's stiffness test */
             mp_ode_stiffness_test(&g->ctl[l], rho[l], g->m->stiff_rho, &g->stiff[l]);
-        lane_output(g, l, g->h[l], tnew[l]);
+        int cut = g->nimp ? lane_impacts(g, l, tnew[l]) : 0;
+        if (cut) {
+            act[l] = cut == 1; /* cut at an impact: the lane restarts there (below) */
+            continue;
+        }
+        lane_output(g, l, g->h[l], tnew[l], 1);
         for (size_t c = 0; c < g->n; c++) {
             size_t i = c * W + (size_t)l;
             g->y[i] = g->ynew[i];
             g->f[i] = g->fnew[i];
         }
         g->t[l] = tnew[l];
+        g->nfix[l]++;
         g->h[l] = fmin(g->adaptive ? hnew[l] : g->o->h, g->hmax);
         if (!(g->t[l] < g->sf)) lane_end(g, l, MP_OK);
     }
+    int any = 0;
+    for (int l = 0; l < W; l++) any |= act[l];
+    if (any) lane_restart(g, act);
 }
 
 /* ---- the group's loop --------------------------------------------------------------- */
@@ -604,7 +795,8 @@ static void lane_refill(lane_group *g)
 
 int MP_LANES_RUN(const mp_ode_method *m, const mp_ode_problem *probs, const mp_lane_system *ls,
                  size_t k, double t0, double tf, const double *y0s, const mp_ode_options *o,
-                 double *yout, mp_ode_outcome *out, const mp_lane_feed *feed)
+                 double *yout, mp_ode_outcome *out, mp_ode_result *results,
+                 const mp_lane_feed *feed)
 {
     lane_group g;
     memset(&g, 0, sizeof g);
@@ -626,9 +818,18 @@ int MP_LANES_RUN(const mp_ode_method *m, const mp_ode_problem *probs, const mp_l
     g.y0s = y0s;
     g.yout = yout;
     g.out = out;
+    g.nimp = ls->n_impacts;
+    g.results = g.nimp ? results : NULL;
     size_t nvec = 4 + m->nscratch + m->ncoef;
-    double *buf = calloc(nvec * g.nW + ls->np * W + g.nt + 2 * g.n, sizeof(double));
-    if (!buf) return MP_ENOMEM;
+    double *buf = calloc(nvec * g.nW + ls->np * W + g.nt + 2 * g.n + 2 * g.nimp * W,
+                         sizeof(double));
+    long *acts = g.nimp ? calloc(g.nimp * W, sizeof(long)) : NULL;
+    if (!buf || (g.nimp && !acts)) {
+        free(buf);
+        free(acts);
+        return MP_ENOMEM;
+    }
+    g.act_n = acts;
     g.y = buf;
     g.ynew = g.y + g.nW;
     g.f = g.ynew + g.nW;
@@ -639,6 +840,8 @@ int MP_LANES_RUN(const mp_ode_method *m, const mp_ode_problem *probs, const mp_l
     double *sev = g.par + ls->np * W;
     g.gy = sev + g.nt;
     g.gf = g.gy + g.n;
+    g.g_old = g.gf + g.n;
+    g.act_t = g.g_old + g.nimp * W;
     for (size_t j = 0; j < g.nt; j++) sev[j] = g.dir * o->t_eval[j];
     g.sev = sev;
     long iter = 0;
@@ -656,5 +859,6 @@ int MP_LANES_RUN(const mp_ode_method *m, const mp_ode_problem *probs, const mp_l
         if (g.stop) break;
     }
     free(buf);
+    free(acts);
     return g.stop ? MP_EINTR : MP_OK;
 }

@@ -53,13 +53,30 @@ __attribute__((__simd__("notinbranch"), const, nothrow)) double mp_lane_pow(doub
 /* Loop over the lanes of a group (vectorised). */
 #define MP_LANE_LOOP _Pragma("omp simd") for (int l = 0; l < MP_LANES; l++)
 
+/* An impact (mechpy.events.impact) as the lanes run it: the event
+ * side (y[iq] - wall) = 0 reached downwards along the integration, and the
+ * action y[iq] = wall, y[iv] = -e y[iv]; e is per trajectory (e_rows[i]), the
+ * trajectory's parameter e_param (>= 0), or the constant e.  max_events > 0
+ * ends a trajectory at that crossing (a terminal count). */
+typedef struct mp_lane_impact {
+    size_t iq, iv;
+    double wall, side, e;
+    const double *e_rows;
+    long e_param;
+    int max_events;
+} mp_lane_impact;
+
 /* What an ensemble runs in lanes: the lane rhs (NULL: each trajectory's own
  * scalar problem through a gather/call/scatter wrapper) and its parameters,
- * row i of trajectory i at params + i * pstride (pstride 0: one row for all). */
+ * row i of trajectory i at params + i * pstride (pstride 0: one row for all),
+ * and its impacts (each lane jumps on its own; the event lists go to the
+ * trajectories' results). */
 typedef struct mp_lane_system {
     mp_lane_rhs rhs;
     const double *params;
     size_t np, pstride;
+    const mp_lane_impact *impacts;
+    size_t n_impacts;
 } mp_lane_system;
 
 /* How a lane group gets its work and reports it (ensemble.c's threads):
@@ -74,30 +91,35 @@ typedef struct mp_lane_feed {
     void *ctx;
 } mp_lane_feed;
 
-/* Whether method m integrates from t0 to tf with options o in lanes (dopri5,
- * dop853, rk4; t_eval given; no events or dense output; the checks every
- * solve makes at its start pass).  Others take the scalar path. */
-int mp_ode_lanes_supported(const mp_ode_method *m, const mp_ode_options *o, double t0, double tf);
+/* Whether method m integrates from t0 to tf with options o in lanes (a row
+ * with a lane kernel; t_eval given; no dense output; no events unless
+ * lane_events, the lanes running them (impacts); the checks every solve makes
+ * at its start pass).  Others take the scalar path. */
+int mp_ode_lanes_supported(const mp_ode_method *m, const mp_ode_options *o, double t0, double tf,
+                           int lane_events);
 
 /* Contract: one thread's lane group: trajectories i = feed->take() (k in all)
  * from y0s[i * n] with problems probs[i] (the generic wrapper's) or ls->rhs,
  * from t0 to tf (backwards when tf < t0), samples at o->t_eval into yout's
  * (n, n_eval) block i (NaN where not reached), out[i] as mp_ode_solve's
- * outcome.  Only for a method mp_ode_lanes_supported accepts.  Returns MP_OK,
+ * outcome, with impacts results[i] its event lists (mp_ode_result_events_init
+ * here; the caller frees them).  Only for a method mp_ode_lanes_supported accepts.  Returns MP_OK,
  * MP_EINTR when the feed stopped it, or MP_ENOMEM. */
 int mp_ode_lanes_run(const mp_ode_method *m, const mp_ode_problem *probs,
                      const mp_lane_system *ls, size_t k, double t0, double tf, const double *y0s,
                      const mp_ode_options *o, double *yout, mp_ode_outcome *out,
-                     const mp_lane_feed *feed);
+                     mp_ode_result *results, const mp_lane_feed *feed);
 
 /* The two builds of lanes.c (mp_ode_lanes_run dispatches). */
 int mp_ode_lanes_run_avx2(const mp_ode_method *m, const mp_ode_problem *probs,
                           const mp_lane_system *ls, size_t k, double t0, double tf,
                           const double *y0s, const mp_ode_options *o, double *yout,
-                          mp_ode_outcome *out, const mp_lane_feed *feed);
+                          mp_ode_outcome *out, mp_ode_result *results,
+                          const mp_lane_feed *feed);
 int mp_ode_lanes_run_base(const mp_ode_method *m, const mp_ode_problem *probs,
                           const mp_lane_system *ls, size_t k, double t0, double tf,
                           const double *y0s, const mp_ode_options *o, double *yout,
-                          mp_ode_outcome *out, const mp_lane_feed *feed);
+                          mp_ode_outcome *out, mp_ode_result *results,
+                          const mp_lane_feed *feed);
 
 #endif

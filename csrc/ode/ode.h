@@ -313,6 +313,11 @@ int mp_ode_span_ok(const mp_ode_method *m, double t0, double tf, const mp_ode_op
 int mp_ode_solve(const mp_ode_method *m, const mp_ode_problem *p, double t0, double tf,
                  const double *y0, const mp_ode_options *o, mp_ode_result *r);
 void mp_ode_result_free(mp_ode_result *r);
+/* A result that holds only event lists (the lane driver's): n states, n_events
+ * empty lists.  MP_OK or MP_ENOMEM (free it with mp_ode_result_free). */
+int mp_ode_result_events_init(mp_ode_result *r, size_t n, size_t n_events);
+/* Append (t, y) to event k's list.  MP_OK or MP_ENOMEM. */
+int mp_ode_result_push_event(mp_ode_result *r, size_t k, double t, const double *y);
 
 /* Evaluate stored dense output at times tq (any order); out is nq rows of n. */
 int mp_ode_result_dense_eval(size_t n, size_t ncoef, size_t nseg, const double *seg_t,

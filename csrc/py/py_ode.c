@@ -999,10 +999,16 @@ static void ensemble_error(const mp_ode_ensemble *e, int rc, const char *kind)
         mp_py_raise(MP_EDOM, ctx);
         break;
     case MP_ENS_NO_LANES:
+        if (e->base.sw) {
+            PyErr_Format(PyExc_ValueError, "lanes=True: %s has a switch of its right-hand side "
+                         "(a discontinuity the engine crosses as an event), which the lanes do "
+                         "not take; use lanes=None or False", scene);
+            break;
+        }
         lane_method_names(names, sizeof names);
         PyErr_Format(PyExc_ValueError, "lanes=True needs a scene or compiled system, a method "
-                     "that runs in lanes (%s) and no events or dense output (got %s with a "
-                     "%s system)", names, e->m->name, kind);
+                     "that runs in lanes (%s), no dense output and no events but impacts (got %s "
+                     "with a %s system)", names, e->m->name, kind);
         break;
     default:
         mp_py_raise(rc, "solve_many");
@@ -1022,7 +1028,10 @@ typedef struct {
     const_jac *cjs;
     py_with_jac *wjs;
     py_watched *watched;
+    size_t nimp;
     mp_ode_result *results; /* with events: each trajectory's whole result */
+    mp_lane_impact *imps;   /* the events as the lanes run them (all impacts), or NULL */
+    PyArrayObject **imp_e;  /* ... their per-trajectory restitutions (owned) */
 } many_adapters;
 
 static void many_adapters_clear(many_adapters *a)
@@ -1042,7 +1051,54 @@ static void many_adapters_clear(many_adapters *a)
     PyMem_Free(a->wjs);
     PyMem_Free(a->watched);
     PyMem_Free(a->results);
+    if (a->imp_e)
+        for (size_t q = 0; a->imps && q < a->nimp; q++) Py_XDECREF(a->imp_e[q]);
+    PyMem_Free(a->imp_e);
+    PyMem_Free(a->imps);
     memset(a, 0, sizeof *a);
+}
+
+/* Contract: the event entries evo (all C impacts: el->all_c) as the lanes run
+ * them, into a->imps (n_events of them), when each is an impact reached
+ * downwards (its direction -1): 1, or 0 when the lanes cannot run them, or
+ * -1 with an exception set. */
+static int many_lane_impacts(many_adapters *a, PyObject *evo, const py_event_list *el, size_t k)
+{
+    size_t ne = (size_t)el->count;
+    const int *dir = PyArray_DATA(el->dir), *term = PyArray_DATA(el->term);
+    for (size_t q = 0; q < ne; q++)
+        if (dir[q] != -1) return 0;
+    a->imps = PyMem_Calloc(ne, sizeof *a->imps);
+    a->imp_e = PyMem_Calloc(ne, sizeof *a->imp_e);
+    a->nimp = ne;
+    if (!a->imps || !a->imp_e) {
+        PyErr_NoMemory();
+        return -1;
+    }
+    for (size_t q = 0; q < ne; q++) {
+        Py_ssize_t iq, iv;
+        long ep;
+        double wall, side;
+        PyObject *eo;
+        const char *tag;
+        if (!PyArg_ParseTuple(PyList_GET_ITEM(evo, (Py_ssize_t)q), "snndOdl", &tag, &iq, &iv,
+                              &wall, &eo, &side, &ep))
+            return -1;
+        mp_lane_impact *im = &a->imps[q];
+        *im = (mp_lane_impact){(size_t)iq, (size_t)iv, wall, side, 0.0, NULL, ep, term[q]};
+        if (ep >= 0) continue;
+        if (PyFloat_Check(eo)) {
+            im->e = PyFloat_AS_DOUBLE(eo);
+            continue;
+        }
+        if (!(a->imp_e[q] = mp_py_array(eo, "restitution", 1))) return -1;
+        if ((size_t)PyArray_SIZE(a->imp_e[q]) != k) {
+            PyErr_SetString(PyExc_ValueError, "restitution needs one value per trajectory");
+            return -1;
+        }
+        im->e_rows = PyArray_DATA(a->imp_e[q]);
+    }
+    return 1;
 }
 
 /* Contract: trajectory i's rows of a Python system as leading extra
@@ -1199,6 +1255,8 @@ static PyObject *py_ode_solve_many(PyObject *self, PyObject *args, PyObject *kw)
     if (jac_parse(jaco, n, &jm) < 0 || event_list_parse(evo, termo, diro, &el, &o) < 0)
         goto out;
     const double *rows = par ? PyArray_DATA(par) : NULL;
+    int lane_imps = 0; /* impacts alone: the lanes run them too */
+    if (el.count && el.all_c && (lane_imps = many_lane_impacts(&ad, evo, &el, k)) < 0) goto out;
     ens = (mp_ode_ensemble){
         .m = m, .base = sys.prob, .k = k, .n = n, .rows = rows, .np = np,
         .rows_kind = !par ? MP_ENS_ROWS_NONE : sys.model ? MP_ENS_ROWS_SCENE
@@ -1208,7 +1266,8 @@ static PyObject *py_ode_solve_many(PyObject *self, PyObject *args, PyObject *kw)
         .torque = sys.torque.fn ? &sys.torque : NULL, .lane_rhs = sys.lanes,
         .holds_python = sys.holds_python || watch != Py_None || (jaco != Py_None && !jm) ||
                         (el.count && !el.all_c),
-        .want_lanes = want_lanes};
+        .want_lanes = want_lanes, .impacts = lane_imps > 0 ? ad.imps : NULL,
+        .n_impacts = lane_imps > 0 ? ad.nimp : 0};
     int rc = mp_ode_ensemble_build(&ens, oa.t0, oa.tf, &o);
     if (rc != MP_OK) {
         ensemble_error(&ens, rc, kind);
