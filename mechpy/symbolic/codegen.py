@@ -830,6 +830,31 @@ int {name}({sig})
 """
 
 
+def _first_order_tail(has_energy: bool, what: str) -> str:
+    """The functions of a library whose state is not (q, q'): mp_gen_energy (the
+    given energy, printed before as gen_energy, or absent), absent momenta,
+    multipliers and constraint forces, and mp_gen_lagrangian refusing (what: the
+    kind of system, for its comment)."""
+    energy = r"""
+/* out[0] = the given energy. */
+int mp_gen_energy(double t, const double *y, double *out, void *params)
+{
+    gen_energy(t, y, (const double *)params, out);
+    return MP_OK;
+}
+""" if has_energy else _absent("mp_gen_energy")
+    return "\n".join([energy, _absent("mp_gen_momenta") + _absent("mp_gen_multipliers")
+                      + _absent("mp_gen_constraint_forces"), f"""
+/* Not defined for {what}: returns MP_EDOM. */
+int mp_gen_lagrangian(size_t m, const double *t, const double *q, const double *qd,
+                      double *out, void *params)
+{{
+    (void)m; (void)t; (void)q; (void)qd; (void)out; (void)params;
+    return MP_EDOM;
+}}
+"""])
+
+
 def _equations_source(ir, status):
     B = ir.blocks
     parts = [_header(ir, status), _dims(ir),
@@ -854,27 +879,7 @@ int mp_gen_jac(double t, const double *y, double *jac, void *params)
     parts.append(_fixed_blocks(ir))
     if "energy" in B:
         parts.append(_block("gen_energy", B["energy"], ir, _ARGS, "the energy"))
-        parts.append(r"""
-/* out[0] = the given energy. */
-int mp_gen_energy(double t, const double *y, double *out, void *params)
-{
-    gen_energy(t, y, (const double *)params, out);
-    return MP_OK;
-}
-""")
-    else:
-        parts.append(_absent("mp_gen_energy"))
-    parts.append(_absent("mp_gen_momenta") + _absent("mp_gen_multipliers")
-                 + _absent("mp_gen_constraint_forces"))
-    parts.append("""
-/* Not defined for a first-order system: returns MP_EDOM. */
-int mp_gen_lagrangian(size_t m, const double *t, const double *q, const double *qd,
-                      double *out, void *params)
-{
-    (void)m; (void)t; (void)q; (void)qd; (void)out; (void)params;
-    return MP_EDOM;
-}
-""")
+    parts.append(_first_order_tail("energy" in B, "a first-order system"))
     return "\n".join(parts)
 
 
@@ -1059,28 +1064,7 @@ int mp_gen_residual_jac(double t, const double *y, double *out, void *params)
     return MP_OK;
 }
 """)
-    if "energy" in B:
-        parts.append(r"""
-/* out[0] = the energy. */
-int mp_gen_energy(double t, const double *y, double *out, void *params)
-{
-    gen_energy(t, y, (const double *)params, out);
-    return MP_OK;
-}
-""")
-    else:
-        parts.append(_absent("mp_gen_energy"))
-    parts.append(_absent("mp_gen_momenta") + _absent("mp_gen_multipliers")
-                 + _absent("mp_gen_constraint_forces"))
-    parts.append("""
-/* Not defined for a mechanics model: returns MP_EDOM. */
-int mp_gen_lagrangian(size_t m, const double *t, const double *q, const double *qd,
-                      double *out, void *params)
-{
-    (void)m; (void)t; (void)q; (void)qd; (void)out; (void)params;
-    return MP_EDOM;
-}
-""")
+    parts.append(_first_order_tail("energy" in B, "a mechanics model"))
     if lanes is None:
         parts.append(_lanes_mechanics(ir))
     parts.append(_fixed_blocks(ir))

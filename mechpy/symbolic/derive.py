@@ -390,14 +390,7 @@ def lagrangian_ir(L, q, params=None, constraints=(), forces=None, baumgarte=None
             raise ValueError(f"forces must have one entry per coordinate: got {len(Qf)} for "
                              f"{n} coordinate(s) {[_name(x) for x in qs]}")
     k = len(cons)
-    if baumgarte is None:
-        baumgarte = BAUMGARTE
-    try:
-        alpha, beta = (float(x) for x in baumgarte)
-    except (TypeError, ValueError):
-        raise TypeError("baumgarte must be a pair (alpha, beta) of numbers (1/s)") from None
-    if not (alpha >= 0 and beta >= 0):
-        raise ValueError(f"baumgarte (alpha, beta) must be non-negative, got {baumgarte}")
+    alpha, beta = baumgarte_rates(baumgarte)
 
     T = sp.Symbol("mp_t")
     Q = [sp.Symbol(f"mp_y{i}") for i in range(n)]
@@ -549,3 +542,17 @@ def equations_ir(rhs, y, params=None, energy=None) -> IR:
     ir.equations = [sp.Eq(yi.diff(t) if not isinstance(yi, sp.Symbol) else
                           sp.Derivative(yi, t), f) for yi, f in zip(ys, fs)]
     return ir
+
+
+def baumgarte_rates(baumgarte) -> tuple:
+    """Baumgarte's (alpha, beta) (1/s): the default BAUMGARTE for None, else a
+    checked pair of non-negative numbers (TypeError, ValueError)."""
+    if baumgarte is None:
+        baumgarte = BAUMGARTE
+    try:
+        alpha, beta = (float(x) for x in baumgarte)
+    except (TypeError, ValueError):
+        raise TypeError("baumgarte must be a pair (alpha, beta) of numbers (1/s)") from None
+    if not (alpha >= 0 and beta >= 0):
+        raise ValueError(f"baumgarte (alpha, beta) must be non-negative, got {baumgarte}")
+    return alpha, beta

@@ -43,7 +43,7 @@ import sympy as sp
 from sympy.physics.mechanics import dynamicsymbols
 
 from .. import _core
-from .derive import IR, BAUMGARTE, _Diff, _assumptions, _check_derived, _check_input
+from .derive import IR, _assumptions, _check_derived, _check_input, _Diff, baumgarte_rates
 from .scene import CompiledScene
 
 __all__ = ["mechanics_parts", "MechanicsScene"]
@@ -191,14 +191,7 @@ def mechanics_parts(method, params, specified=None, baumgarte=None):
     """
     kind, m = _method(method)
     t = dynamicsymbols._t
-    if baumgarte is None:
-        baumgarte = BAUMGARTE
-    try:
-        alpha, beta = (float(x) for x in baumgarte)
-    except (TypeError, ValueError):
-        raise TypeError("baumgarte must be a pair (alpha, beta) of numbers (1/s)") from None
-    if not (alpha >= 0 and beta >= 0):
-        raise ValueError(f"baumgarte (alpha, beta) must be non-negative, got {baumgarte}")
+    alpha, beta = baumgarte_rates(baumgarte)
     q = list(m.q)
     n = len(q)
     if kind == "kane":
@@ -383,7 +376,7 @@ def mechanics_parts(method, params, specified=None, baumgarte=None):
 def finish(ir, info):
     """The derivatives: D (NA x (NS + nr)) and GJ (nres x NS)."""
     d = _Diff()
-    NS, NA = ir.n, info["na"]
+    NA = info["na"]
     A = ir.blocks["A"]
     b = ir.blocks["b"]
     Z = ir.Z
