@@ -206,7 +206,8 @@ static double lane_interp(const lane_group *g, int l, size_t c, double s)
  * tnew (or cut at tend < tnew by an event, exact_end 0): the step end itself
  * exactly, the others from the interpolant in coef (mp_ode_dense_eval's form,
  * lane by lane). */
-static void lane_output(lane_group *g, int l, double h, double tnew, int exact_end)
+static inline __attribute__((always_inline)) void lane_output(lane_group *g, int l, double h,
+                                                             double tnew, int exact_end)
 {
     size_t nc = g->m->ncoef, nW = g->nW;
     for (; g->ie[l] < g->nt && g->sev[g->ie[l]] <= tnew; g->ie[l]++) {
@@ -562,7 +563,7 @@ static int lane_g_at(void *ctx, double s, double *gs)
  * is left at the impact with its state after it, to restart (lane_restart).
  * Returns 1 when the lane restarts there, 2 when it ended, 0 when no impact
  * cut the step (the impacts' g moved to the step end). */
-static int lane_impacts(lane_group *g, int l, double tnew)
+__attribute__((noinline, cold)) static int lane_impacts(lane_group *g, int l, double tnew)
 {
     size_t n = g->n, i = g->idx[l];
     double t = g->t[l], h = g->h[l], s_hit = 2.0;
@@ -650,7 +651,7 @@ static int lane_impacts(lane_group *g, int l, double tnew)
  * (lane_impacts), restart there as driver.c's apply_action restarts a solve:
  * f afresh, the controller and the first step afresh, fixed steps counted
  * from the impact; a lane whose f fails ends. */
-static void lane_restart(lane_group *g, int *act)
+__attribute__((noinline, cold)) static void lane_restart(lane_group *g, int *act)
 {
     int rc[W];
     double ts[W];
@@ -762,7 +763,10 @@ static void lane_attempt(lane_group *g)
         }
         g->t[l] = tnew[l];
         g->nfix[l]++;
-        g->h[l] = fmin(g->adaptive ? hnew[l] : g->o->h, g->hmax);
+        /* fmin(next, hmax) as a select (fmin is a call in this loop): the same value,
+         * both being positive and finite */
+        double hn = g->adaptive ? hnew[l] : g->o->h;
+        g->h[l] = hn < g->hmax ? hn : g->hmax;
         if (!(g->t[l] < g->sf)) lane_end(g, l, MP_OK);
     }
     int any = 0;
