@@ -243,12 +243,21 @@ static inline double wrap_pi(double t)
     return t;
 }
 
+/* sqrt(x^2 + y^2) without hypot's cost where the sum of squares is a normal
+ * number (the usual case), hypot where it is not (nothing underflows). */
+static inline double norm2(double x, double y)
+{
+    double s = x * x + y * y;
+    return s >= DBL_MIN && s <= DBL_MAX ? sqrt(s) : hypot(x, y);
+}
+
 /* Angles of the active rotation with unit-or-not quaternion q (Bernardes and
  * Viollet 2022, "Quaternion to Euler angles conversion: a direct, general
  * and computationally efficient method", PLoS ONE 17(11): e0276302).  The
  * paper's algorithm is for extrinsic sequences; intrinsic ones are the
- * reversed sequence with reversed angles.  Returns 1 at gimbal lock. */
-static int euler_of_quat(const double *q, const int axes_in[3], int extrinsic, double lock_tol,
+ * reversed sequence with reversed angles.  tl = tan(lock_tol / 2) (the
+ * gimbal-lock band).  Returns 1 at gimbal lock. */
+static int euler_of_quat(const double *q, const int axes_in[3], int extrinsic, double tl,
                          double *out)
 {
     int i, j, k;
@@ -268,14 +277,15 @@ static int euler_of_quat(const double *q, const int axes_in[3], int extrinsic, d
         a = q[3] - q[j]; b = q[i] + q[k] * sign; c = q[j] + q[3]; d = q[k] * sign - q[i];
     }
     /* theta = 2 atan2(|(c, d)|, |(a, b)|): accurate near 0 and pi, unlike acos;
-     * hypot so that nothing underflows before theta does */
+     * the norms so that nothing underflows before theta does (norm2) */
     double t[3];
-    double ncd = hypot(c, d), nab = hypot(a, b);
+    double ncd = norm2(c, d), nab = norm2(a, b);
     t[1] = 2.0 * atan2(ncd, nab);
     /* tan(theta/2) = ncd/nab and tan((pi - theta)/2) = nab/ncd: lock only where the
      * smaller norm is no longer a normal number relative to the larger (the first and
-     * third angles are then indeterminate) or within lock_tol of it */
-    double big = fmax(ncd, nab), tl = lock_tol < MP_PI ? tan(0.5 * lock_tol) : INFINITY;
+     * third angles are then indeterminate) or within lock_tol of it (tl = tan(lock_tol/2),
+     * the caller's) */
+    double big = fmax(ncd, nab);
     int safe1 = ncd > tl * nab && ncd >= DBL_MIN * big;
     int safe2 = nab > tl * ncd && nab >= DBL_MIN * big;
     double half_sum = atan2(b, a);
@@ -312,6 +322,7 @@ int mp_rotation_euler_from_quat(size_t n, const double *q, const struct mp_rotat
                                 size_t *bad)
 {
     size_t locks = 0;
+    double tl = lock_tol < MP_PI ? tan(0.5 * lock_tol) : INFINITY; /* once, not per angle */
     for (size_t i = 0; i < n; i++) {
         const double *p = q + 4 * i;
         double u[4] = {p[0], p[1], p[2], p[3]};
@@ -323,7 +334,7 @@ int mp_rotation_euler_from_quat(size_t n, const double *q, const struct mp_rotat
         if (passive) {
             u[0] = -u[0]; u[1] = -u[1]; u[2] = -u[2];
         }
-        locks += (size_t)euler_of_quat(u, seq->axes, seq->extrinsic, lock_tol, angles + 3 * i);
+        locks += (size_t)euler_of_quat(u, seq->axes, seq->extrinsic, tl, angles + 3 * i);
     }
     if (nlock) *nlock = locks;
     return MP_OK;
