@@ -7,9 +7,11 @@
     python scripts/mutate.py --only ode:7 --only modes.py:2   # rerun chosen mutants
 
 A mutant is one small edit of one source line: a sign flip (``a + b`` ->
-``a - b``), a constant's last digit (``0.5`` -> ``0.6``), an off-by-one
-(``i < n`` -> ``i <= n``, ``k + 1`` -> ``k + 2``) or a dropped term
-(``a + b * c`` -> ``a``).  The candidates of a module are listed in a fixed
+``a - b``), a constant's last digit (``0.5`` -> ``0.6``; the sixth significant
+digit of a longer literal), an off-by-one (``i < n`` -> ``i <= n``, ``k + 1``
+-> ``k + 2``), a condition turned (``==`` <-> ``!=``, ``and`` <-> ``or``), an
+operator swapped (``a * b`` <-> ``a / b``) or a dropped term (``a + b * c`` ->
+``a``).  The candidates of a module are listed in a fixed
 order and drawn at random with a fixed seed, so a run is repeatable and a
 mutant has a stable name (``module:index``).
 
@@ -50,30 +52,94 @@ ENGINE_TESTS = ["tests/test_integrate.py", "tests/test_engine_regressions.py",
                 "tests/test_hard_cases.py", "tests/test_ensemble.py", "tests/test_detest.py"]
 SCENE_TESTS = ["tests/test_scenes.py", "tests/test_scene_values.py", "tests/test_chain.py",
                "tests/test_frames.py", "tests/test_rigid.py"]
-# module -> (source files, the tests that cover them; extra pytest arguments allowed)
+#: The SIMD lane driver and its fixed-step blocks: their own entry, so that the
+#: rest of csrc/ode/ (a glob: a file added there is in "ode" at once) keeps
+#: its own figures.
+LANES = ["csrc/ode/lanes.c", "csrc/ode/lanes.h", "csrc/ode/fixed.h"]
+# module -> (source files or globs, the tests that cover them; extra pytest
+# arguments allowed).  The tests of a module are the test files that import it
+# or call what it defines (a C file: the Python calls that reach it).  Every
+# csrc/**/*.c|h and mechpy/**/*.py belongs to exactly one module or to
+# EXCLUDED (tests/test_mutate_modules.py checks it against the tree).
 MODULES = {
-    "ode": (["csrc/ode/driver.c", "csrc/ode/rk.c", "csrc/ode/radau.c", "csrc/ode/gsl.c",
-             "csrc/ode/geometric.c", "csrc/ode/ensemble.c", "csrc/ode/rigid_split.c",
-             "csrc/ode/auto.c", "csrc/ode/methods.c"],
-            ENGINE_TESTS + ["tests/test_rigid.py", "-k", FAST]),
-    "integrate.py": (["mechpy/integrate.py"], ENGINE_TESTS + ["-k", FAST]),
-    "models": (["csrc/models/oscillators.c", "csrc/models/orbits.c", "csrc/models/chain.c",
-                "csrc/models/foucault.c", "csrc/models/rigid.c", "csrc/models/rocket.c",
-                "csrc/models/models.c"], SCENE_TESTS),
+    "ode": (["csrc/ode/*.c", "csrc/ode/*.h"],
+            ENGINE_TESTS + ["tests/test_rigid.py", "tests/test_lanes.py", "-k", FAST]),
+    "lanes": (LANES, ["tests/test_lanes.py", "tests/test_ensemble.py", "-k", FAST]),
+    "integrate.py": (["mechpy/integrate.py", "mechpy/_callbacks.py"],
+                     ENGINE_TESTS + ["tests/test_lanes.py", "-k", FAST]),
+    "models": (["csrc/models/*.c", "csrc/models/*.h"], SCENE_TESTS),
     "scenes.py": (["mechpy/scenes.py"], SCENE_TESTS),
-    "inertia.c": (["csrc/inertia.c"], ["tests/test_inertia.py"]),
-    "rotation.c": (["csrc/rotation.c"], ["tests/test_rotation.py", "tests/test_rigid.py"]),
-    "modes.c": (["csrc/modes.c"], ["tests/test_modes.py", "tests/test_chain.py", "-k", FAST]),
-    "variational.c": (["csrc/variational.c"], ["tests/test_variational.py", "-k", FAST]),
+    "inertia.c": (["csrc/inertia.c", "csrc/inertia.h"], ["tests/test_inertia.py"]),
+    "rotation.c": (["csrc/rotation.c", "csrc/rotation.h"],
+                   ["tests/test_rotation.py", "tests/test_rigid.py"]),
+    "modes.c": (["csrc/modes.c", "csrc/modes.h"],
+                ["tests/test_modes.py", "tests/test_chain.py", "-k", FAST]),
+    "variational.c": (["csrc/variational.c", "csrc/variational.h"],
+                      ["tests/test_variational.py", "-k", FAST]),
+    "binding": (["csrc/py/*.c", "csrc/py/*.h", "csrc/mp_status.c", "csrc/mp_status.h"],
+                ["tests/test_errors.py", "tests/test_integrate.py",
+                 "tests/test_engine_regressions.py", "tests/test_scenes.py",
+                 "tests/test_inertia.py", "tests/test_rotation.py", "tests/test_modes.py",
+                 "tests/test_compiled.py", "-k", FAST]),
     "inertia.py": (["mechpy/inertia.py"], ["tests/test_inertia.py"]),
     "rotation.py": (["mechpy/rotation.py"], ["tests/test_rotation.py", "tests/test_rigid.py"]),
     "modes.py": (["mechpy/modes.py"], ["tests/test_modes.py", "tests/test_chain.py", "-k", FAST]),
-    "variational.py": (["mechpy/variational/action.py", "mechpy/variational/classic.py",
-                        "mechpy/variational/constraints.py",
-                        "mechpy/variational/functionals.py",
-                        "mechpy/variational/lagrangians.py"],
-                       ["tests/test_variational.py", "-k", FAST]),
+    "variational.py": (["mechpy/variational/*.py"], ["tests/test_variational.py", "-k", FAST]),
+    "symbolic": (["mechpy/symbolic/derive.py", "mechpy/symbolic/codegen.py"],
+                 ["tests/test_compiled.py", "tests/test_lanes.py", "-k", "compiled or lane_rhs"]),
+    "symbolic.build": (["mechpy/symbolic/__init__.py", "mechpy/symbolic/build.py",
+                        "mechpy/symbolic/scene.py"], ["tests/test_compiled.py"]),
+    "cluster.py": (["mechpy/cluster.py"], ["tests/test_cluster.py"]),
+    "phase.py": (["mechpy/phase.py"], ["tests/test_phase.py"]),
+    "tangent.py": (["mechpy/tangent.py"], ["tests/test_tangent.py"]),
+    "frames.py": (["mechpy/frames.py", "mechpy/particles.py"],
+                  ["tests/test_frames.py", "tests/test_particles.py"]),
+    "rigid.py": (["mechpy/rigid.py"], ["tests/test_rigid.py"]),
+    "stress.py": (["mechpy/stress.py"], ["tests/test_stress.py"]),
+    "plot.py": (["mechpy/plot.py", "mechpy/_motion.py"], ["tests/test_plot.py"]),
+    "live": (["mechpy/live/*.py"], ["tests/test_live.py", "tests/test_live_motion.py"]),
+    "support": (["mechpy/_validate.py", "mechpy/errors.py", "mechpy/__init__.py"],
+                ["tests/test_errors.py", "tests/test_integrate.py", "tests/test_imports.py",
+                 "-k", FAST]),
 }
+
+#: Files of the package that no module mutates, and why.
+EXCLUDED = {
+    "mechpy/__main__.py": "the command line's dispatch to the tours and benches "
+                          "(test_build runs it; no result of its own to assert)",
+    "mechpy/bench.py": "the bench harness: it times and prints, it computes nothing "
+                       "that a test could compare with a reference",
+    "mechpy/_timing.py": "timers of the benches and tours (wall-clock figures only)",
+    "mechpy/benches/*.py": "benchmarks: timings of the modules above against other "
+                           "libraries, their correctness is the modules' own (test_hard_cases "
+                           "imports hard_cases' reference values, published ones)",
+    "mechpy/tours/*.py": "the printed demonstrations of `python -m mechpy tour`: they call "
+                         "the modules above and print; test_course runs them for errors only",
+}
+
+
+def _glob(patterns):
+    """The files of ``patterns`` (paths or globs relative to the root), sorted."""
+    out = []
+    for pat in patterns:
+        hits = sorted(str(p.relative_to(ROOT)) for p in ROOT.glob(pat) if p.is_file())
+        out += [h for h in hits if h not in out]
+    return out
+
+
+def module_files(name):
+    """The source files of one module: its globs, less what another module
+    names explicitly (lanes.c is in "lanes", not in the glob of "ode")."""
+    explicit = {f for other, (pats, _) in MODULES.items() if other != name
+                for f in pats if not any(ch in f for ch in "*?[")}
+    return [f for f in _glob(MODULES[name][0]) if f not in explicit]
+
+
+def package_sources():
+    """Every file that belongs to some module or to EXCLUDED: the C sources
+    and headers under csrc/ and the Python files under mechpy/."""
+    return sorted(_glob(["csrc/**/*.c", "csrc/**/*.h", "mechpy/**/*.py"]))
+
 
 NUM = r"(?<![\w.])(\d+\.\d*(?:[eE][+-]?\d+)?|\d*\.\d+(?:[eE][+-]?\d+)?|\d+[eE][+-]?\d+)(?![\w.])"
 INT = r"(?<![\w.])(\d+)(?![\w.])"
@@ -88,7 +154,7 @@ def _code_lines(path, text):
     """(line number, code part) of the lines worth mutating: statements inside
     function bodies, with comments, preprocessor lines and docstrings left out."""
     out = []
-    c = path.endswith(".c")
+    c = path.endswith((".c", ".h"))
     in_block = False   # inside /* */ (C) or a triple-quoted string (Python)
     for no, line in enumerate(text.splitlines()):
         if c:
@@ -125,7 +191,7 @@ def _code_lines(path, text):
 
 def _candidates(path, text):
     """Every mutant of one file, in a fixed order: (line, start, end, new, kind)."""
-    c = path.endswith(".c")
+    c = path.endswith((".c", ".h"))
     cands = []
     for no, code in _code_lines(path, text):
         spans = _string_spans(code)
@@ -139,7 +205,11 @@ def _candidates(path, text):
         for m in re.finditer(NUM, code):
             s = m.group(1)
             mant = re.match(r"[\d.]+", s).group()
-            i = max(k for k, ch in enumerate(mant) if ch.isdigit())
+            # the last digit, or the sixth significant one of a longer literal (a
+            # tableau's 17-digit coefficient moved in its last digit is round-off)
+            sig = [k for k, ch in enumerate(mant) if ch.isdigit()
+                   and (ch != "0" or any(c2 not in "0." for c2 in mant[:k]))]
+            i = sig[5] if len(sig) > 6 else max(k for k, ch in enumerate(mant) if ch.isdigit())
             new = s[:i] + str((int(s[i]) + 1) % 10) + s[i + 1:]
             add(m.start(1), m.end(1), new, "constant")
         for m in re.finditer(r"(?<![<>=!-])(<=|>=|<|>)(?![<>=])", code):
@@ -153,6 +223,13 @@ def _candidates(path, text):
         for m in re.finditer(r"\[" + INT + r"\]", code):
             k = int(m.group(1))
             add(m.start(1), m.end(1), str(k + 1 if k == 0 else k - 1), "off-by-one")
+        for m in re.finditer(r" (==|!=) ", code):
+            add(m.start(1), m.end(1), "!=" if m.group(1) == "==" else "==", "condition")
+        for m in re.finditer(r" (and|or|&&|\|\|) ", code):
+            add(m.start(1), m.end(1), {"and": "or", "or": "and", "&&": "||",
+                                       "||": "&&"}[m.group(1)], "condition")
+        for m in re.finditer(r"(?<=[\w)\]]) ([*/]) (?=[\w(.])", code):
+            add(m.start(1), m.end(1), "/" if m.group(1) == "*" else "*", "operator")
         # a dropped term: " + X" or " - X" up to the next +/- at depth 0, ')' or ';'
         for m in re.finditer(r"(?<=[\w)\]]) [+-] (?=[\w(.])", code):
             depth, j = 0, m.end()
@@ -284,7 +361,7 @@ class Tree:
 
 
 def _run_module(tree, name, n, seed, only, log):
-    files, tests = MODULES[name]
+    files, tests = module_files(name), MODULES[name][1]
     tests = [t for t in tests if not t.startswith("tests/") or (tree.dir / t).exists()]
     pool = []
     for f in files:
@@ -309,7 +386,7 @@ def _run_module(tree, name, n, seed, only, log):
         text = path.read_text()
         path.write_text(_apply(text, cand))
         try:
-            ok = tree.build() if f.endswith(".c") else True
+            ok = tree.build() if f.endswith((".c", ".h")) else True
             if not ok:
                 log(f"   {tag} does not compile, drawn again")
                 continue
@@ -324,7 +401,7 @@ def _run_module(tree, name, n, seed, only, log):
                "after": (line[:a] + new + line[b:]).strip()}
         results.append(row)
         log(f"   {tag:18s} {status:8s} {f}:{no + 1} {kind}: {row['after']}")
-    if any(f.endswith(".c") for f in files):
+    if any(f.endswith((".c", ".h")) for f in files):
         tree.build()  # the unmutated sources again
     return results
 
@@ -342,8 +419,10 @@ def main(argv=None):
     ap.add_argument("--list", action="store_true", help="list the modules and their tests")
     a = ap.parse_args(argv)
     if a.list:
-        for name, (files, tests) in MODULES.items():
-            print(f"{name:15s} {' '.join(files)}\n{'':15s} -> {' '.join(tests)}")
+        for name, (_, tests) in MODULES.items():
+            print(f"{name:15s} {' '.join(module_files(name))}\n{'':15s} -> {' '.join(tests)}")
+        for pat, why in EXCLUDED.items():
+            print(f"{'(excluded)':15s} {pat}: {why}")
         return 0
     names = a.module or list(MODULES)
     only = set(a.only) if a.only else None
