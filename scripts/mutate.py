@@ -5,6 +5,7 @@
     python scripts/mutate.py -m ode -m modes.c -n 20 --seed 3
     python scripts/mutate.py --list               # the modules and their tests
     python scripts/mutate.py --only ode:7 --only modes.py:2   # rerun chosen mutants
+    python scripts/mutate.py --edit 'csrc/ode/lanes.c:165:g->dir * g->t[l]=>g->t[l]'
 
 A mutant is one small edit of one source line: a sign flip (``a + b`` ->
 ``a - b``), a constant's last digit (``0.5`` -> ``0.6``; the sixth significant
@@ -406,6 +407,53 @@ def _run_module(tree, name, n, seed, only, log):
     return results
 
 
+def _owner(path):
+    """The module whose files hold ``path``."""
+    for name in MODULES:
+        if path in module_files(name):
+            return name
+    sys.exit(f"mutate: {path} is in no module of MODULES")
+
+
+def _run_edits(tree, edits, log, only_tests=None):
+    """Hand-written mutants (an audit's): ``path:line:old=>new`` replaces old by
+    new on that line (1-based); each runs the tests of the module holding path."""
+    rows = []
+    for e in edits:
+        try:
+            path, line, change = e.split(":", 2)
+            old, new = change.split("=>", 1)
+            no = int(line) - 1
+        except ValueError:
+            sys.exit(f"mutate: --edit wants path:line:old=>new, got {e!r}")
+        name = _owner(path)
+        f = tree.dir / path
+        text = f.read_text()
+        lines = text.splitlines(keepends=True)
+        if old not in lines[no]:
+            sys.exit(f"mutate: --edit {e!r}: {old!r} is not on line {no + 1} of {path}: "
+                     f"{lines[no].strip()!r}")
+        lines[no] = lines[no].replace(old, new, 1)
+        f.write_text("".join(lines))
+        try:
+            c = path.endswith((".c", ".h"))
+            if c and not tree.build():
+                log(f"   {e}: does not compile\n{tree.last_log[-2000:]}")
+                continue
+            tests = only_tests or [t for t in MODULES[name][1]
+                                   if not t.startswith("tests/") or (tree.dir / t).exists()]
+            rc, secs = tree.pytest(tests, timeout=1800)
+        finally:
+            f.write_text(text)
+            if path.endswith((".c", ".h")):
+                tree.build()
+        status = "survived" if rc == 0 else "killed"
+        rows.append({"id": e, "file": path, "line": no + 1, "kind": "edit", "status": status,
+                     "exit": rc, "seconds": round(secs, 1), "before": lines[no].strip()})
+        log(f"   {status:8s} ({name}, {secs:.0f} s) {e}")
+    return rows
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("-m", "--module", action="append", choices=sorted(MODULES),
@@ -416,6 +464,11 @@ def main(argv=None):
     ap.add_argument("--out", default=str(ROOT / "build" / "mutate-report.json"),
                     help="the JSON report (default: build/, which git ignores)")
     ap.add_argument("--keep", action="store_true", help="keep the temporary copy")
+    ap.add_argument("--edit", action="append",
+                    help="a hand-written mutant path:line:old=>new (repeatable; runs the "
+                         "tests of the module holding path)")
+    ap.add_argument("--tests", help="with --edit: these pytest arguments instead of the "
+                                    "module's tests (one string)")
     ap.add_argument("--list", action="store_true", help="list the modules and their tests")
     a = ap.parse_args(argv)
     if a.list:
@@ -439,6 +492,9 @@ def main(argv=None):
     log(f"mutate: copy in {tree.dir}")
     report = {}
     try:
+        if a.edit:
+            report["edits"] = _run_edits(tree, a.edit, log, a.tests and a.tests.split())
+            names = []
         for name in names:
             report[name] = _run_module(tree, name, a.n, a.seed, only, log)
     finally:
