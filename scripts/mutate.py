@@ -38,6 +38,7 @@ import json
 import os
 import random
 import re
+import shlex
 import shutil
 import signal
 import subprocess
@@ -493,7 +494,7 @@ def main(argv=None):
     report = {}
     try:
         if a.edit:
-            report["edits"] = _run_edits(tree, a.edit, log, a.tests and a.tests.split())
+            report["edits"] = _run_edits(tree, a.edit, log, a.tests and shlex.split(a.tests))
             names = []
         for name in names:
             report[name] = _run_module(tree, name, a.n, a.seed, only, log)

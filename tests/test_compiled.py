@@ -796,6 +796,96 @@ def test_second_build_loads_from_disk(tmp_path, monkeypatch):
     assert not s2._compiled and s2._path == s._path
 
 
+def test_the_cache_key_takes_every_input(tmp_path, monkeypatch):
+    # systems that differ in one input each, built one after the other in one cache
+    # folder: each behaves as its own input says (none is served another's library
+    # or stored derivation), checked against the equations written by hand
+    from mechpy import symbolic
+    monkeypatch.setenv("MECHPY_CACHE_DIR", str(tmp_path))
+    th, = mp.coordinates("theta")
+    w = th.diff(t)
+    g_, l_, b_ = sp.symbols("g l b")
+    P, Pb = dict(g=G, l=1.3), dict(g=G, l=1.3, b=0.2)
+    y = np.array([0.7, -0.4])
+
+    def acc(s):
+        return s.rhs(0.0, y)[1]
+
+    base = mp.lagrangian(l_ ** 2 / 2 * w ** 2 + g_ * l_ * sp.cos(th), [th], params=P)
+    assert acc(base) == pytest.approx(-G / 1.3 * np.sin(0.7), rel=1e-15)
+    # the Lagrangian
+    s = mp.lagrangian(l_ ** 2 / 2 * w ** 2 + 2 * g_ * l_ * sp.cos(th), [th], params=P)
+    assert acc(s) == pytest.approx(-2 * G / 1.3 * np.sin(0.7), rel=1e-15)
+    # the parameters' order (the order of scene.params and of solve_many's rows)
+    s = mp.lagrangian(l_ ** 2 / 2 * w ** 2 + g_ * l_ * sp.cos(th), [th],
+                      params=dict(l=1.3, g=G))
+    assert list(s.params) == ["l", "g"] and acc(s) == acc(base)
+    assert s.replace(g=1.0).rhs(0.0, y)[1] == pytest.approx(-np.sin(0.7) / 1.3, rel=1e-15)
+    # the forces
+    L0 = l_ ** 2 / 2 * w ** 2 + g_ * l_ * sp.cos(th)
+    d1 = mp.lagrangian(L0, [th], params=Pb, forces=[-b_ * w])
+    d2 = mp.lagrangian(L0, [th], params=Pb, forces=[-2 * b_ * w])
+    assert acc(d1) == pytest.approx(acc(base) + 0.2 * 0.4 / 1.3 ** 2, rel=1e-14)
+    assert acc(d2) == pytest.approx(acc(base) + 2 * 0.2 * 0.4 / 1.3 ** 2, rel=1e-14)
+    # the coordinates' order
+    x, z = mp.coordinates("x z")
+    Lxz = (x.diff(t) ** 2 + z.diff(t) ** 2) / 2 - (x ** 2 + 4 * z ** 2) / 2
+    a, b = mp.lagrangian(Lxz, [x, z]), mp.lagrangian(Lxz, [z, x])
+    v = np.array([0.3, 0.5, 0.0, 0.0])
+    assert a.rhs(0.0, v)[2:].tolist() == [-0.3, -2.0] and b.rhs(0.0, v)[2:].tolist() == [-1.2, -0.5]
+    # the constraints and Baumgarte's rates: a state off the constraint x^2 + z^2 = l^2
+    # is pulled back by g'' + 2 alpha g' + beta^2 g = 0
+    L2 = (x.diff(t) ** 2 + z.diff(t) ** 2) / 2 - g_ * z
+    off = np.array([0.0, -1.1, 0.0, 0.0])     # at rest, g = 1.21 - l^2
+    for lv, (al, be) in [(1.0, (5.0, 5.0)), (1.0, (1.0, 2.0)), (1.05, (1.0, 2.0))]:
+        c = mp.lagrangian(L2, [x, z], params=dict(g=G, l=lv),
+                          constraints=[x ** 2 + z ** 2 - l_ ** 2], baumgarte=(al, be))
+        # at rest on the z axis: 2 z z'' = -beta^2 g, so z'' = -beta^2 (z^2 - l^2) / (2 z)
+        zdd = -be ** 2 * (1.1 ** 2 - lv ** 2) / (2 * -1.1)
+        assert c.rhs(0.0, off)[3] == pytest.approx(zdd, rel=1e-13)
+    # first-order equations: the right-hand side, the states' order and the energy
+    e1 = mp.equations([z, -x], [x, z], energy=(x ** 2 + z ** 2) / 2)
+    e2 = mp.equations([z, -x], [z, x], energy=(x ** 2 + z ** 2) / 2)
+    e3 = mp.equations([z, -x], [x, z], energy=x ** 2 + z ** 2)
+    e4 = mp.equations([z, -2 * x], [x, z], energy=(x ** 2 + z ** 2) / 2)
+    u = np.array([0.3, 0.5])
+    # (z, x) = (0.3, 0.5) for e2
+    assert e1.rhs(0.0, u).tolist() == [0.5, -0.3] and e2.rhs(0.0, u).tolist() == [0.3, -0.5]
+    assert e4.rhs(0.0, u).tolist() == [0.5, -0.6]
+    assert e1.energy(u) == pytest.approx(0.17) and e3.energy(u) == pytest.approx(0.34)
+    # the generator's code (its hash): a derivation stored by another generator is not
+    # used, the system is derived again (the same source then loads the same library)
+    from mechpy.symbolic import codegen
+    derived = []
+    real = codegen.c_source
+    monkeypatch.setattr(codegen, "c_source", lambda *a: derived.append(1) or real(*a))
+    same = mp.lagrangian(l_ ** 2 / 2 * w ** 2 + g_ * l_ * sp.cos(th), [th], params=P)
+    assert not derived and same._path == base._path
+    monkeypatch.setattr(symbolic, "_GEN_HASH", "another generator")
+    again = mp.lagrangian(l_ ** 2 / 2 * w ** 2 + g_ * l_ * sp.cos(th), [th], params=P)
+    assert derived == [1] and acc(again) == acc(base)
+
+
+def test_the_library_key_takes_every_input(monkeypatch):
+    from mechpy.symbolic import build
+    src, cmd = "int f(void) { return 1; }\n", ["cc"]
+    k = build._key(src, cmd)
+    assert build._key(src, cmd) == k
+    others = {build._key(src + " ", cmd), build._key(src, ["gcc"]), build._key(src, ["cc", "-m32"])}
+    for name, value in [("FLAGS", build.FLAGS + ("-g",)), ("LIBS", ("-lm", "-lquadmath")),
+                        ("ABI_VERSION", build.ABI_VERSION + 1)]:
+        with monkeypatch.context() as m:
+            m.setattr(build, name, value)
+            others.add(build._key(src, cmd))
+    assert len(others) == 6 and k not in others
+    # a source past LARGE compiles with -O1: the flags it gets are part of its key
+    big = "/*" + "x" * build.LARGE + "*/\n"
+    kb = build._key(big, cmd)
+    with monkeypatch.context() as m:
+        m.setattr(build, "LARGE", 10 * build.LARGE)
+        assert build._key(big, cmd) != kb
+
+
 def test_two_processes_building_at_once(tmp_path):
     code = f"""
         import sympy as sp, mechpy as mp

@@ -641,9 +641,10 @@ def test_zero_at_a_step_end_in_both_directions(direction, sign, backward, termin
     # steps of 0.5 (y' = 1 has no error to grow them past max_step) end exactly on
     # t = 1, where g0 = sign (t - 1) is exactly zero, in either direction of time;
     # so is g1 = sign (y - 1) for rk4 and radau, whose y = t is exact at the step
-    # ends (the weights of dop853 and dopri5 sum to 1 within round-off only).  Along the solve g moves from -sign to +sign forwards
-    # and the other way backwards: a crossing in the direction of the filter is
-    # reported once, at t = 1 with y = 1, and a terminal one ends the solve there
+    # ends (the weights of dop853 and dopri5 sum to 1 within round-off only).
+    # Along the solve g moves from -sign to +sign forwards and the other way
+    # backwards: a crossing in the direction of the filter is reported once, at
+    # t = 1 with y = 1, and a terminal one ends the solve there
     t_span, y0 = ((2.0, 0.0), [2.0]) if backward else ((0.0, 2.0), [0.0])
 
     def g_t(t, y):
