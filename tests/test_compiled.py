@@ -833,16 +833,19 @@ def test_the_cache_key_takes_every_input(tmp_path, monkeypatch):
     a, b = mp.lagrangian(Lxz, [x, z]), mp.lagrangian(Lxz, [z, x])
     v = np.array([0.3, 0.5, 0.0, 0.0])
     assert a.rhs(0.0, v)[2:].tolist() == [-0.3, -2.0] and b.rhs(0.0, v)[2:].tolist() == [-1.2, -0.5]
-    # the constraints and Baumgarte's rates: a state off the constraint x^2 + z^2 = l^2
-    # is pulled back by g'' + 2 alpha g' + beta^2 g = 0
+    # the constraints and Baumgarte's rates: a state off the constraint x^2 + z^2 = l^2,
+    # moving along it, is pulled back by g'' + 2 alpha g' + beta^2 g = 0; on the z axis
+    # (x = x' = 0) g' = 2 z z', g'' = 2 z'^2 + 2 z z'', so
+    # z'' = -(2 z'^2 + 4 alpha z z' + beta^2 (z^2 - l^2)) / (2 z)
     L2 = (x.diff(t) ** 2 + z.diff(t) ** 2) / 2 - g_ * z
-    off = np.array([0.0, -1.1, 0.0, 0.0])     # at rest, g = 1.21 - l^2
+    zz, vz = -1.1, 0.3
+    off = np.array([0.0, zz, 0.0, vz])
     for lv, (al, be) in [(1.0, (5.0, 5.0)), (1.0, (1.0, 2.0)), (1.05, (1.0, 2.0))]:
         c = mp.lagrangian(L2, [x, z], params=dict(g=G, l=lv),
                           constraints=[x ** 2 + z ** 2 - l_ ** 2], baumgarte=(al, be))
-        # at rest on the z axis: 2 z z'' = -beta^2 g, so z'' = -beta^2 (z^2 - l^2) / (2 z)
-        zdd = -be ** 2 * (1.1 ** 2 - lv ** 2) / (2 * -1.1)
+        zdd = -(2 * vz ** 2 + 4 * al * zz * vz + be ** 2 * (zz ** 2 - lv ** 2)) / (2 * zz)
         assert c.rhs(0.0, off)[3] == pytest.approx(zdd, rel=1e-13)
+        assert c.rhs(0.0, off)[2] == 0.0
     # first-order equations: the right-hand side, the states' order and the energy
     e1 = mp.equations([z, -x], [x, z], energy=(x ** 2 + z ** 2) / 2)
     e2 = mp.equations([z, -x], [z, x], energy=(x ** 2 + z ** 2) / 2)
