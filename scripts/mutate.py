@@ -21,9 +21,10 @@ temporary directory and the C extension is built there once by meson
 (``meson setup`` with this interpreter's meson, ninja and numpy, a release
 build as meson-python's); for a C mutant ``ninja`` recompiles only the
 mutated file and relinks ``_core``, which goes into the copy's package.
-Each mutant runs the tests that cover its module (``-x``: the first failure kills it; a timeout kills
-it too).  A mutant that does not compile (or whose Python does not parse)
-is not counted and another is drawn.
+Each mutant runs the tests that cover its module (``-x``: the first failure kills
+it; a timeout kills it too).  A mutant that does not compile (or whose Python
+does not parse), or that falls inside a Python string (a docstring, a doctest,
+a message), is not counted and another is drawn.
 
 The interpreter is the one running this script (it needs numpy, meson,
 ninja and the test extra, as the .venv of scripts/dev.sh has):
@@ -174,7 +175,10 @@ def _code_lines(path, text):
             if code.lstrip().startswith("#") or not code.startswith((" ", "\t")):
                 continue
         else:
-            n3 = line.count('"""') + line.count("'''")
+            head = line
+            if "#" in line and not re.search("['\"]", line[:line.index("#")]):
+                head = line[:line.index("#")]   # f'''(u) in a comment opens no string
+            n3 = head.count('"""') + head.count("'''")
             if in_block or n3:
                 if n3 % 2 == 1:
                     in_block = not in_block
@@ -266,6 +270,27 @@ def _candidates(path, text):
                 pass
         cands = keep
     return cands
+
+
+def _string_cells(text):
+    """(line, column) cells covered by Python string tokens (docstrings, doctests,
+    messages): a mutant there changes no behaviour the tests can reach."""
+    import io
+    import tokenize
+    cells = set()
+    for tok in tokenize.generate_tokens(io.StringIO(text).readline):
+        if tok.type == tokenize.STRING or tok.type == getattr(tokenize, "FSTRING_MIDDLE", -1):
+            (r0, c0), (r1, c1) = tok.start, tok.end
+            for r in range(r0, r1 + 1):
+                a = c0 if r == r0 else 0
+                b = c1 if r == r1 else 10 ** 6
+                cells.add((r - 1, a, b))
+    return cells
+
+
+def _in_string(cells, cand):
+    no, a = cand[0], cand[1]
+    return any(r == no and lo <= a < hi for r, lo, hi in cells)
 
 
 def _apply(text, cand):
@@ -377,6 +402,7 @@ def _run_module(tree, name, n, seed, only, log):
     timeout = 3 * base + 60
     log(f"== {name}: {len(pool)} candidates in {len(files)} file(s); tests {base:.0f} s")
     results = []
+    strings = {}
     for index, k in enumerate(order):
         tag = f"{name}:{index}"
         if only is not None and tag not in only:
@@ -386,6 +412,12 @@ def _run_module(tree, name, n, seed, only, log):
         f, cand = pool[k]
         path = tree.dir / f
         text = path.read_text()
+        if f.endswith(".py"):
+            if f not in strings:
+                strings[f] = _string_cells(text)
+            if _in_string(strings[f], cand):
+                log(f"   {tag} is inside a string (a docstring, a message), drawn again")
+                continue
         path.write_text(_apply(text, cand))
         try:
             ok = tree.build() if f.endswith((".c", ".h")) else True

@@ -79,3 +79,28 @@ def test_candidates_of_c_headers_are_c(mutate):
     no, a, b, new, kind = next(c for c in mutate._candidates(
         "x.c", "    y = 0.12345678901234 * x;\n") if c[4] == "constant")
     assert new == "0.12345778901234"
+
+
+def test_mutants_inside_python_strings_are_drawn_again(mutate):
+    # a docstring's formula or a doctest is not behaviour: the lines of a docstring
+    # give no candidates (a triple quote in a comment, as rigid.py's "# f'''(u0)",
+    # opens none: it once turned 88 of rigid.py's 131 candidates into docstring
+    # text), and a draw inside a string token is skipped at run time
+    text = ('def f(a, b):\n'
+            '    r"""Sum: a + b.\n\n'
+            '    >>> f(1, 2) + 0\n'
+            '    3\n'
+            '    """\n'
+            "    c = a + 1   # f'''(a) + 1\n"
+            '    """Not a docstring: a + b."""\n'
+            '    return a + b + c\n')
+    signs = [c for c in mutate._candidates("x.py", text) if c[4] == "sign"]
+    assert sorted({c[0] for c in signs}) == [6, 8]
+    cells = mutate._string_cells(text)
+    lines = text.splitlines()
+    for no in (1, 7):   # the docstring's and the string statement's "+"
+        assert mutate._in_string(cells, (no, lines[no].index("+"), 0, "-", "sign"))
+    assert not any(mutate._in_string(cells, c) for c in signs)
+    rigid = (ROOT / "mechpy/rigid.py").read_text()
+    cells = mutate._string_cells(rigid)
+    assert not any(mutate._in_string(cells, c) for c in mutate._candidates("rigid.py", rigid))
