@@ -102,8 +102,8 @@ MODULES = {
     "plot.py": (["mechpy/plot.py", "mechpy/_motion.py"], ["tests/test_plot.py"]),
     "live": (["mechpy/live/*.py"], ["tests/test_live.py", "tests/test_live_motion.py"]),
     "support": (["mechpy/_validate.py", "mechpy/errors.py", "mechpy/__init__.py"],
-                ["tests/test_errors.py", "tests/test_integrate.py", "tests/test_imports.py",
-                 "-k", FAST]),
+                ["tests/test_validate.py", "tests/test_errors.py", "tests/test_integrate.py",
+                 "tests/test_imports.py", "-k", FAST]),
 }
 
 #: Files of the package that no module mutates, and why.
