@@ -271,3 +271,16 @@ def test_closed_client():
         c.close()
         with pytest.raises(ValueError, match="client is closed"):
             mp.solve_many(SCENE, (0, 1), [[0.1, 0.0]], client=c)
+
+
+def test_a_client_with_one_thread():
+    # one worker with one thread is a cluster (the smallest one), not "no workers"
+    y0s, params = _pendulum_ensemble(40, seed=3)
+    kw = dict(params=params, t_eval=np.linspace(0.0, 5.0, 3))
+    local = mp.solve_many(SCENE, (0, 5), y0s, threads=1, **kw)
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
+                                  dashboard_address=":0", silence_logs=40) as cluster, \
+            distributed.Client(cluster, timeout=60) as c:
+        c.wait_for_workers(1, timeout=60)
+        assert sum(c.nthreads().values()) == 1
+        _assert_same(_run(mp.solve_many, SCENE, (0, 5), y0s, client=c, **kw), local)
