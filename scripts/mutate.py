@@ -67,7 +67,10 @@ LANES = ["csrc/ode/lanes.c", "csrc/ode/lanes.h", "csrc/ode/fixed.h"]
 MODULES = {
     "ode": (["csrc/ode/*.c", "csrc/ode/*.h"],
             ENGINE_TESTS + ["tests/test_rigid.py", "tests/test_lanes.py", "-k", FAST]),
-    "lanes": (LANES, ["tests/test_lanes.py", "tests/test_ensemble.py", "-k", FAST]),
+    # fixed.h's kick-drift-kick steps run in the method rows too (verlet, yoshida):
+    # test_integrate.py holds their tests
+    "lanes": (LANES, ["tests/test_lanes.py", "tests/test_ensemble.py", "tests/test_integrate.py",
+                      "-k", FAST]),
     "integrate.py": (["mechpy/integrate.py", "mechpy/_callbacks.py"],
                      ENGINE_TESTS + ["tests/test_lanes.py", "-k", FAST]),
     "models": (["csrc/models/*.c", "csrc/models/*.h"], SCENE_TESTS),
