@@ -498,3 +498,26 @@ def test_resample_is_the_cubic_hermite_interpolant():
         errs.append(np.max(np.abs(_motion.resample(sc, ts, ys, fine)[0] - np.cos(fine))))
     assert 14 < errs[0] / errs[1] < 18, errs   # measured 16.0
     assert np.array_equal(_motion.resample(sc, ts, ys, ts), ys)   # exact at the samples
+
+
+def test_work_precision_leaves_out_every_row_without_a_positive_finite_error():
+    # as documented: NaN, inf, zero, negative errors and None, and a time that is not
+    # positive, are left out of the log-log lines
+    rows = [dict(problem="p", impl="a", time=t, error=e) for t, e in
+            [(1e-3, 1e-4), (2e-3, float("inf")), (3e-3, 0.0), (4e-3, -1e-6), (5e-3, None),
+             (0.0, 1e-6), (6e-3, float("nan")), (7e-3, 1e-8)]]
+    ax = mp.plot.work_precision(rows)
+    assert ax.lines[0].get_xdata().tolist() == [1e-3, 7e-3]
+    assert ax.lines[0].get_ydata().tolist() == [1e-4, 1e-8]
+    plt.close("all")
+
+
+def test_foucault_bob_is_the_state_and_the_height_on_the_sphere():
+    from mechpy import _motion
+    sc = mp.scenes.Foucault(latitude=45.0, length=10.0)
+    y = np.array([[0.3, -1.2, 0.0], [0.7, 0.5, -2.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]])
+    xyz = _motion.foucault_bob(sc, y)
+    assert np.array_equal(xyz[:2], y[:2])
+    # on the sphere of radius L about the pivot (0, 0, L)
+    np.testing.assert_allclose(xyz[0] ** 2 + xyz[1] ** 2 + (10.0 - xyz[2]) ** 2, 100.0,
+                               rtol=1e-15)
