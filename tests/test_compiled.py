@@ -1308,3 +1308,21 @@ def test_symbolic_field_of_a_compiled_lagrangian_is_its_rhs(double_pendulum, rng
         # measured 8.3e-15 (relative to max(1, |f|))
         np.testing.assert_allclose(f(0.3, y), double_pendulum.rhs(0.3, y), rtol=5e-14,
                                    atol=5e-14)
+
+
+def test_a_library_is_loaded_once_per_process(tmp_path, monkeypatch):
+    # build.py: a library this process has loaded is used again as it is (no second
+    # read, hash or load of its file), so that a file changed on disk meanwhile does
+    # not swap the code under a running system
+    from mechpy.symbolic import build
+    monkeypatch.setenv("MECHPY_CACHE_DIR", str(tmp_path))
+    x, = mp.coordinates("x")
+    rhs = [-x * sp.Rational(7, 3)]         # a system no other test builds
+    first = mp.equations(rhs, [x])
+    assert first._compiled
+    reads = []
+    real = build._cached
+    monkeypatch.setattr(build, "_cached", lambda path: reads.append(path) or real(path))
+    again = mp.equations(rhs, [x])
+    assert not again._compiled and again._path == first._path and reads == []
+    assert again.rhs(0.0, [3.0])[0] == -7.0
