@@ -314,4 +314,5 @@ def test_rocket_burnout_time_is_fuel_over_burn_rate():
     assert r.burnout_time == 64.0
     s = mp.solve(r, (0.0, 64.0), r.initial_state(), rtol=1e-12, atol=1e-9)
     assert s.y[2, -1] == pytest.approx(200.0, rel=1e-11)   # measured 1.2e-12
-    assert mp.scenes.Rocket(burn_rate=0.0, m0=500.0, m_dry=500.0).burnout_time == 0.0
+    assert mp.scenes.Rocket(exhaust_speed=2000.0, burn_rate=0.0, m0=500.0,
+                            m_dry=500.0).burnout_time == 0.0
