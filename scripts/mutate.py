@@ -5,11 +5,14 @@
     python scripts/mutate.py -m ode -m modes.c -n 20 --seed 3
     python scripts/mutate.py --list               # the modules and their tests
     python scripts/mutate.py --only ode:7 --only modes.py:2   # rerun chosen mutants
+    python scripts/mutate.py --edit 'csrc/ode/lanes.c:165:g->dir * g->t[l]=>g->t[l]'
 
 A mutant is one small edit of one source line: a sign flip (``a + b`` ->
-``a - b``), a constant's last digit (``0.5`` -> ``0.6``), an off-by-one
-(``i < n`` -> ``i <= n``, ``k + 1`` -> ``k + 2``) or a dropped term
-(``a + b * c`` -> ``a``).  The candidates of a module are listed in a fixed
+``a - b``), a constant's last digit (``0.5`` -> ``0.6``; the sixth significant
+digit of a longer literal), an off-by-one (``i < n`` -> ``i <= n``, ``k + 1``
+-> ``k + 2``), a condition turned (``==`` <-> ``!=``, ``and`` <-> ``or``), an
+operator swapped (``a * b`` <-> ``a / b``) or a dropped term (``a + b * c`` ->
+``a``).  The candidates of a module are listed in a fixed
 order and drawn at random with a fixed seed, so a run is repeatable and a
 mutant has a stable name (``module:index``).
 
@@ -18,9 +21,10 @@ temporary directory and the C extension is built there once by meson
 (``meson setup`` with this interpreter's meson, ninja and numpy, a release
 build as meson-python's); for a C mutant ``ninja`` recompiles only the
 mutated file and relinks ``_core``, which goes into the copy's package.
-Each mutant runs the tests that cover its module (``-x``: the first failure kills it; a timeout kills
-it too).  A mutant that does not compile (or whose Python does not parse)
-is not counted and another is drawn.
+Each mutant runs the tests that cover its module (``-x``: the first failure kills
+it; a timeout kills it too).  A mutant that does not compile (or whose Python
+does not parse), or that falls inside a Python string (a docstring, a doctest,
+a message), is not counted and another is drawn.
 
 The interpreter is the one running this script (it needs numpy, meson,
 ninja and the test extra, as the .venv of scripts/dev.sh has):
@@ -35,6 +39,7 @@ import json
 import os
 import random
 import re
+import shlex
 import shutil
 import signal
 import subprocess
@@ -50,30 +55,97 @@ ENGINE_TESTS = ["tests/test_integrate.py", "tests/test_engine_regressions.py",
                 "tests/test_hard_cases.py", "tests/test_ensemble.py", "tests/test_detest.py"]
 SCENE_TESTS = ["tests/test_scenes.py", "tests/test_scene_values.py", "tests/test_chain.py",
                "tests/test_frames.py", "tests/test_rigid.py"]
-# module -> (source files, the tests that cover them; extra pytest arguments allowed)
+#: The SIMD lane driver and its fixed-step blocks: their own entry, so that the
+#: rest of csrc/ode/ (a glob: a file added there is in "ode" at once) keeps
+#: its own figures.
+LANES = ["csrc/ode/lanes.c", "csrc/ode/lanes.h", "csrc/ode/fixed.h"]
+# module -> (source files or globs, the tests that cover them; extra pytest
+# arguments allowed).  The tests of a module are the test files that import it
+# or call what it defines (a C file: the Python calls that reach it).  Every
+# csrc/**/*.c|h and mechpy/**/*.py belongs to exactly one module or to
+# EXCLUDED (tests/test_mutate_modules.py checks it against the tree).
 MODULES = {
-    "ode": (["csrc/ode/driver.c", "csrc/ode/rk.c", "csrc/ode/radau.c", "csrc/ode/gsl.c",
-             "csrc/ode/geometric.c", "csrc/ode/ensemble.c", "csrc/ode/rigid_split.c",
-             "csrc/ode/auto.c", "csrc/ode/methods.c"],
-            ENGINE_TESTS + ["tests/test_rigid.py", "-k", FAST]),
-    "integrate.py": (["mechpy/integrate.py"], ENGINE_TESTS + ["-k", FAST]),
-    "models": (["csrc/models/oscillators.c", "csrc/models/orbits.c", "csrc/models/chain.c",
-                "csrc/models/foucault.c", "csrc/models/rigid.c", "csrc/models/rocket.c",
-                "csrc/models/models.c"], SCENE_TESTS),
+    "ode": (["csrc/ode/*.c", "csrc/ode/*.h"],
+            ENGINE_TESTS + ["tests/test_rigid.py", "tests/test_lanes.py", "-k", FAST]),
+    # fixed.h's kick-drift-kick steps run in the method rows too (verlet, yoshida):
+    # test_integrate.py holds their tests
+    "lanes": (LANES, ["tests/test_lanes.py", "tests/test_ensemble.py", "tests/test_integrate.py",
+                      "-k", FAST]),
+    "integrate.py": (["mechpy/integrate.py", "mechpy/_callbacks.py"],
+                     ENGINE_TESTS + ["tests/test_lanes.py", "-k", FAST]),
+    "models": (["csrc/models/*.c", "csrc/models/*.h"], SCENE_TESTS),
     "scenes.py": (["mechpy/scenes.py"], SCENE_TESTS),
-    "inertia.c": (["csrc/inertia.c"], ["tests/test_inertia.py"]),
-    "rotation.c": (["csrc/rotation.c"], ["tests/test_rotation.py", "tests/test_rigid.py"]),
-    "modes.c": (["csrc/modes.c"], ["tests/test_modes.py", "tests/test_chain.py", "-k", FAST]),
-    "variational.c": (["csrc/variational.c"], ["tests/test_variational.py", "-k", FAST]),
+    "inertia.c": (["csrc/inertia.c", "csrc/inertia.h"], ["tests/test_inertia.py"]),
+    "rotation.c": (["csrc/rotation.c", "csrc/rotation.h"],
+                   ["tests/test_rotation.py", "tests/test_rigid.py"]),
+    "modes.c": (["csrc/modes.c", "csrc/modes.h"],
+                ["tests/test_modes.py", "tests/test_chain.py", "-k", FAST]),
+    "variational.c": (["csrc/variational.c", "csrc/variational.h"],
+                      ["tests/test_variational.py", "-k", FAST]),
+    "binding": (["csrc/py/*.c", "csrc/py/*.h", "csrc/mp_status.c", "csrc/mp_status.h"],
+                ["tests/test_errors.py", "tests/test_integrate.py",
+                 "tests/test_engine_regressions.py", "tests/test_scenes.py",
+                 "tests/test_inertia.py", "tests/test_rotation.py", "tests/test_modes.py",
+                 "tests/test_compiled.py", "-k", FAST]),
     "inertia.py": (["mechpy/inertia.py"], ["tests/test_inertia.py"]),
     "rotation.py": (["mechpy/rotation.py"], ["tests/test_rotation.py", "tests/test_rigid.py"]),
     "modes.py": (["mechpy/modes.py"], ["tests/test_modes.py", "tests/test_chain.py", "-k", FAST]),
-    "variational.py": (["mechpy/variational/action.py", "mechpy/variational/classic.py",
-                        "mechpy/variational/constraints.py",
-                        "mechpy/variational/functionals.py",
-                        "mechpy/variational/lagrangians.py"],
-                       ["tests/test_variational.py", "-k", FAST]),
+    "variational.py": (["mechpy/variational/*.py"], ["tests/test_variational.py", "-k", FAST]),
+    "symbolic": (["mechpy/symbolic/derive.py", "mechpy/symbolic/codegen.py"],
+                 ["tests/test_compiled.py", "tests/test_lanes.py", "-k", "compiled or lane_rhs"]),
+    "symbolic.build": (["mechpy/symbolic/__init__.py", "mechpy/symbolic/build.py",
+                        "mechpy/symbolic/scene.py"], ["tests/test_compiled.py"]),
+    "cluster.py": (["mechpy/cluster.py"], ["tests/test_cluster.py"]),
+    "phase.py": (["mechpy/phase.py"], ["tests/test_phase.py"]),
+    "tangent.py": (["mechpy/tangent.py"], ["tests/test_tangent.py"]),
+    "frames.py": (["mechpy/frames.py", "mechpy/particles.py"],
+                  ["tests/test_frames.py", "tests/test_particles.py"]),
+    "rigid.py": (["mechpy/rigid.py"], ["tests/test_rigid.py"]),
+    "stress.py": (["mechpy/stress.py"], ["tests/test_stress.py"]),
+    "plot.py": (["mechpy/plot.py", "mechpy/_motion.py"], ["tests/test_plot.py"]),
+    "live": (["mechpy/live/*.py"], ["tests/test_live.py", "tests/test_live_motion.py"]),
+    "support": (["mechpy/_validate.py", "mechpy/errors.py", "mechpy/__init__.py"],
+                ["tests/test_validate.py", "tests/test_errors.py", "tests/test_integrate.py",
+                 "tests/test_imports.py", "-k", FAST]),
 }
+
+#: Files of the package that no module mutates, and why.
+EXCLUDED = {
+    "mechpy/__main__.py": "the command line's dispatch to the tours and benches "
+                          "(test_build runs it; no result of its own to assert)",
+    "mechpy/bench.py": "the bench harness: it times and prints, it computes nothing "
+                       "that a test could compare with a reference",
+    "mechpy/_timing.py": "timers of the benches and tours (wall-clock figures only)",
+    "mechpy/benches/*.py": "benchmarks: timings of the modules above against other "
+                           "libraries, their correctness is the modules' own (test_hard_cases "
+                           "imports hard_cases' reference values, published ones)",
+    "mechpy/tours/*.py": "the printed demonstrations of `python -m mechpy tour`: they call "
+                         "the modules above and print; test_course runs them for errors only",
+}
+
+
+def _glob(patterns):
+    """The files of ``patterns`` (paths or globs relative to the root), sorted."""
+    out = []
+    for pat in patterns:
+        hits = sorted(str(p.relative_to(ROOT)) for p in ROOT.glob(pat) if p.is_file())
+        out += [h for h in hits if h not in out]
+    return out
+
+
+def module_files(name):
+    """The source files of one module: its globs, less what another module
+    names explicitly (lanes.c is in "lanes", not in the glob of "ode")."""
+    explicit = {f for other, (pats, _) in MODULES.items() if other != name
+                for f in pats if not any(ch in f for ch in "*?[")}
+    return [f for f in _glob(MODULES[name][0]) if f not in explicit]
+
+
+def package_sources():
+    """Every file that belongs to some module or to EXCLUDED: the C sources
+    and headers under csrc/ and the Python files under mechpy/."""
+    return sorted(_glob(["csrc/**/*.c", "csrc/**/*.h", "mechpy/**/*.py"]))
+
 
 NUM = r"(?<![\w.])(\d+\.\d*(?:[eE][+-]?\d+)?|\d*\.\d+(?:[eE][+-]?\d+)?|\d+[eE][+-]?\d+)(?![\w.])"
 INT = r"(?<![\w.])(\d+)(?![\w.])"
@@ -88,7 +160,7 @@ def _code_lines(path, text):
     """(line number, code part) of the lines worth mutating: statements inside
     function bodies, with comments, preprocessor lines and docstrings left out."""
     out = []
-    c = path.endswith(".c")
+    c = path.endswith((".c", ".h"))
     in_block = False   # inside /* */ (C) or a triple-quoted string (Python)
     for no, line in enumerate(text.splitlines()):
         if c:
@@ -106,7 +178,10 @@ def _code_lines(path, text):
             if code.lstrip().startswith("#") or not code.startswith((" ", "\t")):
                 continue
         else:
-            n3 = line.count('"""') + line.count("'''")
+            head = line
+            if "#" in line and not re.search("['\"]", line[:line.index("#")]):
+                head = line[:line.index("#")]   # f'''(u) in a comment opens no string
+            n3 = head.count('"""') + head.count("'''")
             if in_block or n3:
                 if n3 % 2 == 1:
                     in_block = not in_block
@@ -125,7 +200,7 @@ def _code_lines(path, text):
 
 def _candidates(path, text):
     """Every mutant of one file, in a fixed order: (line, start, end, new, kind)."""
-    c = path.endswith(".c")
+    c = path.endswith((".c", ".h"))
     cands = []
     for no, code in _code_lines(path, text):
         spans = _string_spans(code)
@@ -139,7 +214,11 @@ def _candidates(path, text):
         for m in re.finditer(NUM, code):
             s = m.group(1)
             mant = re.match(r"[\d.]+", s).group()
-            i = max(k for k, ch in enumerate(mant) if ch.isdigit())
+            # the last digit, or the sixth significant one of a longer literal (a
+            # tableau's 17-digit coefficient moved in its last digit is round-off)
+            sig = [k for k, ch in enumerate(mant) if ch.isdigit()
+                   and (ch != "0" or any(c2 not in "0." for c2 in mant[:k]))]
+            i = sig[5] if len(sig) > 6 else max(k for k, ch in enumerate(mant) if ch.isdigit())
             new = s[:i] + str((int(s[i]) + 1) % 10) + s[i + 1:]
             add(m.start(1), m.end(1), new, "constant")
         for m in re.finditer(r"(?<![<>=!-])(<=|>=|<|>)(?![<>=])", code):
@@ -153,6 +232,13 @@ def _candidates(path, text):
         for m in re.finditer(r"\[" + INT + r"\]", code):
             k = int(m.group(1))
             add(m.start(1), m.end(1), str(k + 1 if k == 0 else k - 1), "off-by-one")
+        for m in re.finditer(r" (==|!=) ", code):
+            add(m.start(1), m.end(1), "!=" if m.group(1) == "==" else "==", "condition")
+        for m in re.finditer(r" (and|or|&&|\|\|) ", code):
+            add(m.start(1), m.end(1), {"and": "or", "or": "and", "&&": "||",
+                                       "||": "&&"}[m.group(1)], "condition")
+        for m in re.finditer(r"(?<=[\w)\]]) ([*/]) (?=[\w(.])", code):
+            add(m.start(1), m.end(1), "/" if m.group(1) == "*" else "*", "operator")
         # a dropped term: " + X" or " - X" up to the next +/- at depth 0, ')' or ';'
         for m in re.finditer(r"(?<=[\w)\]]) [+-] (?=[\w(.])", code):
             depth, j = 0, m.end()
@@ -187,6 +273,27 @@ def _candidates(path, text):
                 pass
         cands = keep
     return cands
+
+
+def _string_cells(text):
+    """(line, column) cells covered by Python string tokens (docstrings, doctests,
+    messages): a mutant there changes no behaviour the tests can reach."""
+    import io
+    import tokenize
+    cells = set()
+    for tok in tokenize.generate_tokens(io.StringIO(text).readline):
+        if tok.type == tokenize.STRING or tok.type == getattr(tokenize, "FSTRING_MIDDLE", -1):
+            (r0, c0), (r1, c1) = tok.start, tok.end
+            for r in range(r0, r1 + 1):
+                a = c0 if r == r0 else 0
+                b = c1 if r == r1 else 10 ** 6
+                cells.add((r - 1, a, b))
+    return cells
+
+
+def _in_string(cells, cand):
+    no, a = cand[0], cand[1]
+    return any(r == no and lo <= a < hi for r, lo, hi in cells)
 
 
 def _apply(text, cand):
@@ -285,7 +392,7 @@ class Tree:
 
 
 def _run_module(tree, name, n, seed, only, log):
-    files, tests = MODULES[name]
+    files, tests = module_files(name), MODULES[name][1]
     tests = [t for t in tests if not t.startswith("tests/") or (tree.dir / t).exists()]
     pool = []
     for f in files:
@@ -299,6 +406,7 @@ def _run_module(tree, name, n, seed, only, log):
     timeout = 3 * base + 60
     log(f"== {name}: {len(pool)} candidates in {len(files)} file(s); tests {base:.0f} s")
     results = []
+    strings = {}
     for index, k in enumerate(order):
         tag = f"{name}:{index}"
         if only is not None and tag not in only:
@@ -308,9 +416,15 @@ def _run_module(tree, name, n, seed, only, log):
         f, cand = pool[k]
         path = tree.dir / f
         text = path.read_text()
+        if f.endswith(".py"):
+            if f not in strings:
+                strings[f] = _string_cells(text)
+            if _in_string(strings[f], cand):
+                log(f"   {tag} is inside a string (a docstring, a message), drawn again")
+                continue
         path.write_text(_apply(text, cand))
         try:
-            ok = tree.build() if f.endswith(".c") else True
+            ok = tree.build() if f.endswith((".c", ".h")) else True
             if not ok:
                 log(f"   {tag} does not compile, drawn again")
                 continue
@@ -325,9 +439,56 @@ def _run_module(tree, name, n, seed, only, log):
                "after": (line[:a] + new + line[b:]).strip()}
         results.append(row)
         log(f"   {tag:18s} {status:8s} {f}:{no + 1} {kind}: {row['after']}")
-    if any(f.endswith(".c") for f in files):
+    if any(f.endswith((".c", ".h")) for f in files):
         tree.build()  # the unmutated sources again
     return results
+
+
+def _owner(path):
+    """The module whose files hold ``path``."""
+    for name in MODULES:
+        if path in module_files(name):
+            return name
+    sys.exit(f"mutate: {path} is in no module of MODULES")
+
+
+def _run_edits(tree, edits, log, only_tests=None):
+    """Hand-written mutants (an audit's): ``path:line:old=>new`` replaces old by
+    new on that line (1-based); each runs the tests of the module holding path."""
+    rows = []
+    for e in edits:
+        try:
+            path, line, change = e.split(":", 2)
+            old, new = change.split("=>", 1)
+            no = int(line) - 1
+        except ValueError:
+            sys.exit(f"mutate: --edit wants path:line:old=>new, got {e!r}")
+        name = _owner(path)
+        f = tree.dir / path
+        text = f.read_text()
+        lines = text.splitlines(keepends=True)
+        if old not in lines[no]:
+            sys.exit(f"mutate: --edit {e!r}: {old!r} is not on line {no + 1} of {path}: "
+                     f"{lines[no].strip()!r}")
+        lines[no] = lines[no].replace(old, new, 1)
+        f.write_text("".join(lines))
+        try:
+            c = path.endswith((".c", ".h"))
+            if c and not tree.build():
+                log(f"   {e}: does not compile\n{tree.last_log[-2000:]}")
+                continue
+            tests = only_tests or [t for t in MODULES[name][1]
+                                   if not t.startswith("tests/") or (tree.dir / t).exists()]
+            rc, secs = tree.pytest(tests, timeout=1800)
+        finally:
+            f.write_text(text)
+            if path.endswith((".c", ".h")):
+                tree.build()
+        status = "survived" if rc == 0 else "killed"
+        rows.append({"id": e, "file": path, "line": no + 1, "kind": "edit", "status": status,
+                     "exit": rc, "seconds": round(secs, 1), "before": lines[no].strip()})
+        log(f"   {status:8s} ({name}, {secs:.0f} s) {e}")
+    return rows
 
 
 def main(argv=None):
@@ -340,11 +501,18 @@ def main(argv=None):
     ap.add_argument("--out", default=str(ROOT / "build" / "mutate-report.json"),
                     help="the JSON report (default: build/, which git ignores)")
     ap.add_argument("--keep", action="store_true", help="keep the temporary copy")
+    ap.add_argument("--edit", action="append",
+                    help="a hand-written mutant path:line:old=>new (repeatable; runs the "
+                         "tests of the module holding path)")
+    ap.add_argument("--tests", help="with --edit: these pytest arguments instead of the "
+                                    "module's tests (one string)")
     ap.add_argument("--list", action="store_true", help="list the modules and their tests")
     a = ap.parse_args(argv)
     if a.list:
-        for name, (files, tests) in MODULES.items():
-            print(f"{name:15s} {' '.join(files)}\n{'':15s} -> {' '.join(tests)}")
+        for name, (_, tests) in MODULES.items():
+            print(f"{name:15s} {' '.join(module_files(name))}\n{'':15s} -> {' '.join(tests)}")
+        for pat, why in EXCLUDED.items():
+            print(f"{'(excluded)':15s} {pat}: {why}")
         return 0
     names = a.module or list(MODULES)
     only = set(a.only) if a.only else None
@@ -361,6 +529,9 @@ def main(argv=None):
     log(f"mutate: copy in {tree.dir}")
     report = {}
     try:
+        if a.edit:
+            report["edits"] = _run_edits(tree, a.edit, log, a.tests and shlex.split(a.tests))
+            names = []
         for name in names:
             report[name] = _run_module(tree, name, a.n, a.seed, only, log)
     finally:

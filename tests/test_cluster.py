@@ -271,3 +271,28 @@ def test_closed_client():
         c.close()
         with pytest.raises(ValueError, match="client is closed"):
             mp.solve_many(SCENE, (0, 1), [[0.1, 0.0]], client=c)
+
+
+def test_a_client_with_one_thread():
+    # one worker with one thread is a cluster (the smallest one), not "no workers"
+    y0s, params = _pendulum_ensemble(40, seed=3)
+    kw = dict(params=params, t_eval=np.linspace(0.0, 5.0, 3))
+    local = mp.solve_many(SCENE, (0, 5), y0s, threads=1, **kw)
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
+                                  dashboard_address=":0", silence_logs=40) as cluster, \
+            distributed.Client(cluster, timeout=60) as c:
+        c.wait_for_workers(1, timeout=60)
+        assert sum(c.nthreads().values()) == 1
+        _assert_same(_run(mp.solve_many, SCENE, (0, 5), y0s, client=c, **kw), local)
+
+
+def test_chunks_are_a_few_per_worker_thread(client):
+    # the documented default: about four chunks per worker thread (2 threads here), and
+    # chunk_size rows each when given; a lazy result's fields keep the chunks' rows
+    assert sum(client.nthreads().values()) == 2
+    k = 40
+    y0s, params = _pendulum_ensemble(k, seed=5)
+    for chunk_size, rows in [(None, (5,) * 8), (7, (7,) * 5 + (5,)), (100, (40,))]:
+        lazy = _run(mp.solve_many, SCENE, (0, 1), y0s, params=params, client=client,
+                    chunk_size=chunk_size, lazy=True)
+        assert lazy.y.chunks[0] == rows and lazy.status.chunks[0] == rows

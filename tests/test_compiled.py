@@ -515,6 +515,56 @@ def test_elementary_functions_against_sympy(rng):
     assert worst_f > 0 or worst_j > 0      # the points are not all exact
 
 
+#: Sums and products the C printer rearranges, f(x, y) with parameters a, b: terms
+#: that differ by a numeric or parameter factor (gathered into one coefficient),
+#: quotients (negative powers moved to a denominator), rational powers of sums.
+_b = sp.Symbol("b")
+COMBINED = [
+    lambda x, y: _a * sp.sin(x) + 2 * sp.sin(x) - _b * sp.sin(x),
+    lambda x, y: 3 * x * y - _a * x * y + sp.Rational(1, 3) * x * y + y,
+    lambda x, y: x / y ** 2 - _b * x / y ** 2,
+    lambda x, y: x * y ** sp.Rational(-3, 2) + y ** sp.Rational(-1, 2),
+    lambda x, y: (x ** 2 + y ** 2) ** sp.Rational(-1, 2) - (x ** 2 + y ** 2) ** sp.Rational(3, 2),
+    lambda x, y: _a / (x * y) - x ** -4 * y ** 3,
+    lambda x, y: sp.exp(-x) * sp.cos(y) - _a * sp.exp(-x) * sp.cos(y) + x ** 5 * y ** -5,
+    lambda x, y: -x - y - _a * _b * x * y,
+    lambda x, y: sp.atan2(y, x) - sp.atan2(x, y + 3),
+    lambda x, y: sp.log(x * y) * sp.sqrt(x + y) - sp.acos(x / (y + 2)),
+]
+
+
+def test_sums_and_quotients_against_sympy_term_by_term(rng):
+    # each form on its own pair of states (x_i, y_i), its row of f and its two
+    # Jacobian entries against SymPy with 30 digits, element by element: a lost
+    # sign, a coefficient gathered wrongly or a power printed as another shows as
+    # an O(1) relative error in that element alone
+    n = len(COMBINED)
+    xs = mp.coordinates(" ".join(f"x{i}" for i in range(n)))
+    ys = mp.coordinates(" ".join(f"y{i}" for i in range(n)))
+    fs = [f(x, y) for f, x, y in zip(COMBINED, xs, ys)]
+    s = mp.equations(fs + [sp.S.Zero] * n, list(xs) + list(ys), params=dict(a=1.7, b=0.45))
+    X, Y = sp.symbols("X Y")
+    worst = 0.0
+    for tv in (0.0, 1.3):
+        pt = np.concatenate([rng.uniform(0.3, 1.5, n), rng.uniform(0.4, 1.6, n)])
+        got, J = s.rhs(tv, pt), s.jacobian(tv, pt)
+        assert np.all(J[n:] == 0) and np.all(got[n:] == 0)
+        for i, f in enumerate(COMBINED):
+            e = f(X, Y)
+            vals = {X: sp.Float(pt[i], 30), Y: sp.Float(pt[n + i], 30),
+                    _a: sp.Float(1.7, 30), _b: sp.Float(0.45, 30)}
+            ref = float(e.evalf(30, subs=vals))
+            dx, dy = (float(sp.diff(e, v).evalf(30, subs=vals)) for v in (X, Y))
+            for got_v, ref_v in [(got[i], ref), (J[i, i], dx), (J[i, n + i], dy)]:
+                err = abs(got_v - ref_v) / max(abs(ref_v), 1e-300)
+                # measured 3.8e-15 at worst (a sum that cancels), 3e-16 mostly
+                assert err < 1e-14, (e, pt[i], pt[n + i], got_v, ref_v)
+                worst = max(worst, err)
+            others = np.delete(J[i], [i, n + i])
+            assert np.all(others == 0)
+    assert worst > 0
+
+
 #: SymPy's named constants (NumberSymbol): printed as double literals.
 CONSTANTS = [sp.pi, sp.E, sp.EulerGamma, sp.GoldenRatio, sp.Catalan, sp.TribonacciConstant]
 
@@ -744,6 +794,99 @@ def test_second_build_loads_from_disk(tmp_path, monkeypatch):
     monkeypatch.setattr(build, "_compile", None)
     s2 = mp.lagrangian(L, q, params=dict(m=2.0, length=1.0, g=G, k=0.1))
     assert not s2._compiled and s2._path == s._path
+
+
+def test_the_cache_key_takes_every_input(tmp_path, monkeypatch):
+    # systems that differ in one input each, built one after the other in one cache
+    # folder: each behaves as its own input says (none is served another's library
+    # or stored derivation), checked against the equations written by hand
+    from mechpy import symbolic
+    monkeypatch.setenv("MECHPY_CACHE_DIR", str(tmp_path))
+    th, = mp.coordinates("theta")
+    w = th.diff(t)
+    g_, l_, b_ = sp.symbols("g l b")
+    P, Pb = dict(g=G, l=1.3), dict(g=G, l=1.3, b=0.2)
+    y = np.array([0.7, -0.4])
+
+    def acc(s):
+        return s.rhs(0.0, y)[1]
+
+    base = mp.lagrangian(l_ ** 2 / 2 * w ** 2 + g_ * l_ * sp.cos(th), [th], params=P)
+    assert acc(base) == pytest.approx(-G / 1.3 * np.sin(0.7), rel=1e-15)
+    # the Lagrangian
+    s = mp.lagrangian(l_ ** 2 / 2 * w ** 2 + 2 * g_ * l_ * sp.cos(th), [th], params=P)
+    assert acc(s) == pytest.approx(-2 * G / 1.3 * np.sin(0.7), rel=1e-15)
+    # the parameters' order (the order of scene.params and of solve_many's rows)
+    s = mp.lagrangian(l_ ** 2 / 2 * w ** 2 + g_ * l_ * sp.cos(th), [th],
+                      params=dict(l=1.3, g=G))
+    assert list(s.params) == ["l", "g"] and acc(s) == acc(base)
+    assert s.replace(g=1.0).rhs(0.0, y)[1] == pytest.approx(-np.sin(0.7) / 1.3, rel=1e-15)
+    # the forces
+    L0 = l_ ** 2 / 2 * w ** 2 + g_ * l_ * sp.cos(th)
+    d1 = mp.lagrangian(L0, [th], params=Pb, forces=[-b_ * w])
+    d2 = mp.lagrangian(L0, [th], params=Pb, forces=[-2 * b_ * w])
+    assert acc(d1) == pytest.approx(acc(base) + 0.2 * 0.4 / 1.3 ** 2, rel=1e-14)
+    assert acc(d2) == pytest.approx(acc(base) + 2 * 0.2 * 0.4 / 1.3 ** 2, rel=1e-14)
+    # the coordinates' order
+    x, z = mp.coordinates("x z")
+    Lxz = (x.diff(t) ** 2 + z.diff(t) ** 2) / 2 - (x ** 2 + 4 * z ** 2) / 2
+    a, b = mp.lagrangian(Lxz, [x, z]), mp.lagrangian(Lxz, [z, x])
+    v = np.array([0.3, 0.5, 0.0, 0.0])
+    assert a.rhs(0.0, v)[2:].tolist() == [-0.3, -2.0] and b.rhs(0.0, v)[2:].tolist() == [-1.2, -0.5]
+    # the constraints and Baumgarte's rates: a state off the constraint x^2 + z^2 = l^2,
+    # moving along it, is pulled back by g'' + 2 alpha g' + beta^2 g = 0; on the z axis
+    # (x = x' = 0) g' = 2 z z', g'' = 2 z'^2 + 2 z z'', so
+    # z'' = -(2 z'^2 + 4 alpha z z' + beta^2 (z^2 - l^2)) / (2 z)
+    L2 = (x.diff(t) ** 2 + z.diff(t) ** 2) / 2 - g_ * z
+    zz, vz = -1.1, 0.3
+    off = np.array([0.0, zz, 0.0, vz])
+    for lv, (al, be) in [(1.0, (5.0, 5.0)), (1.0, (1.0, 2.0)), (1.05, (1.0, 2.0))]:
+        c = mp.lagrangian(L2, [x, z], params=dict(g=G, l=lv),
+                          constraints=[x ** 2 + z ** 2 - l_ ** 2], baumgarte=(al, be))
+        zdd = -(2 * vz ** 2 + 4 * al * zz * vz + be ** 2 * (zz ** 2 - lv ** 2)) / (2 * zz)
+        assert c.rhs(0.0, off)[3] == pytest.approx(zdd, rel=1e-13)
+        assert c.rhs(0.0, off)[2] == 0.0
+    # first-order equations: the right-hand side, the states' order and the energy
+    e1 = mp.equations([z, -x], [x, z], energy=(x ** 2 + z ** 2) / 2)
+    e2 = mp.equations([z, -x], [z, x], energy=(x ** 2 + z ** 2) / 2)
+    e3 = mp.equations([z, -x], [x, z], energy=x ** 2 + z ** 2)
+    e4 = mp.equations([z, -2 * x], [x, z], energy=(x ** 2 + z ** 2) / 2)
+    u = np.array([0.3, 0.5])
+    # (z, x) = (0.3, 0.5) for e2
+    assert e1.rhs(0.0, u).tolist() == [0.5, -0.3] and e2.rhs(0.0, u).tolist() == [0.3, -0.5]
+    assert e4.rhs(0.0, u).tolist() == [0.5, -0.6]
+    assert e1.energy(u) == pytest.approx(0.17) and e3.energy(u) == pytest.approx(0.34)
+    # the generator's code (its hash): a derivation stored by another generator is not
+    # used, the system is derived again (the same source then loads the same library)
+    from mechpy.symbolic import codegen
+    derived = []
+    real = codegen.c_source
+    monkeypatch.setattr(codegen, "c_source", lambda *a: derived.append(1) or real(*a))
+    same = mp.lagrangian(l_ ** 2 / 2 * w ** 2 + g_ * l_ * sp.cos(th), [th], params=P)
+    assert not derived and same._path == base._path
+    monkeypatch.setattr(symbolic, "_GEN_HASH", "another generator")
+    again = mp.lagrangian(l_ ** 2 / 2 * w ** 2 + g_ * l_ * sp.cos(th), [th], params=P)
+    assert derived == [1] and acc(again) == acc(base)
+
+
+def test_the_library_key_takes_every_input(monkeypatch):
+    from mechpy.symbolic import build
+    src, cmd = "int f(void) { return 1; }\n", ["cc"]
+    k = build._key(src, cmd)
+    assert build._key(src, cmd) == k
+    others = {build._key(src + " ", cmd), build._key(src, ["gcc"]), build._key(src, ["cc", "-m32"])}
+    for name, value in [("FLAGS", build.FLAGS + ("-g",)), ("LIBS", ("-lm", "-lquadmath")),
+                        ("ABI_VERSION", build.ABI_VERSION + 1)]:
+        with monkeypatch.context() as m:
+            m.setattr(build, name, value)
+            others.add(build._key(src, cmd))
+    assert len(others) == 6 and k not in others
+    # a source past LARGE compiles with -O1: the flags it gets are part of its key
+    big = "/*" + "x" * build.LARGE + "*/\n"
+    kb = build._key(big, cmd)
+    with monkeypatch.context() as m:
+        m.setattr(build, "LARGE", 10 * build.LARGE)
+        assert build._key(big, cmd) != kb
 
 
 def test_two_processes_building_at_once(tmp_path):
@@ -1153,3 +1296,33 @@ def test_a_state_symbol_is_a_right_hand_side():
         mp.equations([sp.Eq(v, 1), -x], [x, v])
     with pytest.raises(ValueError, match="equation or a condition"):
         mp.equations([x > 0, -x], [x, v])
+
+
+def test_symbolic_field_of_a_compiled_lagrangian_is_its_rhs(double_pendulum, rng):
+    # CompiledScene.symbolic(): the first-order field f(t, y) in SymPy, for a
+    # Lagrangian of two coordinates (velocities y2, y3), equals the compiled rhs
+    F = double_pendulum.symbolic()
+    f = sp.lambdify([F.t, F.y], [e.subs(F.params) for e in F.f], "numpy")
+    for _ in range(3):
+        y = rng.uniform(-1.5, 1.5, 4)
+        # measured 8.3e-15 (relative to max(1, |f|))
+        np.testing.assert_allclose(f(0.3, y), double_pendulum.rhs(0.3, y), rtol=5e-14,
+                                   atol=5e-14)
+
+
+def test_a_library_is_loaded_once_per_process(tmp_path, monkeypatch):
+    # build.py: a library this process has loaded is used again as it is (no second
+    # read, hash or load of its file), so that a file changed on disk meanwhile does
+    # not swap the code under a running system
+    from mechpy.symbolic import build
+    monkeypatch.setenv("MECHPY_CACHE_DIR", str(tmp_path))
+    x, = mp.coordinates("x")
+    rhs = [-x * sp.Rational(7, 3)]         # a system no other test builds
+    first = mp.equations(rhs, [x])
+    assert first._compiled
+    reads = []
+    real = build._cached
+    monkeypatch.setattr(build, "_cached", lambda path: reads.append(path) or real(path))
+    again = mp.equations(rhs, [x])
+    assert not again._compiled and again._path == first._path and reads == []
+    assert again.rhs(0.0, [3.0])[0] == -7.0

@@ -623,3 +623,58 @@ def test_rtol_per_component_as_scipy():
         mp.solve(harmonic, (0, 1), [1.0, 0.0], rtol=[1e-3, 0.0])
     with pytest.raises(ValueError, match=r"rtol must have shape \(2\)"):
         mp.solve(harmonic, (0, 1), [1.0, 0.0], rtol=[1e-3, 1e-3, 1e-3])
+
+
+STEP_END_METHODS = {"dop853": dict(first_step=0.5, max_step=0.5),
+                    "dopri5": dict(first_step=0.5, max_step=0.5),
+                    "radau": dict(first_step=0.5, max_step=0.5),
+                    "auto": dict(first_step=0.5, max_step=0.5),
+                    "rk4": dict(h=0.5)}
+
+
+@pytest.mark.parametrize("method", sorted(STEP_END_METHODS))
+@pytest.mark.parametrize("terminal", [False, True])
+@pytest.mark.parametrize("backward", [False, True])
+@pytest.mark.parametrize("sign", [1.0, -1.0])
+@pytest.mark.parametrize("direction", [0, 1, -1])
+def test_zero_at_a_step_end_in_both_directions(direction, sign, backward, terminal, method):
+    # steps of 0.5 (y' = 1 has no error to grow them past max_step) end exactly on
+    # t = 1, where g0 = sign (t - 1) is exactly zero, in either direction of time;
+    # so is g1 = sign (y - 1) for rk4 and radau, whose y = t is exact at the step
+    # ends (the weights of dop853 and dopri5 sum to 1 within round-off only).
+    # Along the solve g moves from -sign to +sign forwards and the other way
+    # backwards: a crossing in the direction of the filter is reported once, at
+    # t = 1 with y = 1, and a terminal one ends the solve there
+    t_span, y0 = ((2.0, 0.0), [2.0]) if backward else ((0.0, 2.0), [0.0])
+
+    def g_t(t, y):
+        return sign * (t - 1.0)
+
+    def g_y(t, y):
+        return sign * (y[0] - 1.0)
+
+    events = [g_t, g_y] if method in ("rk4", "radau") else [g_t]
+    for g in events:
+        g.direction = direction
+        g.terminal = terminal
+    s = mp.solve(lambda t, y: [1.0], t_span, y0, events=events, method=method,
+                 **STEP_END_METHODS[method])
+    rising = sign if not backward else -sign   # g's sign change along the solve
+    fires = direction == 0 or direction == rising
+    steps = [0.0, 0.5, 1.0, 1.5, 2.0][::-1 if backward else 1]
+    for k in range(len(events)):
+        # a terminal event ends the solve: the second one, at the same time, is not
+        # reached (SciPy: the events up to the first terminal one, ordered by time)
+        seen = fires and not (terminal and k > 0)
+        assert s.t_events[k].tolist() == ([1.0] if seen else []), (k, s.t_events)
+        if seen:   # y there from the interpolant: the step end's y to round-off
+            assert abs(s.y_events[k][0, 0] - 1.0) < 1e-15
+    if terminal and fires:
+        assert s.status == 1 and s.t.tolist() == steps[:3]
+    else:
+        assert s.status == 0 and s.t.tolist() == steps
+    # SciPy's RK45 at the same steps finds the same first crossing
+    ref = solve_ivp(lambda t, y: [1.0], t_span, y0, events=events, first_step=0.5,
+                    max_step=0.5)
+    for k in range(len(events)):
+        assert s.t_events[k][:1].tolist() == ref.t_events[k][:1].tolist()

@@ -1,5 +1,6 @@
 """Every exported exception is raised by a real failure, and the one status
 table decides what solve and solve_many raise or report."""
+import builtins
 import re
 
 import numpy as np
@@ -171,3 +172,31 @@ def test_solve_many_budget_is_a_status_and_errors_raise_names_the_trajectory():
         mp.solve_many(VDP, (0, 30), y0s, params=p, max_steps=2000, errors="raise")
     ok = mp.solve_many(VDP, (0, 1), y0s, params=[[1.0], [1.0]])
     assert ok.raise_for_status() is None and ok.success.all()
+
+
+def test_the_docstring_table_says_what_each_class_is():
+    # each row of mechpy.errors' table against the classes themselves: the builtin
+    # base of a mechpy class ("also an instance of"), nothing for a builtin class
+    # (MemoryError, RuntimeError, KeyboardInterrupt are not mechpy's), the status
+    # only where errors="status" can report one
+    doc = errors.__doc__
+    rule = next(ln for ln in doc.splitlines() if ln.startswith("====="))
+    cols = [len(c) for c in rule.split("  ")]
+    rows = []
+    for ln in doc.splitlines():
+        if ln.startswith("MP_"):
+            cells, at = [], 0
+            for w in cols:
+                cells.append(ln[at:at + w].strip())
+                at += w + 2
+            rows.append(cells)
+    assert len(rows) == sum(r["exception"] is not None for r in errors._TABLE)
+    for cname, clsname, base, status, auto, message in rows:
+        cls = next(r["exception"] for r in errors._TABLE if r["name"] == cname)
+        assert cls.__name__ == clsname
+        if issubclass(cls, errors.MechpyError):
+            assert base and isinstance(cls("x"), getattr(builtins, base, Exception))
+            assert base in [b.__name__ for b in cls.__mro__]
+        else:
+            assert base == "" and auto == "always raises"
+        assert (status == "") == (auto == "always raises")

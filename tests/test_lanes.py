@@ -2,10 +2,11 @@
 
 Each lane repeats the scalar driver's decisions; fused multiply-adds and
 libmvec's sin/cos round differently, so samples agree to round-off amplified
-by the flow, and statuses, messages (but for the last digits of a time) and
-evaluation counts agree.
+by the flow, and statuses, messages (the times in them to that rounding, with
+their sign) and evaluation counts agree.
 """
 import re
+import sys
 
 import numpy as np
 import pytest
@@ -63,8 +64,45 @@ def _rel_diff(a, b, rows=slice(None)):
     return float(np.max(np.abs(ya - yb) / scale[None, :, None]))
 
 
-def _strip_times(messages):
-    return [re.sub(r"t = [-+0-9.e]+", "t = ?", m) for m in messages]
+_TIME = re.compile(r"t = ([-+0-9.e]+)")
+
+
+def _same_messages(a, b, rtol=3e-5):
+    """Messages of the lanes (a) and of the scalar path (b): the same text, and
+    the times in them (where a failure happened) the same to rounding amplified
+    by the flow: relative rtol, the same sign (a backward solve fails at t < 0).
+    The step sizes follow error estimates that are differences of nearly equal
+    stages, so the rounding of the lanes' sin/cos moves a time after a few steps
+    (measured 5.6e-10 after 5 steps of a pendulum, 3.7e-6 after 188 steps of one
+    started near the separatrix; a step is ~1e-2 of these spans, a sign flips it)."""
+    assert len(a) == len(b)
+    for ma, mb in zip(a, b):
+        assert _TIME.sub("t = ?", ma) == _TIME.sub("t = ?", mb), (ma, mb)
+        ta = [float(x) for x in _TIME.findall(ma)]
+        tb = [float(x) for x in _TIME.findall(mb)]
+        for x, y in zip(ta, tb):
+            assert np.sign(x) == np.sign(y) and abs(x - y) <= rtol * max(abs(y), 1e-300), \
+                (ma, mb)
+
+
+def _message_times(messages):
+    """The time in each message (NaN where it names none)."""
+    return np.array([float(m[0]) if (m := _TIME.findall(msg)) else np.nan
+                     for msg in messages])
+
+
+def _same_fields(a, b, rel=3e-12, rtol_t=3e-5):
+    """Every field of the lanes' result (a) against the scalar path's (b)."""
+    assert a.lanes and not b.lanes
+    assert np.array_equal(a.t, b.t)
+    assert np.array_equal(a.status, b.status) and np.array_equal(a.success, b.success)
+    assert np.array_equal(a.nfev, b.nfev)
+    _same_messages(a.message, b.message, rtol_t)
+    assert np.array_equal(np.isnan(a.y), np.isnan(b.y))
+    ok = ~np.isnan(b.y)
+    if ok.any():
+        scale = np.maximum(np.max(np.abs(np.where(ok, b.y, 0.0)), axis=(0, 2)), 1e-300)
+        assert np.max((np.abs(a.y - b.y) / scale[None, :, None])[ok]) < rel
 
 
 def test_cases_cover_every_scene():
@@ -137,7 +175,7 @@ def test_step_budget_per_lane(k):
     assert np.array_equal(a.status, b.status) and np.array_equal(a.nfev, b.nfev)
     if k >= LANES:
         assert 0 < np.sum(a.status == -1) < k   # some ran out, some finished
-    assert _strip_times(a.message) == _strip_times(b.message)
+    _same_messages(a.message, b.message)
     assert np.array_equal(np.isnan(a.y), np.isnan(b.y))   # samples past a failure are NaN
     ok = ~np.isnan(b.y)
     assert np.max(np.abs(a.y[ok] - b.y[ok]), initial=0.0) < 1e-10   # measured 2e-13
@@ -157,7 +195,7 @@ def test_singular_heavy_top_in_a_lane_group(k):
     assert np.array_equal(a.status, b.status) and np.array_equal(a.nfev, b.nfev)
     bad = y0s[:, 1] == 0.0
     assert (a.status[bad] == -3).all() and (a.status[~bad] == 0).all()
-    assert _strip_times(a.message) == _strip_times(b.message)
+    _same_messages(a.message, b.message)
     assert np.isnan(a.y[bad]).all()
     if (~bad).any():
         assert _rel_diff(a, b, ~bad) < 3e-12   # measured 4e-14
@@ -177,7 +215,7 @@ def test_blow_up_of_compiled_equations():
     assert np.array_equal(a.status, b.status) and np.array_equal(a.nfev, b.nfev)
     blows = y0s[:, 0] > 1 / 1.5
     assert (a.status[blows] < 0).all() and (a.status[~blows] == 0).all()
-    assert _strip_times(a.message) == _strip_times(b.message)
+    _same_messages(a.message, b.message)
     assert np.array_equal(np.isnan(a.y), np.isnan(b.y))
     with np.errstate(divide="ignore"):
         exact = (y0s / (1 - y0s * te[None, :]))[:, None, :]
@@ -473,7 +511,7 @@ def test_singular_mass_matrix_in_a_compiled_lane(k):
     assert np.array_equal(a.status, b.status) and np.array_equal(a.nfev, b.nfev)
     bad = v * 2 > 35.1
     assert (a.status[bad] == -3).all() and (a.status[~bad] == 0).all()
-    assert _strip_times(a.message) == _strip_times(b.message)
+    _same_messages(a.message, b.message)
     assert np.array_equal(np.isnan(a.y), np.isnan(b.y))
     # until the failure q1 = v t exactly as far as rounding goes
     ok = ~np.isnan(a.y[:, 0, :])
@@ -502,7 +540,7 @@ def test_vanishing_mass_of_one_coordinate_in_lanes(method):
     a, b = _both(s, (0, 1000), y0s, t_eval=te, errors="status", params={"c": cs},
                  method=method, **kw)
     assert np.array_equal(a.status, b.status) and np.array_equal(a.nfev, b.nfev)
-    assert _strip_times(a.message) == _strip_times(b.message)
+    _same_messages(a.message, b.message)
     fine = cs * 1000 < 708
     assert (a.status[fine] == 0).all() and (a.status[~fine] < 0).all()
     # NonFiniteError, SingularityError: both in one lane group but for rk4's steps
@@ -524,7 +562,7 @@ def test_blow_up_of_a_compiled_lagrangian():
     assert np.array_equal(r.status, b.status) and np.array_equal(r.nfev, b.nfev)
     blows = a * 1.5 > np.sqrt(2)
     assert (r.status[blows] < 0).all() and (r.status[~blows] == 0).all()
-    assert _strip_times(r.message) == _strip_times(b.message)
+    _same_messages(r.message, b.message)
     assert np.array_equal(np.isnan(r.y), np.isnan(b.y))
     with np.errstate(divide="ignore"):
         exact = a[:, None] / (1 - a[:, None] * te[None, :] / np.sqrt(2))
@@ -563,3 +601,176 @@ def test_no_lane_rhs_for_a_huge_system(monkeypatch, tmp_path):
     a, b = _both(s, (0, 1), y0s, t_eval=[0.0, 1.0])
     assert np.array_equal(a.nfev, b.nfev)
     assert _rel_diff(a, b) < 3e-13   # measured 2.3e-14 (the lane driver's own rounding)
+
+
+# ---- every field against the scalar path: backward spans, starts from rest, ----------
+# ---- budgets, stiffness hints, the progress line ---------------------------------------
+
+def test_backward_blow_up_fails_at_the_pole_in_lanes():
+    """y' = y^2 backwards from y0 < 0: y = y0 / (1 - y0 t) leaves every float at
+    t = 1/y0 < 0.  The lanes that start below -2/3 fail there, at a negative
+    time (the message's time as the scalar path's), the others reach -1.5."""
+    (y,) = mp.coordinates("y")
+    s = mp.equations([y ** 2], [y])
+    y0s = np.linspace(-1.0, 1.0, 36)[:, None]
+    te = np.linspace(0, -1.5, 4)
+    a, b = _both(s, (0, -1.5), y0s, t_eval=te, errors="status")
+    _same_fields(a, b, rel=1e-6)   # measured 9.4e-8, on the samples nearest the pole
+    blows = y0s[:, 0] < -1 / 1.5
+    assert (a.status[blows] == -1).all() and (a.status[~blows] == 0).all()
+    tf = _message_times(a.message)[blows]
+    # the step size falls below round-off just past the pole: measured 1.2e-9
+    assert np.all(np.abs(tf - 1 / y0s[blows, 0]) < 1e-8)
+    with np.errstate(divide="ignore"):
+        exact = (y0s / (1 - y0s * te[None, :]))[:, None, :]
+    ok = ~np.isnan(a.y) & np.isfinite(exact)
+    rel = np.abs(a.y[ok] - exact[ok]) / np.maximum(np.abs(exact[ok]), 1.0)
+    assert np.max(rel) < 1e-6   # measured 8e-8 (the samples nearest the pole)
+
+
+@pytest.mark.parametrize("method", sorted(METHODS))
+def test_backward_step_budget_per_lane(method):
+    """A backward solve that runs out of steps: the same lanes fail, with the
+    same negative time in their messages, and the samples before it agree."""
+    k = 21
+    y0s = np.column_stack([np.linspace(0.1, 3.1, k)[::-1], np.zeros(k)])
+    te = np.linspace(0, -20, 9)
+    kw = METHODS[method]
+    full = mp.solve_many(S.Pendulum(), (0, -20), y0s, t_eval=te, lanes=False, method=method,
+                         **kw)
+    # evaluations per step: 12 and 6 (FSAL); rk4 gets half its 4 x 20000 steps
+    budget = int(np.median(full.nfev) / {"dop853": 12, "dopri5": 6, "rk4": 8}[method])
+    a, b = _both(S.Pendulum(), (0, -20), y0s, t_eval=te, max_steps=budget, errors="status",
+                 method=method, **kw)
+    _same_fields(a, b, rel=1e-10)   # measured 2e-13
+    tf = _message_times(a.message)[a.status == -1]
+    if method == "rk4":   # fixed steps of h: every lane stops after the same budget
+        assert (a.status == -1).all()
+        assert np.allclose(tf, -budget * kw["h"], rtol=1e-12, atol=0)
+    else:
+        assert 0 < np.sum(a.status == -1) < k
+        assert np.all((tf < 0) & (tf > -20))
+    # a failed lane's samples up to its failure time are the full solve's
+    for i in np.flatnonzero(a.status == -1):
+        got = te >= _message_times(a.message)[i]   # the time reached, the budget spent
+        assert np.all(np.isfinite(a.y[i][:, got])) and np.all(np.isnan(a.y[i][:, ~got]))
+        assert np.array_equal(b.y[i][:, got], full.y[i][:, got])
+        assert np.max(np.abs(a.y[i][:, got] - full.y[i][:, got])) < 3e-9   # measured 4.3e-10
+
+
+@pytest.mark.parametrize("method", sorted(METHODS))
+@pytest.mark.parametrize("t_span", [(0, 3), (0, -3)])
+def test_starts_from_rest(method, t_span):
+    """At rest: on the equilibrium f(y0) = 0 (the first-step guess has no
+    derivative to go by) and at rest away from it, in both directions, for
+    scenes and a compiled system.  Every field as on the scalar path, and the
+    equilibrium stays put exactly."""
+    te = np.linspace(*t_span, 4)
+    k = 11
+    amp = np.linspace(-1.0, 1.0, k)   # amp[5] == 0: the equilibrium
+    for system, y0s in [
+            (S.Pendulum(), np.column_stack([amp, np.zeros(k)])),
+            (S.Duffing(alpha=1.0, beta=0.5), np.column_stack([amp, np.zeros(k)])),
+            (S.SpringChain(masses=[1.0, 2.0]), np.column_stack([amp, -amp, np.zeros((k, 2))])),
+            (_compiled_pendulum(), np.column_stack([amp, np.zeros(k)]))]:
+        a, b = _both(system, t_span, y0s, t_eval=te, method=method, **METHODS[method])
+        _same_fields(a, b)   # measured 3e-15
+        assert a.success.all()
+        assert np.all(a.y[5] == 0.0)
+
+
+def test_stiffness_hint_in_lanes():
+    """Van der Pol at mu = 1000 under dop853 with a step budget: the message says
+    the problem appears stiff (Hairer's test) in the stiff lanes only, at the same
+    time as on the scalar path; mu = 1 lanes in the same group run out without it."""
+    k = 9
+    mu = np.r_[[1.0] * 4, [1000.0] * 5]
+    y0s = np.tile([2.0, 0.0], (k, 1))
+    a, b = _both(S.VanDerPol(mu=1.0), (0, 3000), y0s, params={"mu": mu}, max_steps=3000,
+                 errors="status")
+    _same_fields(a, b)   # measured: the failure times 1.1e-9 apart (relative)
+    assert (a.status == -1).all()
+    hint = np.array(["appears stiff" in m for m in a.message])
+    assert np.array_equal(hint, mu > 100)
+    # the non-stiff lanes run out far later in t: mu = 1 has period ~6.7, mu = 1000 ~1614
+    # with a boundary layer of width ~1/mu where the explicit steps pile up
+    tf = _message_times(a.message)
+    assert np.all(tf[mu == 1.0] > 100) and np.all(tf[mu > 100] < 100)
+
+
+def _progress_counts(err):
+    lines = re.findall(r"solve_many: (\d+)/(\d+) trajectories", err)
+    return [int(d) for d, _ in lines], {int(t) for _, t in lines}
+
+
+@pytest.mark.parametrize("k", [1, LANES + 3, 50, 250])
+def test_progress_line_in_lanes(k, monkeypatch, capfd):
+    """Without tqdm, progress=True writes a stderr line as trajectories finish, at
+    most once per percent and always at the end: in lanes as on the scalar path
+    (one thread: every report comes from the calling thread)."""
+    monkeypatch.setitem(sys.modules, "tqdm.auto", None)    # the import fails
+    y0s = np.column_stack([np.linspace(0.1, 3.0, k), np.zeros(k)])
+    got = {}
+    for lanes in (True, False):
+        capfd.readouterr()
+        e = mp.solve_many(S.Pendulum(), (0, 2), y0s, progress=True, threads=1, lanes=lanes)
+        assert e.success.all() and e.lanes == lanes
+        err = capfd.readouterr().err
+        done, totals = _progress_counts(err)
+        assert totals == {k} and err.endswith(f"solve_many: {k}/{k} trajectories\n")
+        assert done == sorted(set(done)) and done[-1] == k
+        # one report per percent step: every count up to 100 trajectories, else
+        # exactly the counts that start a new percent (and the last)
+        pct = [d for d in range(1, k + 1) if d == k or d * 100 // k != (d - 1) * 100 // k]
+        assert done == pct
+        got[lanes] = e
+    assert np.array_equal(got[True].nfev, got[False].nfev)
+
+
+def test_progress_callback_in_lanes(monkeypatch):
+    """With tqdm, the bar gets the counts of the C side in lanes, rising to k."""
+    import types
+    reports = []
+
+    class Bar:
+        def __init__(self, total, **kw):
+            self.total, self.n = total, 0
+
+        def update(self, d):
+            reports.append(d)
+            self.n += d
+
+        def close(self):
+            pass
+
+    fake = types.ModuleType("tqdm.auto")
+    fake.tqdm = Bar
+    monkeypatch.setitem(sys.modules, "tqdm", types.ModuleType("tqdm"))
+    monkeypatch.setitem(sys.modules, "tqdm.auto", fake)
+    k = 40
+    y0s = np.column_stack([np.linspace(0.1, 3.0, k), np.zeros(k)])
+    e = mp.solve_many(S.Pendulum(), (0, 2), y0s, progress=True, threads=1, lanes=True)
+    assert e.lanes and e.success.all()
+    # one update per finished trajectory from the lanes (k <= 100); the final
+    # report(k, k) of solve_many then adds nothing
+    assert reports[:k] == [1] * k and sum(reports) == k
+
+
+@pytest.mark.parametrize("method", sorted(METHODS))
+def test_samples_between_steps_in_lanes(method):
+    """t_eval points inside the steps (rk4's steps of 0.01 end at multiples of it;
+    the samples fall at odd thousandths): each method's interpolant in the lanes as on
+    the scalar path, and near the exact motion of the harmonic chain."""
+    ch = S.SpringChain(masses=[1.0, 2.0, 0.5])
+    k = 11
+    y0s = _starts([0.3, -0.2, 0.1, 0.0, 0.25, -0.4], 0.3, k)
+    te = np.array([0.0, 0.0037, 0.5013, 1.2345, 2.9999])
+    kw = dict(h=0.01) if method == "rk4" else {}
+    a, b = _both(ch, (0, 3), y0s, t_eval=te, method=method, **kw)
+    _same_fields(a, b)   # measured 3.7e-15 (0 for rk4)
+    md = ch.modes()
+    for i in range(k):
+        q, v = md.evolve(y0s[i, :3], y0s[i, 3:], te, velocities=True)
+        # measured 6.8e-9 (rk4's Hermite interpolant at h = 0.01), 5.1e-9 and 5.5e-9
+        # (dop853, dopri5 at rtol 1e-8)
+        assert np.max(np.abs(a.y[i] - np.concatenate([q.T, v.T]))) < 5e-8

@@ -86,3 +86,22 @@ def test_cm_frame_round_trip_and_zero_momentum():
         P.to_cm([1.0, -1.0], [0.0, 1.0])
     with pytest.raises(ValueError, match="velocities"):
         P.to_cm([1.0, 1.0], [0.0, 1.0, 2.0])
+
+
+def test_restitution_law_along_the_normal_both_moving():
+    """Both bodies moving, oblique normal, 2D and 3D: the normal relative velocity
+    reverses scaled by e (Newton's law of restitution), and the kinetic energy lost
+    is mu (1 - e^2) u^2 / 2 with mu the reduced mass and u the normal closing speed."""
+    for d in (2, 3):
+        m1, m2 = RNG.uniform(0.5, 2, 6), RNG.uniform(0.5, 2, 6)
+        v1, v2 = RNG.normal(size=(6, d)), RNG.normal(size=(6, d))
+        n = RNG.normal(size=(6, d))
+        e = RNG.uniform(0, 1, 6)
+        a, b = P.collide(m1, v1, m2, v2, e, normal=n)
+        nh = n / np.linalg.norm(n, axis=-1, keepdims=True)
+        u = np.sum((v1 - v2) * nh, -1)
+        np.testing.assert_allclose(np.sum((a - b) * nh, -1), -e * u, rtol=0, atol=1e-14)
+        ke = lambda x, y: (m1 * np.sum(x * x, -1) + m2 * np.sum(y * y, -1)) / 2   # noqa: E731
+        mu = m1 * m2 / (m1 + m2)
+        np.testing.assert_allclose(ke(v1, v2) - ke(a, b), mu * (1 - e ** 2) * u ** 2 / 2,
+                                   rtol=0, atol=1e-14)

@@ -448,3 +448,76 @@ def test_animate_field_is_deprecated_for_the_live_view():
     with pytest.warns(DeprecationWarning, match="mp.live.phase_portrait"):
         mp.plot.animate_field(mp.scenes.VanDerPol(), particles=5, frames=1, trail=2)
     plt.close("all")
+
+
+@pytest.mark.filterwarnings("ignore::DeprecationWarning")
+def test_animate_field_moves_particles_forward_along_the_field(tmp_path):
+    # the harmonic field (Van der Pol at mu = 0: x' = y, y' = -x) turns every point
+    # clockwise by dt per frame: each trail segment (a, b) is b = R(-dt) a to RK4's
+    # error (dt^5 / 120 relative); a particle respawned in between jumps, and is left out
+    dt = 0.03
+    anim = mp.plot.animate_field(mp.scenes.VanDerPol(mu=0.0), (-3, 3), (-3, 3), particles=200,
+                                 frames=4, trail=4, dt=dt, respawn=0.0,
+                                 path=tmp_path / "field.html")
+    segs = np.array(anim._fig.axes[0].collections[0].get_segments())
+    a, b = segs[:, 0, :], segs[:, 1, :]
+    c, s = np.cos(dt), np.sin(dt)
+    turned = np.column_stack([c * a[:, 0] + s * a[:, 1], -s * a[:, 0] + c * a[:, 1]])
+    # (a trail not yet grown has segments of length 0: left out too)
+    kept = (np.abs(np.hypot(*b.T) - np.hypot(*a.T)) < 1e-8) & np.any(a != b, axis=1)
+    assert kept.sum() > 0.8 * len(segs)   # measured 582 of 600
+    err = np.max(np.abs(b[kept] - turned[kept]))
+    assert err < 5e-9, err   # measured 6.0e-10
+    plt.close("all")
+
+
+def test_resample_is_the_cubic_hermite_interpolant():
+    # the frames between samples (mechpy._motion.resample, which every animation uses):
+    # exact for a cubic motion, whose derivatives the system gives (y = t^3 - 2 t,
+    # y' = 3 t^2 - 2 as the state (y, v) of v' = 6 t), and 4th order on the harmonic
+    # oscillator (the error falls 16x when the spacing halves)
+    from mechpy import _motion
+
+    class Cubic:
+        dim = 2
+
+        def rhs(self, t, y):
+            return np.array([3 * t * t - 2.0, 6.0 * t])
+
+    t = np.array([0.0, 0.7, 1.5, 2.0])
+    y = np.array([t ** 3 - 2 * t, 3 * t ** 2 - 2])
+    times = np.linspace(0.0, 2.0, 37)
+    got = _motion.resample(Cubic(), t, y, times)
+    assert np.max(np.abs(got[0] - (times ** 3 - 2 * times))) < 1e-14
+    sc = mp.scenes.VanDerPol(mu=0.0)
+    errs = []
+    for m in (9, 17):
+        ts = np.linspace(0.0, 4.0, m)
+        ys = np.array([np.cos(ts), -np.sin(ts)])
+        fine = np.linspace(0.0, 4.0, 401)
+        errs.append(np.max(np.abs(_motion.resample(sc, ts, ys, fine)[0] - np.cos(fine))))
+    assert 14 < errs[0] / errs[1] < 18, errs   # measured 16.0
+    assert np.array_equal(_motion.resample(sc, ts, ys, ts), ys)   # exact at the samples
+
+
+def test_work_precision_leaves_out_every_row_without_a_positive_finite_error():
+    # as documented: NaN, inf, zero, negative errors and None, and a time that is not
+    # positive, are left out of the log-log lines
+    rows = [dict(problem="p", impl="a", time=t, error=e) for t, e in
+            [(1e-3, 1e-4), (2e-3, float("inf")), (3e-3, 0.0), (4e-3, -1e-6), (5e-3, None),
+             (0.0, 1e-6), (6e-3, float("nan")), (7e-3, 1e-8)]]
+    ax = mp.plot.work_precision(rows)
+    assert ax.lines[0].get_xdata().tolist() == [1e-3, 7e-3]
+    assert ax.lines[0].get_ydata().tolist() == [1e-4, 1e-8]
+    plt.close("all")
+
+
+def test_foucault_bob_is_the_state_and_the_height_on_the_sphere():
+    from mechpy import _motion
+    sc = mp.scenes.Foucault(latitude=45.0, length=10.0)
+    y = np.array([[0.3, -1.2, 0.0], [0.7, 0.5, -2.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]])
+    xyz = _motion.foucault_bob(sc, y)
+    assert np.array_equal(xyz[:2], y[:2])
+    # on the sphere of radius L about the pivot (0, 0, L)
+    np.testing.assert_allclose(xyz[0] ** 2 + xyz[1] ** 2 + (10.0 - xyz[2]) ** 2, 100.0,
+                               rtol=1e-15)

@@ -471,3 +471,35 @@ def test_scene_evaluation_at_a_singular_state_raises_instead_of_returning_garbag
     assert np.isfinite(top.rhs(0.0, np.stack([good, good], axis=1))).all()
     with pytest.raises(mp.errors.NonFiniteError, match="Kepler rhs at state 1"):
         mp.scenes.Kepler().rhs(0.0, np.array([[1.0, 0.0], [0.0, 0.0], [0.0, 1.0], [1.0, 0.0]]))
+
+
+@pytest.mark.parametrize("th0, thd, phd, psd", [
+    (2.2, 0.5, 1.0, 30.0), (2.8, -0.3, 0.2, 30.0), (1.9, 0.0, 3.0, 30.0), (0.4, 0.7, -0.5, 30.0),
+    # a wide nutation from below the horizontal: theta_min (1.54) above u = 1 + 2 cos theta0
+    (2.5, 6.6, 2.1, 22.9), (1.93, -1.86, 9.94, 48.1)])
+def test_nutation_bounds_below_the_horizontal_match_integration(th0, thd, phd, psd):
+    # theta0 beyond pi/2 (cos theta0 < 0) as well as above: both turning points against
+    # the extremes of a tight integration
+    y0 = [0.0, th0, 0.0, phd, thd, psd]
+    lo, hi = mp.rigid.nutation_bounds(*TOP, th0, thd, phd, psd)
+    ref = _theta_extremes(HeavyTop(*TOP), y0, 3.0)
+    assert lo <= th0 <= hi
+    assert abs(lo - ref[0]) < 1e-13 and abs(hi - ref[1]) < 1e-13   # measured <= 1.3e-14
+
+
+def test_free_precession_closed_form_and_integration():
+    # a symmetric body (I1 = I2): omega's component across the axis turns in the body
+    # at Omega = omega3 (I3 - I1) / I1, and the axis about L in space at |L| / I1
+    I1, I3, w0 = 1.0, 1.5, np.array([0.3, 0.0, 2.0])
+    body, space = mp.rigid.free_precession([I1, I1, I3], w0)
+    assert body == pytest.approx(2.0 * (I3 - I1) / I1, rel=1e-15)
+    assert space == pytest.approx(np.sqrt(0.3 ** 2 + (I3 * 2.0) ** 2) / I1, rel=1e-15)
+    T = 2 * np.pi / abs(body)
+    s = mp.solve(RigidBody((I1, I1, I3)), (0, T), w0, rtol=1e-12, atol=1e-12,
+                 t_eval=[T / 2, T])
+    np.testing.assert_allclose(s.y[:, 0], [-0.3, 0.0, 2.0], atol=1e-9)
+    np.testing.assert_allclose(s.y[:, 1], w0, atol=1e-9)
+    # I1 = I2 up to 1e-12 relative is symmetric; beyond it is refused, named
+    assert mp.rigid.free_precession([1.0, 1.0 + 5e-13, 1.5], w0)[0] == pytest.approx(body)
+    with pytest.raises(ValueError, match="symmetric body, I1 = I2"):
+        mp.rigid.free_precession([1.0, 1.1, 1.5], w0)
