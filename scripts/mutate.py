@@ -66,13 +66,17 @@ LANES = ["csrc/ode/lanes.c", "csrc/ode/lanes.h", "csrc/ode/fixed.h"]
 # EXCLUDED (tests/test_mutate_modules.py checks it against the tree).
 MODULES = {
     "ode": (["csrc/ode/*.c", "csrc/ode/*.h"],
-            ENGINE_TESTS + ["tests/test_rigid.py", "tests/test_lanes.py", "-k", FAST]),
+            ENGINE_TESTS + ["tests/test_rigid.py", "tests/test_lanes.py", "tests/test_events.py",
+                            "tests/test_widths.py", "-k", FAST]),
     # fixed.h's kick-drift-kick steps run in the method rows too (verlet, yoshida):
     # test_integrate.py holds their tests
     "lanes": (LANES, ["tests/test_lanes.py", "tests/test_ensemble.py", "tests/test_integrate.py",
-                      "-k", FAST]),
-    "integrate.py": (["mechpy/integrate.py", "mechpy/_callbacks.py"],
-                     ENGINE_TESTS + ["tests/test_lanes.py", "-k", FAST]),
+                      "tests/test_events.py", "-k", FAST]),
+    "integrate.py": (["mechpy/integrate.py", "mechpy/_callbacks.py", "mechpy/_solution.py",
+                      "mechpy/_system.py"],
+                     ENGINE_TESTS + ["tests/test_lanes.py", "tests/test_widths.py",
+                                     "tests/test_events.py", "-k", FAST]),
+    "events.py": (["mechpy/events.py"], ["tests/test_events.py"]),
     "models": (["csrc/models/*.c", "csrc/models/*.h"], SCENE_TESTS),
     "scenes.py": (["mechpy/scenes.py"], SCENE_TESTS),
     "inertia.c": (["csrc/inertia.c", "csrc/inertia.h"], ["tests/test_inertia.py"]),
@@ -95,6 +99,10 @@ MODULES = {
                  ["tests/test_compiled.py", "tests/test_lanes.py", "-k", "compiled or lane_rhs"]),
     "symbolic.build": (["mechpy/symbolic/__init__.py", "mechpy/symbolic/build.py",
                         "mechpy/symbolic/scene.py"], ["tests/test_compiled.py"]),
+    "mechanics": (["mechpy/symbolic/multibody.py", "mechpy/symbolic/models.py"],
+                  ["tests/test_mechanics.py"]),
+    "symbolic.jit": (["mechpy/symbolic/jit.py", "mechpy/symbolic/_jit_rt.py"],
+                     ["tests/test_install.py", "-k", "numba or compiler"]),
     "cluster.py": (["mechpy/cluster.py"], ["tests/test_cluster.py"]),
     "phase.py": (["mechpy/phase.py"], ["tests/test_phase.py"]),
     "tangent.py": (["mechpy/tangent.py"], ["tests/test_tangent.py"]),

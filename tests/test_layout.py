@@ -885,3 +885,25 @@ def test_hoop_normal_force_rejects_bad_states():
         h.normal_force(0.0, np.ones((3, 4)))
     with pytest.raises(ValueError, match="t of shape"):
         h.normal_force(np.ones(5), np.ones((2, 4)))
+
+
+def test_no_merge_conflict_markers_in_the_tree():
+    """No file the project tracks holds a merge's conflict markers."""
+    import subprocess
+    from pathlib import Path
+    root = Path(__file__).resolve().parents[1]
+    try:
+        files = subprocess.run(["git", "ls-files"], cwd=root, capture_output=True, text=True,
+                               check=True).stdout.split()
+    except (OSError, subprocess.CalledProcessError):
+        pytest.skip("not a git checkout (an sdist)")
+    bad = []
+    for name in files:
+        p = root / name
+        if p.suffix not in (".py", ".md", ".c", ".h", ".toml", ".build", ".sh", ".rst",
+                            ".ipynb", ".wrap", ".txt", ".cfg"):
+            continue
+        for i, line in enumerate(p.read_text(errors="replace").splitlines(), 1):
+            if line.startswith(("<<<<<<< ", ">>>>>>> ")) or line == "=======":
+                bad.append(f"{name}:{i}")
+    assert bad == []
