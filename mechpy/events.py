@@ -167,7 +167,8 @@ def impact(coordinate, wall=0.0, restitution=1.0, side=+1) -> Impact:
         Where the wall is (in q's units).
     restitution : float, (k,) array or str
         Coefficient of restitution e >= 0 (1: elastic, 0: the velocity
-        stops): a number; in :func:`mechpy.solve_many` one value per
+        stops; against a force into the wall that re-fires the impact at once,
+        an :class:`~mechpy.errors.EventError`: make it terminal instead): a number; in :func:`mechpy.solve_many` one value per
         trajectory; or the name of a parameter of the system (then swept
         through ``params``).
     side : {+1, -1}
