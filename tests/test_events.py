@@ -346,3 +346,37 @@ def test_rocket_lands_sits_and_never_lifts_off():
     heavy = mp.scenes.Rocket(exhaust_speed=U, burn_rate=0.5, m0=M0, m_dry=MD, g=g)
     s = heavy.fly((0, 100))
     assert s.success and np.all(s.y[:2] == 0) and "never lifts off" in s.message
+
+
+def test_impact_as_a_python_event_and_its_checks():
+    """The Impact's own event function and action (for a Python event list), its
+    index rules, and the restitution checked when the solve reads it."""
+    floor = mp.events.impact(0, wall=0.3, restitution=0.5)
+    ceiling = mp.events.impact(0, wall=0.3, restitution=0.5, side=-1)
+    assert floor(0.0, [1.0, -2.0]) == pytest.approx(0.7, abs=1e-15)
+    assert ceiling(0.0, [1.0, -2.0]) == pytest.approx(-0.7, abs=1e-15)
+    assert floor.action(0.0, [0.3 - 1e-9, -2.0]).tolist() == [0.3, 1.0]
+    # the Python function gives the C impact's crossings: x'' = -x from 1, wall at 0.3
+    def f(t, y):
+        return [y[1], -y[0]]
+
+    def g(t, y):
+        return floor(t, y)
+    g.direction, g.action = -1, floor.action
+    py = mp.solve(f, (0, 4), [1.0, 0.0], events=g, rtol=1e-12, atol=1e-12)
+    c = mp.solve(f, (0, 4), [1.0, 0.0], events=floor, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(py.t_events[0], c.t_events[0], rtol=1e-12)
+    np.testing.assert_allclose(c.t_events[0][0], np.arccos(0.3), rtol=1e-12)
+    # a velocity's index is not a coordinate: (q, v) with q = y[:n/2]
+    with pytest.raises(ValueError, match="coordinate 1 needs a state"):
+        mp.solve(f, (0, 1), [1.0, 0.0], events=mp.events.impact(1))
+    # the restitution as the solve reads it: a negative one set after the fact is refused,
+    # 0 (the velocity stops) is allowed
+    late = mp.events.impact(0, restitution=0.5)
+    late.restitution = -0.5
+    with pytest.raises(ValueError, match="restitution must be >= 0"):
+        mp.solve(f, (0, 4), [1.0, 0.0], events=late)
+    stop = mp.events.impact(0, restitution=0.0)
+    stop.terminal = True
+    s = mp.solve(f, (0, 4), [1.0, 0.0], events=stop, rtol=1e-12, atol=1e-12)
+    assert s.status == 1 and abs(s.t[-1] - np.pi / 2) < 1e-10
