@@ -49,7 +49,7 @@ def _compiled():
     th, = mp.coordinates("theta")
     import sympy as sp
     g, L = sp.symbols("g L", positive=True)
-    return mp.lagrangian(sp.Rational(1, 2) * L**2 * th.diff(mp.t)**2 + g * L * sp.cos(th),
+    return mp.lagrangian(sp.Rational(1, 2) * L**2 * th.diff()**2 + g * L * sp.cos(th),
                          [th], params={"g": 9.81, "L": 1.0})
 
 

@@ -197,6 +197,17 @@ static inline int mp_ode_event_root(int (*g)(void *ctx, double s, double *gs), v
  * t than this fraction of the time since the solve's start end it there. */
 #define MP_ODE_ZENO_FRAC 1e-12
 
+/* Sub-intervals of a step searched for event crossings (both widths). */
+#define MP_ODE_EVENT_SUBDIV 4
+
+/* Where a zero of g left by an action at t is probed after the restart: 1%
+ * of the shortest gap between two actions that is not an accumulation (of a
+ * solve that started at t_start), and never within round-off of t. */
+static inline double mp_ode_restart_probe(double t, double t_start)
+{
+    return fmax(0.01 * MP_ODE_ZENO_FRAC * (t - t_start), 64.0 * DBL_EPSILON * fabs(t));
+}
+
 /* What an action event's new crossing at t means, its previous action at
  * t_prev (n_prev actions before), the solve started at t_start, the step h:
  * MP_OK (apply the action), MP_EEVENT (it fires again at once: within the

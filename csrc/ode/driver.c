@@ -10,7 +10,6 @@
 #include <string.h>
 
 #define MP_ODE_INTERRUPT_EVERY 256   /* steps between interrupt checks */
-#define MP_ODE_EVENT_SUBDIV 4        /* sub-intervals searched for crossings per step */
 
 /* ---- small helpers ------------------------------------------------------ */
 
@@ -742,10 +741,7 @@ static int accept_step(ode_run *s, double h, double hnew, double tnew)
      * leaves in its direction is an event there */
     int fresh = r->nsteps == 0 ? 1 : s->restarted ? 2 : 0;
     s->restarted = 0;
-    /* the probe after an action: 1% of the shortest gap between two actions
-     * that is not an accumulation, and never within round-off of t */
-    double probe = fmax(0.01 * MP_ODE_ZENO_FRAC * (t - w->t_start),
-                        64.0 * DBL_EPSILON * fabs(t));
+    double probe = mp_ode_restart_probe(t, w->t_start);
     if (o->n_events && (rc = ev_step(w, r, o, t, h, fresh, probe, s->g_old, s->g_sub, s->ytmp,
                                      s->gtmp, s->hits, &s_stop, &act)) != MP_OK)
         return rc;

@@ -30,7 +30,6 @@
 
 #define W MP_LANES
 #define LANES_INTERRUPT_EVERY 256 /* lock-step attempts between interrupt polls */
-#define LANE_EVENT_SUBDIV 4       /* sub-intervals searched for impacts (driver.c's) */
 
 /* the row's lane kernel (ode.h's MP_LANE_*) */
 enum { LANE_RK4 = MP_LANE_RK4, LANE_DOPRI5 = MP_LANE_DOPRI5, LANE_DOP853 = MP_LANE_DOP853 };
@@ -298,8 +297,8 @@ static void lane_start(lane_group *g, int *fresh)
         g->ie[l] = 0;
         g->attempts[l] = g->nfev[l] = 0;
         for (size_t q = 0; q < g->nimp; q++) {
-            const mp_lane_impact *im = &g->ls->impacts[q];
-            g->g_old[q * W + (size_t)l] = im->side * (y0[im->iq] - im->wall);
+            const mp_impact *im = &g->ls->impacts[q];
+            g->g_old[q * W + (size_t)l] = mp_impact_g(im, y0[im->iq]);
             g->act_n[q * W + (size_t)l] = 0;
         }
         if (g->results && mp_ode_result_events_init(&g->results[i], n, g->nimp) != MP_OK)
@@ -544,13 +543,13 @@ static void finish_lanes(lane_group *g, int *on, const int *dense, int *rc, doub
 typedef struct {
     const lane_group *g;
     int l;
-    const mp_lane_impact *im;
+    const mp_impact *im;
 } lane_g_ctx;
 
 static int lane_g_at(void *ctx, double s, double *gs)
 {
     const lane_g_ctx *c = ctx;
-    *gs = c->im->side * (lane_interp(c->g, c->l, c->im->iq, s) - c->im->wall);
+    *gs = mp_impact_g(c->im, lane_interp(c->g, c->l, c->im->iq, s));
     return MP_OK;
 }
 
@@ -571,13 +570,13 @@ __attribute__((noinline, cold)) static int lane_impacts(lane_group *g, int l, do
     int fresh = g->restarted[l];
     g->restarted[l] = 0;
     /* where a zero left by an action is probed (driver.c's ev_step) */
-    double probe = fmax(0.01 * MP_ODE_ZENO_FRAC * (t - g->s0), 64.0 * DBL_EPSILON * fabs(t));
+    double probe = mp_ode_restart_probe(t, g->s0);
     for (size_t q = 0; q < g->nimp; q++) {
-        const mp_lane_impact *im = &g->ls->impacts[q];
+        const mp_impact *im = &g->ls->impacts[q];
         lane_g_ctx c = {g, l, im};
         double g0 = g->g_old[q * W + (size_t)l], s_from = 0.0;
         if (fresh && g0 == 0.0) {
-            s_from = fmin(probe / h, 0.5 / LANE_EVENT_SUBDIV);
+            s_from = fmin(probe / h, 0.5 / MP_ODE_EVENT_SUBDIV);
             lane_g_at(&c, s_from, &g0);
             if (g0 < 0.0) { /* left the wall downwards at once */
                 s_hit = 0.0;
@@ -585,13 +584,13 @@ __attribute__((noinline, cold)) static int lane_impacts(lane_group *g, int l, do
                 continue;
             }
         }
-        for (int j = 1; j <= LANE_EVENT_SUBDIV; j++) { /* the scalar driver's sub-intervals */
-            double s0 = j == 1 ? s_from : (double)(j - 1) / LANE_EVENT_SUBDIV;
-            double s1 = (double)j / LANE_EVENT_SUBDIV, g1;
-            if (j == LANE_EVENT_SUBDIV) g1 = im->side * (g->ynew[im->iq * W + (size_t)l] - im->wall);
+        for (int j = 1; j <= MP_ODE_EVENT_SUBDIV; j++) { /* the scalar driver's sub-intervals */
+            double s0 = j == 1 ? s_from : (double)(j - 1) / MP_ODE_EVENT_SUBDIV;
+            double s1 = (double)j / MP_ODE_EVENT_SUBDIV, g1;
+            if (j == MP_ODE_EVENT_SUBDIV) g1 = mp_impact_g(im, g->ynew[im->iq * W + (size_t)l]);
             else lane_g_at(&c, s1, &g1);
             if (g0 > 0.0 && g1 <= 0.0) {
-                double root;
+                double root = s1; /* lane_g_at cannot fail: the root is always set */
                 mp_ode_event_root(lane_g_at, &c, t, h, s0, g0, s1, g1, &root);
                 if (root < s_hit) {
                     s_hit = root;
@@ -604,8 +603,8 @@ __attribute__((noinline, cold)) static int lane_impacts(lane_group *g, int l, do
     }
     if (s_hit > 1.0) { /* no impact: g at the step end */
         for (size_t q = 0; q < g->nimp; q++) {
-            const mp_lane_impact *im = &g->ls->impacts[q];
-            g->g_old[q * W + (size_t)l] = im->side * (g->ynew[im->iq * W + (size_t)l] - im->wall);
+            const mp_impact *im = &g->ls->impacts[q];
+            g->g_old[q * W + (size_t)l] = mp_impact_g(im, g->ynew[im->iq * W + (size_t)l]);
         }
         return 0;
     }
@@ -613,7 +612,7 @@ __attribute__((noinline, cold)) static int lane_impacts(lane_group *g, int l, do
     lane_output(g, l, h, tend, 0);
     for (size_t c = 0; c < n; c++) g->gy[c] = lane_interp(g, l, c, s_hit);
     g->t[l] = tend;
-    const mp_lane_impact *im = &g->ls->impacts[k_hit];
+    const mp_impact *im = &g->ls->impacts[k_hit];
     size_t a = k_hit * W + (size_t)l;
     if (g->results &&
         mp_ode_result_push_event(&g->results[i], k_hit, g->dir * tend, g->gy) != MP_OK) {
@@ -633,14 +632,12 @@ __attribute__((noinline, cold)) static int lane_impacts(lane_group *g, int l, do
         lane_end_ev(g, l, st, st == MP_TERMINATED ? MP_ODE_STOP_ZENO : 0, k_hit, gap);
         return 2;
     }
-    double e = im->e_param >= 0 ? g->par[(size_t)im->e_param * W + (size_t)l]
-             : im->e_rows ? im->e_rows[i] : im->e;
-    g->gy[im->iv] = -e * g->gy[im->iv];
-    g->gy[im->iq] = im->wall;
+    double p_e = im->e_param >= 0 ? g->par[(size_t)im->e_param * W + (size_t)l] : 0.0;
+    mp_impact_apply(im, mp_impact_e(im, i, p_e), g->gy, 1);
     for (size_t c = 0; c < n; c++) g->y[c * W + (size_t)l] = g->gy[c];
     for (size_t q = 0; q < g->nimp; q++) {
-        const mp_lane_impact *iq = &g->ls->impacts[q];
-        g->g_old[q * W + (size_t)l] = iq->side * (g->gy[iq->iq] - iq->wall);
+        const mp_impact *iq = &g->ls->impacts[q];
+        g->g_old[q * W + (size_t)l] = mp_impact_g(iq, g->gy[iq->iq]);
     }
     g->act_t[a] = tend;
     g->act_n[a]++;

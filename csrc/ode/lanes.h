@@ -53,29 +53,16 @@ __attribute__((__simd__("notinbranch"), const, nothrow)) double mp_lane_pow(doub
 /* Loop over the lanes of a group (vectorised). */
 #define MP_LANE_LOOP _Pragma("omp simd") for (int l = 0; l < MP_LANES; l++)
 
-/* An impact (mechpy.events.impact) as the lanes run it: the event
- * side (y[iq] - wall) = 0 reached downwards along the integration, and the
- * action y[iq] = wall, y[iv] = -e y[iv]; e is per trajectory (e_rows[i]), the
- * trajectory's parameter e_param (>= 0), or the constant e.  max_events > 0
- * ends a trajectory at that crossing (a terminal count). */
-typedef struct mp_lane_impact {
-    size_t iq, iv;
-    double wall, side, e;
-    const double *e_rows;
-    long e_param;
-    int max_events;
-} mp_lane_impact;
-
 /* What an ensemble runs in lanes: the lane rhs (NULL: each trajectory's own
  * scalar problem through a gather/call/scatter wrapper) and its parameters,
  * row i of trajectory i at params + i * pstride (pstride 0: one row for all),
- * and its impacts (each lane jumps on its own; the event lists go to the
- * trajectories' results). */
+ * and its impacts (ode.h's mp_impact, each reached downwards; each lane
+ * jumps on its own; the event lists go to the trajectories' results). */
 typedef struct mp_lane_system {
     mp_lane_rhs rhs;
     const double *params;
     size_t np, pstride;
-    const mp_lane_impact *impacts;
+    const mp_impact *impacts;
     size_t n_impacts;
 } mp_lane_system;
 

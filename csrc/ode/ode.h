@@ -23,6 +23,42 @@ typedef int (*mp_ode_events)(double t, const double *y, double *g, void *data);
  * values) is replaced in place, and the integration restarts from it.
  * MP_OK or a status that stops the solve. */
 typedef int (*mp_ode_action)(double t, double *y, size_t k, void *data);
+/* An impact (mechpy.events.impact), the one event the engine knows by value
+ * (so that it runs without the GIL, and in the SIMD lanes): the event
+ * g = side (y[iq] - wall), and its action y[iq] = wall, y[iv] = -e y[iv] (the
+ * coordinate exactly at the wall, its velocity reflected and scaled by the
+ * restitution).  e is the trajectory's parameter e_param (>= 0), else its row
+ * e_rows[i] (one per trajectory of an ensemble), else the constant e.
+ * max_events > 0 ends a trajectory at that crossing (a terminal count; the
+ * lanes' own, the scalar path has the options' terminal). */
+typedef struct mp_impact {
+    size_t iq, iv;
+    double wall, side, e;
+    const double *e_rows;
+    long e_param;
+    int max_events;
+} mp_impact;
+
+/* The impact's g for the coordinate's value x. */
+static inline double mp_impact_g(const mp_impact *im, double x)
+{
+    return im->side * (x - im->wall);
+}
+
+/* The impact's restitution for trajectory i with parameter e_param's value
+ * p_e (read only when e_param >= 0). */
+static inline double mp_impact_e(const mp_impact *im, size_t i, double p_e)
+{
+    return im->e_param >= 0 ? p_e : im->e_rows ? im->e_rows[i] : im->e;
+}
+
+/* The impact's action on a state whose component c is y[c * stride]. */
+static inline void mp_impact_apply(const mp_impact *im, double e, double *y, size_t stride)
+{
+    y[im->iv * stride] = -e * y[im->iv * stride];
+    y[im->iq * stride] = im->wall;
+}
+
 /* Interrupt check, called every few hundred steps; non-zero stops the solve. */
 typedef int (*mp_ode_interrupt)(void *ctx);
 

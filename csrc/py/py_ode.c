@@ -102,14 +102,6 @@ static int py_jac(double t, const double *y, double *J, void *data)
     return py_call(&((const py_with_jac *)data)->jac, t, y, J);
 }
 
-/* An impact (mechpy.events.impact) in C: g = side (y[iq] - wall), and the
- * action y[iv] = -e y[iv], y[iq] = wall (the coordinate exactly at the wall,
- * its velocity reflected and scaled by the restitution e). */
-typedef struct {
-    size_t iq, iv;
-    double wall, e, side;
-    long e_param; /* >= 0: e is the system's parameter of this index (per trajectory) */
-} c_impact;
 
 /* The event functions of one solve (one trajectory): per event a Python
  * function g(t, y, *args) (fns[k].fun) or a C impact (fns[k].fun NULL:
@@ -118,10 +110,10 @@ typedef struct {
 typedef struct {
     py_fn *fns;
     py_fn *acts;
-    c_impact *imp;
+    mp_impact *imp;       /* ode.h's: an impact's g and action, as the lanes run them */
     const double *params; /* the trajectory's parameter vector (an impact's e_param) */
     size_t count, n;
-    char (*names)[32];    /* "events[k]", "events[k].action": for messages */
+    char (*names)[40];    /* "events[k]", "events[k].action": for messages */
 } py_events;
 
 static int py_events_eval(double t, const double *y, double *g, void *data)
@@ -129,8 +121,7 @@ static int py_events_eval(double t, const double *y, double *g, void *data)
     const py_events *e = data;
     for (size_t k = 0; k < e->count; k++) {
         if (!e->fns[k].fun) {
-            const c_impact *im = &e->imp[k];
-            g[k] = im->side * (y[im->iq] - im->wall);
+            g[k] = mp_impact_g(&e->imp[k], y[e->imp[k].iq]);
             continue;
         }
         int rc = py_call(&e->fns[k], t, y, &g[k]);
@@ -145,10 +136,9 @@ static int py_events_action(double t, double *y, size_t k, void *data)
 {
     const py_events *e = data;
     if (!e->fns[k].fun) {
-        const c_impact *im = &e->imp[k];
-        double rest = im->e_param >= 0 ? e->params[im->e_param] : im->e;
-        y[im->iv] = -rest * y[im->iv];
-        y[im->iq] = im->wall;
+        const mp_impact *im = &e->imp[k];
+        mp_impact_apply(im, mp_impact_e(im, 0, im->e_param >= 0 ? e->params[im->e_param] : 0.0),
+                        y, 1);
         return MP_OK;
     }
     return py_call(&e->acts[k], t, y, y);
@@ -709,6 +699,31 @@ static int is_impact(PyObject *entry)
     return PyUnicode_Check(tag) && PyUnicode_CompareWithASCIIString(tag, "impact") == 0;
 }
 
+/* Contract: events[k], an impact tuple ("impact", iq, iv, wall, e, side,
+ * e_param) for states of n and parameter vectors of nparams, into *im (its
+ * max_events 0, its e the float e or 0: *eo is e as given, borrowed: a float,
+ * or one value per trajectory when e_param < 0).  0, or -1 with an exception
+ * set (a coordinate, velocity or parameter out of range). */
+static int parse_impact(PyObject *entry, Py_ssize_t k, size_t n, size_t nparams,
+                        mp_impact *im, PyObject **eo)
+{
+    Py_ssize_t iq, iv;
+    long ep;
+    double wall, side;
+    const char *tag;
+    if (!PyArg_ParseTuple(entry, "snndOdl", &tag, &iq, &iv, &wall, eo, &side, &ep))
+        return -1;
+    if (iq < 0 || iv < 0 || (size_t)iq >= n || (size_t)iv >= n ||
+        (ep >= 0 && (size_t)ep >= nparams)) {
+        PyErr_Format(PyExc_ValueError, "events[%zd]: an impact's coordinate, velocity "
+                     "or restitution parameter is out of range", k);
+        return -1;
+    }
+    *im = (mp_impact){(size_t)iq, (size_t)iv, wall, side, 0.0, NULL, ep, 0};
+    if (ep < 0 && PyFloat_Check(*eo)) im->e = PyFloat_AS_DOUBLE(*eo);
+    return 0;
+}
+
 /* Contract: the event list evo (None or a list of entries: a callable g, a
  * pair (g, action) or a C impact tuple) with terminal and direction (one int
  * each) into el and o's event fields; o->events_data and o->action_data are
@@ -767,7 +782,7 @@ static int event_fns(PyObject *evo, Py_ssize_t count, PyObject *args, size_t n,
     pe->params = params;
     pe->fns = PyMem_Calloc((size_t)count, sizeof(py_fn));
     pe->acts = PyMem_Calloc((size_t)count, sizeof(py_fn));
-    pe->imp = PyMem_Calloc((size_t)count, sizeof(c_impact));
+    pe->imp = PyMem_Calloc((size_t)count, sizeof(mp_impact));
     pe->names = PyMem_Calloc(2 * (size_t)count, sizeof *pe->names);
     if (!pe->fns || !pe->acts || !pe->imp || !pe->names) {
         PyErr_NoMemory();
@@ -776,35 +791,20 @@ static int event_fns(PyObject *evo, Py_ssize_t count, PyObject *args, size_t n,
     for (Py_ssize_t k = 0; k < count; k++) {
         PyObject *entry = PyList_GET_ITEM(evo, k);
         if (is_impact(entry)) {
-            Py_ssize_t iq, iv;
-            long ep;
-            double wall, side;
             PyObject *eo;
-            const char *tag;
-            if (!PyArg_ParseTuple(entry, "snndOdl", &tag, &iq, &iv, &wall, &eo, &side, &ep))
-                return -1;
-            if (iq < 0 || iv < 0 || (size_t)iq >= n || (size_t)iv >= n ||
-                (ep >= 0 && (size_t)ep >= nparams)) {
-                PyErr_Format(PyExc_ValueError, "events[%zd]: an impact's coordinate, velocity "
-                             "or restitution parameter is out of range", k);
-                return -1;
-            }
-            double e = 0.0;
-            if (ep < 0 && PyFloat_Check(eo)) {
-                e = PyFloat_AS_DOUBLE(eo);
-            } else if (ep < 0) { /* one restitution per trajectory */
-                PyArrayObject *ea = mp_py_array(eo, "restitution", 1);
-                if (!ea) return -1;
-                if ((size_t)PyArray_SIZE(ea) <= row) {
-                    Py_DECREF(ea);
-                    PyErr_Format(PyExc_ValueError, "events[%zd]: restitution needs one value "
-                                 "per trajectory", k);
-                    return -1;
-                }
-                e = ((const double *)PyArray_DATA(ea))[row];
+            if (parse_impact(entry, k, n, nparams, &pe->imp[k], &eo) < 0) return -1;
+            if (pe->imp[k].e_param >= 0 || PyFloat_Check(eo)) continue;
+            /* one restitution per trajectory: this one's row */
+            PyArrayObject *ea = mp_py_array(eo, "restitution", 1);
+            if (!ea) return -1;
+            if ((size_t)PyArray_SIZE(ea) <= row) {
                 Py_DECREF(ea);
+                PyErr_Format(PyExc_ValueError, "events[%zd]: restitution needs one value "
+                             "per trajectory", k);
+                return -1;
             }
-            pe->imp[k] = (c_impact){(size_t)iq, (size_t)iv, wall, e, side, ep};
+            pe->imp[k].e = ((const double *)PyArray_DATA(ea))[row];
+            Py_DECREF(ea);
             continue;
         }
         PyObject *g = PyTuple_Check(entry) ? PyTuple_GET_ITEM(entry, 0) : entry;
@@ -1030,7 +1030,7 @@ typedef struct {
     py_watched *watched;
     size_t nimp;
     mp_ode_result *results; /* with events: each trajectory's whole result */
-    mp_lane_impact *imps;   /* the events as the lanes run them (all impacts), or NULL */
+    mp_impact *imps;   /* the events as the lanes run them (all impacts), or NULL */
     PyArrayObject **imp_e;  /* ... their per-trajectory restitutions (owned) */
 } many_adapters;
 
@@ -1059,10 +1059,11 @@ static void many_adapters_clear(many_adapters *a)
 }
 
 /* Contract: the event entries evo (all C impacts: el->all_c) as the lanes run
- * them, into a->imps (n_events of them), when each is an impact reached
- * downwards (its direction -1): 1, or 0 when the lanes cannot run them, or
- * -1 with an exception set. */
-static int many_lane_impacts(many_adapters *a, PyObject *evo, const py_event_list *el, size_t k)
+ * them, into a->imps (n_events of them; states of n, parameter rows of
+ * nparams), when each is an impact reached downwards (its direction -1): 1,
+ * or 0 when the lanes cannot run them, or -1 with an exception set. */
+static int many_lane_impacts(many_adapters *a, PyObject *evo, const py_event_list *el, size_t k,
+                             size_t n, size_t nparams)
 {
     size_t ne = (size_t)el->count;
     const int *dir = PyArray_DATA(el->dir), *term = PyArray_DATA(el->term);
@@ -1076,21 +1077,13 @@ static int many_lane_impacts(many_adapters *a, PyObject *evo, const py_event_lis
         return -1;
     }
     for (size_t q = 0; q < ne; q++) {
-        Py_ssize_t iq, iv;
-        long ep;
-        double wall, side;
+        mp_impact *im = &a->imps[q];
         PyObject *eo;
-        const char *tag;
-        if (!PyArg_ParseTuple(PyList_GET_ITEM(evo, (Py_ssize_t)q), "snndOdl", &tag, &iq, &iv,
-                              &wall, &eo, &side, &ep))
+        if (parse_impact(PyList_GET_ITEM(evo, (Py_ssize_t)q), (Py_ssize_t)q, n, nparams, im,
+                         &eo) < 0)
             return -1;
-        mp_lane_impact *im = &a->imps[q];
-        *im = (mp_lane_impact){(size_t)iq, (size_t)iv, wall, side, 0.0, NULL, ep, term[q]};
-        if (ep >= 0) continue;
-        if (PyFloat_Check(eo)) {
-            im->e = PyFloat_AS_DOUBLE(eo);
-            continue;
-        }
+        im->max_events = term[q];
+        if (im->e_param >= 0 || PyFloat_Check(eo)) continue;
         if (!(a->imp_e[q] = mp_py_array(eo, "restitution", 1))) return -1;
         if ((size_t)PyArray_SIZE(a->imp_e[q]) != k) {
             PyErr_SetString(PyExc_ValueError, "restitution needs one value per trajectory");
@@ -1255,14 +1248,19 @@ static PyObject *py_ode_solve_many(PyObject *self, PyObject *args, PyObject *kw)
     if (jac_parse(jaco, n, &jm) < 0 || event_list_parse(evo, termo, diro, &el, &o) < 0)
         goto out;
     const double *rows = par ? PyArray_DATA(par) : NULL;
+    /* the parameter vector each trajectory's events see (an impact's e_param) */
+    size_t nparams = sys.params ? (size_t)PyArray_SIZE(sys.params) : 0;
+    size_t npar = par && (sys.model || sys.params) ? np : nparams;
     int lane_imps = 0; /* impacts alone: the lanes run them too */
-    if (el.count && el.all_c && (lane_imps = many_lane_impacts(&ad, evo, &el, k)) < 0) goto out;
+    if (el.count && el.all_c &&
+        (lane_imps = many_lane_impacts(&ad, evo, &el, k, n, npar)) < 0)
+        goto out;
     ens = (mp_ode_ensemble){
         .m = m, .base = sys.prob, .k = k, .n = n, .rows = rows, .np = np,
         .rows_kind = !par ? MP_ENS_ROWS_NONE : sys.model ? MP_ENS_ROWS_SCENE
                    : sys.params ? MP_ENS_ROWS_DATA : MP_ENS_ROWS_CALLER,
         .model = sys.model, .params = sys.params ? PyArray_DATA(sys.params) : NULL,
-        .nparams = sys.params ? (size_t)PyArray_SIZE(sys.params) : 0,
+        .nparams = nparams,
         .torque = sys.torque.fn ? &sys.torque : NULL, .lane_rhs = sys.lanes,
         .holds_python = sys.holds_python || watch != Py_None || (jaco != Py_None && !jm) ||
                         (el.count && !el.all_c),
@@ -1309,7 +1307,6 @@ static PyObject *py_ode_solve_many(PyObject *self, PyObject *args, PyObject *kw)
             !(ad.evdata = PyMem_Calloc(k, sizeof *ad.evdata)) ||
             !(ad.results = PyMem_Calloc(k, sizeof *ad.results)))
             goto nomem;
-        size_t npar = rows && ens.rows_kind != MP_ENS_ROWS_CALLER ? np : ens.nparams;
         for (size_t i = 0; i < k; i++) {
             const double *pv = rows && ens.rows_kind != MP_ENS_ROWS_CALLER ? rows + i * np
                                                                             : ens.params;
