@@ -530,6 +530,12 @@ COMBINED = [
     lambda x, y: -x - y - _a * _b * x * y,
     lambda x, y: sp.atan2(y, x) - sp.atan2(x, y + 3),
     lambda x, y: sp.log(x * y) * sp.sqrt(x + y) - sp.acos(x / (y + 2)),
+    # half-integer powers up to 7/2 are printed as products and one sqrt, 9/2 by pow()
+    lambda x, y: (x * y ** sp.Rational(5, 2) - y ** sp.Rational(-5, 2)
+                  + x ** sp.Rational(7, 2) * y ** sp.Rational(-7, 2) + x ** sp.Rational(9, 2)),
+    # a reciprocal shared by several terms (a temporary that multiplies)
+    lambda x, y: (x * (x + y) ** sp.Rational(-1, 2) + sp.sin(y) * (x + y) ** sp.Rational(-1, 2)
+                  - x ** 2 * (x + y) ** sp.Rational(-3, 2) + y / (x + y)),
 ]
 
 
