@@ -101,7 +101,7 @@ def run(quick: bool):
 def targets(rows):
     """mechpy's fastest run at or below 1e-14 against the 200 ms goal, and its
     time beside IAS15's."""
-    mine = [r for r in rows if r.get("path", "").startswith("longrun-")
+    mine = [r for r in rows if (r.get("path") or "").startswith("longrun-")
             and r["path"] != "longrun-ias15" and r["error"] <= 1e-14]
     ias = [r for r in rows if r.get("path") == "longrun-ias15" and np.isfinite(r["time"])]
     if not mine:
