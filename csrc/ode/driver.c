@@ -574,15 +574,18 @@ static int alloc_workspace(ode_run *s, const mp_ode_problem *p, double t0, doubl
 {
     const mp_ode_method *m = s->m;
     mp_ode_ws *w = &s->w;
-    size_t n = p->n, nvec = 7 + m->nscratch + m->ncoef;
+    size_t n = p->n, nvec = 10 + m->nscratch + m->ncoef;
     s->buf = malloc(nvec * n * sizeof(double));
     if (!s->buf) return MP_ENOMEM;
     w->p = p; w->m = s->cur; w->o = s->o; w->n = n; w->ncoef = m->ncoef;
     w->t_start = t0; w->t_end = tf;
     w->y = s->buf; w->ynew = s->buf + n; w->f = s->buf + 2 * n; w->fnew = s->buf + 3 * n;
     s->ytmp = s->buf + 4 * n;
-    s->save = s->buf + 5 * n; /* 2n: y and f at the start of a fast block */
-    w->k = s->buf + 7 * n;
+    s->save = s->buf + 5 * n; /* 3n: y, f and lo at the start of a fast block */
+    w->lo = s->buf + 8 * n;
+    w->lonew = s->buf + 9 * n;
+    memset(w->lo, 0, 2 * n * sizeof(double));
+    w->k = s->buf + 10 * n;
     w->coef = w->k + m->nscratch * n;
     memset(w->coef, 0, m->ncoef * n * sizeof(double));
     int rc;
@@ -752,6 +755,7 @@ static int accept_step(ode_run *s, double h, double hnew, double tnew)
         mp_ode_dense_eval(w->coef, w->ncoef, n, s_stop, s->ytmp);
         if (o->n_eval == 0 && (rc = push_sample(r, tend, s->ytmp)) != MP_OK) return rc;
         memcpy(w->y, s->ytmp, n * sizeof(double));
+        memset(w->lo, 0, n * sizeof(double)); /* a new state: no low-order part */
         s->t = tend;
         if (act < 0) { /* a terminal event: the solve ends here */
             r->terminated = 1;
@@ -761,6 +765,7 @@ static int accept_step(ode_run *s, double h, double hnew, double tnew)
     }
     if (o->n_eval == 0 && (rc = push_sample(r, tnew, w->ynew)) != MP_OK) return rc;
     double *sw = w->y; w->y = w->ynew; w->ynew = sw;
+    sw = w->lo; w->lo = w->lonew; w->lonew = sw;
     if (w->fnew_valid) { sw = w->f; w->f = w->fnew; w->fnew = sw; }
     s->t = tnew;
     s->nfixed += !s->cur->adaptive;
@@ -776,7 +781,7 @@ static int accept_step(ode_run *s, double h, double hnew, double tnew)
  * one, none reaching the next t_eval point, none at an interrupt poll, within
  * the budget), with the stage checks off, and checks once at the block's end
  * that y, f and the values the steps dropped are finite.  A non-finite value
- * or a failure puts everything back as it was at the block's start (y, f,
+ * or a failure puts everything back as it was at the block's start (y, lo, f,
  * counts, samples) and leaves the block to the checked loop, which stops
  * where and as it always does: results and counts are the checked loop's,
  * bit for bit. */
@@ -802,6 +807,7 @@ static void fixed_block(ode_run *s)
     long nfev0 = w->nfev;
     memcpy(s->save, w->y, n * sizeof(double));
     memcpy(s->save + n, w->f, n * sizeof(double));
+    memcpy(s->save + 2 * n, w->lo, n * sizeof(double));
     w->discarded = 0.0;
     int rc = s->cur->block(w, s->t0, s->nfixed, h, k, every ? r->t + r->m : NULL,
                            every ? r->y + r->m * n : NULL);
@@ -810,6 +816,7 @@ static void fixed_block(ode_run *s)
     if (bad) { /* back to the block's start: the checked loop runs it, and the failing step */
         memcpy(w->y, s->save, n * sizeof(double));
         memcpy(w->f, s->save + n, n * sizeof(double));
+        memcpy(w->lo, s->save + 2 * n, n * sizeof(double));
         w->nfev = nfev0;
         s->checked_until = s->attempts + k + 1;
         return;

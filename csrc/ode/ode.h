@@ -71,10 +71,11 @@ typedef struct mp_ode_blocks {
      * mp_ode_rk4_steps */
     int (*rk4)(void *data, double t0, long i0, double h, long k, double *y, double *f,
                double *ts, double *ys);
-    /* k steps of the composition c[0..ns), as mp_ode_compose_steps (NULL: rhs
-     * is not separable) */
+    /* k steps of the composition c[0..ns), as mp_ode_compose_steps, lo the
+     * state's low-order part or NULL (uncompensated) (compose NULL: rhs is
+     * not separable) */
     int (*compose)(void *data, double t0, long i0, double h, const double *c, int ns, long k,
-                   double *y, double *f, double *ts, double *ys, double *discarded);
+                   double *y, double *lo, double *f, double *ts, double *ys, double *discarded);
 } mp_ode_blocks;
 
 /* A switch of a problem's right-hand side: a scene's discontinuity that the
@@ -215,6 +216,8 @@ typedef struct mp_ode_method {
     int implicit;
     int symplectic;
     int needs_jacobian; /* uses df/dy (analytic or finite differences) */
+    int compensated;    /* its updates of the state are compensated sums (ode/fixed.h's
+                           mp_ode_sum_add), the state's low-order part in ws->lo */
     int dense_order;    /* order of its interpolant */
     int lanes;          /* its lane kernel (MP_LANE_*): ensembles run it in SIMD lanes;
                            MP_LANE_NONE: one trajectory at a time */
@@ -260,6 +263,11 @@ struct mp_ode_ws {
     const mp_ode_options *o;
     size_t n;
     double *y, *ynew, *f, *fnew; /* f = f(t, y); fnew = f(t + h, ynew) after finish */
+    double *lo, *lonew;          /* the low-order parts of y and ynew (compensated summation,
+                                    ode/fixed.h's mp_ode_sum_add): the state is y + lo to about
+                                    twice the working precision.  Written by the rows that
+                                    compensate (yoshida4, yoshida6), else zero; the driver
+                                    swaps them with y and ynew, zeroes lo where it sets y */
     int fnew_valid;              /* finish computed fnew */
     double *k;                   /* nscratch * n */
     double *coef;                /* ncoef * n: the last accepted step's interpolant; slots a
