@@ -204,6 +204,42 @@ class _MappedDense(DenseOutput):
         return self._fn(self._inner(t))
 
 
+class _JoinedDense(DenseOutput):
+    """Dense outputs of consecutive pieces of one solve (a switch or a restart
+    between them), joined in time: t in a piece's span is that piece's, a
+    time shared by two pieces the one's that starts there (forwards: the
+    state after the switch)."""
+
+    def __init__(self, parts):
+        self._parts = list(parts)
+        self.t_min = min(q.t_min for q in self._parts)
+        self.t_max = max(q.t_max for q in self._parts)
+        self.n_segments = sum(q.n_segments for q in self._parts)
+        # the pieces' starts in the order of time; a backward solve's last
+        # piece starts earliest
+        mins = np.array([q.t_min for q in self._parts])
+        self._order = np.argsort(mins, kind="stable")
+        self._starts = mins[self._order]
+
+    def __call__(self, t):
+        t = np.asarray(t, dtype=np.float64)
+        if not np.all(np.isfinite(t)):
+            raise ValueError("t must be finite")
+        flat = t.reshape(-1)
+        k = np.clip(np.searchsorted(self._starts, flat, side="right") - 1, 0,
+                    len(self._parts) - 1)
+        out = None
+        for j in np.unique(k):
+            sel = k == j
+            v = self._parts[self._order[j]](flat[sel])
+            if out is None:
+                out = np.empty((v.shape[0], flat.size))
+            out[:, sel] = v
+        if out is None:     # no time asked
+            out = np.empty((np.asarray(self._parts[0](self._parts[0].t_min)).shape[0], 0))
+        return out[:, 0] if t.ndim == 0 else out.reshape(out.shape[:1] + t.shape)
+
+
 class EnsembleSolution(Solution):
     """Result of :func:`solve_many`: ``t`` (m,), ``y`` (k, n, m), ``success``
     (k,), ``status`` (k,), ``message`` (a list of k str), ``nfev`` (k,),

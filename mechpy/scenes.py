@@ -23,7 +23,7 @@ import numpy as np
 
 from . import _core
 from ._callbacks import c_address
-from ._solution import DenseOutput, Solution
+from ._solution import DenseOutput, Solution, _JoinedDense
 from ._system import _method_names
 from ._validate import as_array, as_int, as_scalar
 from .integrate import solve
@@ -1073,27 +1073,6 @@ class _PadDense(DenseOutput):
         t = np.asarray(t, dtype=np.float64)
         m = np.maximum(self._m0 - self._b * (t - self.t_min), self._md)
         return np.stack([np.zeros_like(m), np.zeros_like(m), m])
-
-
-class _JoinedDense(DenseOutput):
-    """Dense outputs of consecutive pieces of one solve, joined in time."""
-
-    def __init__(self, parts):
-        self._parts = parts
-        self.t_min, self.t_max = parts[0].t_min, parts[-1].t_max
-        self.n_segments = sum(q.n_segments for q in parts)
-
-    def __call__(self, t):
-        t = np.asarray(t, dtype=np.float64)
-        flat = t.reshape(-1)
-        out = np.empty((3, flat.size))
-        starts = np.array([q.t_min for q in self._parts])
-        which = np.clip(np.searchsorted(starts, flat, side="right") - 1, 0, len(self._parts) - 1)
-        for i, q in enumerate(self._parts):
-            sel = which == i
-            if sel.any():
-                out[:, sel] = q(flat[sel])
-        return out.reshape((3,) + t.shape)
 
 
 def _join_pieces(pieces, every_step):
