@@ -24,64 +24,69 @@ SPLIT = 60_000
 
 #: The dense solver, written once.  NA is the size of the linear system.
 RUNTIME = r"""
-/* LU factorisation with partial pivoting of the NA x NA row-major matrix A,
+/* LU factorisation with partial pivoting of the n x n row-major matrix A,
  * in place; piv receives the row exchanges, dinv the inverses of the pivots
  * (the solve multiplies: no division waits on the right-hand side).  Returns
  * MP_ENONFINITE for a NaN
- * or inf entry, MP_ESINGULAR when a pivot is zero or below NA eps max|A|
+ * or inf entry, MP_ESINGULAR when a pivot is zero or below n eps max|A|
  * (numerically singular), MP_OK otherwise. */
-static MP_INLINE int mp_lu(double *A, int *piv, double *dinv)
+static MP_INLINE int mp_lu_n(double *A, int n, int *piv, double *dinv)
 {
     double amax = 0.0;
-    for (int i = 0; i < NA * NA; i++) {
+    for (int i = 0; i < n * n; i++) {
         double a = fabs(A[i]);
         if (!isfinite(a)) return MP_ENONFINITE;
         if (a > amax) amax = a;
     }
-    const double tol = NA * DBL_EPSILON * amax;
-    for (int k = 0; k < NA; k++) {
+    const double tol = n * DBL_EPSILON * amax;
+    for (int k = 0; k < n; k++) {
         int p = k;
-        double best = fabs(A[k * NA + k]);
-        for (int i = k + 1; i < NA; i++) {
-            double a = fabs(A[i * NA + k]);
+        double best = fabs(A[k * n + k]);
+        for (int i = k + 1; i < n; i++) {
+            double a = fabs(A[i * n + k]);
             if (a > best) { best = a; p = i; }
         }
         if (!(best > tol)) return MP_ESINGULAR;
         piv[k] = p;
         if (p != k)
-            for (int j = 0; j < NA; j++) {
-                double s = A[k * NA + j]; A[k * NA + j] = A[p * NA + j]; A[p * NA + j] = s;
+            for (int j = 0; j < n; j++) {
+                double s = A[k * n + j]; A[k * n + j] = A[p * n + j]; A[p * n + j] = s;
             }
-        const double inv = 1.0 / A[k * NA + k];
+        const double inv = 1.0 / A[k * n + k];
         dinv[k] = inv;
-        for (int i = k + 1; i < NA; i++) {
-            double l = A[i * NA + k] * inv;
-            A[i * NA + k] = l;
+        for (int i = k + 1; i < n; i++) {
+            double l = A[i * n + k] * inv;
+            A[i * n + k] = l;
             if (l != 0.0)
-                for (int j = k + 1; j < NA; j++) A[i * NA + j] -= l * A[k * NA + j];
+                for (int j = k + 1; j < n; j++) A[i * n + j] -= l * A[k * n + j];
         }
     }
     return MP_OK;
 }
 
-/* Solve A x = b in place (x holds b on entry) with the factors of mp_lu. */
-static MP_INLINE void mp_lu_solve(const double *LU, const int *piv, const double *dinv, double *x)
+/* Solve A x = b in place (x holds b on entry) with the factors of mp_lu_n. */
+static MP_INLINE void mp_lu_solve_n(const double *LU, int n, const int *piv,
+                                    const double *dinv, double *x)
 {
-    for (int k = 0; k < NA; k++) {
+    for (int k = 0; k < n; k++) {
         int p = piv[k];
         if (p != k) { double s = x[k]; x[k] = x[p]; x[p] = s; }
     }
-    for (int i = 1; i < NA; i++) {
+    for (int i = 1; i < n; i++) {
         double s = x[i];
-        for (int j = 0; j < i; j++) s -= LU[i * NA + j] * x[j];
+        for (int j = 0; j < i; j++) s -= LU[i * n + j] * x[j];
         x[i] = s;
     }
-    for (int i = NA - 1; i >= 0; i--) {
+    for (int i = n - 1; i >= 0; i--) {
         double s = x[i];
-        for (int j = i + 1; j < NA; j++) s -= LU[i * NA + j] * x[j];
+        for (int j = i + 1; j < n; j++) s -= LU[i * n + j] * x[j];
         x[i] = s * dinv[i];
     }
 }
+
+/* The NA x NA system's (mp_gen_rhs's, the Jacobian's). */
+#define mp_lu(A, piv, dinv) mp_lu_n((A), NA, (piv), (dinv))
+#define mp_lu_solve(LU, piv, dinv, x) mp_lu_solve_n((LU), NA, (piv), (dinv), (x))
 """
 
 
@@ -969,10 +974,100 @@ def _chunked(text):
     return "\n".join(out) + "\n" + driver
 
 
+def _kane_blocks(A, na, nc, ns):
+    """Whether the NA x NA matrix A (row-major, its entries as SymPy
+    expressions) has the blocks of a Kane model (multibody.py): the first nc
+    rows the identity on q' beside -C^T on the multipliers, the next ns - nc
+    rows the mass matrix M on u' alone, the last na - ns rows C on q' alone.
+    Then A z = b splits: M u' = F, and (C C^T) mu = b_mu - C f_k with
+    q' = f_k + C^T mu (f_k the first nc entries of b, b_mu the last)."""
+    def a(i, j):
+        return sp.sympify(A[i * na + j])
+
+    for i in range(nc):
+        for j in range(ns):
+            if a(i, j) != (1 if i == j else 0):
+                return False
+        for c in range(ns, na):
+            if sp.expand(a(i, c) + a(c, i)) != 0:
+                return False
+    for i in range(nc, ns):
+        if any(a(i, j) != 0 for j in list(range(nc)) + list(range(ns, na))):
+            return False
+    for c in range(ns, na):
+        if any(a(c, j) != 0 for j in range(nc, na)):
+            return False
+    return True
+
+
+#: mp_gen_rhs of a Kane model from its blocks (see _kane_blocks): the LU of
+#: the NU x NU mass matrix and of the NH x NH C C^T instead of the NA x NA
+#: system (the n-link cart's 22 x 22 becomes 11 x 11, the bicycle's 11 x 11
+#: a 6 x 6 and a 1 x 1); the Jacobian keeps the whole system's factors.
+_RHS_KANE = r"""
+/* dy/dt = (q', u') at (t, y) from the blocks of A z = b: M u' = F by mp_lu_n,
+ * then with the NH holonomic constraints (C C^T) mu = b_mu - C f_k and
+ * q' = f_k + C^T mu (C the last NH rows of A, f_k the first NC entries of b);
+ * without them q' = f_k.  params: the parameter vector. */
+int mp_gen_rhs(double t, const double *y, double *dydt, void *params)
+{
+    double Ab[NA * NA + NA], M[NU * NU], dinv[NU];
+    int piv[NU], rc;
+    gen_Ab(t, y, (const double *)params, Ab);
+    const double *b = Ab + NA * NA;
+    for (int i = 0; i < NU; i++) {
+        for (int j = 0; j < NU; j++) M[i * NU + j] = Ab[(NC + i) * NA + NC + j];
+        dydt[NC + i] = b[NC + i];
+    }
+    if ((rc = mp_lu_n(M, NU, piv, dinv)) != MP_OK) return rc;
+    mp_lu_solve_n(M, NU, piv, dinv, dydt + NC);
+    for (int i = 0; i < NC; i++) dydt[i] = b[i];
+#if NH > 0
+    double S[NH * NH], mu[NH], sinv[NH];
+    int spiv[NH];
+    const double *C = Ab + NS * NA;          /* row c: C[c * NA + j], j < NC */
+    for (int c = 0; c < NH; c++) {
+        double r = b[NS + c];
+        for (int j = 0; j < NC; j++) r -= C[c * NA + j] * b[j];
+        mu[c] = r;
+        for (int d = 0; d < NH; d++) {
+            double s = 0.0;
+            for (int j = 0; j < NC; j++) s += C[c * NA + j] * C[d * NA + j];
+            S[c * NH + d] = s;
+        }
+    }
+    if ((rc = mp_lu_n(S, NH, spiv, sinv)) != MP_OK) return rc;
+    mp_lu_solve_n(S, NH, spiv, sinv, mu);
+    for (int i = 0; i < NC; i++)
+        for (int c = 0; c < NH; c++) dydt[i] += C[c * NA + i] * mu[c];
+#endif
+    for (int i = 0; i < NS; i++)
+        if (!isfinite(dydt[i])) return MP_ENONFINITE;
+    return MP_OK;
+}
+"""
+
+
+#: mp_gen_rhs of a mechanics model whose A has no blocks to split.
+_RHS_FULL = r"""
+/* dy/dt = z[:NS] at (t, y); params: the parameter vector. */
+int mp_gen_rhs(double t, const double *y, double *dydt, void *params)
+{
+    double LU[NA * NA + NA], dinv[NA], z[NA];
+    int piv[NA];
+    int rc = gen_solve(t, y, (const double *)params, LU, piv, dinv, z);
+    if (rc != MP_OK) return rc;
+    for (int i = 0; i < NS; i++) dydt[i] = z[i];
+    return MP_OK;
+}
+"""
+
+
 def _mechanics_source(ir, status):
-    """A model of SymPy's mechanics (see multibody.py): A z = b solved by
-    mp_lu at each evaluation, dy/dt = z[:NS]; the Jacobian and the input
-    matrix from D after the same factorisation."""
+    """A model of SymPy's mechanics (see multibody.py): A z = b solved at each
+    evaluation (by its blocks for a Kane model: _kane_blocks), dy/dt = z[:NS];
+    the Jacobian and the input matrix from D after the whole system's
+    factorisation."""
     B = ir.blocks
     nv = len(B["D"]) // len(B["b"])          # NS states + the specified inputs
     # A and b in one pass: the subexpressions they share (the bicycle: the
@@ -993,6 +1088,12 @@ def _mechanics_source(ir, status):
     na = len(B["b"])
     header = re.sub(r"\n#define NA \d+ ", f"\n#define NA {na} ", _header(ir, status))
     head = [header, f"#define NV {nv}   /* columns of D: states, inputs */"]
+    if _kane_blocks(B["A"], na, ir.nc, ir.n):
+        head.append(f"#define NU {ir.n - ir.nc}   /* speeds: M is NU x NU */\n"
+                    f"#define NH {na - ir.n}   /* holonomic constraints: C is NH x NC */")
+        rhs = _RHS_KANE
+    else:
+        rhs = _RHS_FULL
     if len(jac) + sum(map(len, blocks)) > SPLIT:
         parts = head + ["#if defined(__GNUC__)\n#define MP_HIDDEN "
                         "__attribute__((visibility(\"hidden\")))\n#else\n#define MP_HIDDEN"
@@ -1021,17 +1122,7 @@ static inline int gen_solve(double t, const double *y, const double *p, double *
     return MP_OK;
 }
 
-/* dy/dt = z[:NS] at (t, y); params: the parameter vector. */
-int mp_gen_rhs(double t, const double *y, double *dydt, void *params)
-{
-    double LU[NA * NA + NA], dinv[NA], z[NA];
-    int piv[NA];
-    int rc = gen_solve(t, y, (const double *)params, LU, piv, dinv, z);
-    if (rc != MP_OK) return rc;
-    for (int i = 0; i < NS; i++) dydt[i] = z[i];
-    return MP_OK;
-}
-
+MP_GEN_RHS
 /* out (NS x ncol, row-major) = the first NS rows of A^-1 D[:, :ncol]: the
  * Jacobian (ncol = NS) or, with the inputs' columns, (df/dy, df/dr). */
 static int gen_lin(double t, const double *y, const double *p, double *out, int ncol)
@@ -1076,6 +1167,7 @@ int mp_gen_residual_jac(double t, const double *y, double *out, void *params)
     return MP_OK;
 }
 """)
+    parts[-1] = parts[-1].replace("MP_GEN_RHS\n", rhs)
     parts.append(_first_order_tail("energy" in B, "a mechanics model"))
     if lanes is None:
         parts.append(_lanes_mechanics(ir))
