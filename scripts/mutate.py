@@ -92,7 +92,9 @@ MODULES = {
                  "tests/test_inertia.py", "tests/test_rotation.py", "tests/test_modes.py",
                  "tests/test_compiled.py", "-k", FAST]),
     "inertia.py": (["mechpy/inertia.py"], ["tests/test_inertia.py"]),
-    "rotation.py": (["mechpy/rotation.py"], ["tests/test_rotation.py", "tests/test_rigid.py"]),
+    # to_scipy and from_scipy are tested against SciPy's Rotation in test_conventions.py
+    "rotation.py": (["mechpy/rotation.py"], ["tests/test_rotation.py", "tests/test_rigid.py",
+                                             "tests/test_conventions.py"]),
     "modes.py": (["mechpy/modes.py"], ["tests/test_modes.py", "tests/test_chain.py", "-k", FAST]),
     "variational.py": (["mechpy/variational/*.py"], ["tests/test_variational.py", "-k", FAST]),
     "symbolic": (["mechpy/symbolic/derive.py", "mechpy/symbolic/codegen.py"],
