@@ -695,3 +695,18 @@ def test_bad_input():
         mi.Body(1.0, [0, 0, 0], np.diag([1.0, 1.0, 3.0]))
     with pytest.raises(ValueError, match="symmetric"):
         mi.Body(1.0, [0, 0, 0], [[1, 0.5, 0], [0, 1, 0], [0, 0, 1]])
+
+
+def test_body_checks_its_tensor_alike_in_any_units():
+    """Body's check of a mass distribution's tensor (principal moments >= 0 with
+    I1 + I2 >= I3) does not depend on the units: at the scales 1e-6, 1 and 1e6 a flat
+    body (I1 + I2 = I3) and a point mass (zero tensor) are accepted, a violation of
+    the triangle inequality by 1e-6 relative, or a negative moment, refused."""
+    for a in (1e-6, 1.0, 1e6):
+        for ok in ([a, a, 2 * a], [a, 2 * a, 3 * a], [0.0, a, a], [0.0, 0.0, 0.0]):
+            b = mi.Body(2.0, inertia=np.diag(ok))
+            assert np.array_equal(b.inertia, np.diag(ok))
+        for bad in ([a, a, 2 * a * (1 + 1e-6)], [a, 2 * a, 3 * a * (1 + 1e-6)],
+                    [-1e-6 * a, a, a]):
+            with pytest.raises(ValueError, match="I1 \\+ I2 >= I3"):
+                mi.Body(2.0, inertia=np.diag(bad))

@@ -121,6 +121,11 @@ def test_pickle_replace_and_lanes():
     y = np.array([0.4, 0.1])
     assert np.array_equal(back.rhs(0.0, y), pend.rhs(0.0, y))
     short = pend.replace(l=0.5)
+    # a scene is a value: its copies are equal (and hash alike), another length or
+    # another model is not
+    assert back == pend and hash(back) == hash(pend) and pend.replace(l=L) == pend
+    assert short != pend and short.replace(l=L) == pend
+    assert mp.mechanics(_pendulum_lagrange(), PARAMS) != pend
     assert np.isclose(short.rhs(0.0, [np.pi / 2, 0.0])[1], -G / 0.5)
     lengths = np.array([0.5, 1.0, 1.5, 2.0, 2.5, 3.0, 3.5, 4.0, 4.5])
     ens = mp.solve_many(pend, (0, 2), np.tile([0.3, 0.0], (9, 1)), params={"l": lengths},
@@ -186,6 +191,34 @@ def test_disc_linearize_equals_sympys_linearizer(disc):
     assert np.allclose(A, A_ref, rtol=1e-11, atol=1e-11)
 
 
+def test_disc_rolling_upright_closed_forms(disc):
+    """The upright rolling disc against its closed forms (the references above are
+    SymPy's equations of the same model, blind to a wrong inertia or coordinate):
+    at yaw psi and spin w the contact point moves at r w (cos psi, sin psi) in the
+    plane, and the lean obeys (I1 + m r^2) phi'' = (m g r - I3 (I3 + m r^2) w^2 / I1)
+    phi (the yaw rate following I1 psi'' = I3 w phi'), I1 = m r^2 / 4 about a
+    diameter, I3 = m r^2 / 2 about the axle: stable above w^2 = g / (3 r)."""
+    _, params, scene = disc
+    m, r, g = params["m"], params["r"], params["g"]
+    for psi in (0.0, 0.7, np.pi / 2, 2.5, -1.2):
+        w = 3.0
+        y = scene.project(np.array([psi, 0.0, 0.4, 0.3, -0.2, 0.0, 0.0, w, 0.0, 0.0]))
+        ref = r * w * np.array([np.cos(psi), np.sin(psi)])
+        assert np.abs(y[8:] - ref).max() < 5e-15             # the dependent speeds
+        assert np.abs(scene.rhs(0.0, y)[3:5] - ref).max() < 5e-15   # q4', q5' (7e-16)
+    I1, I3 = m * r**2 / 4, m * r**2 / 2
+    for w in (1.5, np.sqrt(g / (3 * r)) * 1.3, 8.0):
+        y0 = scene.project(np.array([0.4, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, w, 0.0, 0.0]))
+        A, _ = scene.linearize(y0)
+        lam2 = (m * g * r - I3 * (I3 + m * r**2) * w**2 / I1) / (I1 + m * r**2)
+        ev = np.linalg.eigvals(A)
+        big = ev[np.abs(ev) > 1e-6]
+        ref = np.sqrt(complex(lam2)) * np.array([1, -1])
+        assert len(big) == 2
+        err = np.abs(np.sort_complex(big) - np.sort_complex(ref)).max()
+        assert err < 5e-15 * np.sqrt(abs(lam2))                  # measured 6e-16
+
+
 # ---------------------------------------------------------------- the bicycle
 
 @pytest.fixture(scope="module")
@@ -201,6 +234,22 @@ TABLE2 = {0.0: [-5.53094371765393, -3.13164324790656, 3.13164324790656, 5.530943
                 -0.77534188219585 + 4.46486771378823j],
           10.0: [-24.62459635017404, 0.16105338653172, -3.72016840437287 - 10.90681139476287j,
                  -3.72016840437287 + 10.90681139476287j]}
+#: the same paper, Table 1: the wheels' radii, the masses and moments of inertia (kg m^2)
+#: of the rear wheel R, rear frame B, front frame H and front wheel F, and g
+TABLE1 = dict(rR=0.3, mR=2.0, IRxx=0.0603, IRyy=0.12, mB=85.0, IBxx=9.2, IByy=11.0, IBzz=2.8,
+              IBxz=2.4, mH=4.0, IHxx=0.05892, IHyy=0.06, IHzz=0.00708, IHxz=-0.00756, rF=0.35,
+              mF=3.0, IFxx=0.1405, IFyy=0.28, g=9.81)
+
+
+def test_bicycle_constants_are_table1():
+    """The bodies' masses and inertias are Table 1's as published (IHyy, the front
+    frame's pitch moment, is one the linear eigenvalues of Table 2 do not involve); the
+    products IBxz, IHxz enter with the opposite sign, the model's convention for them
+    (the eigenvalues of Table 2 check that, and the geometry's conversion)."""
+    _, params = whipple_bicycle()
+    for k, v in TABLE1.items():
+        assert params[k] == (-v if k.endswith("xz") else v), k
+
 #: the same paper: weave and capsize speeds (m/s)
 WEAVE, CAPSIZE = 4.29238253634111, 6.02426201538837
 LEAN_STEER = [1, 2, 3, 5]          # q2 roll, q5 steer, u2 roll rate, u5 steer rate

@@ -291,6 +291,25 @@ def test_ill_conditioned_masses_by_residuals(rng, method):
     assert np.max(rel) < (1e-12 if method == "chain" else 1e-2), rel
 
 
+@pytest.mark.parametrize("method", ["chain", "dense"])
+@pytest.mark.parametrize("n", [2, 7])
+def test_default_zero_tol_is_the_documented_round_off_bound(method, n):
+    """The docstring's bound 16 n eps max|omega^2|: a diagonal K (eigenvalues exact on
+    both paths) with one eigenvalue 0.3% above it keeps it, 0.3% below it is a zero mode;
+    a negative one 0.3% beyond it is UnstableSystemError, 0.3% within it is set to 0."""
+    bound = 16 * n * EPS
+    for f, zero in ((1.003, False), (0.997, True)):
+        K = np.diag([1.0] + [f * bound] * (n - 1))
+        modes = normal_modes(K, np.eye(n), method=method)
+        assert modes.zero_modes.sum() == (n - 1 if zero else 0)
+        if not zero:    # measured: exact
+            assert np.abs(modes.omega[:-1] ** 2 / (f * bound) - 1).max() < 1e-15
+    K = np.diag([1.0] + [-0.997 * bound] * (n - 1))
+    assert normal_modes(K, np.eye(n), method=method).zero_modes.sum() == n - 1
+    with pytest.raises(mp.UnstableSystemError):
+        normal_modes(np.diag([1.0] + [-1.003 * bound] * (n - 1)), np.eye(n), method=method)
+
+
 # ------------------------------------------------------------- the motion
 @pytest.mark.parametrize("ends", ["fixed", "free"])
 def test_evolve_matches_odeint(rng, ends):

@@ -305,6 +305,22 @@ def test_euler_from_quat_against_scipy(seq, passive, rng):
     np.testing.assert_allclose(angle_diff(got, a), 0, atol=1e-13)
 
 
+
+@pytest.mark.parametrize("seq", SEQS)
+def test_euler_from_quat_of_the_identity_and_the_half_turns(seq):
+    """The quaternions with one nonzero component (the identity and the half turns
+    about x, y, z), unit and scaled by 1e-140 or 1e140: their angles give back SciPy's
+    matrix (at lock the angles are another choice of the same rotation)."""
+    for k in range(4):
+        for scale in (1.0, 1e-140, 1e140):
+            q = np.zeros(4)
+            q[k] = scale
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", UserWarning)    # gimbal lock at some
+                a = rot.euler_from_quat(q, seq)
+            R = Rotation.from_quat(np.eye(4)[k]).as_matrix()
+            assert np.abs(scipy_matrix(seq, a, False) - R).max() < 1e-15, (k, scale)
+
 def test_quat_from_matrix_against_scipy_every_branch():
     # identity-like, near-180-degree rotations about each axis (each Shepperd branch), random
     R = np.concatenate([
