@@ -64,6 +64,25 @@ def test_agrees_with_solve_ivp_same_method(method, scipy_method):
     assert ours.nfev < 1.5 * ref.nfev
 
 
+@pytest.mark.parametrize("method,scipy_method", [("dop853", "DOP853"), ("dopri5", "RK45")])
+def test_first_step_is_solve_ivps(method, scipy_method):
+    # the automatic first step is Hairer's estimate (Solving ODEs I, II.4), SciPy's
+    # select_initial_step: the same step to round-off, forward and backward, from rest
+    # and where one component is near zero, at loose and tight tolerances, relative and
+    # absolute (where the second-derivative probe, not 100 times the trial step, sets it)
+    def f(t, y):
+        return [y[1], -np.sin(y[0]) - 0.1 * y[1] + 0.3 * np.cos(t)]
+    for span in [(0.0, 10.0), (2.0, -8.0), (0.0, 0.01)]:
+        for y0 in ([1.0, 0.0], [0.3, 2.0], [1e-3, 4.0], [0.0, 0.0]):
+            for rtol, atol in [(1e-3, 1e-5), (1e-6, 1e-8), (1e-10, 1e-12), (1e-6, 1e-2),
+                               (1e-3, 1e-1)]:
+                kw = dict(rtol=rtol, atol=atol)
+                ours = mp.solve(f, span, y0, method=method, **kw)
+                ref = solve_ivp(f, span, y0, method=scipy_method, **kw)
+                h, h_ref = ours.t[1] - ours.t[0], ref.t[1] - ref.t[0]
+                assert abs(h - h_ref) <= 4e-15 * abs(h_ref), (span, y0, rtol, atol, h, h_ref)
+
+
 def test_agrees_with_odeint_python_rhs():
     t = np.linspace(0, 20, 201)
     ours = mp.solve(vdp_rhs, (0, 20), [2.0, 0.0], rtol=1e-11, atol=1e-12, t_eval=t)
