@@ -387,6 +387,14 @@ def test_first_step_longer_than_the_span():
             mp.solve(harmonic, span, [1.0, 0.0], first_step=2.0)
         with pytest.raises(ValueError, match="`first_step` exceeds bounds"):
             solve_ivp(harmonic, span, [1.0, 0.0], first_step=2.0)
+    # a first step of the whole span is within bounds (SciPy refuses only a longer one):
+    # taken, it lands on tf; the solution is cos t, -sin t
+    for span in [(10, 11), (11, 10)]:
+        for solver in (mp.solve, solve_ivp):
+            s = solver(harmonic, span, [1.0, 0.0], first_step=1.0, rtol=1e-10, atol=1e-12)
+            assert s.success and s.t[-1] == span[1]
+            dt = span[1] - span[0]
+            assert np.abs(s.y[:, -1] - [np.cos(dt), -np.sin(dt)]).max() < 1e-10
 
 
 def test_terminal_none_is_false():
