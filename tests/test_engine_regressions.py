@@ -360,6 +360,23 @@ def test_backward_solve_many_and_round_trip():
     assert np.max(np.abs(back.y[:, :, -1] - y0s)) < 5e-9  # measured 8.1e-10
 
 
+@pytest.mark.parametrize("span", [(0.0, -1.0), (-1.0, 1.0), (-1.0, 0.0), (1.0, -1.0)])
+def test_span_ends_at_minus_one(span):
+    # -1.0 is an ordinary time (PyFloat_AsDouble's error value only with an exception
+    # set): solve and solve_many from and to it, the oscillator x = cos(t - t0)
+    t0, tf = span
+    # measured 1.4e-11 (dop853) and 1.5e-14 (rk4) over the 2-long spans
+    for kw, bound in [(dict(rtol=1e-10, atol=1e-12), 1e-10), (dict(method="rk4", h=1e-3), 1e-13)]:
+        s = mp.solve(harmonic, span, [1.0, 0.0], **kw)
+        e = mp.solve_many(harmonic, span, [[1.0, 0.0], [0.0, 1.0]], **kw)
+        assert s.success and s.t[0] == t0 and s.t[-1] == tf
+        assert e.success.all() and e.t[-1] == tf
+        dt = tf - t0
+        exact = np.array([[np.cos(dt), -np.sin(dt)], [np.sin(dt), np.cos(dt)]])
+        assert np.abs(s.y[:, -1] - exact[0]).max() < bound
+        assert np.abs(e.y[:, :, -1] - exact).max() < bound
+
+
 def test_backward_refused_for_forward_only_methods():
     with pytest.raises(ValueError, match="forwards in time"):
         mp.solve(mp.scenes.Pendulum(), (1, 0), [1.0, 0.0], method="verlet", h=0.01)
