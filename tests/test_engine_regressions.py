@@ -377,6 +377,27 @@ def test_span_ends_at_minus_one(span):
         assert np.abs(e.y[:, :, -1] - exact).max() < bound
 
 
+@pytest.mark.parametrize("method,scipy_method", [("dopri5", "RK45"), ("dop853", "DOP853"),
+                                                 ("radau", "Radau"), ("auto", "RK45")])
+def test_span_of_a_few_ulps_is_solved(method, scipy_method):
+    # a span of 1 to 16 ulps of t0 (the step floor is 16 ulps, Radau's 10): the one step
+    # lands on tf, as in SciPy, forward and backward; x = cos(t - t0) to round-off (auto
+    # against RK45: SciPy's LSODA fails there with "Unexpected istate")
+    for t0 in (1.0, 1e6, -3.0):
+        for k in (1, 4, 16):
+            for sign in (1, -1):
+                tf = t0
+                for _ in range(k):
+                    tf = np.nextafter(tf, sign * np.inf)
+                s = mp.solve(harmonic, (t0, tf), [1.0, 0.0], method=method)
+                ref = solve_ivp(harmonic, (t0, tf), [1.0, 0.0], method=scipy_method)
+                assert ref.status == 0 and ref.t[-1] == tf
+                assert s.status == 0 and s.success, (t0, k, sign, s.message)
+                assert s.t[0] == t0 and s.t[-1] == tf and len(s.t) == len(ref.t) == 2
+                dt = tf - t0
+                assert np.abs(s.y[:, -1] - [np.cos(dt), -np.sin(dt)]).max() <= 2.3e-16
+
+
 def test_backward_refused_for_forward_only_methods():
     with pytest.raises(ValueError, match="forwards in time"):
         mp.solve(mp.scenes.Pendulum(), (1, 0), [1.0, 0.0], method="verlet", h=0.01)
