@@ -321,6 +321,29 @@ def test_ctypes_callback():
     np.testing.assert_allclose(s.y, ref.y, rtol=0, atol=1e-13)
 
 
+@pytest.mark.parametrize("method, kw, bound", [("yoshida4", dict(h=1e-3), 1e-10),
+                                               ("dop853", dict(rtol=1e-11, atol=1e-12), 2e-10)])
+def test_second_order_c_callback(method, kw, bound):
+    # SecondOrder with a ctypes acceleration q_i'' = -w_i^2 q_i (w = 1, 2): the state
+    # (q, v) is cos(w t), -w sin(w t) (measured 1.8e-11 and 3.2e-11); every field equal
+    # to the Python accel's solve
+    @CB
+    def acc(t, q, a, ud):
+        a[0] = -q[0]
+        a[1] = -4.0 * q[1]
+
+    t = np.linspace(0, 5, 11)
+    s = mp.solve(mp.SecondOrder(acc), (0, 5), [1.0, 1.0, 0.0, 0.0], t_eval=t, method=method,
+                 **kw)
+    py = mp.solve(mp.SecondOrder(lambda t, q: [-q[0], -4.0 * q[1]]), (0, 5),
+                  [1.0, 1.0, 0.0, 0.0], t_eval=t, method=method, **kw)
+    exact = np.array([np.cos(t), np.cos(2 * t), -np.sin(t), -2 * np.sin(2 * t)])
+    assert s.success and np.array_equal(s.t, t)
+    assert np.abs(s.y - exact).max() < bound
+    for k in ("t", "y", "status", "nfev", "nsteps", "nreject"):
+        assert np.array_equal(s[k], py[k]), k
+
+
 def test_low_level_callable_with_user_data():
     from scipy import LowLevelCallable
 
