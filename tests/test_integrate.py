@@ -344,6 +344,32 @@ def test_second_order_c_callback(method, kw, bound):
         assert np.array_equal(s[k], py[k]), k
 
 
+def test_numba_cfunc_callback():
+    # a numba cfunc is taken by its address (as the C core's callback) in solve,
+    # solve_many and SecondOrder: the pendulum's motion equals the scene's
+    numba = pytest.importorskip("numba")
+    from numba import types
+    sig = types.void(types.double, types.CPointer(types.double), types.CPointer(types.double),
+                     types.voidptr)
+
+    @numba.cfunc(sig)
+    def f(t, y, dydt, ud):
+        dydt[0] = y[1]
+        dydt[1] = -9.81 * np.sin(y[0])
+
+    @numba.cfunc(sig)
+    def acc(t, q, a, ud):
+        a[0] = -9.81 * np.sin(q[0])
+
+    t = np.linspace(0, 3, 7)
+    ref = mp.solve(mp.scenes.Pendulum(), (0, 3), [THETA0, 0.0], t_eval=t, rtol=1e-11)
+    for system in (f, mp.SecondOrder(acc)):
+        s = mp.solve(system, (0, 3), [THETA0, 0.0], t_eval=t, rtol=1e-11)
+        np.testing.assert_allclose(s.y, ref.y, rtol=0, atol=1e-13)
+        e = mp.solve_many(system, (0, 3), [[THETA0, 0.0], [1.0, 0.0]], t_eval=t, rtol=1e-11)
+        np.testing.assert_allclose(e.y[0], ref.y, rtol=0, atol=1e-13)
+
+
 def test_low_level_callable_with_user_data():
     from scipy import LowLevelCallable
 
