@@ -386,6 +386,24 @@ def test_low_level_callable_with_user_data():
     np.testing.assert_allclose(s.y[:, -1], ref.y[:, -1], atol=1e-12)
 
 
+def test_low_level_callable_with_a_wrong_signature():
+    # only void (double, double const *, double *, void *) is called: a callable with
+    # fewer or more arguments, or another return type, is refused before any call
+    from scipy import LowLevelCallable
+    dp, d = ctypes.POINTER(ctypes.c_double), ctypes.c_double
+    calls = []
+    for ret, args in [(None, (d, dp)), (None, (d, dp, dp)),
+                      (None, (d, dp, dp, ctypes.c_void_p, ctypes.c_int)),
+                      (ctypes.c_int, (d, dp, dp, ctypes.c_void_p))]:
+        fn = ctypes.CFUNCTYPE(ret, *args)(lambda *a: calls.append(a))
+        llc = LowLevelCallable(fn)
+        with pytest.raises(TypeError, match="signature .* does not match"):
+            mp.solve(llc, (0, 1), [1.0])
+        with pytest.raises(TypeError, match="signature .* does not match"):
+            mp.solve(mp.SecondOrder(llc), (0, 1), [1.0, 0.0])
+    assert not calls
+
+
 @pytest.mark.skipif(shutil.which("cc") is None, reason="no C compiler")
 def test_compiled_c_callback(tmp_path):
     src = tmp_path / "vdp.c"
