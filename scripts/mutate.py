@@ -51,8 +51,12 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 
 FAST = "not ctrl_c and not interrupt"   # the Ctrl-C cases wait seconds on purpose
+# test_scipy_ivp_port.py: SciPy's own solve_ivp cases (with SciPy's nfev/njev/nlu
+# bounds where the method is SciPy's) run through mp.solve; it calls the engine
+# as the others do
 ENGINE_TESTS = ["tests/test_integrate.py", "tests/test_engine_regressions.py",
-                "tests/test_hard_cases.py", "tests/test_ensemble.py", "tests/test_detest.py"]
+                "tests/test_hard_cases.py", "tests/test_ensemble.py", "tests/test_detest.py",
+                "tests/test_scipy_ivp_port.py"]
 SCENE_TESTS = ["tests/test_scenes.py", "tests/test_scene_values.py", "tests/test_chain.py",
                "tests/test_frames.py", "tests/test_rigid.py"]
 #: The SIMD lane driver and its fixed-step blocks: their own entry, so that the

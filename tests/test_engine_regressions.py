@@ -360,6 +360,44 @@ def test_backward_solve_many_and_round_trip():
     assert np.max(np.abs(back.y[:, :, -1] - y0s)) < 5e-9  # measured 8.1e-10
 
 
+@pytest.mark.parametrize("span", [(0.0, -1.0), (-1.0, 1.0), (-1.0, 0.0), (1.0, -1.0)])
+def test_span_ends_at_minus_one(span):
+    # -1.0 is an ordinary time (PyFloat_AsDouble's error value only with an exception
+    # set): solve and solve_many from and to it, the oscillator x = cos(t - t0)
+    t0, tf = span
+    # measured 1.4e-11 (dop853) and 1.5e-14 (rk4) over the 2-long spans
+    for kw, bound in [(dict(rtol=1e-10, atol=1e-12), 1e-10), (dict(method="rk4", h=1e-3), 1e-13)]:
+        s = mp.solve(harmonic, span, [1.0, 0.0], **kw)
+        e = mp.solve_many(harmonic, span, [[1.0, 0.0], [0.0, 1.0]], **kw)
+        assert s.success and s.t[0] == t0 and s.t[-1] == tf
+        assert e.success.all() and e.t[-1] == tf
+        dt = tf - t0
+        exact = np.array([[np.cos(dt), -np.sin(dt)], [np.sin(dt), np.cos(dt)]])
+        assert np.abs(s.y[:, -1] - exact[0]).max() < bound
+        assert np.abs(e.y[:, :, -1] - exact).max() < bound
+
+
+@pytest.mark.parametrize("method,scipy_method", [("dopri5", "RK45"), ("dop853", "DOP853"),
+                                                 ("radau", "Radau"), ("auto", "RK45")])
+def test_span_of_a_few_ulps_is_solved(method, scipy_method):
+    # a span of 1 to 16 ulps of t0 (the step floor is 16 ulps, Radau's 10): the one step
+    # lands on tf, as in SciPy, forward and backward; x = cos(t - t0) to round-off (auto
+    # against RK45: SciPy's LSODA fails there with "Unexpected istate")
+    for t0 in (1.0, 1e6, -3.0):
+        for k in (1, 4, 16):
+            for sign in (1, -1):
+                tf = t0
+                for _ in range(k):
+                    tf = np.nextafter(tf, sign * np.inf)
+                s = mp.solve(harmonic, (t0, tf), [1.0, 0.0], method=method)
+                ref = solve_ivp(harmonic, (t0, tf), [1.0, 0.0], method=scipy_method)
+                assert ref.status == 0 and ref.t[-1] == tf
+                assert s.status == 0 and s.success, (t0, k, sign, s.message)
+                assert s.t[0] == t0 and s.t[-1] == tf and len(s.t) == len(ref.t) == 2
+                dt = tf - t0
+                assert np.abs(s.y[:, -1] - [np.cos(dt), -np.sin(dt)]).max() <= 2.3e-16
+
+
 def test_backward_refused_for_forward_only_methods():
     with pytest.raises(ValueError, match="forwards in time"):
         mp.solve(mp.scenes.Pendulum(), (1, 0), [1.0, 0.0], method="verlet", h=0.01)
@@ -387,6 +425,14 @@ def test_first_step_longer_than_the_span():
             mp.solve(harmonic, span, [1.0, 0.0], first_step=2.0)
         with pytest.raises(ValueError, match="`first_step` exceeds bounds"):
             solve_ivp(harmonic, span, [1.0, 0.0], first_step=2.0)
+    # a first step of the whole span is within bounds (SciPy refuses only a longer one):
+    # taken, it lands on tf; the solution is cos t, -sin t
+    for span in [(10, 11), (11, 10)]:
+        for solver in (mp.solve, solve_ivp):
+            s = solver(harmonic, span, [1.0, 0.0], first_step=1.0, rtol=1e-10, atol=1e-12)
+            assert s.success and s.t[-1] == span[1]
+            dt = span[1] - span[0]
+            assert np.abs(s.y[:, -1] - [np.cos(dt), -np.sin(dt)]).max() < 1e-10
 
 
 def test_terminal_none_is_false():

@@ -273,6 +273,34 @@ def test_bad_actions_name_the_event(ball):
         mp.solve(ball, (0, 2), [1.0, 0.0], events=mp.events.impact("x", restitution=[0.5]))
 
 
+@pytest.mark.parametrize("method", ["dop853", "dopri5", "radau"])
+def test_fires_again_at_once_is_relative_to_t(method):
+    """An action that leaves a falling ball d above the floor: it crosses again d / |v|
+    later.  "At once" is within the root finder's resolution in t, 4 eps (|t| + |h|): the
+    same drop at t0 = 1000, d = 1e-13 and 1e-12 (a new crossing 2e-14 and 2e-13 s later,
+    below 2 ulps of t = 1000.45), is an EventError; at t0 = 0 the same d = 1e-12 gives a
+    crossing 2e-13 s later, 4000 ulps of t = 0.45: two actions, an accumulation (Zeno)."""
+    def f(t, y):
+        return [y[1], -G]
+
+    for t0, d, again in [(1000.0, 1e-13, True), (1000.0, 1e-12, True), (0.0, 1e-12, False)]:
+        def g(t, y):
+            return y[0]
+        g.direction = -1
+        g.action = lambda t, y: [abs(y[0]) + d, y[1]]
+        t_hit = t0 + np.sqrt(2 / G)
+        if again:
+            with pytest.raises(mp.EventError, match=r"fires again at once"):
+                mp.solve(f, (t0, t0 + 2), [1.0, 0.0], events=g, method=method, max_steps=3000)
+        else:
+            s = mp.solve(f, (t0, t0 + 2), [1.0, 0.0], events=g, method=method,
+                         max_steps=3000)
+            assert s.status == 1 and "accumulate (Zeno)" in s.message
+            assert len(s.t_events[0]) == 2
+            assert abs(s.t_events[0][0] - t_hit) < 1e-12
+            assert 0 < s.t_events[0][1] - s.t_events[0][0] < 1e-12
+
+
 def test_python_action_and_backward_solve():
     """A harmonic oscillator x'' = -x reflected at x = 0 (e = 1): |x| of the free
     oscillator; backwards in time the same reflection, the events mirrored."""

@@ -64,6 +64,25 @@ def test_agrees_with_solve_ivp_same_method(method, scipy_method):
     assert ours.nfev < 1.5 * ref.nfev
 
 
+@pytest.mark.parametrize("method,scipy_method", [("dop853", "DOP853"), ("dopri5", "RK45")])
+def test_first_step_is_solve_ivps(method, scipy_method):
+    # the automatic first step is Hairer's estimate (Solving ODEs I, II.4), SciPy's
+    # select_initial_step: the same step to round-off, forward and backward, from rest
+    # and where one component is near zero, at loose and tight tolerances, relative and
+    # absolute (where the second-derivative probe, not 100 times the trial step, sets it)
+    def f(t, y):
+        return [y[1], -np.sin(y[0]) - 0.1 * y[1] + 0.3 * np.cos(t)]
+    for span in [(0.0, 10.0), (2.0, -8.0), (0.0, 0.01)]:
+        for y0 in ([1.0, 0.0], [0.3, 2.0], [1e-3, 4.0], [0.0, 0.0]):
+            for rtol, atol in [(1e-3, 1e-5), (1e-6, 1e-8), (1e-10, 1e-12), (1e-6, 1e-2),
+                               (1e-3, 1e-1)]:
+                kw = dict(rtol=rtol, atol=atol)
+                ours = mp.solve(f, span, y0, method=method, **kw)
+                ref = solve_ivp(f, span, y0, method=scipy_method, **kw)
+                h, h_ref = ours.t[1] - ours.t[0], ref.t[1] - ref.t[0]
+                assert abs(h - h_ref) <= 4e-15 * abs(h_ref), (span, y0, rtol, atol, h, h_ref)
+
+
 def test_agrees_with_odeint_python_rhs():
     t = np.linspace(0, 20, 201)
     ours = mp.solve(vdp_rhs, (0, 20), [2.0, 0.0], rtol=1e-11, atol=1e-12, t_eval=t)
@@ -303,6 +322,55 @@ def test_ctypes_callback():
     np.testing.assert_allclose(s.y, ref.y, rtol=0, atol=1e-13)
 
 
+@pytest.mark.parametrize("method, kw, bound", [("yoshida4", dict(h=1e-3), 1e-10),
+                                               ("dop853", dict(rtol=1e-11, atol=1e-12), 2e-10)])
+def test_second_order_c_callback(method, kw, bound):
+    # SecondOrder with a ctypes acceleration q_i'' = -w_i^2 q_i (w = 1, 2): the state
+    # (q, v) is cos(w t), -w sin(w t) (measured 1.8e-11 and 3.2e-11); every field equal
+    # to the Python accel's solve
+    @CB
+    def acc(t, q, a, ud):
+        a[0] = -q[0]
+        a[1] = -4.0 * q[1]
+
+    t = np.linspace(0, 5, 11)
+    s = mp.solve(mp.SecondOrder(acc), (0, 5), [1.0, 1.0, 0.0, 0.0], t_eval=t, method=method,
+                 **kw)
+    py = mp.solve(mp.SecondOrder(lambda t, q: [-q[0], -4.0 * q[1]]), (0, 5),
+                  [1.0, 1.0, 0.0, 0.0], t_eval=t, method=method, **kw)
+    exact = np.array([np.cos(t), np.cos(2 * t), -np.sin(t), -2 * np.sin(2 * t)])
+    assert s.success and np.array_equal(s.t, t)
+    assert np.abs(s.y - exact).max() < bound
+    for k in ("t", "y", "status", "nfev", "nsteps", "nreject"):
+        assert np.array_equal(s[k], py[k]), k
+
+
+def test_numba_cfunc_callback():
+    # a numba cfunc is taken by its address (as the C core's callback) in solve,
+    # solve_many and SecondOrder: the pendulum's motion equals the scene's
+    numba = pytest.importorskip("numba")
+    from numba import types
+    sig = types.void(types.double, types.CPointer(types.double), types.CPointer(types.double),
+                     types.voidptr)
+
+    @numba.cfunc(sig)
+    def f(t, y, dydt, ud):
+        dydt[0] = y[1]
+        dydt[1] = -9.81 * np.sin(y[0])
+
+    @numba.cfunc(sig)
+    def acc(t, q, a, ud):
+        a[0] = -9.81 * np.sin(q[0])
+
+    t = np.linspace(0, 3, 7)
+    ref = mp.solve(mp.scenes.Pendulum(), (0, 3), [THETA0, 0.0], t_eval=t, rtol=1e-11)
+    for system in (f, mp.SecondOrder(acc)):
+        s = mp.solve(system, (0, 3), [THETA0, 0.0], t_eval=t, rtol=1e-11)
+        np.testing.assert_allclose(s.y, ref.y, rtol=0, atol=1e-13)
+        e = mp.solve_many(system, (0, 3), [[THETA0, 0.0], [1.0, 0.0]], t_eval=t, rtol=1e-11)
+        np.testing.assert_allclose(e.y[0], ref.y, rtol=0, atol=1e-13)
+
+
 def test_low_level_callable_with_user_data():
     from scipy import LowLevelCallable
 
@@ -317,6 +385,24 @@ def test_low_level_callable_with_user_data():
     s = mp.solve(llc, (0, 2), [1.0, 0.0], rtol=1e-11)
     ref = mp.solve(mp.scenes.Pendulum(g=4.0), (0, 2), [1.0, 0.0], rtol=1e-11)
     np.testing.assert_allclose(s.y[:, -1], ref.y[:, -1], atol=1e-12)
+
+
+def test_low_level_callable_with_a_wrong_signature():
+    # only void (double, double const *, double *, void *) is called: a callable with
+    # fewer or more arguments, or another return type, is refused before any call
+    from scipy import LowLevelCallable
+    dp, d = ctypes.POINTER(ctypes.c_double), ctypes.c_double
+    calls = []
+    for ret, args in [(None, (d, dp)), (None, (d, dp, dp)),
+                      (None, (d, dp, dp, ctypes.c_void_p, ctypes.c_int)),
+                      (ctypes.c_int, (d, dp, dp, ctypes.c_void_p))]:
+        fn = ctypes.CFUNCTYPE(ret, *args)(lambda *a: calls.append(a))
+        llc = LowLevelCallable(fn)
+        with pytest.raises(TypeError, match="signature .* does not match"):
+            mp.solve(llc, (0, 1), [1.0])
+        with pytest.raises(TypeError, match="signature .* does not match"):
+            mp.solve(mp.SecondOrder(llc), (0, 1), [1.0, 0.0])
+    assert not calls
 
 
 @pytest.mark.skipif(shutil.which("cc") is None, reason="no C compiler")

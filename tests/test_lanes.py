@@ -774,3 +774,20 @@ def test_samples_between_steps_in_lanes(method):
         # measured 6.8e-9 (rk4's Hermite interpolant at h = 0.01), 5.1e-9 and 5.5e-9
         # (dop853, dopri5 at rtol 1e-8)
         assert np.max(np.abs(a.y[i] - np.concatenate([q.T, v.T]))) < 5e-8
+
+
+@pytest.mark.parametrize("method", ["dopri5", "dop853"])
+def test_span_of_a_few_ulps_in_lanes(method):
+    """A span of 1 to 16 ulps of t0 (the step floor is 16 ulps): the one step lands on
+    tf in the lanes as on the scalar path, every field; the pendulum at rest moves
+    by g sin(theta) dt^2 / 2, below round-off."""
+    y0s = _starts([1.0, 0.0], 0.3, 5)
+    for t0 in (1.0, 1e6):
+        for k in (1, 16):
+            tf = t0
+            for _ in range(k):
+                tf = np.nextafter(tf, np.inf)
+            a, b = _both(S.Pendulum(), (t0, tf), y0s, method=method)
+            _same_fields(a, b)
+            assert a.success.all() and a.t[-1] == tf
+            assert np.abs(a.y[:, 0, -1] - y0s[:, 0]).max() <= 1e-15

@@ -91,7 +91,9 @@ static inline double mp_ode_step_span(int adaptive, double t, double h, double t
 
 /* Contract: 1 when an adaptive step h at t is too small to advance t (the
  * step-size floor: the solve ends with MP_ESTEP, or MP_ENONFINITE when the
- * steps shrank because trial stages were not finite). */
+ * steps shrank because trial stages were not finite).  Not asked of the last
+ * step (mp_ode_step_span's *last), which lands on tf however short the rest
+ * of the span: a span of a few ulps of t0 is solved, as in SciPy. */
 static inline int mp_ode_step_floor(double t, double h)
 {
     return h <= 16.0 * DBL_EPSILON * fmax(fabs(t), 1e-300);

@@ -851,7 +851,7 @@ static int run_loop(ode_run *s)
         s->attempts++;
         int last, controlled = cur->adaptive && !cur->self_controlled;
         h = mp_ode_step_span(cur->adaptive, t, h, s->tf, &last);
-        if (controlled && mp_ode_step_floor(t, h)) {
+        if (controlled && !last && mp_ode_step_floor(t, h)) { /* the last lands on tf */
             rc = s->c.nonfinite ? MP_ENONFINITE : MP_ESTEP;
             break;
         }

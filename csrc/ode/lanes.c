@@ -697,7 +697,7 @@ static void lane_attempt(lane_group *g)
         }
         g->attempts[l]++;
         g->h[l] = mp_ode_step_span(g->adaptive, g->t[l], g->h[l], g->sf, &last[l]);
-        if (g->adaptive && mp_ode_step_floor(g->t[l], g->h[l])) {
+        if (g->adaptive && !last[l] && mp_ode_step_floor(g->t[l], g->h[l])) {
             on[l] = 0;
             lane_end(g, l, g->ctl[l].nonfinite ? MP_ENONFINITE : MP_ESTEP);
         }

@@ -266,6 +266,10 @@ static int radau_step(mp_ode_ws *w, double t, double h_req, double *err_out)
     if (!st->have_J && (rc = radau_jac(w, t)) != MP_OK) return rc;
     for (int attempt = 0;; attempt++) {
         double hmin = 10.0 * fabs(nextafter(t, INFINITY) - t);
+        /* SciPy's Radau: a step asked below hmin is raised to it (and cut at t_end
+         * below), so that the rest of a span a few ulps long is taken; only a
+         * step shrunk there by rejections fails */
+        if (attempt == 0 && h < hmin && t_end > t) h = hmin;
         if (h < hmin || attempt > 1000) return nonfinite ? MP_ENONFINITE : MP_ESTEP;
         double tn = (t + h > t_end) ? t_end : t + h;
         h = tn - t;
