@@ -66,11 +66,13 @@ def work(name, impl, method, rtol):
 # (one pass may do) and its tolerance transformation at most 3 rtol.  SciPy's
 # Radau refreshes J after every step whose Newton needed more than two passes
 # at a rate above 1e-3 (radau did the same before: njev within 1%).
-# Measured njev SciPy / radau at rtol 1e-8 (1e-10): HIRES 3.4 (6.4), OREGO 4.6
-# (4.8), ROBER 17 (42), VDPOL 7.1 (8.9); nlu 1.3 ... 4.3; the end errors
-# against the published values in units of rtol 0.07 ... 0.42 (0.15 ... 2.4).
-ECONOMY = {  # (njev factor, nlu factor) asked at rtol 1e-8 and 1e-10: ~half the measured
-    "HIRES": (1.7, 1.2), "OREGO": (2.3, 1.2), "ROBER": (8, 2), "VDPOL": (3.5, 1.2)}
+# Measured SciPy's / radau's njev at rtol 1e-8 (1e-10): HIRES 3.6 (7.5), OREGO
+# 4.3 (4.5), ROBER 16 (39), VDPOL 6.9 (8.5); nlu: HIRES 3.4 (5.6), OREGO 4.3
+# (4.0), ROBER 4.4 (9.1), VDPOL 5.4 (5.8); nfev 1.00 ... 1.55x SciPy's (the
+# Newton iterations with a kept Jacobian); the end errors against the published
+# values 0.007 ... 0.13 rtol (0.07 ... 1.6 rtol).
+ECONOMY = {  # (njev factor, nlu factor) asked at both rtols: about half the least measured
+    "HIRES": (1.8, 1.7), "OREGO": (2.1, 2.0), "ROBER": (8.0, 2.2), "VDPOL": (3.4, 2.7)}
 
 
 @pytest.mark.slow
@@ -83,20 +85,22 @@ def test_radau_jacobian_economy(name, rtol):
     fj, flu = ECONOMY[name]
     assert j_m * fj <= j_s, (j_m, j_s)
     assert lu_m * flu <= lu_s, (lu_m, lu_s)
-    assert n_m <= 1.5 * n_s, (n_m, n_s)
-    # the end values within the asked tolerance of the published ones: at 1e-8
-    # measured 0.07 ... 0.42 rtol; at 1e-10 (atol-limited) up to 2.4 rtol
+    assert n_m <= 2 * n_s, (n_m, n_s)
+    # the end values against the published ones: at 1e-8 within the asked
+    # tolerance (measured up to 0.13 rtol); at 1e-10, where the test set's atol
+    # (1e-11 on HIRES' components of 1e-3) limits, measured up to 1.6 rtol
     assert e_m <= (1 if rtol == 1e-8 else 10) * rtol, e_m
 
 
 def test_radau_beside_scipy_radau_loose():
     # at rtol 1e-6 both meet the tolerance on the five problems (E5 at its
-    # atol-limited 1e-3); radau takes fewer Jacobians on each
+    # atol-limited 1e-3; radau's errors measured 0.004 ... 0.14 rtol), radau with
+    # 2.3 ... 6.0x fewer Jacobians
     for name in NAMES:
         e_m, n_m, j_m, lu_m, ok_m = work(name, "mp", "radau", 1e-6)
         e_s, n_s, j_s, lu_s, ok_s = work(name, "sp", "Radau", 1e-6)
         assert ok_m and ok_s
-        assert j_m < j_s, (name, j_m, j_s)
+        assert 2 * j_m <= j_s, (name, j_m, j_s)
         assert n_m <= 1.5 * n_s, (name, n_m, n_s)
         if name != "E5":
             assert e_m <= 1e-6, (name, e_m)
@@ -148,8 +152,8 @@ def _bruss_y0():
 def test_radau_large_system_economy():
     # n = 200 on [0, 10]: where the LU pair (a real and a complex 200 x 200) is
     # the cost.  Against SciPy's Radau at rtol 1e-10 (the reference) and at the
-    # same rtol 1e-6: measured radau njev 3, nlu 33 against Radau's 20 and 51,
-    # the error 5.0e-8 against 2.5e-9 (the asked 1e-6)
+    # same rtol 1e-6: measured radau njev 3, nlu 34 against Radau's 20 and 88
+    # (BDF's 2 and 41), the error 3.6e-8 against Radau's 8.7e-9 (BDF's 4.9e-6)
     y0 = _bruss_y0()
     assert np.allclose(_bruss_jac(0, y0 + 0.1) @ np.ones(200) * 1e-7,
                        _bruss(0, y0 + 0.1 + 1e-7) - _bruss(0, y0 + 0.1), rtol=1e-5, atol=1e-9)
@@ -159,9 +163,55 @@ def test_radau_large_system_economy():
     s = solve_ivp(_bruss, (0, 10), y0, method="Radau", rtol=1e-6, atol=1e-8, jac=_bruss_jac)
     assert m.success and s.success
     err = np.max(np.abs(m.y[:, -1] - ref) / np.maximum(np.abs(ref), 1e-7))
-    assert err < 1e-6, err
+    assert err < 3e-7, err
     assert 3 * m.njev <= s.njev, (m.njev, s.njev)
-    assert m.nlu < s.nlu, (m.nlu, s.nlu)
+    assert 2 * m.nlu <= s.nlu, (m.nlu, s.nlu)
+
+
+# ---- the CVODE bench's problems and driver ------------------------------------------------
+
+def test_cvode_bench_problems_are_the_test_set():
+    # mechpy/benches/stiff_cvode.py writes each problem once as SymPy equations,
+    # compiled for radau and, as the same C, for CVODE: they are the test set's
+    # right-hand sides and Jacobians (and the Brusselator this file's)
+    from mechpy.benches import stiff_cvode
+    pytest.importorskip("sympy")
+    rng = np.random.default_rng(5)
+    for name, eqs, y, y0, span, atol, ref in stiff_cvode.problems(n_bruss=BRUSS_N):
+        try:
+            scene = mp.equations(eqs, list(y))
+        except mp.symbolic.CompileError:
+            pytest.skip("no C compiler")
+        if name in PROBLEMS:
+            P, f, jac = PROBLEMS[name], PROBLEMS[name].f, PROBLEMS[name].jac
+            assert np.array_equal(y0, P.y0) and span == (P.t0, P.tf)
+            np.testing.assert_array_equal(ref, P.ref)
+        else:
+            f, jac = _bruss, _bruss_jac
+            np.testing.assert_array_equal(y0, _bruss_y0())
+        for _ in range(3):
+            yy = np.asarray(y0) * (1 + 0.1 * rng.standard_normal(len(y0))) + 1e-3
+            np.testing.assert_allclose(scene.rhs(0.0, yy), f(0.0, yy), rtol=1e-12, atol=1e-12)
+            np.testing.assert_allclose(scene.jacobian(0.0, yy), jac(0.0, yy), rtol=1e-12,
+                                       atol=1e-12)
+
+
+def test_cvode_bench_driver_meets_the_published_values():
+    # the driver compiled around the generated C: CVODE on ROBER at rtol 1e-8 ends
+    # within its usual error of the published values (measured 6.6e-7 relative)
+    from mechpy.benches import stiff_cvode
+    why = stiff_cvode.cvode_missing()
+    if why:
+        pytest.skip(why)
+    name, eqs, y, y0, span, atol, ref = stiff_cvode.problems(n_bruss=2)[0]
+    assert name == "ROBER"
+    import tempfile
+    with tempfile.TemporaryDirectory() as d:
+        exe = stiff_cvode.cvode_driver(mp.equations(eqs, list(y)), d)
+        st, nst, nfe, nje, nlu, sec, yend = stiff_cvode.cvode_solve(exe, 3, y0, atol, span,
+                                                                    1e-8, repeats=1)
+    assert st == 0 and 0 < nje <= nlu <= nst and nfe > nst and sec > 0
+    assert relative_error(yend, PROBLEMS["ROBER"].ref, PROBLEMS["ROBER"].atol) < 1e-5
 
 
 # ---- every stiff row against the published values --------------------------------------
