@@ -455,8 +455,8 @@ def test_radau_reuses_jacobians_by_differences(problem, rtol):
     # stiff Van der Pol (mu = 1000) and Robertson problems, with rejected steps and
     # Jacobians by differences, fewer Jacobians than SciPy's Radau for about its
     # evaluations, both within the tolerance of a tight solution.  Measured
-    # SciPy's / radau's njev 1.20, 1.22 at rtol 1e-3 and 3.15, 2.47 at 1e-6, nfev
-    # 1.04 ... 1.20x SciPy's, the scaled end errors 0.021 ... 0.074 (SciPy's
+    # SciPy's / radau's njev 1.20, 1.22 at rtol 1e-3 and 3.43, 2.47 at 1e-6, nfev
+    # 1.10 ... 1.20x SciPy's, the scaled end errors 0.002 ... 0.11 (SciPy's
     # 0.004 ... 0.026); SciPy's Radau refreshes J after every slow Newton
     # iteration (radau did too before: njev within 1% of SciPy's)
     if problem == "vdp":
