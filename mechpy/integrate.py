@@ -161,7 +161,8 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
         integrates complex states); empty gives y0's empty rows.
     method : str
         See :func:`methods`: ``"dop853"`` (default), ``"dopri5"``; stiff
-        ``"radau"`` (Radau IIA, order 5) and ``"auto"`` (dop853, switching to
+        ``"radau"`` (Radau IIA, order 5, keeping its Jacobian and LU factors
+        across steps as Hairer's RADAU5 does) and ``"auto"`` (dop853, switching to
         radau and back as Hairer's stiffness test decides); fixed-step ``"rk4"``
         and the geometric ``"verlet"``, ``"yoshida4"``, ``"yoshida6"``
         (symplectic, for q'' = a(t, q): an undamped scene or
@@ -178,7 +179,9 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
     rtol, atol : float or array_like
         Relative and absolute tolerances, each a scalar or one per component
         (as SciPy's; GSL's steppers take one rtol): the local error estimate
-        e of each step satisfies ``rms(e / (atol + rtol |y|)) <= 1``.
+        e of each step satisfies ``rms(e / (atol + rtol |y|)) <= 1`` (radau's
+        order-3 estimate against RADAU5's transformed tolerances, rtol' =
+        min(0.1 rtol^(2/3), 2 rtol) and atol' = atol rtol' / rtol).
     t_eval : array_like, optional
         Times in ``t_span``, ordered along the integration, at which to store the solution, filled
         from each step's interpolant (the steps are never forced onto them).

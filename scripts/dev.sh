@@ -32,8 +32,9 @@ say() { printf 'mechpy setup: %s\n' "$*"; }
 
 # 1. System libraries -------------------------------------------------------
 debs=(libgsl-dev libopenblas-dev pkg-config)
-# the bench compares with numbalsoda, built from source with a Fortran compiler
-[ "$job" = bench ] && debs+=(gfortran)
+# the bench compares with numbalsoda, built from source with a Fortran compiler, and with
+# CVODE through SUNDIALS' C API (mechpy/benches/stiff_cvode.py compiles its driver)
+[ "$job" = bench ] && debs+=(gfortran libsundials-dev)
 # the live views' tests and their bench run in headless Chromium (software WebGL2)
 case "$job" in test|bench|docs) debs+=(chromium chromium-driver) ;; esac
 missing=()

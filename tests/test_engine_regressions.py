@@ -493,13 +493,18 @@ def test_dopri5_step_control_is_stabilised_on_a_stiff_stretch():
     assert abs(sol.y[0, -1] - exact) < 2e-4 and abs(ref.y[0, -1] - exact) < 2e-4
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("problem", ["vdp", "robertson"])
 @pytest.mark.parametrize("rtol", [1e-3, 1e-6])
-def test_radau_takes_scipy_radau_steps_on_stiff_problems(problem, rtol):
-    # radau is SciPy's Radau IIA (order 5) with its step and Jacobian control: on the
+def test_radau_reuses_jacobians_by_differences(problem, rtol):
+    # radau is SciPy's Radau IIA (order 5) with RADAU5's Jacobian economy: on the
     # stiff Van der Pol (mu = 1000) and Robertson problems, with rejected steps and
-    # Jacobians by differences, the same number of steps and Jacobians as SciPy's
-    # measured: steps within 4.2% (276 / 288), Jacobians within 1% (306 / 309)
+    # Jacobians by differences, fewer Jacobians than SciPy's Radau for about its
+    # evaluations, both within the tolerance of a tight solution.  Measured
+    # SciPy's / radau's njev 1.20, 1.22 at rtol 1e-3 and 3.43, 2.47 at 1e-6, nfev
+    # 1.10 ... 1.20x SciPy's, the scaled end errors 0.002 ... 0.11 (SciPy's
+    # 0.004 ... 0.026); SciPy's Radau refreshes J after every slow Newton
+    # iteration (radau did too before: njev within 1% of SciPy's)
     if problem == "vdp":
         f = lambda t, y: np.array([y[1], 1000.0 * (1 - y[0] ** 2) * y[1] - y[0]])
         span, y0 = (0, 3000), [2.0, 0.0]
@@ -508,9 +513,12 @@ def test_radau_takes_scipy_radau_steps_on_stiff_problems(problem, rtol):
     atol = 1e-3 * rtol
     ours = mp.solve(f, span, y0, method="radau", rtol=rtol, atol=atol)
     ref = solve_ivp(f, span, y0, method="Radau", rtol=rtol, atol=atol)
+    tight = solve_ivp(f, span, y0, method="Radau", rtol=1e-11, atol=1e-14).y[:, -1]
     assert ours.status == 0 and ours.nreject > 0
-    assert abs(len(ours.t) / len(ref.t) - 1) < 0.1
-    assert abs(ours.njev / ref.njev - 1) < 0.1
+    assert (1.1 if rtol == 1e-3 else 2.0) * ours.njev <= ref.njev, (ours.njev, ref.njev)
+    assert ours.nfev <= 1.5 * ref.nfev, (ours.nfev, ref.nfev)
+    err = np.max(np.abs(ours.y[:, -1] - tight) / (atol + rtol * np.abs(tight)))
+    assert err < 0.5, err
 
 
 def test_solve_many_defaults_and_rigid_methods_checked():

@@ -3,8 +3,9 @@ HIRES, OREGO, ROBER, VDPOL (mu = 1000, the plain form on [0, 2000]) and E5,
 against the test set's published end values, with absolute tolerances below the
 components that matter and the analytic Jacobians.
 
-* radau beside SciPy's Radau (the same method): error within 3x, nfev within
-  1.5x, at rtol 1e-8 (and 1e-6 over the set);
+* radau beside SciPy's Radau (the same Radau IIA, radau with RADAU5's economy):
+  Jacobians and LU factorisations fall by a measured factor, the end values
+  within the asked tolerance, at rtol 1e-6, 1e-8 and 1e-10;
 * every stiff row (radau, auto, gsl:msbdf, gsl:bsimp and SciPy's names) solves
   each problem to a bound set from what it measures;
 * `auto` beside LSODA over rtol 1e-4 ... 1e-10: error and nfev, and auto
@@ -48,35 +49,169 @@ def run(name, impl, method, rtol, scene=False):
     return err, int(s.nfev), int(s.njev), bool(s.success)
 
 
-# ---- radau beside SciPy's Radau --------------------------------------------------------
+# ---- radau beside SciPy's Radau: RADAU5's economy -------------------------------------
+
+@functools.lru_cache(maxsize=None)
+def work(name, impl, method, rtol):
+    """(error, nfev, njev, nlu, success) of one solve with the analytic Jacobian."""
+    P = PROBLEMS[name]
+    solver = mp.solve if impl == "mp" else solve_ivp
+    s = solver(P.f, (P.t0, P.tf), P.y0, method=method, rtol=rtol, atol=P.atol, jac=P.jac)
+    err = relative_error(s.y[:, -1], P.ref, P.atol) if s.success else np.inf
+    return err, int(s.nfev), int(s.njev), int(s.nlu), bool(s.success)
+
+
+# radau is SciPy's Radau IIA (5) with RADAU5's economy (csrc/ode/radau.c): the
+# Jacobian kept while Newton contracts by theta <= 0.1, RADAU5's Newton loop
+# (one pass may do) and its tolerance transformation at most 3 rtol.  SciPy's
+# Radau refreshes J after every step whose Newton needed more than two passes
+# at a rate above 1e-3 (radau did the same before: njev within 1%).
+# Measured SciPy's / radau's njev at rtol 1e-8 (1e-10): HIRES 3.6 (7.5), OREGO
+# 4.3 (4.5), ROBER 16 (39), VDPOL 6.9 (8.5); nlu: HIRES 3.4 (5.6), OREGO 4.3
+# (4.0), ROBER 4.4 (9.1), VDPOL 5.4 (5.8); nfev 1.00 ... 1.55x SciPy's (the
+# Newton iterations with a kept Jacobian); the end errors against the published
+# values 0.007 ... 0.13 rtol (0.07 ... 1.6 rtol).
+ECONOMY = {  # (njev factor, nlu factor) asked at both rtols: about half the least measured
+    "HIRES": (1.8, 1.7), "OREGO": (2.1, 2.0), "ROBER": (8.0, 2.2), "VDPOL": (3.4, 2.7)}
+
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name", NAMES)
-def test_radau_matches_scipy_radau(name):
-    # the same method at rtol 1e-8: errors within 3x (measured mechpy 0.65 ...
-    # 1.2x SciPy's; 0.93 ... 1.7x at 1e-10), the same work (nfev, njev within 1%)
-    e_m, n_m, j_m, ok_m = run(name, "mp", "radau", 1e-8)
-    e_s, n_s, j_s, ok_s = run(name, "sp", "Radau", 1e-8)
+@pytest.mark.parametrize("rtol", [1e-8, 1e-10])
+@pytest.mark.parametrize("name", [n for n in NAMES if n != "E5"])
+def test_radau_jacobian_economy(name, rtol):
+    e_m, n_m, j_m, lu_m, ok_m = work(name, "mp", "radau", rtol)
+    e_s, n_s, j_s, lu_s, ok_s = work(name, "sp", "Radau", rtol)
     assert ok_m and ok_s
-    assert e_m <= 3 * e_s, (e_m, e_s)
-    assert n_m <= 1.5 * n_s, (n_m, n_s)
-    assert j_m <= 1.5 * j_s, (j_m, j_s)
+    fj, flu = ECONOMY[name]
+    assert j_m * fj <= j_s, (j_m, j_s)
+    assert lu_m * flu <= lu_s, (lu_m, lu_s)
+    assert n_m <= 2 * n_s, (n_m, n_s)
+    # the end values against the published ones: at 1e-8 within the asked
+    # tolerance (measured up to 0.13 rtol); at 1e-10, where the test set's atol
+    # (1e-11 on HIRES' components of 1e-3) limits, measured up to 1.6 rtol
+    assert e_m <= (1 if rtol == 1e-8 else 10) * rtol, e_m
 
 
-def test_radau_matches_scipy_radau_loose():
-    # at rtol 1e-6 the two step sequences agree to 1e-11 for dozens of steps,
-    # until round-off flips one discrete decision (keep h, refresh J) and the
-    # end errors part by luck: HIRES 1.1e-7 against 2.6e-8 (4.1x), both inside
-    # rtol; so the 3x holds for the geometric mean over the five problems
-    ratios = []
+def test_radau_beside_scipy_radau_loose():
+    # at rtol 1e-6 both meet the tolerance on the five problems (E5 at its
+    # atol-limited 1e-3; radau's errors measured 0.004 ... 0.14 rtol), radau with
+    # 2.3 ... 6.0x fewer Jacobians
     for name in NAMES:
-        e_m, n_m, j_m, ok_m = run(name, "mp", "radau", 1e-6)
-        e_s, n_s, j_s, ok_s = run(name, "sp", "Radau", 1e-6)
+        e_m, n_m, j_m, lu_m, ok_m = work(name, "mp", "radau", 1e-6)
+        e_s, n_s, j_s, lu_s, ok_s = work(name, "sp", "Radau", 1e-6)
         assert ok_m and ok_s
-        assert n_m <= 1.5 * n_s, (name, n_m, n_s)  # measured 0.998 ... 1.008
-        assert j_m <= 1.5 * j_s, (name, j_m, j_s)
-        ratios.append(e_m / e_s)
-    assert np.exp(np.mean(np.log(ratios))) < 3, ratios  # measured 1.3
+        assert 2 * j_m <= j_s, (name, j_m, j_s)
+        assert n_m <= 1.5 * n_s, (name, n_m, n_s)
+        if name != "E5":
+            assert e_m <= 1e-6, (name, e_m)
+
+
+# ---- a large system: the 1-D Brusselator, n = 200 ----------------------------------------
+
+BRUSS_N = 100  # grid points: n = 200 states (u_1, v_1, u_2, v_2, ...)
+
+
+def _bruss(t, y):
+    """Hairer & Wanner's 1-D Brusselator (Solving ODEs II, IV.10): a = 1/50, u = 1
+    and v = 3 at both ends."""
+    u, v = y[0::2], y[1::2]
+    c = (BRUSS_N + 1) ** 2 / 50.0
+    up = np.concatenate(([1.0], u, [1.0]))
+    vp = np.concatenate(([3.0], v, [3.0]))
+    f = np.empty_like(y)
+    f[0::2] = 1 + u * u * v - 4 * u + c * (up[:-2] - 2 * u + up[2:])
+    f[1::2] = 3 * u - u * u * v + c * (vp[:-2] - 2 * v + vp[2:])
+    return f
+
+
+def _bruss_jac(t, y):
+    u, v = y[0::2], y[1::2]
+    c = (BRUSS_N + 1) ** 2 / 50.0
+    n = y.size
+    J = np.zeros((n, n))
+    iu, iv = np.arange(0, n, 2), np.arange(1, n, 2)
+    J[iu, iu] = 2 * u * v - 4 - 2 * c
+    J[iu, iv] = u * u
+    J[iv, iu] = 3 - 2 * u * v
+    J[iv, iv] = -u * u - 2 * c
+    for i in (iu, iv):  # the diffusion couples a component to its neighbours
+        J[i[1:], i[:-1]] = c
+        J[i[:-1], i[1:]] = c
+    return J
+
+
+def _bruss_y0():
+    x = np.arange(1, BRUSS_N + 1) / (BRUSS_N + 1)
+    y0 = np.empty(2 * BRUSS_N)
+    y0[0::2] = 1 + np.sin(2 * np.pi * x)
+    y0[1::2] = 3.0
+    return y0
+
+
+@pytest.mark.slow
+def test_radau_large_system_economy():
+    # n = 200 on [0, 10]: where the LU pair (a real and a complex 200 x 200) is
+    # the cost.  Against SciPy's Radau at rtol 1e-10 (the reference) and at the
+    # same rtol 1e-6: measured radau njev 2, nlu 35 against Radau's 20 and 88
+    # (BDF's 2 and 41), the error 1.9e-8 against Radau's 8.7e-9 (BDF's 4.9e-6)
+    y0 = _bruss_y0()
+    assert np.allclose(_bruss_jac(0, y0 + 0.1) @ np.ones(200) * 1e-7,
+                       _bruss(0, y0 + 0.1 + 1e-7) - _bruss(0, y0 + 0.1), rtol=1e-5, atol=1e-9)
+    ref = solve_ivp(_bruss, (0, 10), y0, method="Radau", rtol=1e-10, atol=1e-12,
+                    jac=_bruss_jac).y[:, -1]
+    m = mp.solve(_bruss, (0, 10), y0, method="radau", rtol=1e-6, atol=1e-8, jac=_bruss_jac)
+    s = solve_ivp(_bruss, (0, 10), y0, method="Radau", rtol=1e-6, atol=1e-8, jac=_bruss_jac)
+    assert m.success and s.success
+    err = np.max(np.abs(m.y[:, -1] - ref) / np.maximum(np.abs(ref), 1e-7))
+    assert err < 2e-7, err
+    assert 3 * m.njev <= s.njev, (m.njev, s.njev)
+    assert 2 * m.nlu <= s.nlu, (m.nlu, s.nlu)
+
+
+# ---- the CVODE bench's problems and driver ------------------------------------------------
+
+def test_cvode_bench_problems_are_the_test_set():
+    # mechpy/benches/stiff_cvode.py writes each problem once as SymPy equations,
+    # compiled for radau and, as the same C, for CVODE: they are the test set's
+    # right-hand sides and Jacobians (and the Brusselator this file's)
+    from mechpy.benches import stiff_cvode
+    pytest.importorskip("sympy")
+    rng = np.random.default_rng(5)
+    for name, eqs, y, y0, span, atol, ref in stiff_cvode.problems(n_bruss=BRUSS_N):
+        try:
+            scene = mp.equations(eqs, list(y))
+        except mp.symbolic.CompileError:
+            pytest.skip("no C compiler")
+        if name in PROBLEMS:
+            P, f, jac = PROBLEMS[name], PROBLEMS[name].f, PROBLEMS[name].jac
+            assert np.array_equal(y0, P.y0) and span == (P.t0, P.tf)
+            np.testing.assert_array_equal(ref, P.ref)
+        else:
+            f, jac = _bruss, _bruss_jac
+            np.testing.assert_array_equal(y0, _bruss_y0())
+        for _ in range(3):
+            yy = np.asarray(y0) * (1 + 0.1 * rng.standard_normal(len(y0))) + 1e-3
+            np.testing.assert_allclose(scene.rhs(0.0, yy), f(0.0, yy), rtol=1e-12, atol=1e-12)
+            np.testing.assert_allclose(scene.jacobian(0.0, yy), jac(0.0, yy), rtol=1e-12,
+                                       atol=1e-12)
+
+
+def test_cvode_bench_driver_meets_the_published_values():
+    # the driver compiled around the generated C: CVODE on ROBER at rtol 1e-8 ends
+    # within its usual error of the published values (measured 6.6e-7 relative)
+    from mechpy.benches import stiff_cvode
+    why = stiff_cvode.cvode_missing()
+    if why:
+        pytest.skip(why)
+    name, eqs, y, y0, span, atol, ref = stiff_cvode.problems(n_bruss=2)[0]
+    assert name == "ROBER"
+    import tempfile
+    with tempfile.TemporaryDirectory() as d:
+        exe = stiff_cvode.cvode_driver(mp.equations(eqs, list(y)), d)
+        st, nst, nfe, nje, nlu, sec, yend = stiff_cvode.cvode_solve(exe, 3, y0, atol, span,
+                                                                    1e-8, repeats=1)
+    assert st == 0 and 0 < nje <= nlu <= nst and nfe > nst and sec > 0
+    assert relative_error(yend, PROBLEMS["ROBER"].ref, PROBLEMS["ROBER"].atol) < 1e-5
 
 
 # ---- every stiff row against the published values --------------------------------------
