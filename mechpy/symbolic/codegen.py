@@ -87,7 +87,7 @@ static MP_INLINE void mp_lu_solve(const double *LU, const int *piv, const double
 
 #: Mass-matrix systems of this size or smaller (NA = coordinates +
 #: constraints) are solved in closed form by a Lagrangian system's mp_gen_rhs
-#: (:data:`CLOSED_SOLVER`, A and b printed as one block so that they share
+#: (:func:`_closed_solver`, A and b printed as one block so that they share
 #: their common subexpressions, sin and cos of one angle becoming one sincos);
 #: larger ones by mp_lu.  The Jacobian, the multipliers and the constraint
 #: forces keep mp_lu's factors at every size.  The double pendulum's
@@ -95,40 +95,41 @@ static MP_INLINE void mp_lu_solve(const double *LU, const int *piv, const double
 #: through mp_lu, against the Fortran of the same equations' 134.
 CLOSED_MAX = 3
 
-#: The adjugate solve for NA = 2 or 3 (Cramer's rule), written once.
-CLOSED_SOLVER = r"""
-/* z = A^-1 b for the NA x NA row-major A (NA = 2 or 3) by its adjugate:
- * z = adj(A) b / det(A).  Returns 0, or 1 without writing z when det(A) is
- * not clearly away from 0 and from overflow (|det| <= NA eps max|A|^NA, a NaN
- * or inf anywhere): the caller then solves by mp_lu, whose pivoting and
- * statuses (MP_ENONFINITE, MP_ESINGULAR) decide, as for every larger system. */
+def _closed_solver(A) -> str:
+    """mp_closed_solve for the NA x NA mass matrix A (NA = 2 or 3; its entries as
+    printed, row-major): z = adj(A) b / det(A), the adjugate and determinant
+    expanded with SymPy over the entries that are not identically zero (a term
+    with a zero factor is not printed: 0 * x is not folded by the compiler,
+    which keeps NaN semantics)."""
+    na = int(round(len(A) ** 0.5))
+    nz = [not (sp.sympify(e) == 0) for e in A]
+    a = sp.Matrix(na, na, [sp.Symbol(f"A[{k}]") if nz[k] else sp.S.Zero
+                           for k in range(na * na)])
+    adj = a.adjugate()
+    det = sp.expand(sum(a[0, j] * adj[j, 0] for j in range(na)))
+    pr = _Printer()
+    b = [sp.Symbol(f"b[{i}]") for i in range(na)]
+    z = [pr.doprint(sp.Add(*[sp.expand(adj[i, j]) * b[j] for j in range(na)]))
+         for i in range(na)]
+    asum = " + ".join(f"fabs(A[{k}])" for k in range(na * na) if nz[k]) or "0.0"
+    lines = "\n".join(f"    z[{i}] = ({zi}) * r;" for i, zi in enumerate(z))
+    return rf"""
+/* z = A^-1 b for the NA x NA row-major A by its adjugate, z = adj(A) b / det(A)
+ * (the entries of A that are identically zero left out).  Returns 0, or 1
+ * without writing z when det(A) is not clearly away from 0 and from overflow
+ * (|det| <= NA eps (sum |A_ij|)^NA, a NaN or inf in A, which the sum carries):
+ * the caller then solves by mp_lu, whose pivoting and statuses (MP_ENONFINITE,
+ * MP_ESINGULAR) decide, as for every larger system. */
 static MP_INLINE int mp_closed_solve(const double *A, const double *b, double *z)
-{
-#if NA == 2
-    const double det = A[0] * A[3] - A[1] * A[2];
-    const double a0 = fabs(A[0]), a1 = fabs(A[1]), a2 = fabs(A[2]), a3 = fabs(A[3]);
-    const double m01 = a0 > a1 ? a0 : a1, m23 = a2 > a3 ? a2 : a3;
-    const double amax = m01 > m23 ? m01 : m23; /* (a NaN in A makes det one) */
-    const double tol = NA * DBL_EPSILON * amax * amax;
+{{
+    const double det = {pr.doprint(det)};
+    const double asum = {asum};
+    const double tol = NA * DBL_EPSILON * {" * ".join(["asum"] * na)};
     if (!(fabs(det) > tol && fabs(det) > DBL_MIN && fabs(det) <= DBL_MAX)) return 1;
     const double r = 1.0 / det;
-    z[0] = (A[3] * b[0] - A[1] * b[1]) * r;
-    z[1] = (A[0] * b[1] - A[2] * b[0]) * r;
-#else
-    const double c00 = A[4] * A[8] - A[5] * A[7], c01 = A[5] * A[6] - A[3] * A[8];
-    const double c02 = A[3] * A[7] - A[4] * A[6];
-    const double det = A[0] * c00 + A[1] * c01 + A[2] * c02;
-    double amax = 0.0;
-    for (int i = 0; i < 9; i++) amax = fabs(A[i]) > amax ? fabs(A[i]) : amax;
-    const double tol = NA * DBL_EPSILON * amax * amax * amax;
-    if (!(fabs(det) > tol && fabs(det) > DBL_MIN && fabs(det) <= DBL_MAX)) return 1;
-    const double r = 1.0 / det;
-    z[0] = (c00 * b[0] + (A[2] * A[7] - A[1] * A[8]) * b[1] + (A[1] * A[5] - A[2] * A[4]) * b[2]) * r;
-    z[1] = (c01 * b[0] + (A[0] * A[8] - A[2] * A[6]) * b[1] + (A[2] * A[3] - A[0] * A[5]) * b[2]) * r;
-    z[2] = (c02 * b[0] + (A[1] * A[6] - A[0] * A[7]) * b[1] + (A[0] * A[4] - A[1] * A[3]) * b[2]) * r;
-#endif
+{lines}
     return 0;
-}
+}}
 """
 
 
@@ -764,7 +765,7 @@ def _lagrangian_source(ir, status):
         parts = [_header(ir, status), "#if defined(__GNUC__)\n#define MP_HIDDEN "
                  "__attribute__((visibility(\"hidden\")))\n#else\n#define MP_HIDDEN\n#endif\n"
                  f"MP_HIDDEN void gen_D({_ARGS_Z});", build.UNIT, _dims(ir),
-                 RUNTIME] + ([CLOSED_SOLVER] if closed else []) + blocks
+                 RUNTIME] + ([_closed_solver(B["A"])] if closed else []) + blocks
         # and so does the lane rhs
         lanes = _lanes_lagrangian(ir)
         tail = [build.UNIT, jac] + ([build.UNIT, lanes] if lanes else [])
@@ -772,7 +773,7 @@ def _lagrangian_source(ir, status):
         lanes = None
         parts = [_header(ir, status), _dims(ir), RUNTIME, jac.replace("\nvoid gen_D(",
                                                                         "\nstatic void gen_D(")]
-        parts += ([CLOSED_SOLVER] if closed else []) + blocks
+        parts += ([_closed_solver(B["A"])] if closed else []) + blocks
         tail = []
     parts.append(r"""
 /* Solve A z = b at (t, y): z = (q'', -lambda).  A0 receives A before the
