@@ -90,6 +90,54 @@ static MP_INLINE void mp_lu_solve_n(const double *LU, int n, const int *piv,
 """
 
 
+#: Mass-matrix systems of this size or smaller (NA = coordinates +
+#: constraints) are solved in closed form by a Lagrangian system's mp_gen_rhs
+#: (:func:`_closed_solver`, A and b printed as one block so that they share
+#: their common subexpressions, sin and cos of one angle becoming one sincos);
+#: larger ones by mp_lu.  The Jacobian, the multipliers and the constraint
+#: forces keep mp_lu's factors at every size.  The double pendulum's
+#: evaluation took 272 instructions for the solve and its call (valgrind)
+#: through mp_lu, against the Fortran of the same equations' 134.
+CLOSED_MAX = 3
+
+def _closed_solver(A) -> str:
+    """mp_closed_solve for the NA x NA mass matrix A (NA = 2 or 3; its entries as
+    printed, row-major): z = adj(A) b / det(A), the adjugate and determinant
+    expanded with SymPy over the entries that are not identically zero (a term
+    with a zero factor is not printed: 0 * x is not folded by the compiler,
+    which keeps NaN semantics)."""
+    na = int(round(len(A) ** 0.5))
+    nz = [not (sp.sympify(e) == 0) for e in A]
+    a = sp.Matrix(na, na, [sp.Symbol(f"A[{k}]") if nz[k] else sp.S.Zero
+                           for k in range(na * na)])
+    adj = a.adjugate()
+    det = sp.expand(sum(a[0, j] * adj[j, 0] for j in range(na)))
+    pr = _Printer()
+    b = [sp.Symbol(f"b[{i}]") for i in range(na)]
+    z = [pr.doprint(sp.Add(*[sp.expand(adj[i, j]) * b[j] for j in range(na)]))
+         for i in range(na)]
+    asum = " + ".join(f"fabs(A[{k}])" for k in range(na * na) if nz[k]) or "0.0"
+    lines = "\n".join(f"    z[{i}] = ({zi}) * r;" for i, zi in enumerate(z))
+    return rf"""
+/* z = A^-1 b for the NA x NA row-major A by its adjugate, z = adj(A) b / det(A)
+ * (the entries of A that are identically zero left out).  Returns 0, or 1
+ * without writing z when det(A) is not clearly away from 0 and from overflow
+ * (|det| <= NA eps (sum |A_ij|)^NA, a NaN or inf in A, which the sum carries):
+ * the caller then solves by mp_lu, whose pivoting and statuses (MP_ENONFINITE,
+ * MP_ESINGULAR) decide, as for every larger system. */
+static MP_INLINE int mp_closed_solve(const double *A, const double *b, double *z)
+{{
+    const double det = {pr.doprint(det)};
+    const double asum = {asum};
+    const double tol = NA * DBL_EPSILON * {" * ".join(["asum"] * na)};
+    if (!(fabs(det) > tol && fabs(det) > DBL_MIN && fabs(det) <= DBL_MAX)) return 1;
+    const double r = 1.0 / det;
+{lines}
+    return 0;
+}}
+"""
+
+
 #: Lane right-hand sides (mp_gen_lanes): the function attribute that compiles
 #: one body for AVX2+FMA and portable x86-64 (a resolver picks at load time)
 #: and libmvec's vector variants, as csrc/ode/lanes.h declares them for the C
@@ -667,6 +715,46 @@ _ARGS = "double t, const double *y, const double *p, double *out"
 _ARGS_Z = "double t, const double *y, const double *p, const double *z, double *out"
 
 
+#: A Lagrangian system's mp_gen_rhs: by mp_lu, or in closed form (NA <= CLOSED_MAX).
+_RHS_LU = r"""
+/* dy/dt = (q', q'') at (t, y); params: the parameter vector. */
+int mp_gen_rhs(double t, const double *y, double *dydt, void *params)
+{
+    double A0[NA * NA], LU[NA * NA], dinv[NA], z[NA];
+    int piv[NA];
+    int rc = gen_solve(t, y, (const double *)params, A0, LU, piv, dinv, z);
+    if (rc != MP_OK) return rc;
+    for (int i = 0; i < NC; i++) {
+        dydt[i] = y[NC + i];
+        dydt[NC + i] = z[i];
+    }
+    return MP_OK;
+}
+"""
+_RHS_CLOSED = r"""
+/* dy/dt = (q', q'') at (t, y); params: the parameter vector.  A z = b in
+ * closed form (mp_closed_solve), by mp_lu where that declines. */
+int mp_gen_rhs(double t, const double *y, double *dydt, void *params)
+{
+    double Ab[NA * NA + NA], z[NA];
+    gen_Ab(t, y, (const double *)params, Ab);
+    if (mp_closed_solve(Ab, Ab + NA * NA, z) != 0) {
+        double dinv[NA];
+        int piv[NA];
+        for (int i = 0; i < NA; i++) z[i] = Ab[NA * NA + i];
+        int rc = mp_lu(Ab, piv, dinv);
+        if (rc != MP_OK) return rc;
+        mp_lu_solve(Ab, piv, dinv, z);
+    }
+    for (int i = 0; i < NC; i++) {
+        dydt[i] = y[NC + i];
+        dydt[NC + i] = z[i];
+    }
+    return MP_OK;
+}
+"""
+
+
 def _lagrangian_source(ir, status):
     B = ir.blocks
     n, k = ir.nc, ir.k
@@ -675,13 +763,18 @@ def _lagrangian_source(ir, status):
               _block("gen_energy", B["energy"], ir, _ARGS, "the energy"),
               _block("gen_momenta", B["momenta"], ir, _ARGS, "the momenta"),
               _block("gen_lag", B["lag"], ir, _ARGS, "L")]
+    closed = 2 <= n + k <= CLOSED_MAX
+    if closed:
+        # A and b as one block: their common subexpressions computed once
+        blocks.append(_block("gen_Ab", list(B["A"]) + list(B["b"]), ir, _ARGS,
+                             "the mass matrix (row-major), then the right-hand side"))
     jac = _block("gen_D", B["D"], ir, _ARGS_Z, "the Jacobian", static=False)
     if len(jac) + sum(map(len, blocks)) > SPLIT:
         # the Jacobian's block compiles beside the rest (see build.units)
         parts = [_header(ir, status), "#if defined(__GNUC__)\n#define MP_HIDDEN "
                  "__attribute__((visibility(\"hidden\")))\n#else\n#define MP_HIDDEN\n#endif\n"
                  f"MP_HIDDEN void gen_D({_ARGS_Z});", build.UNIT, _dims(ir),
-                 RUNTIME] + blocks
+                 RUNTIME] + ([_closed_solver(B["A"])] if closed else []) + blocks
         # and so does the lane rhs
         lanes = _lanes_lagrangian(ir)
         tail = [build.UNIT, jac] + ([build.UNIT, lanes] if lanes else [])
@@ -689,7 +782,7 @@ def _lagrangian_source(ir, status):
         lanes = None
         parts = [_header(ir, status), _dims(ir), RUNTIME, jac.replace("\nvoid gen_D(",
                                                                         "\nstatic void gen_D(")]
-        parts += blocks
+        parts += ([_closed_solver(B["A"])] if closed else []) + blocks
         tail = []
     parts.append(r"""
 /* Solve A z = b at (t, y): z = (q'', -lambda).  A0 receives A before the
@@ -718,20 +811,9 @@ static inline int gen_solve(double t, const double *y, const double *p, double *
     return MP_OK;
 }
 
-/* dy/dt = (q', q'') at (t, y); params: the parameter vector. */
-int mp_gen_rhs(double t, const double *y, double *dydt, void *params)
-{
-    double A0[NA * NA], LU[NA * NA], dinv[NA], z[NA];
-    int piv[NA];
-    int rc = gen_solve(t, y, (const double *)params, A0, LU, piv, dinv, z);
-    if (rc != MP_OK) return rc;
-    for (int i = 0; i < NC; i++) {
-        dydt[i] = y[NC + i];
-        dydt[NC + i] = z[i];
-    }
-    return MP_OK;
-}
-
+""")
+    parts.append(_RHS_CLOSED if closed else _RHS_LU)
+    parts.append(r"""
 /* Row-major NS x NS Jacobian of mp_gen_rhs: d q''/d(q, q') = first NC rows of
  * A^-1 D with D = [db/dq - (dA/dq) z, db/dq' - (dA/dq') z]. */
 int mp_gen_jac(double t, const double *y, double *jac, void *params)
