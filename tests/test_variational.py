@@ -1021,3 +1021,16 @@ def test_one_coordinate_compiled_lagrangian_stationary_path(tmp_path, monkeypatc
         exact = (qa * np.sin(1.3 * (T - r.t)) + qb * np.sin(1.3 * r.t)) / np.sin(1.3 * T)
         errs.append(np.abs(r.q - exact).max())
     assert errs[1] < 1e-5 and 3.8 < errs[0] / errs[1] < 4.2      # 2.8e-6 measured
+
+
+def test_minimize_functional_guess_ends_are_replaced():
+    """A guess whose ends are not the end values: its ends are replaced by them (as the
+    docstring says), so the extremal of the arc length is the straight line between
+    the given ends, from any guess."""
+    x = np.linspace(0.0, 2.0, 41)
+    for guess in (np.full(41, 5.0), np.sin(3 * x) - 2.0):
+        ext = V.minimize_functional(lambda x, y, yp: np.sqrt(1 + yp**2), (0.0, 2.0),
+                                    (1.0, -0.5), n=40, guess=guess)
+        assert ext.y[0] == 1.0 and ext.y[-1] == -0.5
+        assert np.abs(ext.y - (1.0 - 0.75 * ext.x)).max() < 3e-13     # 3.7e-14 measured
+        assert abs(ext.value - np.hypot(2.0, 1.5)) < 5e-15              # 4.4e-16
