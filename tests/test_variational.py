@@ -1041,11 +1041,15 @@ def test_minimize_functional_integrand_finite_at_the_edge_of_its_domain():
     y >= 0 begins, so not refused as singular there (the check probes F along the
     chord, inside the domain).  Its extremal (first integral sqrt(y) y'^2 = C) is
     y = x^(4/5), with J = 0.64; the midpoint rule converges to them at first order (the
-    path's derivative is singular at x = 0)."""
-    errs = []
-    for n in (100, 200):
-        ext = V.minimize_functional(lambda x, y, yp: np.sqrt(y) * yp**2, (0.0, 1.0),
-                                    (0.0, 1.0), n=n)
-        assert np.abs(ext.y - ext.x ** 0.8).max() < 4e-3        # 1.8e-3, 1.0e-3 measured
-        errs.append(ext.value - 0.64)
-    assert 0 < errs[1] < 1e-3 and 1.8 < errs[0] / errs[1] < 2.2   # 6.7e-4, 3.4e-4
+    path's derivative is singular at x = 0).  The same in u = y - x: sqrt(y - x) (y' - 1)^2
+    from (0, 0) to (1, 2), whose domain y >= x leaves the line y = 0 at once, extremal
+    y = x + x^(4/5)."""
+    for F, yb, shift in ((lambda x, y, yp: np.sqrt(y) * yp**2, 1.0, 0.0),
+                         (lambda x, y, yp: np.sqrt(y - x) * (yp - 1)**2, 2.0, 1.0)):
+        errs = []
+        for n in (100, 200):
+            ext = V.minimize_functional(F, (0.0, 1.0), (0.0, yb), n=n)
+            exact = shift * ext.x + ext.x ** 0.8
+            assert np.abs(ext.y - exact).max() < 4e-3           # 1.8e-3, 1.0e-3 measured
+            errs.append(ext.value - 0.64)
+        assert 0 < errs[1] < 1e-3 and 1.8 < errs[0] / errs[1] < 2.2   # 6.7e-4, 3.4e-4
