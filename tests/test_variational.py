@@ -1077,3 +1077,23 @@ def test_variational_integrate_with_a_pivoting_mass_matrix():
                + (b0 / w)[:, None] * np.sin(w[:, None] * o.t))
         errs.append(np.abs(o.q - U @ eta).max())
     assert errs[1] < 5e-4 and 3.8 < errs[0] / errs[1] < 4.2      # 2.3e-4, ratio 4.0
+
+
+def test_variational_integrate_time_dependent_beyond_one_chunk():
+    """The Caldirola-Kanai Lagrangian e^(gamma t) (q'^2 - w0^2 q^2) / 2 (Duffing's row
+    with beta = 0): the damped oscillator's exact motion, positions and the velocities
+    recovered from the momenta at each node's own time, over 5001 nodes (more than one
+    block of the C core's 4096 points), at second order."""
+    g, w0 = 0.2, 1.0
+    scene = mp.scenes.Duffing(w0**2, 0.0, delta=g)
+    wd = np.sqrt(w0**2 - g**2 / 4)
+    errs = []
+    for h in (0.004, 0.002):
+        o = V.variational_integrate(scene, (0, 10), 1.0, 0.0, h)
+        e = np.exp(-g / 2 * o.t)
+        A, B = 1.0, g / 2 / wd
+        q = e * (A * np.cos(wd * o.t) + B * np.sin(wd * o.t))
+        v = -g / 2 * q + e * wd * (B * np.cos(wd * o.t) - A * np.sin(wd * o.t))
+        errs.append(max(np.abs(o.q - q).max(), np.abs(o.qdot - v).max()))
+    assert len(o.t) == 5001
+    assert errs[1] < 3e-6 and 3.8 < errs[0] / errs[1] < 4.2      # 1.2e-6, ratio 4.0
