@@ -319,3 +319,18 @@ def test_no_compiler_and_no_numba_says_what_to_install(tmp_path):
     assert r.returncode == 0, r.stderr[-2000:]
     assert "CompileError: no C compiler" in r.stdout, r.stdout
     assert "pip install numba" in r.stdout and "backend='numpy'" in r.stdout
+
+
+def test_numba_module_source_is_the_same_in_every_process():
+    """The generated numba source (its cache key) does not depend on the process's
+    string hashing: a second process finds the first one's module and machine code
+    (the module's promise) only if its text is the same, here with states,
+    parameters and z values of the same indices in one block."""
+    code = ("import sympy as sp\nfrom mechpy.symbolic import jit\n"
+            "y, p, z = (sp.symbols(f'mp_{c}0:3') for c in 'ypz')\n"
+            "print(jit._block('f', [y[i] * p[2 - i] + z[i] + sp.Symbol('mp_t') "
+            "for i in range(3)], with_z=True))\n")
+    outs = {subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                           check=True, env={**os.environ, "PYTHONHASHSEED": str(seed)}).stdout
+            for seed in range(6)}
+    assert len(outs) == 1, outs

@@ -631,3 +631,15 @@ def test_dense_chain_written_by_blocks_equals_the_sparse_one(ends):
     Ks, Ms = mp.modes.chain(N, ends=ends, masses=m, springs=k, sparse=True)
     assert np.array_equal(K, Ks.toarray()) and np.array_equal(M, Ms.toarray())
     assert np.array_equal(K, K.T) and np.count_nonzero(K) == Ks.nnz
+
+
+@pytest.mark.parametrize("method", ["auto", "dense"])
+def test_sparse_shapes_are_checked_with_both_named(method):
+    """Sparse K and M of different shapes: a ValueError naming both shapes, from the
+    check of the sparse path (not an internal error of the chain's band solver)."""
+    for K, M in ((sp.eye(3, format="csr"), sp.eye(2, format="csr")),
+                 (sp.eye(2, format="csr"), np.eye(3)),
+                 (sp.eye(2, format="csr"), sp.csr_array(np.ones((2, 3))))):
+        with pytest.raises(ValueError, match=r"K and M must be square of the same shape, "
+                                             rf"got \({K.shape[0]}, {K.shape[1]}\)"):
+            normal_modes(K, M, method=method)

@@ -119,6 +119,17 @@ def test_angle_ranges(seq, rng):
         assert np.all((a[:, 1] >= 0) & (a[:, 1] <= np.pi))
     else:
         assert np.all(np.abs(a[:, 1]) <= np.pi / 2)
+    # the quaternion path: the same ranges, and the angles give back the rotation
+    q = np.random.default_rng(2).normal(size=(2000, 4))
+    for passive in (False, True):
+        a = rot.euler_from_quat(q, seq, passive)
+        assert np.all(np.abs(a[:, [0, 2]]) <= np.pi)
+        if seq in PROPER:
+            assert np.all((a[:, 1] >= 0) & (a[:, 1] <= np.pi))
+        else:
+            assert np.all(np.abs(a[:, 1]) <= np.pi / 2)
+        ref = Rotation.from_quat(q).as_matrix()
+        assert np.abs(scipy_matrix(seq, a, passive) - ref).max() < 5e-15   # 1.4e-15
 
 
 # ---------------------------------------------------------------- round trips and lock

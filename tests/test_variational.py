@@ -979,3 +979,121 @@ def test_ctrl_c_is_prompt_in_a_long_minimisation():
     from sigint import interrupt_delay
     dt = interrupt_delay("", "mp.variational.brachistochrone(2.0, 1.0, n=2 * 10 ** 6)", delay=1.0)
     assert dt < 1.0, f"KeyboardInterrupt {dt} s after SIGINT"         # measured 0.02-0.3 s
+
+
+class _Addressed:
+    """An object offering the variational tools a compiled Lagrangian's address."""
+
+    def __init__(self, address, dim):
+        self._lagrangian_c = (address, np.array([1.0]))
+        self.dim = dim
+
+
+def test_compiled_lagrangian_address_and_dim_are_checked():
+    """A null or negative function address is refused before anything calls it (a
+    NULL call would crash the interpreter), as is a state dimension that is not an
+    even int >= 2."""
+    for address in (0, -8, True):
+        with pytest.raises(TypeError, match="address"):
+            V.stationary_path(_Addressed(address, 2), 0.0, 1.0, 1.0, 50)
+    for dim in (0, 3, 2.0):
+        with pytest.raises(TypeError, match="dim"):
+            V.stationary_path(_Addressed(4096, dim), 0.0, 1.0, 1.0, 50)
+
+
+def test_one_coordinate_compiled_lagrangian_stationary_path(tmp_path, monkeypatch):
+    """A compiled Lagrangian of one coordinate (state dimension 2), the oscillator
+    L = q'^2/2 - w^2 q^2/2: its stationary path between q(0) = qa and q(T) = qb is
+    (qa sin w(T - t) + qb sin w t) / sin w T, to the midpoint rule's O(h^2)."""
+    import sympy as sp
+    from mechpy.symbolic import build
+    if not build.have_compiler():
+        pytest.skip("no C compiler")
+    monkeypatch.setenv("MECHPY_CACHE_DIR", str(tmp_path))
+    q, = mp.coordinates("q")
+    w = sp.Symbol("w", positive=True)
+    scene = mp.lagrangian(q.diff()**2 / 2 - w**2 * q**2 / 2, [q], {"w": 1.3})
+    assert scene.dim == 2
+    qa, qb, T = 0.4, -0.3, 1.7
+    errs = []
+    for n in (100, 200):
+        r = V.stationary_path(scene, qa, qb, T, n)
+        exact = (qa * np.sin(1.3 * (T - r.t)) + qb * np.sin(1.3 * r.t)) / np.sin(1.3 * T)
+        errs.append(np.abs(r.q - exact).max())
+    assert errs[1] < 1e-5 and 3.8 < errs[0] / errs[1] < 4.2      # 2.8e-6 measured
+
+
+def test_minimize_functional_guess_ends_are_replaced():
+    """A guess whose ends are not the end values: its ends are replaced by them (as the
+    docstring says), so the extremal of the arc length is the straight line between
+    the given ends, from any guess."""
+    x = np.linspace(0.0, 2.0, 41)
+    for guess in (np.full(41, 5.0), np.sin(3 * x) - 2.0):
+        ext = V.minimize_functional(lambda x, y, yp: np.sqrt(1 + yp**2), (0.0, 2.0),
+                                    (1.0, -0.5), n=40, guess=guess)
+        assert ext.y[0] == 1.0 and ext.y[-1] == -0.5
+        assert np.abs(ext.y - (1.0 - 0.75 * ext.x)).max() < 3e-13     # 3.7e-14 measured
+        assert abs(ext.value - np.hypot(2.0, 1.5)) < 5e-15              # 4.4e-16
+
+
+def test_minimize_functional_integrand_finite_at_the_edge_of_its_domain():
+    """F = sqrt(y) y'^2 from (0, 0) to (1, 1): finite at the end y = 0, where its domain
+    y >= 0 begins, so not refused as singular there (the check probes F along the
+    chord, inside the domain).  Its extremal (first integral sqrt(y) y'^2 = C) is
+    y = x^(4/5), with J = 0.64; the midpoint rule converges to them at first order (the
+    path's derivative is singular at x = 0).  The same in u = y - x: sqrt(y - x) (y' - 1)^2
+    from (0, 0) to (1, 2), whose domain y >= x leaves the line y = 0 at once, extremal
+    y = x + x^(4/5)."""
+    for F, yb, shift in ((lambda x, y, yp: np.sqrt(y) * yp**2, 1.0, 0.0),
+                         (lambda x, y, yp: np.sqrt(y - x) * (yp - 1)**2, 2.0, 1.0)):
+        errs = []
+        for n in (100, 200):
+            ext = V.minimize_functional(F, (0.0, 1.0), (0.0, yb), n=n)
+            exact = shift * ext.x + ext.x ** 0.8
+            assert np.abs(ext.y - exact).max() < 4e-3           # 1.8e-3, 1.0e-3 measured
+            errs.append(ext.value - 0.64)
+        assert 0 < errs[1] < 1e-3 and 1.8 < errs[0] / errs[1] < 2.2   # 6.7e-4, 3.4e-4
+
+
+def test_variational_integrate_with_a_pivoting_mass_matrix():
+    """L = q'^T M q' / 2 - q^T K q / 2 with M = [[1, 1.5], [1.5, 3]] (positive definite,
+    its first column's largest entry off the diagonal: the velocity solve pivots) against
+    the exact motion from SciPy's eigh(K, M), at second order."""
+    import scipy.linalg as sl
+    Mm = np.array([[1.0, 1.5], [1.5, 3.0]])
+    Kk = np.array([[2.0, -0.5], [-0.5, 1.0]])
+
+    def L(q, v):
+        return (0.5 * np.einsum("i...,ij,j...->...", v, Mm, v)
+                - 0.5 * np.einsum("i...,ij,j...->...", q, Kk, q))
+    q0, v0 = np.array([0.3, -0.2]), np.array([0.1, 0.4])
+    w2, U = sl.eigh(Kk, Mm)                    # U^T M U = I
+    w = np.sqrt(w2)
+    a0, b0 = U.T @ Mm @ q0, U.T @ Mm @ v0
+    errs = []
+    for h in (0.02, 0.01):
+        o = V.variational_integrate(L, (0, 3), q0, v0, h)
+        eta = (a0[:, None] * np.cos(w[:, None] * o.t)
+               + (b0 / w)[:, None] * np.sin(w[:, None] * o.t))
+        errs.append(np.abs(o.q - U @ eta).max())
+    assert errs[1] < 5e-4 and 3.8 < errs[0] / errs[1] < 4.2      # 2.3e-4, ratio 4.0
+
+
+def test_variational_integrate_time_dependent_beyond_one_chunk():
+    """The Caldirola-Kanai Lagrangian e^(gamma t) (q'^2 - w0^2 q^2) / 2 (Duffing's row
+    with beta = 0): the damped oscillator's exact motion, positions and the velocities
+    recovered from the momenta at each node's own time, over 5001 nodes (more than one
+    block of the C core's 4096 points), at second order."""
+    g, w0 = 0.2, 1.0
+    scene = mp.scenes.Duffing(w0**2, 0.0, delta=g)
+    wd = np.sqrt(w0**2 - g**2 / 4)
+    errs = []
+    for h in (0.004, 0.002):
+        o = V.variational_integrate(scene, (0, 10), 1.0, 0.0, h)
+        e = np.exp(-g / 2 * o.t)
+        A, B = 1.0, g / 2 / wd
+        q = e * (A * np.cos(wd * o.t) + B * np.sin(wd * o.t))
+        v = -g / 2 * q + e * wd * (B * np.cos(wd * o.t) - A * np.sin(wd * o.t))
+        errs.append(max(np.abs(o.q - q).max(), np.abs(o.qdot - v).max()))
+    assert len(o.t) == 5001
+    assert errs[1] < 3e-6 and 3.8 < errs[0] / errs[1] < 4.2      # 1.2e-6, ratio 4.0
