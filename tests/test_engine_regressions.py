@@ -677,6 +677,13 @@ def test_rtol_per_component_as_scipy():
         mp.solve(harmonic, (0, 1), [1.0, 0.0], rtol=[1e-3, 0.0])
     with pytest.raises(ValueError, match=r"rtol must have shape \(2\)"):
         mp.solve(harmonic, (0, 1), [1.0, 0.0], rtol=[1e-3, 1e-3, 1e-3])
+    # one component, one rtol: a GSL method takes the array of one as its scalar;
+    # y' = -y, y = e^-t
+    for method in ("gsl:rkf45", "gsl:rk8pd"):
+        s = mp.solve(lambda t, y: -y, (0, 1), [1.0], rtol=[1e-10], atol=1e-12, method=method)
+        ref = mp.solve(lambda t, y: -y, (0, 1), [1.0], rtol=1e-10, atol=1e-12, method=method)
+        assert s.success and np.array_equal(s.t, ref.t) and np.array_equal(s.y, ref.y)
+        assert abs(s.y[0, -1] - np.exp(-1.0)) < 1e-10  # measured 1.3e-11 (rkf45)
 
 
 STEP_END_METHODS = {"dop853": dict(first_step=0.5, max_step=0.5),
