@@ -184,6 +184,11 @@ def test_frames_and_defaults():
     w = mp.live.animate(p, sol, duration=2, fps=10, trail=0)
     assert w.times.size == 21 and w.spec["trails"] == []
     assert repr(w).startswith("<mechpy.live.Motion pendulum: 21 frames")
+    # at most 3600 frames in all (the docstring): 3600 are made, 3601 refused
+    w = mp.live.animate(p, sol, fps=60, duration=3599 / 60)
+    assert w.times.size == 3600 and w.times[0] == 0.0 and w.times[-1] == 100.0
+    with pytest.raises(ValueError, match="3601 frames, more than 3600"):
+        mp.live.animate(p, sol, fps=60, duration=60)
 
 
 def test_bad_input():
