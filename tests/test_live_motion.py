@@ -112,6 +112,11 @@ def test_top_axis_and_spin_from_euler_angles(driver, tmp_path):
         np.testing.assert_allclose(c[:, 2], 0.1 * np.cos(th_ref), rtol=0, atol=2e-11)
         np.testing.assert_allclose(np.hypot(c[:, 0], c[:, 1]), 0.1 * np.sin(th_ref), rtol=0,
                                    atol=2e-11)
+        # whole circles: closed, the azimuth going once round in steps below 2 pi / 100
+        np.testing.assert_allclose(c[0], c[-1], rtol=0, atol=1e-15)
+        az = np.unwrap(np.arctan2(c[:, 1], c[:, 0]))
+        assert abs(abs(az[-1] - az[0]) - 2 * np.pi) < 1e-12
+        assert np.abs(np.diff(az)).max() < 2 * np.pi / 100
 
 
 def test_rigid_body_axes_from_the_quaternion(driver, tmp_path):
@@ -184,6 +189,11 @@ def test_frames_and_defaults():
     w = mp.live.animate(p, sol, duration=2, fps=10, trail=0)
     assert w.times.size == 21 and w.spec["trails"] == []
     assert repr(w).startswith("<mechpy.live.Motion pendulum: 21 frames")
+    # at most 3600 frames in all (the docstring): 3600 are made, 3601 refused
+    w = mp.live.animate(p, sol, fps=60, duration=3599 / 60)
+    assert w.times.size == 3600 and w.times[0] == 0.0 and w.times[-1] == 100.0
+    with pytest.raises(ValueError, match="3601 frames, more than 3600"):
+        mp.live.animate(p, sol, fps=60, duration=60)
 
 
 def test_bad_input():
