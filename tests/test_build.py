@@ -94,3 +94,20 @@ def test_command_line_runs_from_the_package(argv, tmp_path):
                        capture_output=True, text=True, timeout=120)
     assert r.returncode == 0, r.stderr
     assert "usage: python -m mechpy" in r.stdout
+
+
+def test_bench_targets_read_every_sections_rows():
+    # the report's targets see all sections' rows at once: a row without a path,
+    # with path None (hard_cases', longrun's) or without an error must not stop any
+    # section's targets (a whole bench run lost its report to one such row)
+    from mechpy import bench
+    from mechpy.benches import entries
+    rows = [dict(problem="p", impl="a", time=1.0, error=float("nan")),
+            dict(problem="p", impl="b", time=1.0, error=1e-6, rtol=1e-6, path=None),
+            dict(problem="q", impl="c", time=2.0, error=1e-6, rtol=1e-3, path="call-mechpy",
+                 method="dop853", nfev=10)]
+    for mod in entries():
+        if hasattr(mod, "targets"):
+            assert isinstance(mod.targets(rows), list), mod.__name__
+    tg = bench.targets(rows)
+    assert all({"target", "goal", "worst", "median"} <= set(t) for t in tg)

@@ -299,7 +299,7 @@ def targets(rows) -> list[dict]:
     """Generated / Fortran CPU time per solve, per system (goal <= 1.15x)."""
     out = []
     for p in dict.fromkeys(r["problem"] for r in rows):
-        by = {r["path"]: r for r in rows if r["problem"] == p}
+        by = {r.get("path"): r for r in rows if r["problem"] == p}
         if "generated-vs-fortran" in by and "fortran" in by:
             v = by["generated-vs-fortran"]["time"] / by["fortran"]["time"]
             out.append(dict(target="generated system / Fortran DOP853 with the equations "

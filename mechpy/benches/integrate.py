@@ -162,7 +162,7 @@ def _call_cost(cfs, nbs):
 def targets(rows) -> list[dict]:
     """The call cost: mechpy's tiny solve against numbalsoda's (goal <= 2x), and
     one output point, t_eval=[tf], against the default output (goal <= 1.1x)."""
-    by = {r.get("path"): r for r in rows if r.get("path", "").startswith("call-")}
+    by = {r["path"]: r for r in rows if (r.get("path") or "").startswith("call-")}
     out = []
     if "call-mechpy" in by and "call-numbalsoda" in by:
         v = by["call-mechpy"]["time"] / by["call-numbalsoda"]["time"]

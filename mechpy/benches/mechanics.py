@@ -219,7 +219,7 @@ def targets(rows) -> list[dict]:
         if r.get("path") == "build-mechpy" and r["problem"].startswith("Whipple"):
             out.append(dict(target="mp.mechanics: the bicycle's first build (s)",
                             problem=r["problem"], goal="< 10 s", worst=r["time"],
-                            median=r["time"], n=1))
+                            median=r["time"], n=1, unit=" s"))
     for p in dict.fromkeys(r["problem"] for r in rows):
         pr = [r for r in rows if r["problem"] == p]
         own = [r for r in pr if r.get("path") == "mechanics" and np.isfinite(r["error"])]
