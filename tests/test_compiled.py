@@ -1454,3 +1454,24 @@ def test_closed_solve_threshold_and_fallback():
     assert _uses_closed(ss)
     with pytest.raises(mp.SingularityError, match="mass matrix"):
         ss.rhs(0, [0.1, 0.2, 0.0, 0.0])
+
+
+@pytest.mark.parametrize("closed_max", [3, 0])
+def test_non_finite_forcing_is_an_error_on_both_solve_paths(closed_max, monkeypatch, tmp_path):
+    # d/dx sqrt(x) is NaN for x < 0 while the mass matrix stays the identity: the
+    # closed form (whose determinant test sees A only) and LU both refuse the
+    # state, never returning NaN accelerations with a success status
+    from mechpy.symbolic import codegen
+    monkeypatch.setattr(codegen, "CLOSED_MAX", closed_max)
+    monkeypatch.setenv("MECHPY_CACHE_DIR", str(tmp_path))
+    x, y = mp.coordinates("x y")
+    s = mp.lagrangian((x.diff() ** 2 + y.diff() ** 2) / 2 + sp.sqrt(x) + y, [x, y])
+    assert _uses_closed(s) == (closed_max == 3)
+    assert s.rhs(0.0, [4.0, 0.0, 0.0, 0.0]) == pytest.approx([0.0, 0.0, 0.25, 1.0], rel=1e-15)
+    with pytest.raises(mp.NonFiniteError):
+        s.rhs(0.0, [-1.0, 0.0, 0.0, 0.0])
+    pytest.importorskip("numba")
+    nb = mp.lagrangian((x.diff() ** 2 + y.diff() ** 2) / 2 + sp.sqrt(x) + y, [x, y],
+                       backend="numba")
+    with pytest.raises(mp.NonFiniteError):
+        nb.rhs(0.0, [-1.0, 0.0, 0.0, 0.0])

@@ -12,7 +12,7 @@ import ctypes
 import numpy as np
 
 from .. import _core
-from .._validate import as_array, as_scalar
+from .._validate import as_array, as_finite_result, as_scalar
 from ..scenes import Scene
 
 __all__ = ["CompiledScene"]
@@ -237,8 +237,11 @@ class CompiledScene(Scene):
         return np.moveaxis(out, 0, -1).reshape(tuple(lead) + tuple(rest))
 
     def rhs(self, t, y) -> np.ndarray:
-        """dy/dt at (t, y); y of shape (dim, ...)."""
+        """dy/dt at (t, y); y of shape (dim, ...).  NonFiniteError where the
+        equations give a NaN or inf (as a solve reports it)."""
         out, rest = self._eval("rhs", t, y)
+        as_finite_result(out, f"the right-hand side at t = {t}",
+                         "the equations give NaN or inf at this state (outside their domain?)")
         return self._shape(out, rest, (self._dim,))
 
     def jacobian(self, t, y) -> np.ndarray:
