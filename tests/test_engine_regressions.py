@@ -398,6 +398,42 @@ def test_span_of_a_few_ulps_is_solved(method, scipy_method):
                 assert np.abs(s.y[:, -1] - [np.cos(dt), -np.sin(dt)]).max() <= 2.3e-16
 
 
+@pytest.mark.parametrize("method,scipy_method", [("dopri5", "RK45"), ("dop853", "DOP853"),
+                                                 ("radau", "Radau"), ("auto", "RK45")])
+def test_first_step_below_the_floor_is_raised_to_it(method, scipy_method):
+    # a first_step below the step floor (1e-300; 1e-15 is 4.5 ulps of 1; 1e-12 at 1e6 is
+    # 8.6e-3 ulps) is raised to the floor, as SciPy raises it, not refused as "below
+    # round-off"; only a rejected step's retry below the floor ends a solve. The decay
+    # x' = -x then ends at exp(-(tf - t0)) to SciPy's accuracy, in both directions.
+    f = lambda t, y: -y
+    for t0, fs in ((1.0, 1e-300), (1.0, 1e-15), (1e6, 1e-12), (-3.0, 1e-300)):
+        for sign in (1, -1):
+            span = (t0, t0 + sign * 2.0)
+            s = mp.solve(f, span, [1.0], method=method, first_step=fs, rtol=1e-8, atol=1e-10)
+            ref = solve_ivp(f, span, [1.0], method=scipy_method, first_step=fs,
+                            rtol=1e-8, atol=1e-10)
+            assert ref.status == 0
+            assert s.status == 0 and s.success, (t0, fs, sign, s.message)
+            # the first step is the floor: 16 eps |t0| (16 to 64 ulps in the direction of
+            # the solve), Radau's 10 ulps
+            ulp = abs(np.nextafter(t0, sign * np.inf) - t0)
+            assert s.t[-1] == span[1] and 10 * ulp <= sign * (s.t[1] - s.t[0]) <= 64 * ulp
+            exact = np.exp(-2.0)
+            # measured 1.3e-9 (dopri5, t0 = 1e6) and below; SciPy's 5.6e-9 and below
+            assert abs(s.y[0, -1] - exact) < max(2 * abs(ref.y[0, -1] - exact), 2e-8)
+
+
+def test_a_rejected_step_below_the_floor_ends_the_solve():
+    # x' = x^2 from x(0) = 1 blows up at t = 1: the steps shrink by rejections until a
+    # retry is below the floor, which ends the solve as SciPy's "less than spacing
+    # between numbers" does, at the blow-up (the numerical one is within 1e-8 of t = 1:
+    # measured 6.3e-10, 1.2e-9 and 4.9e-11) with x beyond 1e7
+    for method in ("dopri5", "dop853", "radau"):
+        s = mp.solve(lambda t, y: y**2, (0, 2.0), [1.0], method=method)
+        assert s.status == -1 and "round-off" in s.message
+        assert abs(s.t[-1] - 1) < 1e-8 and s.y[0, -1] > 1e7
+
+
 def test_backward_refused_for_forward_only_methods():
     with pytest.raises(ValueError, match="forwards in time"):
         mp.solve(mp.scenes.Pendulum(), (1, 0), [1.0, 0.0], method="verlet", h=0.01)

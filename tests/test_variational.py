@@ -143,6 +143,17 @@ def test_catenary_against_cosh(a, b, L):
     assert abs(r.horizontal_tension - A) < 2e-4 * A
 
 
+def test_catenary_beyond_one_block_of_evaluations():
+    """The integrands are evaluated by blocks of 2^18 intervals (Ctrl-C is asked
+    between blocks): n = 270000 has a second block, whose length constraint must
+    see its own nodes.  Against cosh, to round-off of the banded Newton solve
+    (h^2 = 1.4e-11): y measured 2.7e-12, the length 3.7e-14, the multiplier 1.6e-12."""
+    r = V.catenary((0.0, 0.0), (1.0, 0.0), 1.5, n=270000)
+    assert np.max(np.abs(r.y - r.y_exact)) < 3e-11
+    assert abs(r.length - 1.5) < 1e-12
+    assert abs(r.multiplier - r.multiplier_exact) < 2e-11
+
+
 def test_catenary_lower_energy_than_other_chains_of_same_length():
     r = V.catenary(0.0, 2.0, 3.0, n=100)
     rng = np.random.default_rng(2)
@@ -946,6 +957,21 @@ def test_a_maximum_is_not_reported_as_a_minimum():
     # the minimum of its negative is the same line
     r = V.minimize_functional(lambda x, y, yp: yp * yp, (0.0, 1.0), (0.0, 1.0), 200)
     assert abs(r.value - 1.0) < 1e-12 and np.max(np.abs(r.y - r.x)) < 1e-12
+
+
+def test_a_newton_step_without_decrease_is_not_taken():
+    """The line search takes a step only where J decreases (Armijo's sufficient
+    decrease).  Arc length on [0, 4] (n = 4, h = 1) from the zigzag guess
+    y = (0, c, 0, -c, 0): the symmetries y -> -y and x -> 4 - x keep Newton on
+    this family, where J = 4 sqrt(1 + c^2) and Newton's step is c -> -c^3.  From
+    c = 1 it lands on c = -1 with the same J: that step is refused, the halved one
+    lands on c = 0, the straight line, and the next iteration ends there.  Taking
+    the step without decrease swings between c = 1 and -1 (25 iterations)."""
+    F = lambda x, y, yp: np.sqrt(1 + yp * yp)
+    r = V.minimize_functional(F, (0.0, 4.0), (0.0, 0.0), 4, guess=[0.0, 1.0, 0.0, -1.0, 0.0],
+                              max_iter=6)
+    assert r.iterations <= 3   # the refused step, the exact halved one, the check there
+    assert np.abs(r.y).max() < 1e-12 and abs(r.value - 4.0) < 1e-12
 
 
 # ---- budgets and Ctrl-C ---------------------------------------------------------------------

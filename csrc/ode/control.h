@@ -89,14 +89,21 @@ static inline double mp_ode_step_span(int adaptive, double t, double h, double t
     return h;
 }
 
-/* Contract: 1 when an adaptive step h at t is too small to advance t (the
- * step-size floor: the solve ends with MP_ESTEP, or MP_ENONFINITE when the
- * steps shrank because trial stages were not finite).  Not asked of the last
- * step (mp_ode_step_span's *last), which lands on tf however short the rest
- * of the span: a span of a few ulps of t0 is solved, as in SciPy. */
-static inline int mp_ode_step_floor(double t, double h)
+/* Contract: the step-size floor for an adaptive step h planned at t (16 eps
+ * |t|, below which t + h does not advance t reliably; SciPy's is 10 ulps).  A
+ * step below it that is not the retry of a rejected step (a first_step, an
+ * accepted step's proposal) is raised to it, as SciPy raises it, unless
+ * max_step hmax is below the floor too (SciPy's max_step wins).  Returns 1
+ * when the step stays below it: the solve ends with MP_ESTEP, or MP_ENONFINITE
+ * when the steps shrank because trial stages were not finite.  The caller
+ * asks this before mp_ode_step_span and ends the solve only when the step is
+ * not the last (*last), which lands on tf however short the rest of the span:
+ * a span of a few ulps of t0 is solved, as in SciPy. */
+static inline int mp_ode_step_floor(const mp_ode_ctl *c, double t, double hmax, double *h)
 {
-    return h <= 16.0 * DBL_EPSILON * fmax(fabs(t), 1e-300);
+    double hmin = 16.0 * DBL_EPSILON * fmax(fabs(t), 1e-300);
+    if (*h < hmin && !c->rejected && hmin <= hmax) *h = hmin;
+    return *h < hmin;
 }
 
 /* Hairer's RMS error norm sqrt(mean((e_i / (atol_i + rtol_i max(|y0_i|,

@@ -850,8 +850,11 @@ static int run_loop(ode_run *s)
             break;
         s->attempts++;
         int last, controlled = cur->adaptive && !cur->self_controlled;
+        /* a step below the floor is raised (radau's too: it never steps past what is
+         * asked); a retry below it ends the solve, radau's within its own step */
+        int below = cur->adaptive && mp_ode_step_floor(&s->c, t, o->max_step, &h);
         h = mp_ode_step_span(cur->adaptive, t, h, s->tf, &last);
-        if (controlled && !last && mp_ode_step_floor(t, h)) { /* the last lands on tf */
+        if (below && controlled && !last) { /* the last lands on tf */
             rc = s->c.nonfinite ? MP_ENONFINITE : MP_ESTEP;
             break;
         }

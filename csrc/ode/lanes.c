@@ -696,8 +696,9 @@ static void lane_attempt(lane_group *g)
             continue;
         }
         g->attempts[l]++;
+        int below = g->adaptive && mp_ode_step_floor(&g->ctl[l], g->t[l], g->o->max_step, &g->h[l]);
         g->h[l] = mp_ode_step_span(g->adaptive, g->t[l], g->h[l], g->sf, &last[l]);
-        if (g->adaptive && !last[l] && mp_ode_step_floor(g->t[l], g->h[l])) {
+        if (below && !last[l]) {
             on[l] = 0;
             lane_end(g, l, g->ctl[l].nonfinite ? MP_ENONFINITE : MP_ESTEP);
         }
