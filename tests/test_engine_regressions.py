@@ -434,6 +434,31 @@ def test_a_rejected_step_below_the_floor_ends_the_solve():
         assert abs(s.t[-1] - 1) < 1e-8 and s.y[0, -1] > 1e7
 
 
+@pytest.mark.parametrize("n", [4, 7, 15, 16])
+def test_implicit_newton_on_a_linear_system_converges_at_once(n):
+    # y' = A y, A = V D V^-1 with rates 1 to 1e4 in a non-normal basis whose Newton
+    # matrices need row interchanges. With the exact Jacobian the Newton matrix is exact
+    # (radau keeps h with its LU), so each pass solves the stage equations to round-off:
+    # radau takes 1.4-1.6 passes a step (a pass, and at times one more to see it
+    # converged), gauss4 2.5-3.4; a wrong linear solve (a row interchange left out: 4.5
+    # to 5.2 passes and hundreds of rejections, or no convergence) still ends close to
+    # exp(A t) y0, so the passes are the witness. Sizes on both sides of the LU solves'
+    # switch from substitutions by hand to LAPACK's at 16 (gauss4's system is 2n).
+    from scipy.linalg import expm
+    rng = np.random.default_rng(n)
+    V = rng.standard_normal((n, n)) + 3 * np.eye(n)[rng.permutation(n)]
+    A = V @ np.diag(-np.logspace(0, 4, n)) @ np.linalg.inv(V)
+    y0 = rng.standard_normal(n)
+    exact = expm(0.5 * A) @ y0
+    f = lambda t, y: A @ y
+    r = mp.solve(f, (0, 0.5), y0, method="radau", jac=A, rtol=1e-10, atol=1e-12)
+    assert (r.nfev - r.nsteps) / (3 * r.nsteps) < 2.0      # measured 1.41-1.60
+    assert np.abs(r.y[:, -1] - exact).max() < 3e-12          # measured 2.6e-13
+    g = mp.solve(f, (0, 0.5), y0, method="gauss4", jac=A, h=0.5 / 500)
+    assert g.nfev / (2 * g.nsteps) < 4.0                     # measured 2.54-3.40
+    assert np.abs(g.y[:, -1] - exact).max() < 1.5e-11        # measured 1.4e-12
+
+
 def test_backward_refused_for_forward_only_methods():
     with pytest.raises(ValueError, match="forwards in time"):
         mp.solve(mp.scenes.Pendulum(), (1, 0), [1.0, 0.0], method="verlet", h=0.01)

@@ -3,6 +3,7 @@
  * separable systems q'' = a(t, q), and the two-stage Gauss-Legendre method
  * (order 4, implicit, symplectic, keeps quadratic invariants). */
 #include "ode/ode.h"
+#include "ode/lu.h"
 #include "ode/fixed.h"
 
 #include <float.h>
@@ -140,8 +141,6 @@ static int gl_stage(mp_ode_ws *w, double t, const double *Y, double *K)
 
 /* LAPACK (Fortran calling convention) */
 extern void dgetrf_(const int *m, const int *n, double *a, const int *lda, int *ipiv, int *info);
-extern void dgetrs_(const char *trans, const int *n, const int *nrhs, const double *a,
-                    const int *lda, const int *ipiv, double *b, const int *ldb, int *info);
 
 typedef struct {
     int n2;            /* 2n: the size of the Newton system */
@@ -233,8 +232,7 @@ static int gauss4_newton(mp_ode_ws *w, double t, double h)
             for (size_t i = 0; i < n; i++)
                 st->dZ[s * n + i] = h * (gl_a[s][0] * st->F[i] + gl_a[s][1] * st->F[n + i]) -
                                     st->Z[s * n + i];
-        int one = 1, info = 0;
-        dgetrs_("N", &st->n2, &one, st->M, &st->n2, st->piv, st->dZ, &st->n2, &info);
+        mp_ode_getrs(st->n2, st->M, st->piv, st->dZ);
         /* the change of the stages against the size of the state as a whole:
          * a component passing through zero must not demand relative round-off */
         double d = 0.0;
