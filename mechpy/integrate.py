@@ -199,8 +199,9 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
     h : float
         Step of fixed-step methods.
     first_step, max_step : float
-        Initial step (default: Hairer's estimate; at most ``|tf - t0|``) and
-        largest step.
+        Initial step (default: Hairer's estimate; at most ``|tf - t0|``; one
+        below the step floor, 16 eps |t0|, is raised to it, as SciPy raises
+        it) and largest step.
     max_steps : int
         Budget of attempted steps; when it runs out the solve ends with
         ``status = -1``.
