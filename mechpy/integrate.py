@@ -28,6 +28,7 @@ from ._system import (SCIPY_METHODS, SecondOrder, _as_args, _catch_unraisable,  
                       _ensemble_params, _events_spec, _method_names, _python_fun,
                       _rigid_split_check, _system_spec, _watch_list, methods)
 from ._validate import as_array, as_int, as_scalar
+from .errors import SingularityError
 
 __all__ = ["solve", "solve_many", "methods", "Solution", "EnsembleSolution", "DenseOutput",
            "SecondOrder"]
@@ -303,8 +304,11 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
                          "to end the solve (events with terminal = True)")
     errors = _errors_mode(errors)
     check = getattr(system, "_check_initial", None)   # e.g. constraints a scene imposes
-    if check is not None and n:   # a singular state is the solve's to report (errors="status")
-        check(t0, y0a, singular=errors != "status")
+    if check is not None and n:
+        # a singular mass matrix at y0 is the solve's first evaluation's to find
+        # (its error is raised below as the check raises it, naming the
+        # matrix; errors="status" reports it); without a step, the check's
+        check(t0, y0a, singular=t0 == tf and errors != "status")
     if t0 == tf or n == 0:
         return _no_step(t0, tf, y0a, tev, dense_output, evs)
 
@@ -318,6 +322,8 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
             r = _core.ode_solve(*call)
     code, message, t, y, nfev, njev, nlu, nsteps, nreject, dense, events_out, backward = r
     if code and _raises(code, errors):
+        if check is not None and _STATUS[code]["exception"] is SingularityError:
+            check(t0, y0a)   # singular at y0 itself: the check's error, naming the matrix
         raise _status_error(code, "solve", message)
     status = _STATUS[code]["solve_status"]
     sol = None
@@ -362,6 +368,8 @@ def _one_column(fun):
 
 
 def _is_complex(y0) -> bool:
+    if type(y0) is np.ndarray:
+        return y0.dtype.kind == "c"
     if isinstance(y0, (str, bytes)) or y0 is None:
         return False
     try:

@@ -92,49 +92,178 @@ static MP_INLINE void mp_lu_solve_n(const double *LU, int n, const int *piv,
 
 #: Mass-matrix systems of this size or smaller (NA = coordinates +
 #: constraints) are solved in closed form by a Lagrangian system's mp_gen_rhs
-#: (:func:`_closed_solver`, A and b printed as one block so that they share
-#: their common subexpressions, sin and cos of one angle becoming one sincos);
-#: larger ones by mp_lu.  The Jacobian, the multipliers and the constraint
-#: forces keep mp_lu's factors at every size.  The double pendulum's
-#: evaluation took 272 instructions for the solve and its call (valgrind)
-#: through mp_lu, against the Fortran of the same equations' 134.
+#: (:func:`_closed_rhs`: A z = b by the blocks of A, each by its adjugate, A,
+#: b and the solution printed as one block, so that they share their common
+#: subexpressions and sin and cos of one angle become one sincos); larger ones
+#: by mp_lu.  The Jacobian, the multipliers and the constraint forces keep
+#: mp_lu's factors at every size.  The double pendulum's evaluation took 272
+#: instructions for the solve and its call (valgrind) through mp_lu, against
+#: the Fortran of the same equations' 134.
 CLOSED_MAX = 3
 
-def _closed_solver(A) -> str:
-    """mp_closed_solve for the NA x NA mass matrix A (NA = 2 or 3; its entries as
-    printed, row-major): z = adj(A) b / det(A), the adjugate and determinant
-    expanded with SymPy over the entries that are not identically zero (a term
-    with a zero factor is not printed: 0 * x is not folded by the compiler,
-    which keeps NaN semantics)."""
-    na = int(round(len(A) ** 0.5))
-    nz = [not (sp.sympify(e) == 0) for e in A]
-    a = sp.Matrix(na, na, [sp.Symbol(f"A[{k}]") if nz[k] else sp.S.Zero
-                           for k in range(na * na)])
-    adj = a.adjugate()
-    det = sp.expand(sum(a[0, j] * adj[j, 0] for j in range(na)))
-    pr = _Printer()
-    b = [sp.Symbol(f"b[{i}]") for i in range(na)]
-    z = [pr.doprint(sp.Add(*[sp.expand(adj[i, j]) * b[j] for j in range(na)]))
-         for i in range(na)]
-    asum = " + ".join(f"fabs(A[{k}])" for k in range(na * na) if nz[k]) or "0.0"
-    lines = "\n".join(f"    z[{i}] = ({zi}) * r;" for i, zi in enumerate(z))
-    return rf"""
-/* z = A^-1 b for the NA x NA row-major A by its adjugate, z = adj(A) b / det(A)
- * (the entries of A that are identically zero left out).  Returns 0, or 1
- * without writing z when det(A) is not clearly away from 0 and from overflow
- * (|det| <= NA eps (sum |A_ij|)^NA, a NaN or inf in A, which the sum carries):
- * the caller then solves by mp_lu, whose pivoting and statuses (MP_ENONFINITE,
- * MP_ESINGULAR) decide, as for every larger system. */
-static MP_INLINE int mp_closed_solve(const double *A, const double *b, double *z)
-{{
-    const double det = {pr.doprint(det)};
-    const double asum = {asum};
-    const double tol = NA * DBL_EPSILON * {" * ".join(["asum"] * na)};
-    if (!(fabs(det) > tol && fabs(det) > DBL_MIN && fabs(det) <= DBL_MAX)) return 1;
-    const double r = 1.0 / det;
-{lines}
-    return 0;
-}}
+#: A block of A whose entries and right-hand side hold more operations than
+#: this is not solved symbolically (the expansions and SymPy's cancel grow
+#: with their size): its adjugate is evaluated from the entries' values.  The
+#: spherical pendulum's blocks hold 15, the heavy top's 39 and 20, the double
+#: pendulum's 41 (its entries' form is the cheaper); the triple pendulum's 205,
+#: whose symbolic form took 0.9 s of a first build to lose to the entries'.
+CLOSED_SYMBOLIC_OPS = 100
+
+
+def _components(A, na):
+    """The diagonal blocks of the na x na SymPy matrix A: index lists of the
+    connected components of its pattern of entries not identically zero."""
+    root = list(range(na))
+
+    def find(i):
+        while root[i] != i:
+            i = root[i]
+        return i
+    for i in range(na):
+        for j in range(na):
+            if not (A[i, j] == 0):
+                root[find(i)] = find(j)
+    out = {}
+    for i in range(na):
+        out.setdefault(find(i), []).append(i)
+    return list(out.values())
+
+
+def _ops(text: str) -> int:
+    """Arithmetic operations and calls in printed C (the cost compared)."""
+    return sum(text.count(c) for c in "+*/(")
+
+
+def _closed_rhs(ir) -> str | None:
+    """mp_gen_rhs for NA <= CLOSED_MAX as one block, or None (not printable).
+
+    A z = b is solved by the diagonal blocks of A (:func:`_components`), each
+    block by z = adj(A) b / det(A) in one of two forms, the one with fewer
+    operations after common subexpressions: the adjugate and determinant
+    expanded over the entries' values (the entries identically zero left out:
+    0 * x is not folded by the compiler, which keeps NaN semantics), or the
+    same solved symbolically, numerators and determinant expanded and each
+    quotient reduced by SymPy's cancel (a factor common to the forcing and the
+    determinant divides out: the spherical pendulum's theta'' needs no
+    mass-matrix term, the heavy top's determinant is I1 I3 sin^2 theta instead
+    of a difference that cancels).  Only the coordinates' rows of z are
+    computed (the multipliers are not part of the state).  Each block's
+    determinant is tested as mp_closed_solve tested the whole one: when it is
+    not clearly away from 0 and from overflow (|det| <= k eps (sum |A_ij|)^k
+    for a k x k block, or a NaN or inf in the block, which the sum carries),
+    gen_rhs_lu solves by mp_lu, whose pivoting and statuses (MP_ENONFINITE,
+    MP_ESINGULAR) decide, as for every larger system."""
+    B = ir.blocks
+    na, nc = ir.nc + ir.k, ir.nc
+    A = sp.Matrix(na, na, [sp.sympify(e) for e in B["A"]])
+    b = [sp.sympify(e) for e in B["b"]]
+    comps = _components(A, na)
+    entry = {(i, j): sp.Symbol(f"mp_a{i * na + j}") for i in range(na) for j in range(na)
+             if not (A[i, j] == 0)}
+    bsym = [sp.Symbol(f"mp_b{i}") for i in range(na)]
+    names = {ir.T: "t"}
+    for i, p in enumerate(ir.P):
+        names[p] = f"mp_p{i}"
+
+    def form(symbolic):
+        """[(name, expression)] for the entries, determinants and z of every
+        block; None where the symbolic form is not tried."""
+        outs = []
+        for c, blk in enumerate(comps):
+            sub = A.extract(blk, blk)
+            if symbolic:
+                if sum(sp.count_ops(e) for e in list(sub) + [b[i] for i in blk]) \
+                        > CLOSED_SYMBOLIC_OPS:
+                    return None
+                M, rhs = sub, [b[i] for i in blk]
+            else:
+                M = sp.Matrix(len(blk), len(blk), lambda r, s: entry.get((blk[r], blk[s]),
+                                                                         sp.S.Zero))
+                rhs = [bsym[i] for i in blk]
+            det = sp.expand(M.det(method="berkowitz")) if len(blk) > 1 else M[0, 0]
+            adj = M.adjugate() if len(blk) > 1 else sp.Matrix([[1]])
+            outs.append((f"mp_d{c}", det))
+            for r, i in enumerate(blk):
+                if i >= nc:
+                    continue
+                num = sp.expand(sum(adj[r, s] * rhs[s] for s in range(len(blk))))
+                outs.append((f"mp_z{i}", sp.cancel(num / det) if symbolic else num / det))
+        return outs
+
+    best = None
+    for symbolic in (False, True):
+        outs = form(symbolic)
+        if outs is None:
+            continue
+        # the entries first: the determinant tests read them (their sums)
+        exprs = [(s.name, A[i, j]) for (i, j), s in entry.items()]
+        if not symbolic:
+            exprs += [(bsym[i].name, b[i]) for i in range(na)]
+        exprs += outs
+        em = _Emitter(names, ir.P)
+        for _, e in exprs:
+            em.scan(e)
+        try:
+            for n, e in exprs:   # each after the temporaries it needs
+                em.lines.append(f"    const double {n} = {em.expr(e)};")
+        except _Unprintable:
+            if not symbolic:
+                return None
+            continue
+        text = "\n".join(em.lines)
+        if best is None or _ops(text) < _ops(best):
+            best = text
+    checks = []
+    for c, blk in enumerate(comps):
+        asum = " + ".join(f"fabs({entry[i, j].name})" for i in blk for j in blk
+                          if (i, j) in entry) or "0.0"
+        checks.append(f"mp_closed_ok(mp_d{c}, {asum}, {len(blk)})")
+    used = set(re.findall(r"\bmp_[yp]\d+\b", best))
+    loads = [f"    const double mp_y{i} = y[{i}];" for i in range(ir.n) if f"mp_y{i}" in used]
+    loads += [f"    const double mp_p{i} = p[{i}];" for i in range(len(ir.P))
+              if f"mp_p{i}" in used]
+    stores = [f"    dydt[{i}] = " + (f"mp_y{nc + i};" if f"mp_y{nc + i}" in used
+                                       else f"y[{nc + i}];") for i in range(nc)]
+    stores += [f"    dydt[{nc + i}] = mp_z{i};" for i in range(nc)]
+    return r"""
+/* Whether det, the determinant of a k x k block of A whose entries' absolute
+ * values sum to asum, is clearly away from 0 and from overflow:
+ * |det| > k eps asum^k and DBL_MIN < |det| <= DBL_MAX (false for a NaN). */
+static MP_INLINE int mp_closed_ok(double det, double asum, int k)
+{
+    double tol = k * DBL_EPSILON;
+    for (int i = 0; i < k; i++) tol *= asum;
+    const double d = fabs(det);
+    return d > tol && d > DBL_MIN && d <= DBL_MAX;
+}
+
+/* dy/dt by gen_solve's LU: where the closed form declines. */
+static int gen_rhs_lu(double t, const double *y, double *dydt, const double *p)
+{
+    double A0[NA * NA], LU[NA * NA], dinv[NA], z[NA];
+    int piv[NA];
+    int rc = gen_solve(t, y, p, A0, LU, piv, dinv, z);
+    if (rc != MP_OK) return rc;
+    for (int i = 0; i < NC; i++) {
+        dydt[i] = y[NC + i];
+        dydt[NC + i] = z[i];
+    }
+    return MP_OK;
+}
+
+/* dy/dt = (q', q'') at (t, y); params: the parameter vector.  A z = b in
+ * closed form by the blocks of A (codegen._closed_rhs), by gen_rhs_lu where
+ * a block's determinant test declines. */
+int mp_gen_rhs(double t, const double *y, double *dydt, void *params)
+{
+    const double *p = (const double *)params;
+""" + "\n".join(loads + [best]) + f"""
+    if (!({' && '.join(checks)}))
+        return gen_rhs_lu(t, y, dydt, p);
+""" + "\n".join(stores) + """
+    (void)t;
+    return MP_OK;
+}
 """
 
 
@@ -715,7 +844,7 @@ _ARGS = "double t, const double *y, const double *p, double *out"
 _ARGS_Z = "double t, const double *y, const double *p, const double *z, double *out"
 
 
-#: A Lagrangian system's mp_gen_rhs: by mp_lu, or in closed form (NA <= CLOSED_MAX).
+#: A Lagrangian system's mp_gen_rhs by mp_lu (NA > CLOSED_MAX; else _closed_rhs).
 _RHS_LU = r"""
 /* dy/dt = (q', q'') at (t, y); params: the parameter vector. */
 int mp_gen_rhs(double t, const double *y, double *dydt, void *params)
@@ -724,28 +853,6 @@ int mp_gen_rhs(double t, const double *y, double *dydt, void *params)
     int piv[NA];
     int rc = gen_solve(t, y, (const double *)params, A0, LU, piv, dinv, z);
     if (rc != MP_OK) return rc;
-    for (int i = 0; i < NC; i++) {
-        dydt[i] = y[NC + i];
-        dydt[NC + i] = z[i];
-    }
-    return MP_OK;
-}
-"""
-_RHS_CLOSED = r"""
-/* dy/dt = (q', q'') at (t, y); params: the parameter vector.  A z = b in
- * closed form (mp_closed_solve), by mp_lu where that declines. */
-int mp_gen_rhs(double t, const double *y, double *dydt, void *params)
-{
-    double Ab[NA * NA + NA], z[NA];
-    gen_Ab(t, y, (const double *)params, Ab);
-    if (mp_closed_solve(Ab, Ab + NA * NA, z) != 0) {
-        double dinv[NA];
-        int piv[NA];
-        for (int i = 0; i < NA; i++) z[i] = Ab[NA * NA + i];
-        int rc = mp_lu(Ab, piv, dinv);
-        if (rc != MP_OK) return rc;
-        mp_lu_solve(Ab, piv, dinv, z);
-    }
     for (int i = 0; i < NC; i++) {
         dydt[i] = y[NC + i];
         dydt[NC + i] = z[i];
@@ -763,18 +870,14 @@ def _lagrangian_source(ir, status):
               _block("gen_energy", B["energy"], ir, _ARGS, "the energy"),
               _block("gen_momenta", B["momenta"], ir, _ARGS, "the momenta"),
               _block("gen_lag", B["lag"], ir, _ARGS, "L")]
-    closed = 2 <= n + k <= CLOSED_MAX
-    if closed:
-        # A and b as one block: their common subexpressions computed once
-        blocks.append(_block("gen_Ab", list(B["A"]) + list(B["b"]), ir, _ARGS,
-                             "the mass matrix (row-major), then the right-hand side"))
+    rhs = _closed_rhs(ir) if n + k <= CLOSED_MAX else None
     jac = _block("gen_D", B["D"], ir, _ARGS_Z, "the Jacobian", static=False)
     if len(jac) + sum(map(len, blocks)) > SPLIT:
         # the Jacobian's block compiles beside the rest (see build.units)
         parts = [_header(ir, status), "#if defined(__GNUC__)\n#define MP_HIDDEN "
                  "__attribute__((visibility(\"hidden\")))\n#else\n#define MP_HIDDEN\n#endif\n"
                  f"MP_HIDDEN void gen_D({_ARGS_Z});", build.UNIT, _dims(ir),
-                 RUNTIME] + ([_closed_solver(B["A"])] if closed else []) + blocks
+                 RUNTIME] + blocks
         # and so does the lane rhs
         lanes = _lanes_lagrangian(ir)
         tail = [build.UNIT, jac] + ([build.UNIT, lanes] if lanes else [])
@@ -782,7 +885,7 @@ def _lagrangian_source(ir, status):
         lanes = None
         parts = [_header(ir, status), _dims(ir), RUNTIME, jac.replace("\nvoid gen_D(",
                                                                         "\nstatic void gen_D(")]
-        parts += ([_closed_solver(B["A"])] if closed else []) + blocks
+        parts += blocks
         tail = []
     parts.append(r"""
 /* Solve A z = b at (t, y): z = (q'', -lambda).  A0 receives A before the
@@ -812,7 +915,7 @@ static inline int gen_solve(double t, const double *y, const double *p, double *
 }
 
 """)
-    parts.append(_RHS_CLOSED if closed else _RHS_LU)
+    parts.append(_RHS_LU if rhs is None else rhs)
     parts.append(r"""
 /* Row-major NS x NS Jacobian of mp_gen_rhs: d q''/d(q, q') = first NC rows of
  * A^-1 D with D = [db/dq - (dA/dq) z, db/dq' - (dA/dq') z]. */

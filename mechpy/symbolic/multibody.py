@@ -566,6 +566,9 @@ class MechanicsScene(CompiledScene):
         raise ValueError(f"project: the constraints did not converge from y = {list(y)} "
                          f"(residuals {list(g)})")
 
+    def _constrained(self) -> bool:
+        return bool(self._info["nres"])
+
     def _check_rows(self, t0, Y, vec, first, many, tol, singular=True):
         nres = self._info["nres"]
         if nres:

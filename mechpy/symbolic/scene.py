@@ -304,6 +304,8 @@ class CompiledScene(Scene):
         mass matrix is singular there (``singular=False``: the solve reports
         it, as a status under ``errors="status"``).  One C evaluation per
         function (per row with params)."""
+        if not (singular or self._constrained()):
+            return
         Y = np.ascontiguousarray(y0.reshape(-1, self._dim))
         if params is None:
             vecs = [(self._vec, slice(None))]
@@ -315,6 +317,10 @@ class CompiledScene(Scene):
                     for i in range(Y.shape[0])]
         for vec, rows in vecs:
             self._check_rows(t0, Y[rows], vec, rows.start or 0, y0.ndim > 1, tol, singular)
+
+    def _constrained(self) -> bool:
+        """Whether an initial state has constraints to meet (_check_rows)."""
+        return bool(self._k)
 
     def _check_rows(self, t0, Y, vec, first, many, tol, singular=True):
         if self._k:
