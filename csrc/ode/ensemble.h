@@ -55,7 +55,7 @@ typedef struct mp_ode_ensemble {
     const struct mp_rigid_torque *torque; /* a RigidBody scene's C torque (NULL: none) */
     mp_lane_rhs lane_rhs;                 /* a compiled system's lane rhs (NULL: none) */
     int holds_python;                     /* a trajectory calls Python: no lanes, one thread */
-    const mp_impact *impacts;        /* the events, when they are all impacts (or NULL) */
+    const mp_impact *impacts;             /* the events, when they are all impacts (or NULL) */
     size_t n_impacts;
     int want_lanes;                       /* -1 when possible, 0 never, 1 always */
     /* out */

@@ -139,9 +139,6 @@ static int gl_stage(mp_ode_ws *w, double t, const double *Y, double *K)
     return rc == MP_ENONFINITE ? MP_ENOCONV : rc;
 }
 
-/* LAPACK (Fortran calling convention) */
-extern void dgetrf_(const int *m, const int *n, double *a, const int *lda, int *ipiv, int *info);
-
 typedef struct {
     int n2;            /* 2n: the size of the Newton system */
     double *J;         /* n x n, row-major: df/dy at the start of a step */

@@ -21,7 +21,11 @@
 
 #define MP_ODE_LU_SMALL 16 /* by hand below this size, by LAPACK from it */
 
-/* LAPACK (Fortran calling convention) */
+/* LAPACK (Fortran calling convention): the factorisations radau and gauss4
+ * call, and the solves below for MP_ODE_LU_SMALL and larger */
+extern void dgetrf_(const int *m, const int *n, double *a, const int *lda, int *ipiv, int *info);
+extern void zgetrf_(const int *m, const int *n, double complex *a, const int *lda, int *ipiv,
+                    int *info);
 extern void dgetrs_(const char *trans, const int *n, const int *nrhs, const double *a,
                     const int *lda, const int *ipiv, double *b, const int *ldb, int *info);
 extern void zgetrs_(const char *trans, const int *n, const int *nrhs, const double complex *a,

@@ -41,11 +41,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* LAPACK (Fortran calling convention) */
-extern void dgetrf_(const int *m, const int *n, double *a, const int *lda, int *ipiv, int *info);
-extern void zgetrf_(const int *m, const int *n, double complex *a, const int *lda, int *ipiv,
-                    int *info);
-
 #define S6 2.449489742783178098197284
 #define NEWTON_MAXITER 7 /* RADAU5's NIT */
 #define MIN_FACTOR 0.2

@@ -102,7 +102,6 @@ static int py_jac(double t, const double *y, double *J, void *data)
     return py_call(&((const py_with_jac *)data)->jac, t, y, J);
 }
 
-
 /* The event functions of one solve (one trajectory): per event a Python
  * function g(t, y, *args) (fns[k].fun) or a C impact (fns[k].fun NULL:
  * imp[k]), and per event its action: a Python callable action(t, y, *args)
@@ -1030,7 +1029,7 @@ typedef struct {
     py_watched *watched;
     size_t nimp;
     mp_ode_result *results; /* with events: each trajectory's whole result */
-    mp_impact *imps;   /* the events as the lanes run them (all impacts), or NULL */
+    mp_impact *imps;        /* the events as the lanes run them (all impacts), or NULL */
     PyArrayObject **imp_e;  /* ... their per-trajectory restitutions (owned) */
 } many_adapters;
 
