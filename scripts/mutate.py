@@ -485,6 +485,7 @@ def _run_edits(tree, edits, log, only_tests=None):
         if old not in lines[no]:
             sys.exit(f"mutate: --edit {e!r}: {old!r} is not on line {no + 1} of {path}: "
                      f"{lines[no].strip()!r}")
+        before = lines[no]
         lines[no] = lines[no].replace(old, new, 1)
         f.write_text("".join(lines))
         try:
@@ -501,7 +502,8 @@ def _run_edits(tree, edits, log, only_tests=None):
                 tree.build()
         status = "survived" if rc == 0 else "killed"
         rows.append({"id": e, "file": path, "line": no + 1, "kind": "edit", "status": status,
-                     "exit": rc, "seconds": round(secs, 1), "before": lines[no].strip()})
+                     "exit": rc, "seconds": round(secs, 1), "before": before.strip(),
+                     "after": lines[no].strip()})
         log(f"   {status:8s} ({name}, {secs:.0f} s) {e}")
     return rows
 

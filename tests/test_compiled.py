@@ -1508,3 +1508,67 @@ def test_closed_form_keeps_its_precision_near_a_singular_configuration(theta):
     # measured: at most 2.1e-16 relative at every theta (from the entries: 2e-5
     # at theta = 1e-6)
     assert np.max(np.abs(got - want) / np.abs(want)) < 2e-15
+
+
+@pytest.mark.parametrize("n, coupled", [
+    (1, ()), (2, ()), (2, ((0, 1),)), (3, ()), (3, ((0, 1),)), (3, ((0, 2),)),
+    (3, ((1, 2),)), (3, ((0, 1), (1, 2))), (3, ((0, 1), (0, 2), (1, 2)))])
+@pytest.mark.parametrize("symbolic_ops", [None, 0])
+def test_closed_form_by_blocks_against_sympy(n, coupled, symbolic_ops, monkeypatch, tmp_path):
+    """Mass matrices that split into every pattern of diagonal blocks up to
+    3 x 3 (entries that depend on the coordinates and on a parameter, a
+    potential that couples the blocks): the closed form, block by block,
+    equals SymPy's Euler-Lagrange equations solved by NumPy at random states,
+    with the cheaper of its two forms and (CLOSED_SYMBOLIC_OPS = 0) with the
+    entries' form alone."""
+    if symbolic_ops is not None:
+        from mechpy.symbolic import codegen
+        monkeypatch.setattr(codegen, "CLOSED_SYMBOLIC_OPS", symbolic_ops)
+        monkeypatch.setenv("MECHPY_CACHE_DIR", str(tmp_path))
+    q = mp.coordinates(" ".join(f"q{i}" for i in range(n)))
+    q = list(q) if n > 1 else [q[0]]
+    m0 = sp.Symbol("m0")
+    M = sp.zeros(n, n)
+    for i in range(n):
+        M[i, i] = (m0 if i == 0 else 1 + i / 2) * (1 + sp.Rational(3, 10)
+                                                   * sp.sin(q[(i + 1) % n]) ** 2)
+    for i, j in coupled:
+        M[i, j] = M[j, i] = sp.Rational(1, 5) * sp.cos(q[i] - q[j])
+    qd = sp.Matrix([qi.diff(t) for qi in q])
+    V = sum((i + 1) * (1 - sp.cos(qi)) for i, qi in enumerate(q)) + q[0] * q[-1] / 10
+    L = (qd.T * M * qd)[0, 0] / 2 - V
+    vals = {"m0": 1.3}
+    s = mp.lagrangian(L, q, params=vals)
+    assert _uses_closed(s)
+    ref = _sympy_rhs(L, q, vals)
+    rng = np.random.default_rng(7 * n + len(coupled))
+    worst = 0.0
+    for _ in range(10):
+        y = rng.uniform(-2, 2, 2 * n)
+        want = ref(y)
+        worst = max(worst, np.max(np.abs(s.rhs(0.0, y) - want)) / np.max(np.abs(want)))
+    # measured: at most 8.3e-16
+    assert worst < 4e-15
+
+
+def test_a_mass_matrix_singular_up_to_rounding_is_refused():
+    """M = 1000 [[49, 1], [1, a]] with a = fl(1/49) is singular but for
+    rounding: its determinant comes out as 1e6 (49 a - 1) = -1.1e-10, not 0.
+    The closed form must hand over to LU (which finds the pivot below its
+    tolerance) and raise, never return the quotient by that rounding error
+    (accelerations of order 1e13)."""
+    x, y = mp.coordinates("x y")
+    a = sp.Symbol("a")
+    L = 500 * (49 * x.diff(t) ** 2 + 2 * x.diff(t) * y.diff(t) + a * y.diff(t) ** 2) \
+        - (x ** 2 + y ** 2) / 2
+    s = mp.lagrangian(L, [x, y], params={"a": 1 / 49})
+    assert _uses_closed(s)
+    assert 49 * (1 / 49) - 1 != 0
+    with pytest.raises(mp.SingularityError, match="mass matrix"):
+        s.rhs(0.0, [0.3, 0.2, 0.0, 0.0])
+    with pytest.raises(mp.SingularityError, match="mass matrix"):
+        mp.solve(s, (0, 1), [0.3, 0.2, 0.0, 0.0])
+    # a regular neighbour (a = 2/49) is solved, by the same closed form
+    r = s.replace(a=2 / 49)
+    want = np.linalg.solve(1000 * np.array([[49, 1], [1, 2 / 49]]), [-0.3, -0.2])
+    assert np.allclose(r.rhs(0.0, [0.3, 0.2, 0.0, 0.0])[2:], want, rtol=1e-13, atol=0)
