@@ -113,7 +113,7 @@ static inline double mp_ode_rms_norm(const mp_ode_options *o, size_t n, size_t s
 {
     double sum = 0.0;
     for (size_t i = 0; i < n; i++) {
-        double sc = o->atol[i] + o->rtolv[i] * fmax(fabs(y0[i * s]), fabs(y1[i * s]));
+        double sc = o->atol[i] + o->rtolv[i] * mp_ode_absmax(y0[i * s], y1[i * s]);
         double q = e[i * s] / sc;
         sum += q * q;
     }

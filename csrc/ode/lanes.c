@@ -442,10 +442,7 @@ static void dop853_lanes(lane_group *g, int *on, int *rc, double *err, double *r
         lane_dot(mp_dop853_e5, K, 12, c * W, e5);
         lane_dot(mp_dop853_e3, K, 12, c * W, e3);
         MP_LANE_LOOP {
-            /* fmax(|y|, |y1|) as a select (fmax is a call the loop cannot
-             * vectorise): the same value, y being finite in a running lane */
-            double a0 = fabs(y[l]), a1 = fabs(y1[l]);
-            double sk = at + rtol * (a1 > a0 ? a1 : a0);
+            double sk = at + rtol * mp_ode_absmax(y[l], y1[l]); /* y finite in a running lane */
             double r = 1.0 / sk, q5 = e5[l] * r, q3 = e3[l] * r;
             e5s[l] += q5 * q5;
             e3s[l] += q3 * q3;

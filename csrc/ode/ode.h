@@ -321,6 +321,17 @@ static inline int mp_ode_ws_eval(double t, const double *y, double *dydt, void *
 int mp_ode_ws_jac(mp_ode_ws *w, double t, const double *y, const double *f0, double *jac,
                   double *scratch_y, double *scratch_f);
 
+/* max(|a|, |b|) as a select, for the error weights atol + rtol max(|y0|, |y1|):
+ * fmax's value wherever a (the step's start, finite) is not NaN, without
+ * fmax's library call, which the error loops can neither inline nor
+ * vectorise. */
+static inline double mp_ode_absmax(double a, double b)
+{
+    a = fabs(a);
+    b = fabs(b);
+    return b > a ? b : a;
+}
+
 /* Hairer's RMS error norm: sqrt(mean((e_i / (atol_i + rtol_i max(|y0_i|, |y1_i|)))^2)). */
 double mp_ode_err_norm(const mp_ode_ws *w, const double *e, const double *y0, const double *y1);
 

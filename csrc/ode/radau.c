@@ -373,7 +373,7 @@ static int radau_step(mp_ode_ws *w, double t, double h_req, double *err_out)
         }
         solve_real(st, e);
         for (size_t i = 0; i < n; i++)
-            st->scale[i] = atol[i] + fmax(fabs(w->y[i]), fabs(ynew[i])) * rtol[i];
+            st->scale[i] = atol[i] + mp_ode_absmax(w->y[i], ynew[i]) * rtol[i];
         err = rms(n, e, st->scale);
         double safety = 0.9 * (2 * NEWTON_MAXITER + 1) / (2 * NEWTON_MAXITER + iters);
         if ((rejected || st->q_h == 0) && err > 1.0) {
