@@ -305,9 +305,10 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
     errors = _errors_mode(errors)
     check = getattr(system, "_check_initial", None)   # e.g. constraints a scene imposes
     if check is not None and n:
-        # a singular mass matrix at y0 is the solve's first evaluation's to find
-        # (its error is raised below as the check raises it, naming the
-        # matrix; errors="status" reports it); without a step, the check's
+        # a singular mass matrix at y0 is for the solve's first evaluation to
+        # find (the error is then raised below by the check, naming the matrix;
+        # errors="status" reports it); a solve without a step (t0 == tf)
+        # evaluates nothing, so the check looks itself
         check(t0, y0a, singular=t0 == tf and errors != "status")
     if t0 == tf or n == 0:
         return _no_step(t0, tf, y0a, tev, dense_output, evs)
