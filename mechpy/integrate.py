@@ -28,7 +28,6 @@ from ._system import (SCIPY_METHODS, SecondOrder, _as_args, _catch_unraisable,  
                       _ensemble_params, _events_spec, _method_names, _python_fun,
                       _rigid_split_check, _system_spec, _watch_list, methods)
 from ._validate import as_array, as_int, as_scalar
-from .errors import SingularityError
 
 __all__ = ["solve", "solve_many", "methods", "Solution", "EnsembleSolution", "DenseOutput",
            "SecondOrder"]
@@ -323,7 +322,7 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
             r = _core.ode_solve(*call)
     code, message, t, y, nfev, njev, nlu, nsteps, nreject, dense, events_out, backward = r
     if code and _raises(code, errors):
-        if check is not None and _STATUS[code]["exception"] is SingularityError:
+        if check is not None and code == _core.STATUS["MP_ESINGULAR"]:
             check(t0, y0a)   # singular at y0 itself: the check's error, naming the matrix
         raise _status_error(code, "solve", message)
     status = _STATUS[code]["solve_status"]
