@@ -1513,7 +1513,7 @@ def test_closed_form_keeps_its_precision_near_a_singular_configuration(theta):
 @pytest.mark.parametrize("n, coupled", [
     (1, ()), (2, ()), (2, ((0, 1),)), (3, ()), (3, ((0, 1),)), (3, ((0, 2),)),
     (3, ((1, 2),)), (3, ((0, 1), (1, 2))), (3, ((0, 1), (0, 2), (1, 2)))])
-@pytest.mark.parametrize("symbolic_ops", [None, 0])
+@pytest.mark.parametrize("symbolic_ops", [None, pytest.param(0, marks=pytest.mark.slow)])
 def test_closed_form_by_blocks_against_sympy(n, coupled, symbolic_ops, monkeypatch, tmp_path):
     """Mass matrices that split into every pattern of diagonal blocks up to
     3 x 3 (entries that depend on the coordinates and on a parameter, a
