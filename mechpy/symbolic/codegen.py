@@ -130,7 +130,8 @@ def _components(A, na):
 
 
 def _ops(text: str) -> int:
-    """Arithmetic operations and calls in printed C (the cost compared)."""
+    """The cost compared between two printings of the same C: its +, *, / and
+    opening parentheses (calls, and the groupings that come with sums)."""
     return sum(text.count(c) for c in "+*/(")
 
 
@@ -237,20 +238,7 @@ static MP_INLINE int mp_closed_ok(double det, double asum, int k)
     return d > tol && d > DBL_MIN && d <= DBL_MAX;
 }
 
-/* dy/dt by gen_solve's LU: where the closed form declines. */
-static int gen_rhs_lu(double t, const double *y, double *dydt, const double *p)
-{
-    double A0[NA * NA], LU[NA * NA], dinv[NA], z[NA];
-    int piv[NA];
-    int rc = gen_solve(t, y, p, A0, LU, piv, dinv, z);
-    if (rc != MP_OK) return rc;
-    for (int i = 0; i < NC; i++) {
-        dydt[i] = y[NC + i];
-        dydt[NC + i] = z[i];
-    }
-    return MP_OK;
-}
-
+""" + _RHS_BY_LU + r"""
 /* dy/dt = (q', q'') at (t, y); params: the parameter vector.  A z = b in
  * closed form by the blocks of A (codegen._closed_rhs), by gen_rhs_lu where
  * a block's determinant test declines. */
@@ -844,20 +832,30 @@ _ARGS = "double t, const double *y, const double *p, double *out"
 _ARGS_Z = "double t, const double *y, const double *p, const double *z, double *out"
 
 
-#: A Lagrangian system's mp_gen_rhs by mp_lu (NA > CLOSED_MAX; else _closed_rhs).
-_RHS_LU = r"""
-/* dy/dt = (q', q'') at (t, y); params: the parameter vector. */
-int mp_gen_rhs(double t, const double *y, double *dydt, void *params)
+#: dy/dt of a Lagrangian system by gen_solve's LU: its mp_gen_rhs where NA >
+#: CLOSED_MAX (_RHS_LU), where the closed form declines otherwise (_closed_rhs).
+_RHS_BY_LU = r"""
+/* dy/dt = (q', q'') at (t, y) by gen_solve's LU, parameters p. */
+static int gen_rhs_lu(double t, const double *y, double *dydt, const double *p)
 {
     double A0[NA * NA], LU[NA * NA], dinv[NA], z[NA];
     int piv[NA];
-    int rc = gen_solve(t, y, (const double *)params, A0, LU, piv, dinv, z);
+    int rc = gen_solve(t, y, p, A0, LU, piv, dinv, z);
     if (rc != MP_OK) return rc;
     for (int i = 0; i < NC; i++) {
         dydt[i] = y[NC + i];
         dydt[NC + i] = z[i];
     }
     return MP_OK;
+}
+"""
+
+#: A Lagrangian system's mp_gen_rhs by mp_lu (NA > CLOSED_MAX; else _closed_rhs).
+_RHS_LU = _RHS_BY_LU + r"""
+/* dy/dt = (q', q'') at (t, y); params: the parameter vector. */
+int mp_gen_rhs(double t, const double *y, double *dydt, void *params)
+{
+    return gen_rhs_lu(t, y, dydt, (const double *)params);
 }
 """
 
