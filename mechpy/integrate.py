@@ -138,7 +138,7 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
           events=None, args: tuple = (), h: float | None = None,
           first_step: float | None = None, max_step: float = np.inf,
           max_steps: int = 10_000_000, jac: Callable | None = None,
-          errors: str = "auto", vectorized: bool = False) -> Solution:
+          jac_sparsity=None, errors: str = "auto", vectorized: bool = False) -> Solution:
     """Solve an initial value problem dy/dt = f(t, y), y(t0) = y0.
 
     Parameters
@@ -200,7 +200,7 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
         Step of fixed-step methods.
     first_step, max_step : float
         Initial step (default: Hairer's estimate; at most ``|tf - t0|``; one
-        below the step floor, 16 eps |t0|, is raised to it, as SciPy raises
+        below the step floor, ``16 eps |t0|``, is raised to it, as SciPy raises
         it) and largest step.
     max_steps : int
         Budget of attempted steps; when it runs out the solve ends with
@@ -208,6 +208,17 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
     jac : callable or array_like (n, n), optional
         ``jac(t, y, *args)`` -> (n, n) Jacobian, or a constant matrix, for
         methods that use one (scenes bring their own analytic Jacobian).
+    jac_sparsity : array_like (n, n) or scipy.sparse matrix, optional
+        SciPy's: the Jacobian's nonzero pattern (a zero entry: df_i/dy_j is
+        zero everywhere).  mechpy uses its band, ml = max(i - j) and
+        mu = max(j - i) over the nonzero entries: finite-difference Jacobians
+        take ml + mu + 1 evaluations of f instead of n, and ``radau`` (and
+        ``auto``'s stiff part) factorise their Newton matrices in band form
+        where 3 (ml + mu + 1) <= n and n >= 16 (LAPACK's ``dgbtrf``).
+        Entries of an analytic ``jac`` outside the band are not read then.
+        Systems from :func:`mechpy.symbolic.equations` bring their own
+        pattern, from the symbolic Jacobian.  Number the states so that
+        coupled ones are close (a chain: (x_1, v_1, x_2, v_2, ...)).
     errors : {"auto", "raise", "status"}
         What a failure does.  ``"auto"``: the integration giving up (step
         budget, step size) ends with ``status = -1`` and a message, as
@@ -278,7 +289,7 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
         return _solve_complex(system, t_span, y0, dict(
             method=method, rtol=rtol, atol=atol, t_eval=t_eval, dense_output=dense_output,
             events=events, args=args, h=h, first_step=first_step, max_step=max_step,
-            max_steps=max_steps, jac=jac, errors=errors))
+            max_steps=max_steps, jac=jac, jac_sparsity=jac_sparsity, errors=errors))
     # y0's values are checked finite by the C core, which reads them anyway
     y0a = as_array(y0, "y0", ndim=1, finite=False, allow_empty=True)
     n = y0a.size
@@ -293,6 +304,7 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
         if isinstance(jac, (str, bytes)):
             raise TypeError("jac must be callable or a constant (n, n) array")
         jac = as_array(jac, "jac", shape=(n, n))
+    band = _jac_band(jac_sparsity, system, n)
     _rigid_split_check(method, system)
     spec, dim = _system_spec(system, args, method)
     if dim is not None and dim != n:
@@ -314,7 +326,7 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
 
     watch = _watch_list(system)
     call = (method, spec, y0a, *_options(t0, tf, rtol, atol_a, tev, hh, fs, ms, budget),
-            dense_output, evs or None, term, dirs, args, jac, watch)
+            dense_output, evs or None, term, dirs, args, jac, watch, band)
     if watch is None:
         r = _core.ode_solve(*call)
     else:
@@ -378,6 +390,27 @@ def _is_complex(y0) -> bool:
         return False
 
 
+def _jac_band(jac_sparsity, system, n: int):
+    """The Jacobian's band (ml, mu) for the core, from jac_sparsity (an (n, n)
+    pattern: array_like or scipy.sparse) or, without one, the system's own
+    (``_jac_band``: a compiled system's, from its symbolic Jacobian); None when
+    the band covers the matrix (dense)."""
+    if jac_sparsity is None:
+        return getattr(system, "_jac_band", None)
+    if hasattr(jac_sparsity, "tocoo"):     # scipy.sparse: its stored nonzeros
+        if tuple(jac_sparsity.shape) != (n, n):
+            raise ValueError(f"jac_sparsity must have shape ({n}, {n}), "
+                             f"got {tuple(jac_sparsity.shape)}")
+        c = jac_sparsity.tocoo()
+        keep = c.data != 0
+        rows, cols = c.row[keep], c.col[keep]
+    else:
+        rows, cols = np.nonzero(as_array(jac_sparsity, "jac_sparsity", shape=(n, n)))
+    d = rows.astype(np.int64) - cols.astype(np.int64)
+    ml, mu = (int(max(d.max(), 0)), int(max(-d.min(), 0))) if d.size else (0, 0)
+    return (ml, mu) if ml + mu + 1 < n else None
+
+
 def _solve_complex(system, t_span, y0, kw) -> Solution:
     """solve for a complex y0, as SciPy integrates complex states: the real
     system z = (Re y, Im y) of size 2n (f, jac and events see complex y), the
@@ -405,6 +438,11 @@ def _solve_complex(system, t_span, y0, kw) -> Solution:
             raise ValueError(f"jac must be of shape ({n}, {n}), got {J.shape}")
         return np.block([[J.real, -J.imag], [J.imag, J.real]])
 
+    if kw["jac_sparsity"] is not None:   # the real system's: the pattern in each block
+        S = kw["jac_sparsity"]
+        S = (S.toarray() if hasattr(S, "toarray") else
+             as_array(S, "jac_sparsity", shape=(n, n))) != 0
+        kw["jac_sparsity"] = np.block([[S, S], [S, S]])
     jac = kw["jac"]
     if callable(jac):
         user_jac = jac

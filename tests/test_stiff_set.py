@@ -330,3 +330,155 @@ if __name__ == "__main__":
     print(table_same_rtol())
     print()
     print(table_equal_error())
+
+
+# ---- banded Jacobians (jac_sparsity): grouped differences, radau's band LU ----------
+
+def _chain(M=30, k=1e4, c=0.5):
+    """A damped chain of M unit masses between fixed ends, springs k, dampers c
+    to ground, the state (x_1, v_1, x_2, v_2, ...): y' = A y, A banded (3 below,
+    1 above).  (A, y0)."""
+    n = 2 * M
+    A = np.zeros((n, n))
+    for i in range(M):
+        A[2 * i, 2 * i + 1] = 1.0
+        A[2 * i + 1, 2 * i] = -2 * k
+        A[2 * i + 1, 2 * i + 1] = -c
+        if i > 0:
+            A[2 * i + 1, 2 * i - 2] = k
+        if i < M - 1:
+            A[2 * i + 1, 2 * i + 2] = k
+    x = np.arange(1, M + 1) / (M + 1)
+    y0 = np.zeros(n)
+    y0[0::2] = np.sin(np.pi * x) + 0.3 * np.sin(7 * np.pi * x)
+    return A, y0
+
+
+@pytest.mark.parametrize("rtol", [1e-6, 1e-8])
+def test_band_lu_radau_against_the_exact_linear_flow(rtol):
+    # y(T) = expm(A T) y0 exactly.  At these steps the Newton matrix's columns
+    # have their largest entry off the diagonal (2k = 2e4 against gamma/h ~ 2e3):
+    # the band factors pivot.  Measured: band and dense LU both 2.7e-7 (rtol 1e-6)
+    # and 7.6e-10 (1e-8) from the exact flow, with the same Jacobians and within
+    # 2% of each other's steps; SciPy's Radau 8.2e-8 and 2.4e-10 with 1.9x the nfev
+    import scipy.linalg
+    A, y0 = _chain()
+    T = 2.0
+    exact = scipy.linalg.expm(A * T) @ y0
+
+    def f(t, y):
+        return A @ y
+
+    band = mp.solve(f, (0, T), y0, method="radau", rtol=rtol, atol=1e-10, jac=A,
+                    jac_sparsity=A != 0)
+    dense = mp.solve(f, (0, T), y0, method="radau", rtol=rtol, atol=1e-10, jac=A)
+    assert band.success and dense.success
+    scale = np.max(np.abs(exact))
+    e_band = np.max(np.abs(band.y[:, -1] - exact)) / scale
+    e_dense = np.max(np.abs(dense.y[:, -1] - exact)) / scale
+    bound = {1e-6: 3e-6, 1e-8: 8e-9}[rtol]
+    assert e_band < bound and e_dense < bound, (e_band, e_dense)
+    assert e_band < 1.2 * e_dense, (e_band, e_dense)
+    assert abs(band.nsteps - dense.nsteps) <= 0.05 * dense.nsteps, (band.nsteps, dense.nsteps)
+
+
+@pytest.mark.slow
+def test_band_lu_radau_on_the_brusselator_against_scipy():
+    # the nonlinear large system in band form (n = 200, ml = mu = 2) against SciPy's
+    # Radau at rtol 1e-10; measured error 1.9e-8 at rtol 1e-6, as dense (the bound of
+    # the dense test above), and the same Jacobians and LU factorisations within 3
+    y0 = _bruss_y0()
+    ref = solve_ivp(_bruss, (0, 10), y0, method="Radau", rtol=1e-10, atol=1e-12,
+                    jac=_bruss_jac, jac_sparsity=_bruss_jac(0, y0) != 0).y[:, -1]
+    pattern = _bruss_jac(0.0, y0 + 0.1) != 0
+    m = mp.solve(_bruss, (0, 10), y0, method="radau", rtol=1e-6, atol=1e-8, jac=_bruss_jac,
+                 jac_sparsity=pattern)
+    d = mp.solve(_bruss, (0, 10), y0, method="radau", rtol=1e-6, atol=1e-8, jac=_bruss_jac)
+    assert m.success and d.success
+    err = np.max(np.abs(m.y[:, -1] - ref) / np.maximum(np.abs(ref), 1e-7))
+    assert err < 2e-7, err
+    assert m.njev == d.njev and abs(m.nlu - d.nlu) <= 3, (m.njev, d.njev, m.nlu, d.nlu)
+
+
+def test_grouped_differences_are_the_dense_differences():
+    # a banded f: each f_i reads y_{i-2} .. y_{i+2} only, so perturbing columns
+    # five apart together changes each f_i exactly as perturbing its own column
+    # alone: the Jacobian is the dense one to the bit, the solve identical, and
+    # each Jacobian costs ml + mu + 1 = 5 evaluations instead of n = 12 (n below 16:
+    # the LU stays dense, so only the differences differ)
+    global BRUSS_N
+    saved, BRUSS_N = BRUSS_N, 6
+    try:
+        x = np.arange(1, 7) / 7
+        y0 = np.empty(12)
+        y0[0::2], y0[1::2] = 1 + np.sin(2 * np.pi * x), 3.0
+        pattern = _bruss_jac(0.0, y0 + 0.1) != 0
+        for method in ("radau", "gsl:msbdf"):
+            band = mp.solve(_bruss, (0, 10), y0, method=method, rtol=1e-6, atol=1e-8,
+                            jac_sparsity=pattern)
+            dense = mp.solve(_bruss, (0, 10), y0, method=method, rtol=1e-6, atol=1e-8)
+            assert band.success and dense.success and band.njev > 0
+            np.testing.assert_array_equal(band.y, dense.y)
+            assert band.njev == dense.njev
+            assert dense.nfev - band.nfev == (12 - 5) * band.njev, (method, band.nfev,
+                                                                    dense.nfev, band.njev)
+    finally:
+        BRUSS_N = saved
+
+
+def test_jac_sparsity_forms_and_refusals():
+    import scipy.sparse
+    A, y0 = _chain(M=10)
+    n = A.shape[0]
+
+    def f(t, y):
+        return A @ y
+
+    kw = dict(method="radau", rtol=1e-8, atol=1e-10)
+    base = mp.solve(f, (0, 0.5), y0, **kw)
+    # a pattern covering the matrix is the dense solve, to the bit; a scipy.sparse
+    # pattern is its dense twin's band
+    full = mp.solve(f, (0, 0.5), y0, jac_sparsity=np.ones((n, n)), **kw)
+    np.testing.assert_array_equal(full.y, base.y)
+    a = mp.solve(f, (0, 0.5), y0, jac_sparsity=A != 0, **kw)
+    b = mp.solve(f, (0, 0.5), y0, jac_sparsity=scipy.sparse.csr_matrix(A), **kw)
+    np.testing.assert_array_equal(a.y, b.y)
+    assert a.nfev < base.nfev     # 5 evaluations a Jacobian, not 20
+    np.testing.assert_allclose(a.y[:, -1], base.y[:, -1], rtol=0, atol=1e-7)
+    with pytest.raises(ValueError, match=r"jac_sparsity must have shape \(20, 20\)"):
+        mp.solve(f, (0, 0.5), y0, jac_sparsity=np.ones((n, n - 1)), **kw)
+    with pytest.raises(ValueError, match=r"jac_sparsity must have shape \(20, 20\)"):
+        mp.solve(f, (0, 0.5), y0, jac_sparsity=scipy.sparse.eye(n + 1), **kw)
+    with pytest.raises(ValueError, match="jac_sparsity"):
+        mp.solve(f, (0, 0.5), y0, jac_sparsity=np.full((n, n), np.nan), **kw)
+    with pytest.raises(TypeError, match="jac_sparsity"):
+        mp.solve(f, (0, 0.5), y0, jac_sparsity="band", **kw)
+    # a complex state: the real system's pattern, the band then spans it (dense)
+    c = mp.solve(lambda t, y: -1j * y, (0, 1.0), [1.0 + 0j, 0.5j], method="radau",
+                 rtol=1e-10, atol=1e-12, jac_sparsity=np.eye(2))
+    np.testing.assert_allclose(c.y[:, -1], np.exp(-1j) * np.array([1.0, 0.5j]), atol=1e-9)
+
+
+def test_compiled_equations_know_their_band():
+    # the band comes from the symbolic Jacobian's zeros (SymPy's own jacobian here);
+    # mp.solve then factorises in band form by itself: the same solution as the
+    # forced dense form, to the Newton tolerance
+    sp = pytest.importorskip("sympy")
+    from mechpy.benches import stiff_cvode
+    name, eqs, y, y0, span, atol, ref = stiff_cvode.problems(n_bruss=20)[-1]
+    try:
+        scene = mp.equations(eqs, list(y))
+    except mp.symbolic.CompileError:
+        pytest.skip("no C compiler")
+    J = sp.Matrix(eqs).jacobian(list(y))
+    i, j = np.nonzero(np.array([[J[r, c] != 0 for c in range(J.cols)] for r in range(J.rows)]))
+    assert scene._jac_band == (int(max(i - j)), int(max(j - i))) == (2, 2)
+    kw = dict(method="radau", rtol=1e-8, atol=atol, t_eval=[span[1]])
+    band = mp.solve(scene, span, y0, **kw)
+    dense = mp.solve(scene, span, y0, jac_sparsity=np.ones((40, 40)), **kw)
+    assert band.success and dense.success
+    np.testing.assert_allclose(band.y, dense.y, rtol=1e-8)
+    # a coupled system has no narrow band: dense, as before
+    q = sp.symbols("q0:3")
+    full = mp.equations([q[1] * q[2], -q[0] * q[2], q[0] * q[1]], list(q))
+    assert full._jac_band is None

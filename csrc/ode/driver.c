@@ -46,17 +46,31 @@ int mp_ode_ws_jac(mp_ode_ws *w, double t, const double *y, const double *f0, dou
             }
         return MP_OK;
     }
+    /* columns `width` apart share no row of the band: one evaluation
+     * perturbs them all (Curtis, Powell and Reid's grouping); dense, each
+     * column is a group of its own */
+    size_t ml = n - 1, mu = n - 1;
+    if (w->p->banded && w->p->ml + w->p->mu + 1 < n) {
+        ml = w->p->ml;
+        mu = w->p->mu;
+        memset(jac, 0, n * n * sizeof(double));
+    }
+    size_t width = ml + mu + 1;
     memcpy(scratch_y, y, n * sizeof(double));
-    for (size_t j = 0; j < n; j++) {
-        double scale = fmax(fabs(y[j]), w->o->atol[j] / w->o->rtolv[j]);
-        if (!(scale > 0)) scale = 1.0;
-        double yj = y[j], d = sqrt(DBL_EPSILON) * scale;
-        scratch_y[j] = yj + d;
-        d = scratch_y[j] - yj; /* the increment actually representable */
+    for (size_t g = 0; g < width && g < n; g++) {
+        for (size_t j = g; j < n; j += width) {
+            double scale = fmax(fabs(y[j]), w->o->atol[j] / w->o->rtolv[j]);
+            if (!(scale > 0)) scale = 1.0;
+            scratch_y[j] = y[j] + sqrt(DBL_EPSILON) * scale;
+        }
         int rc = mp_ode_ws_rhs(w, t, scratch_y, scratch_f);
         if (rc != MP_OK) return rc;
-        for (size_t i = 0; i < n; i++) jac[i * n + j] = (scratch_f[i] - f0[i]) / d;
-        scratch_y[j] = yj;
+        for (size_t j = g; j < n; j += width) {
+            double d = scratch_y[j] - y[j]; /* the increment actually representable */
+            size_t i0 = j > mu ? j - mu : 0, i1 = j + ml < n ? j + ml + 1 : n;
+            for (size_t i = i0; i < i1; i++) jac[i * n + j] = (scratch_f[i] - f0[i]) / d;
+            scratch_y[j] = y[j];
+        }
     }
     return MP_OK;
 }

@@ -32,6 +32,17 @@ extern void zgetrs_(const char *trans, const int *n, const int *nrhs, const doub
                     const int *lda, const int *ipiv, double complex *b, const int *ldb,
                     int *info);
 
+/* LAPACK's band factorisations: radau on a banded problem
+ * (mp_ode_problem.banded), A in band storage AB (column-major, leading
+ * dimension ldab = 2 kl + ku + 1, A_ij at AB[kl + ku + i - j + j ldab]).
+ * Their solves are by hand (mp_ode_gbtrs below) at every size: dgbtrs calls
+ * BLAS's dger once per column, whose call costs more than the column's few
+ * products (the 200-state Brusselator at band 2 + 2: radau 2.x faster). */
+extern void dgbtrf_(const int *m, const int *n, const int *kl, const int *ku, double *ab,
+                    const int *ldab, int *ipiv, int *info);
+extern void zgbtrf_(const int *m, const int *n, const int *kl, const int *ku,
+                    double complex *ab, const int *ldab, int *ipiv, int *info);
+
 /* Contract: b := A^-1 b for the n x n matrix A whose factors P A = L U are
  * in LU (column-major, leading dimension n, L unit lower) with 1-based
  * pivots ipiv, as dgetrs("N") with nrhs = 1 computes it. */
@@ -111,6 +122,105 @@ static inline void mp_ode_zgetrs(int n, const double complex *LU, const int *ipi
             double ar = creal(col[i]), ai = cimag(col[i]);
             b[i] = CMPLX(creal(b[i]) - (qr * ar - qi * ai), cimag(b[i]) - (qr * ai + qi * ar));
         }
+    }
+}
+
+/* Contract: b := A^-1 b for the n x n band matrix A (kl sub-, ku
+ * super-diagonals) whose factors dgbtrf left in AB (leading dimension ld =
+ * 2 kl + ku + 1) with 1-based pivots ipiv, as dgbtrs("N") with nrhs = 1
+ * computes it: L's columns applied with their interchanges in dgbtrf's
+ * order (dger's updates, skipping a zero entry as dger does), then U
+ * (bandwidth kl + ku) by rows: each entry of the solution one sum of at
+ * most kl + ku products, accumulated in a register (dtbsv's columns store
+ * into b at every product), times dinv[i] = 1 / U_ii (mp_ode_gbdinv: a
+ * product where dtbsv divides, the solves outnumbering the factorisations
+ * tenfold and more). */
+static inline void mp_ode_gbtrs(int n, int kl, int ku, const double *AB, int ld, const int *ipiv,
+                                const double *dinv, double *b)
+{
+    int k = kl + ku;
+    for (int j = 0; kl > 0 && j < n - 1; j++) {
+        int lm = kl < n - 1 - j ? kl : n - 1 - j, p = ipiv[j] - 1;
+        if (p != j) {
+            double s = b[j];
+            b[j] = b[p];
+            b[p] = s;
+        }
+        double bj = b[j];
+        if (bj == 0.0) continue;
+        const double *l = AB + (size_t)j * (size_t)ld + k + 1;
+        for (int r = 0; r < lm; r++) b[j + 1 + r] -= bj * l[r];
+    }
+    /* U by rows: U_ij = AB[k + i + j (ld - 1)], a row's entries ld - 1 apart */
+    for (int i = n - 1; i >= 0; i--) {
+        const double *row = AB + (size_t)i * (size_t)ld + k;
+        int m = k < n - 1 - i ? k : n - 1 - i;
+        double s = b[i];
+        for (int c = 1; c <= m; c++) s -= row[(size_t)c * (size_t)(ld - 1)] * b[i + c];
+        b[i] = s * dinv[i];
+    }
+}
+
+/* Contract: dinv[i] = 1 / U_ii of dgbtrf's factors in AB (kl + ku super-
+ * diagonals, leading dimension ld), for mp_ode_gbtrs. */
+static inline void mp_ode_gbdinv(int n, int k, const double *AB, int ld, double *dinv)
+{
+    for (int i = 0; i < n; i++) dinv[i] = 1.0 / AB[(size_t)i * (size_t)ld + k];
+}
+
+/* Contract: the complex counterpart of mp_ode_gbdinv: 1 / U_ii by Smith's
+ * formula, which neither overflows nor underflows where it is
+ * representable. */
+static inline void mp_ode_zgbdinv(int n, int k, const double complex *AB, int ld,
+                                  double complex *dinv)
+{
+    for (int i = 0; i < n; i++) {
+        double complex u = AB[(size_t)i * (size_t)ld + k];
+        double c = creal(u), d = cimag(u);
+        if (fabs(c) >= fabs(d)) {
+            double r = d / c, den = c + d * r;
+            dinv[i] = CMPLX(1.0 / den, -r / den);
+        } else {
+            double r = c / d, den = c * r + d;
+            dinv[i] = CMPLX(r / den, -1.0 / den);
+        }
+    }
+}
+
+/* Contract: the complex counterpart of mp_ode_gbtrs (zgbtrf's factors, dinv
+ * from mp_ode_zgbdinv), its products plain (as Fortran's). */
+static inline void mp_ode_zgbtrs(int n, int kl, int ku, const double complex *AB, int ld,
+                                 const int *ipiv, const double complex *dinv, double complex *b)
+{
+    int k = kl + ku;
+    for (int j = 0; kl > 0 && j < n - 1; j++) {
+        int lm = kl < n - 1 - j ? kl : n - 1 - j, p = ipiv[j] - 1;
+        if (p != j) {
+            double complex s = b[j];
+            b[j] = b[p];
+            b[p] = s;
+        }
+        double br = creal(b[j]), bi = cimag(b[j]);
+        if (br == 0.0 && bi == 0.0) continue;
+        const double complex *l = AB + (size_t)j * (size_t)ld + k + 1;
+        for (int r = 0; r < lm; r++) {
+            double ar = creal(l[r]), ai = cimag(l[r]);
+            double complex *x = b + j + 1 + r;
+            *x = CMPLX(creal(*x) - (br * ar - bi * ai), cimag(*x) - (br * ai + bi * ar));
+        }
+    }
+    for (int i = n - 1; i >= 0; i--) {
+        const double complex *row = AB + (size_t)i * (size_t)ld + k;
+        int m = k < n - 1 - i ? k : n - 1 - i;
+        double br = creal(b[i]), bi = cimag(b[i]);
+        for (int c = 1; c <= m; c++) {
+            double complex a = row[(size_t)c * (size_t)(ld - 1)], x = b[i + c];
+            double ar = creal(a), ai = cimag(a), xr = creal(x), xi = cimag(x);
+            br -= ar * xr - ai * xi;
+            bi -= ar * xi + ai * xr;
+        }
+        double dr = creal(dinv[i]), di = cimag(dinv[i]);
+        b[i] = CMPLX(br * dr - bi * di, br * di + bi * dr);
     }
 }
 

@@ -114,6 +114,14 @@ typedef struct mp_ode_problem {
     /* optional: the switch ahead (NULL: none); rhs and jac are the branch
      * before it */
     const mp_ode_switch *sw;
+    /* optional: the Jacobian's band (SciPy's jac_sparsity, LSODA's lband and
+     * uband): when banded, df_i/dy_j is zero for i - j > ml and for j - i > mu.
+     * Finite differences then perturb columns ml + mu + 1 apart together
+     * (mp_ode_ws_jac), and radau factorises in band form where that is the
+     * cheaper (an analytic Jacobian's entries outside the band are not read
+     * there).  0: dense. */
+    int banded;
+    size_t ml, mu;
 } mp_ode_problem;
 
 /* Contract: the problem p on the branch of the state (t, y): the switches it is
@@ -317,7 +325,9 @@ static inline int mp_ode_ws_eval(double t, const double *y, double *dydt, void *
 
 /* Jacobian df/dy (row-major) at (t, y): the problem's own when it has one,
  * else forward differences with increments sqrt(eps) * max(|y_j|, atol_j/rtol);
- * f0 = f(t, y) must be given for the differences.  Counts njev. */
+ * f0 = f(t, y) must be given for the differences.  A banded problem's
+ * differences take ml + mu + 1 evaluations, its entries outside the band
+ * zero (dense: n evaluations).  Counts njev. */
 int mp_ode_ws_jac(mp_ode_ws *w, double t, const double *y, const double *f0, double *jac,
                   double *scratch_y, double *scratch_f);
 

@@ -829,16 +829,17 @@ static void event_fns_free(py_events *pe)
 
 /* Contract: ode_solve(method, system, y0, t0, tf, rtol, atol, t_eval, h,
  * first_step, max_step, max_steps, dense, events, terminal, direction, args,
- * jac, watch), all positional (its fixed cost is the cost of a small solve;
- * integrate.py has validated them) -> the tuple of result_to_python.  A
+ * jac, watch, band), all positional (its fixed cost is the cost of a small
+ * solve; integrate.py has validated them; band: None or the Jacobian's
+ * (ml, mu), mp_ode_problem's) -> the tuple of result_to_python.  A
  * failure the status table marks as always raising (a callback's exception,
  * Ctrl-C, memory) raises; every other outcome is returned with its code and
  * message (integrate.py decides, from the same table, what raises). */
 static PyObject *py_ode_solve(PyObject *self, PyObject *const *argv, Py_ssize_t nargs)
 {
     (void)self;
-    if (nargs != 19) {
-        PyErr_Format(PyExc_TypeError, "ode_solve takes 19 arguments, got %zd", nargs);
+    if (nargs != 20) {
+        PyErr_Format(PyExc_TypeError, "ode_solve takes 20 arguments, got %zd", nargs);
         return NULL;
     }
     const char *mname = PyUnicode_Check(argv[0]) ? PyUnicode_AsUTF8(argv[0]) : NULL;
@@ -882,6 +883,18 @@ static PyObject *py_ode_solve(PyObject *self, PyObject *const *argv, Py_ssize_t 
     if (ode_args_from_argv(argv + 3, n, &oa, &o) < 0) goto out;
     if (py_system_parse(spec, n, &sys) < 0) goto out;
     mp_ode_problem prob = sys.prob;
+    if (argv[19] != Py_None) {
+        Py_ssize_t ml = -1, mu = -1;
+        if (!PyArg_ParseTuple(argv[19], "nn;band must be a tuple (ml, mu)", &ml, &mu))
+            goto out;
+        if (ml < 0 || mu < 0) {
+            PyErr_SetString(PyExc_ValueError, "band (ml, mu) must be >= 0");
+            goto out;
+        }
+        prob.banded = 1;
+        prob.ml = (size_t)ml;
+        prob.mu = (size_t)mu;
+    }
     int holds_python = sys.holds_python;
     if (m->symplectic && !m->implicit && prob.nq == 0) { /* the scene rows say which are */
         char why[256];

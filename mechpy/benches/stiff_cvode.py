@@ -12,7 +12,12 @@ mechpy compiles its systems with.  Same rtol and atol; each row gives njev,
 nlu (CVODE: its linear-solver setups, each a new LU), nfev (CVODE: rhs
 evaluations of the integrator), the time of a solve (median, CVODE's measured
 inside the driver) and the error at the end against the published value (the
-Brusselator's: radau at rtol 1e-12).  Without SUNDIALS (Debian's
+Brusselator's: radau at rtol 1e-12).  The Brusselator's Jacobian is banded
+(ml = mu = 2, the states (u_1, v_1, u_2, ...)), a band its compiled scene
+knows from the symbolic Jacobian: radau factorises it in band form, and
+runs again dense (``jac_sparsity`` all ones); CVODE runs dense and with its
+band matrix and solver (the same band), each form against its like.
+Without SUNDIALS (Debian's
 libsundials-dev) or a compiler the mechpy rows are still given and a row says
 why CVODE is missing.
 """
@@ -108,6 +113,8 @@ _DRIVER = r"""
 #include <nvector/nvector_serial.h>
 #include <sunmatrix/sunmatrix_dense.h>
 #include <sunlinsol/sunlinsol_dense.h>
+#include <sunmatrix/sunmatrix_band.h>
+#include <sunlinsol/sunlinsol_band.h>
 
 static int f(realtype t, N_Vector y, N_Vector ydot, void *ud)
 {
@@ -120,10 +127,16 @@ static int jac(realtype t, N_Vector y, N_Vector fy, SUNMatrix J, void *ud, N_Vec
     (void)fy; (void)t1; (void)t2; (void)t3;
     double *rm = ud; /* row-major scratch, NS x NS */
     if (mp_gen_jac(t, N_VGetArrayPointer(y), rm, NULL) != MP_OK) return -1;
+#ifdef MP_BAND /* the band (ML, MU) of the generated Jacobian */
+    for (sunindextype j = 0; j < NS; j++)
+        for (sunindextype i = j > MU ? j - MU : 0; i < NS && i <= j + ML; i++)
+            SM_ELEMENT_B(J, i, j) = rm[i * NS + j];
+#else
     for (sunindextype j = 0; j < NS; j++) {
         double *col = SM_COLUMN_D(J, j);
         for (sunindextype i = 0; i < NS; i++) col[i] = rm[i * NS + j];
     }
+#endif
     return 0;
 }
 
@@ -149,8 +162,13 @@ int main(int argc, char **argv)
         struct timespec a, b;
         clock_gettime(CLOCK_MONOTONIC, &a);
         void *mem = CVodeCreate(CV_BDF, ctx);
+#ifdef MP_BAND
+        SUNMatrix A = SUNBandMatrix(NS, MU, ML, ctx);
+        SUNLinearSolver LS = SUNLinSol_Band(y, A, ctx);
+#else
         SUNMatrix A = SUNDenseMatrix(NS, NS, ctx);
         SUNLinearSolver LS = SUNLinSol_Dense(y, A, ctx);
+#endif
         CVodeInit(mem, f, t0, y);
         CVodeSVtolerances(mem, rtol, at);
         CVodeSetUserData(mem, scratch);
@@ -186,7 +204,8 @@ int main(int argc, char **argv)
 """
 
 _LIBS = ["-lsundials_cvode", "-lsundials_nvecserial", "-lsundials_sunmatrixdense",
-         "-lsundials_sunlinsoldense", "-lm"]
+         "-lsundials_sunlinsoldense", "-lsundials_sunmatrixband", "-lsundials_sunlinsolband",
+         "-lm"]
 
 
 def cvode_missing() -> str | None:
@@ -199,13 +218,17 @@ def cvode_missing() -> str | None:
     return None
 
 
-def cvode_driver(scene, d: str) -> str:
-    """Compile the CVODE driver around ``scene.c_source`` in directory d; the
-    executable's path."""
+def cvode_driver(scene, d: str, band=None) -> str:
+    """Compile the CVODE driver around ``scene.c_source`` in directory d (with
+    band = (ml, mu): CVODE's band matrix and linear solver); the executable's
+    path."""
     from mechpy.symbolic.build import FLAGS
     cc = shutil.which("cc") or shutil.which("gcc")
-    src, exe = os.path.join(d, "cvode_driver.c"), os.path.join(d, "cvode_driver")
+    tag = "" if band is None else "_band"
+    src, exe = os.path.join(d, f"cvode_driver{tag}.c"), os.path.join(d, f"cvode_driver{tag}")
     with open(src, "w") as fh:
+        if band is not None:
+            fh.write(f"#define MP_BAND 1\n#define ML {band[0]}\n#define MU {band[1]}\n")
         fh.write(scene.c_source + "\n" + _DRIVER)
     flags = [f for f in FLAGS if f not in ("-shared", "-fPIC", "-std=c99")]
     subprocess.run([cc, *flags, "-std=gnu99", src, "-o", exe, *_LIBS], check=True,
@@ -240,29 +263,47 @@ def run(quick: bool):
             if ref is None:  # the Brusselator: radau far below the tolerances asked
                 ref = mp.solve(scene, span, y0, method="radau", rtol=1e-12,
                                atol=1e-14).y[:, -1]
-            exe = None
+            band = scene._jac_band    # from the symbolic Jacobian
+            if band is not None and not (n >= 16 and 3 * (band[0] + band[1] + 1) <= n):
+                band = None           # radau factorises it dense (integrate.solve)
+            exe = exe_band = None
             if why is None:
                 try:
                     exe = cvode_driver(scene, d)
+                    if band is not None:
+                        exe_band = cvode_driver(scene, d, band)
                 except subprocess.CalledProcessError as e:
                     why = f"the CVODE driver did not compile: {e.stderr.decode()[:200]}"
+            # a banded system also runs radau dense (jac_sparsity all ones), for
+            # what the band form gains
+            runs = [("radau", None, "stiff-mechpy"), ("auto", None, "stiff-mechpy")]
+            if band is not None:
+                runs.append(("radau", np.ones((n, n)), "stiff-mechpy-dense"))
             for rtol in rtols:
-                for m in ("radau", "auto"):
-                    def fn(m=m):
+                for m, sparsity, path in runs:
+                    def fn(m=m, sparsity=sparsity):
                         return mp.solve(scene, span, y0, method=m, rtol=rtol, atol=atol,
-                                        t_eval=[span[1]])
+                                        t_eval=[span[1]], jac_sparsity=sparsity)
                     s = fn()
+                    form = ("" if band is None else
+                            f", band LU {band[0]} + {band[1]}" if sparsity is None else
+                            ", dense LU")
                     rows.append(dict(
-                        problem=name, impl=f"mechpy {m} (compiled C rhs + jac)",
-                        path="stiff-mechpy", method=m, rtol=rtol, n=n,
+                        problem=name, impl=f"mechpy {m} (compiled C rhs + jac{form})",
+                        path=path, method=m, rtol=rtol, n=n,
                         error=_error(s.y[:, -1], ref, atol) if s.success else float("inf"),
                         time=median_time(fn, repeat=3, budget=3.0), nfev=int(s.nfev),
                         njev=int(s.njev), nlu=int(s.nlu)))
-                if exe is not None:
-                    st, nst, nfe, nje, nlu, sec, yend = cvode_solve(exe, n, y0, atol, span, rtol)
+                for x, path, what in ((exe, "stiff-cvode", "dense"),
+                                      (exe_band, "stiff-cvode-band",
+                                       "band" if band is None else
+                                       f"band {band[0]} + {band[1]}")):
+                    if x is None:
+                        continue
+                    st, nst, nfe, nje, nlu, sec, yend = cvode_solve(x, n, y0, atol, span, rtol)
                     rows.append(dict(
-                        problem=name, impl="CVODE BDF, dense, analytic jac (same C rhs)",
-                        path="stiff-cvode", method="cvode", rtol=rtol, n=n,
+                        problem=name, impl=f"CVODE BDF, {what}, analytic jac (same C rhs)",
+                        path=path, method="cvode", rtol=rtol, n=n,
                         error=_error(yend, ref, atol) if st >= 0 else float("inf"),
                         time=sec, nfev=nfe, njev=nje, nlu=nlu))
             if exe is None:
@@ -274,9 +315,34 @@ def run(quick: bool):
 
 def targets(rows) -> list[dict]:
     """radau against CVODE at each problem and rtol: njev ratio (goal <= 3x) and
-    time ratio CVODE / radau (goal >= 1x)."""
+    time ratio CVODE / radau (goal >= 1x); on a banded system also against
+    CVODE with its band solver (each side in band form)."""
     out = []
     cv = {(r["problem"], r["rtol"]): r for r in rows if r.get("path") == "stiff-cvode"}
+    cvb = {(r["problem"], r["rtol"]): r for r in rows if r.get("path") == "stiff-cvode-band"}
+    for p in dict.fromkeys(k[0] for k in cvb):
+        mine = [r for r in rows if r.get("path") == "stiff-mechpy" and r["method"] == "radau"
+                and r["problem"] == p and (p, r["rtol"]) in cvb]
+        tr = [cvb[(p, r["rtol"])]["time"] / r["time"] for r in mine]
+        if tr:
+            out.append(dict(target="radau (band LU): CVODE band's time / radau's, same rtol "
+                            "(every rtol)", problem=p, goal=">= 1x", worst=min(tr),
+                            median=float(np.median(tr)), n=len(tr)))
+    # speed against error: each CVODE row against radau's quickest row that is at
+    # least as accurate (radau's errors at a given rtol are far smaller)
+    for path, what in (("stiff-cvode", "CVODE"), ("stiff-cvode-band", "CVODE band")):
+        for p in dict.fromkeys(r["problem"] for r in rows if r.get("path") == path):
+            mine = [r for r in rows if r.get("path") == "stiff-mechpy" and r["method"] == "radau"
+                    and r["problem"] == p]
+            tr = []
+            for c in (r for r in rows if r.get("path") == path and r["problem"] == p):
+                ok = [r["time"] for r in mine if r["error"] <= c["error"]]
+                if ok:
+                    tr.append(c["time"] / min(ok))
+            if tr:
+                out.append(dict(target=f"radau: {what}'s time / radau's quickest run at no "
+                                "larger error (every CVODE rtol)", problem=p, goal=">= 1x",
+                                worst=min(tr), median=float(np.median(tr)), n=len(tr)))
     for m in ("radau", "auto"):
         for p in dict.fromkeys(r["problem"] for r in rows if r.get("path") == "stiff-mechpy"):
             mine = [r for r in rows if r.get("path") == "stiff-mechpy" and r["method"] == m

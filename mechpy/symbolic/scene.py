@@ -116,6 +116,9 @@ class CompiledScene(Scene):
         self._nc = int(meta["nc"])
         self._k = int(meta["k"])
         self._backend = backend
+        band = meta.get("band")     # equations only: (ml, mu), when narrower than n
+        self._jac_band = (tuple(band) if band is not None and band[0] + band[1] + 1 < self._dim
+                          else None)
         self._vec = np.array(list(self._params.values()), dtype=np.float64)
         self._eqs = None
         solve = ("the mass matrix d2L/dqd2" + (" with the constraint Jacobian" if self._k
