@@ -521,7 +521,7 @@ def solve_many(system, t_span: Sequence[float], y0s, *, params=None, t_eval=None
                max_step: float = np.inf, max_steps: int = 10_000_000,
                errors: str = "auto", client=None, chunk_size: int | None = None,
                lazy: bool = False, lanes: bool | None = None, events=None,
-               jac=None) -> EnsembleSolution:
+               jac=None, jac_sparsity=None) -> EnsembleSolution:
     """Integrate k initial states (an ensemble) in C, on several threads.
 
     Parameters
@@ -582,6 +582,9 @@ def solve_many(system, t_span: Sequence[float], y0s, *, params=None, t_eval=None
     jac : callable or array_like (n, n), optional
         As for :func:`solve`: the Jacobian for the implicit methods, called as
         the system is (a constant matrix runs in C on every thread).
+    jac_sparsity : array_like (n, n) or scipy.sparse matrix, optional
+        As for :func:`solve`: the Jacobian's pattern, whose band serves the
+        finite differences and ``radau``'s band LU of every trajectory.
     errors : {"auto", "raise", "status"}
         As for :func:`solve`, per trajectory: ``"auto"`` reports the step
         budget and step size in ``status`` and raises the first trajectory
@@ -668,6 +671,7 @@ def solve_many(system, t_span: Sequence[float], y0s, *, params=None, t_eval=None
         if isinstance(jac, (str, bytes)):
             raise TypeError("jac must be callable or a constant (n, n) array")
         jac = as_array(jac, "jac", shape=(n, n))
+    band = _jac_band(jac_sparsity, system, n)
     errors = _errors_mode(errors)
     check = getattr(system, "_check_initial", None)   # e.g. constraints a scene imposes
     if check is not None and k:   # singular rows: statuses under errors="status"
@@ -688,7 +692,7 @@ def solve_many(system, t_span: Sequence[float], y0s, *, params=None, t_eval=None
                                      threads=int(nthreads),
                                      progress=bool(progress) if bar is None else bar.report,
                                      watch=watch, lanes=want_lanes, events=evs or None,
-                                     terminal=term, direction=dirs, jac=jac)
+                                     terminal=term, direction=dirs, jac=jac, band=band)
         if bar is not None:
             bar.report(k, k)    # the C side reports from one thread: it may miss the last
     finally:

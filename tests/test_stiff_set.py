@@ -453,6 +453,14 @@ def test_jac_sparsity_forms_and_refusals():
         mp.solve(f, (0, 0.5), y0, jac_sparsity=np.full((n, n), np.nan), **kw)
     with pytest.raises(TypeError, match="jac_sparsity"):
         mp.solve(f, (0, 0.5), y0, jac_sparsity="band", **kw)
+    # solve_many: each trajectory as solve runs it alone, with its band; a C rhs
+    # (a compiled system) runs there with the GIL released, so the band is the core's
+    Ys = np.array([y0, 0.5 * y0])
+    e = mp.solve_many(f, (0, 0.5), Ys, jac_sparsity=A != 0, **kw)
+    np.testing.assert_array_equal(e.y[0, :, -1], a.y[:, -1])
+    assert e.nfev[0] == a.nfev
+    with pytest.raises(ValueError, match="jac_sparsity"):
+        mp.solve_many(f, (0, 0.5), Ys, jac_sparsity=np.ones((n, 2)), **kw)
     # a complex state: the real system's pattern, the band then spans it (dense)
     c = mp.solve(lambda t, y: -1j * y, (0, 1.0), [1.0 + 0j, 0.5j], method="radau",
                  rtol=1e-10, atol=1e-12, jac_sparsity=np.eye(2))
@@ -478,6 +486,9 @@ def test_compiled_equations_know_their_band():
     dense = mp.solve(scene, span, y0, jac_sparsity=np.ones((40, 40)), **kw)
     assert band.success and dense.success
     np.testing.assert_allclose(band.y, dense.y, rtol=1e-8)
+    many = mp.solve_many(scene, span, np.array([y0, y0]), method="radau", rtol=1e-8, atol=atol)
+    np.testing.assert_array_equal(many.y[1, :, -1], band.y[:, -1])
+    assert many.nfev[1] == band.nfev
     # a coupled system has no narrow band: dense, as before
     q = sp.symbols("q0:3")
     full = mp.equations([q[1] * q[2], -q[0] * q[2], q[0] * q[1]], list(q))

@@ -825,6 +825,27 @@ static void event_fns_free(py_events *pe)
     memset(pe, 0, sizeof *pe);
 }
 
+/* Contract: the Jacobian's band of integrate.py's _jac_band (None: dense, or
+ * (ml, mu) >= 0) set on p; -1 with an exception for anything else. */
+static int band_parse(PyObject *band, mp_ode_problem *p)
+{
+    if (band == Py_None) return 0;
+    Py_ssize_t ml = -1, mu = -1;
+    if (!PyTuple_Check(band) || !PyArg_ParseTuple(band, "nn;band must be a tuple (ml, mu)", &ml,
+                                                  &mu)) {
+        if (!PyErr_Occurred()) PyErr_SetString(PyExc_TypeError, "band must be a tuple (ml, mu)");
+        return -1;
+    }
+    if (ml < 0 || mu < 0) {
+        PyErr_SetString(PyExc_ValueError, "band (ml, mu) must be >= 0");
+        return -1;
+    }
+    p->banded = 1;
+    p->ml = (size_t)ml;
+    p->mu = (size_t)mu;
+    return 0;
+}
+
 /* ---- ode_solve ------------------------------------------------------------ */
 
 /* Contract: ode_solve(method, system, y0, t0, tf, rtol, atol, t_eval, h,
@@ -883,18 +904,7 @@ static PyObject *py_ode_solve(PyObject *self, PyObject *const *argv, Py_ssize_t 
     if (ode_args_from_argv(argv + 3, n, &oa, &o) < 0) goto out;
     if (py_system_parse(spec, n, &sys) < 0) goto out;
     mp_ode_problem prob = sys.prob;
-    if (argv[19] != Py_None) {
-        Py_ssize_t ml = -1, mu = -1;
-        if (!PyArg_ParseTuple(argv[19], "nn;band must be a tuple (ml, mu)", &ml, &mu))
-            goto out;
-        if (ml < 0 || mu < 0) {
-            PyErr_SetString(PyExc_ValueError, "band (ml, mu) must be >= 0");
-            goto out;
-        }
-        prob.banded = 1;
-        prob.ml = (size_t)ml;
-        prob.mu = (size_t)mu;
-    }
+    if (band_parse(argv[19], &prob) < 0) goto out;
     int holds_python = sys.holds_python;
     if (m->symplectic && !m->implicit && prob.nq == 0) { /* the scene rows say which are */
         char why[256];
@@ -1198,16 +1208,17 @@ static PyObject *py_ode_solve_many(PyObject *self, PyObject *args, PyObject *kw)
     (void)self;
     static char *kwlist[] = {"method", "system", "y0s", "options", "params", "args", "threads",
                              "progress", "watch", "lanes", "events", "terminal", "direction",
-                             "jac", NULL};
+                             "jac", "band", NULL};
     const char *mname;
     PyObject *spec, *y0o, *opts, *paro = Py_None, *eargs = NULL, *watch = Py_None;
     PyObject *evo = Py_None, *termo = Py_None, *diro = Py_None, *jaco = Py_None;
+    PyObject *bando = Py_None;
     int threads = 1, want_lanes = -1;
     PyObject *progress = Py_False; /* False, True (a stderr line) or a callable report(done, total) */
-    if (!PyArg_ParseTupleAndKeywords(args, kw, "sOOO!|$OO!iOOiOOOO", kwlist, &mname, &spec,
+    if (!PyArg_ParseTupleAndKeywords(args, kw, "sOOO!|$OO!iOOiOOOOO", kwlist, &mname, &spec,
                                      &y0o, &PyTuple_Type, &opts, &paro, &PyTuple_Type, &eargs,
                                      &threads, &progress, &watch, &want_lanes, &evo, &termo,
-                                     &diro, &jaco))
+                                     &diro, &jaco, &bando))
         return NULL;
     if (PyTuple_GET_SIZE(opts) != 9) {
         PyErr_SetString(PyExc_TypeError, "options: t0, tf, rtol, atol, t_eval, h, first_step, "
@@ -1252,6 +1263,7 @@ static PyObject *py_ode_solve_many(PyObject *self, PyObject *args, PyObject *kw)
         np = (size_t)PyArray_DIM(par, 1);
     }
     if (py_system_parse(spec, n, &sys) < 0) goto out;
+    if (band_parse(bando, &sys.prob) < 0) goto out;
     const char *kind = PyUnicode_AsUTF8(PyTuple_GET_ITEM(spec, 0));
     if (par && !sys.model && !sys.params && !sys.holds_python && sys.cfn.nq) {
         PyErr_SetString(PyExc_ValueError, "params are not supported for SecondOrder C callbacks");
