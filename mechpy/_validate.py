@@ -156,3 +156,41 @@ def as_finite_result(x, what: str, cause: str) -> np.ndarray:
         kind = "NaN" if np.isnan(a).any() else "inf"
         raise NonFiniteError(f"{what} overflowed float64 (the result contains {kind}): {cause}")
     return x
+
+
+#: radau's band form pays where BAND_WIDE (ml + mu + 1) <= n and n >= 16
+#: (csrc/ode/radau.c's BAND_WIDE, lu.h's MP_ODE_LU_SMALL)
+BAND_WIDE, BAND_MIN_N = 3, 16
+
+
+def band_of_pattern(rows, cols, n: int):
+    """The band of an (n, n) Jacobian whose nonzero entries are at (rows[k],
+    cols[k]), as the C core takes it (``mp_ode_problem``'s ml, mu, perm):
+    (ml, mu) in the states' own order; (ml, mu, perm) in the order perm, the
+    reverse Cuthill-McKee order of the symmetrised pattern (SciPy's), when
+    that band is narrower and the own one too wide for radau's band form (a
+    system written y = (q, v): its Jacobian [[0, I], [K, C]] has band n/2,
+    the interleaved order a few); None when the band covers the matrix."""
+    rows = np.asarray(rows, dtype=np.int64)
+    cols = np.asarray(cols, dtype=np.int64)
+
+    def band(r, c):
+        d = r - c
+        return (int(max(d.max(), 0)), int(max(-d.min(), 0))) if d.size else (0, 0)
+    ml, mu = band(rows, cols)
+    if BAND_WIDE * (ml + mu + 1) > n >= BAND_MIN_N:
+        try:
+            from scipy.sparse import coo_matrix
+            from scipy.sparse.csgraph import reverse_cuthill_mckee
+        except ImportError:      # without SciPy: the states' own order
+            pass
+        else:
+            g = coo_matrix((np.ones(2 * rows.size), (np.r_[rows, cols], np.r_[cols, rows])),
+                           shape=(n, n)).tocsr()
+            perm = np.asarray(reverse_cuthill_mckee(g, symmetric_mode=True), dtype=np.int64)
+            where = np.empty(n, dtype=np.int64)
+            where[perm] = np.arange(n)
+            pl, pu = band(where[rows], where[cols])
+            if pl + pu < ml + mu:
+                return (pl, pu, perm.tolist())
+    return (ml, mu) if ml + mu + 1 < n else None

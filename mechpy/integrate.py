@@ -27,7 +27,7 @@ from ._solution import (_STATUS, DenseOutput, EnsembleSolution, Solution,  # noq
 from ._system import (SCIPY_METHODS, SecondOrder, _as_args, _catch_unraisable,  # noqa: F401
                       _ensemble_params, _events_spec, _method_names, _python_fun,
                       _rigid_split_check, _system_spec, _watch_list, methods)
-from ._validate import as_array, as_int, as_scalar
+from ._validate import as_array, as_int, as_scalar, band_of_pattern
 
 __all__ = ["solve", "solve_many", "methods", "Solution", "EnsembleSolution", "DenseOutput",
            "SecondOrder"]
@@ -216,9 +216,11 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
         ``auto``'s stiff part) factorise their Newton matrices in band form
         where 3 (ml + mu + 1) <= n and n >= 16 (LAPACK's ``dgbtrf``).
         Entries of an analytic ``jac`` outside the band are not read then.
-        Systems from :func:`mechpy.symbolic.equations` bring their own
-        pattern, from the symbolic Jacobian.  Number the states so that
-        coupled ones are close (a chain: (x_1, v_1, x_2, v_2, ...)).
+        Where the states' own order has too wide a band (a system written
+        y = (q, v)) and SciPy is installed, the band is that of the reverse
+        Cuthill-McKee order (``scipy.sparse.csgraph``), in which the Newton
+        matrices are factorised.  Systems from :func:`mechpy.symbolic.equations`
+        bring their own pattern, from the symbolic Jacobian.
     errors : {"auto", "raise", "status"}
         What a failure does.  ``"auto"``: the integration giving up (step
         budget, step size) ends with ``status = -1`` and a message, as
@@ -391,10 +393,10 @@ def _is_complex(y0) -> bool:
 
 
 def _jac_band(jac_sparsity, system, n: int):
-    """The Jacobian's band (ml, mu) for the core, from jac_sparsity (an (n, n)
-    pattern: array_like or scipy.sparse) or, without one, the system's own
-    (``_jac_band``: a compiled system's, from its symbolic Jacobian); None when
-    the band covers the matrix (dense)."""
+    """The Jacobian's band for the core (``_validate.band_of_pattern``), from
+    jac_sparsity (an (n, n) pattern: array_like or scipy.sparse) or, without
+    one, the system's own (``_jac_band``: a compiled system's, from the zeros
+    of its symbolic Jacobian); None: dense."""
     if jac_sparsity is None:
         return getattr(system, "_jac_band", None)
     if hasattr(jac_sparsity, "tocoo"):     # scipy.sparse: its stored nonzeros
@@ -406,9 +408,7 @@ def _jac_band(jac_sparsity, system, n: int):
         rows, cols = c.row[keep], c.col[keep]
     else:
         rows, cols = np.nonzero(as_array(jac_sparsity, "jac_sparsity", shape=(n, n)))
-    d = rows.astype(np.int64) - cols.astype(np.int64)
-    ml, mu = (int(max(d.max(), 0)), int(max(-d.min(), 0))) if d.size else (0, 0)
-    return (ml, mu) if ml + mu + 1 < n else None
+    return band_of_pattern(rows, cols, n)
 
 
 def _solve_complex(system, t_span, y0, kw) -> Solution:

@@ -50,25 +50,32 @@ int mp_ode_ws_jac(mp_ode_ws *w, double t, const double *y, const double *f0, dou
      * perturbs them all (Curtis, Powell and Reid's grouping); dense, each
      * column is a group of its own */
     size_t ml = n - 1, mu = n - 1;
+    const size_t *perm = NULL; /* the band's order: state perm[c] is its c-th */
     if (w->p->banded && w->p->ml + w->p->mu + 1 < n) {
         ml = w->p->ml;
         mu = w->p->mu;
+        perm = w->p->perm;
         memset(jac, 0, n * n * sizeof(double));
     }
     size_t width = ml + mu + 1;
     memcpy(scratch_y, y, n * sizeof(double));
     for (size_t g = 0; g < width && g < n; g++) {
-        for (size_t j = g; j < n; j += width) {
+        for (size_t c = g; c < n; c += width) {
+            size_t j = perm ? perm[c] : c;
             double scale = fmax(fabs(y[j]), w->o->atol[j] / w->o->rtolv[j]);
             if (!(scale > 0)) scale = 1.0;
             scratch_y[j] = y[j] + sqrt(DBL_EPSILON) * scale;
         }
         int rc = mp_ode_ws_rhs(w, t, scratch_y, scratch_f);
         if (rc != MP_OK) return rc;
-        for (size_t j = g; j < n; j += width) {
+        for (size_t c = g; c < n; c += width) {
+            size_t j = perm ? perm[c] : c;
             double d = scratch_y[j] - y[j]; /* the increment actually representable */
-            size_t i0 = j > mu ? j - mu : 0, i1 = j + ml < n ? j + ml + 1 : n;
-            for (size_t i = i0; i < i1; i++) jac[i * n + j] = (scratch_f[i] - f0[i]) / d;
+            size_t r0 = c > mu ? c - mu : 0, r1 = c + ml < n ? c + ml + 1 : n;
+            for (size_t r = r0; r < r1; r++) {
+                size_t i = perm ? perm[r] : r;
+                jac[i * n + j] = (scratch_f[i] - f0[i]) / d;
+            }
             scratch_y[j] = y[j];
         }
     }

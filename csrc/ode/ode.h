@@ -115,13 +115,16 @@ typedef struct mp_ode_problem {
      * before it */
     const mp_ode_switch *sw;
     /* optional: the Jacobian's band (SciPy's jac_sparsity, LSODA's lband and
-     * uband): when banded, df_i/dy_j is zero for i - j > ml and for j - i > mu.
-     * Finite differences then perturb columns ml + mu + 1 apart together
-     * (mp_ode_ws_jac), and radau factorises in band form where that is the
-     * cheaper (an analytic Jacobian's entries outside the band are not read
-     * there).  0: dense. */
+     * uband): when banded, df_i/dy_j is zero for i - j > ml and for j - i > mu,
+     * i and j counted in the order perm gives (the states perm[0], perm[1],
+     * ...: a bandwidth-reducing order, reverse Cuthill-McKee's; NULL: their
+     * own).  Finite differences then perturb columns ml + mu + 1 apart
+     * together (mp_ode_ws_jac), and radau factorises in band form where that
+     * is the cheaper (an analytic Jacobian's entries outside the band are not
+     * read there).  0: dense. */
     int banded;
     size_t ml, mu;
+    const size_t *perm;
 } mp_ode_problem;
 
 /* Contract: the problem p on the branch of the state (t, y): the switches it is

@@ -78,6 +78,9 @@ typedef struct {
     int n;
     double *J;              /* n x n row-major */
     int band, kl, ku, ldab; /* band form: LUr, LUc hold n columns of ldab */
+    const size_t *perm;     /* band form: the band's order of the states, or NULL */
+    double *pb;             /* ... a right-hand side in that order (n) */
+    double complex *pbc;
     double *dinv_r;         /* band form: 1 / U_ii of each factorisation */
     double complex *dinv_c;
     double *LUr;            /* column-major */
@@ -110,6 +113,8 @@ static void radau_free(mp_ode_ws *w)
     free(st->rtol_t);
     free(st->dinv_r);
     free(st->dinv_c);
+    free(st->pb);
+    free(st->pbc);
     free(st);
     w->state = NULL;
 }
@@ -142,6 +147,11 @@ static int radau_alloc(mp_ode_ws *w)
         st->dinv_r = malloc(n * sizeof(double));
         st->dinv_c = malloc(n * sizeof(double complex));
         if (!st->dinv_r || !st->dinv_c) return MP_ENOMEM;
+        if ((st->perm = p->perm)) {
+            st->pb = malloc(n * sizeof(double));
+            st->pbc = malloc(n * sizeof(double complex));
+            if (!st->pb || !st->pbc) return MP_ENOMEM;
+        }
     }
     st->J = malloc(n * n * sizeof(double));
     st->LUr = malloc(nlu * sizeof(double));
@@ -223,10 +233,12 @@ static int radau_lu(mp_ode_ws *w, double h)
         /* rows 0..kl-1 of each column receive the fill-in */
         memset(st->LUr, 0, (size_t)ld * n * sizeof(double));
         memset(st->LUc, 0, (size_t)ld * n * sizeof(double complex));
+        const size_t *pm = st->perm;
         for (int j = 0; j < n; j++) {
             int i0 = j > ku ? j - ku : 0, i1 = j + kl < n ? j + kl + 1 : n;
+            size_t pj = pm ? pm[j] : (size_t)j;
             for (int i = i0; i < i1; i++) {
-                double a = -st->J[(size_t)i * n + j];
+                double a = -st->J[(pm ? pm[i] : (size_t)i) * (size_t)n + pj];
                 size_t at = (size_t)j * ld + (size_t)(kl + ku + i - j);
                 st->LUr[at] = a + (i == j ? mr : 0.0);
                 st->LUc[at] = a + (i == j ? mc : 0.0);
@@ -260,6 +272,12 @@ static int radau_lu(mp_ode_ws *w, double h)
 
 static void solve_real(radau_state *st, double *b)
 {
+    if (st->band && st->perm) { /* P A P^T factorised: solve for P x from P b */
+        for (int i = 0; i < st->n; i++) st->pb[i] = b[st->perm[i]];
+        mp_ode_gbtrs(st->n, st->kl, st->ku, st->LUr, st->ldab, st->piv_r, st->dinv_r, st->pb);
+        for (int i = 0; i < st->n; i++) b[st->perm[i]] = st->pb[i];
+        return;
+    }
     if (st->band) {
         mp_ode_gbtrs(st->n, st->kl, st->ku, st->LUr, st->ldab, st->piv_r, st->dinv_r, b);
         return;
@@ -269,6 +287,12 @@ static void solve_real(radau_state *st, double *b)
 
 static void solve_complex(radau_state *st, double complex *b)
 {
+    if (st->band && st->perm) {
+        for (int i = 0; i < st->n; i++) st->pbc[i] = b[st->perm[i]];
+        mp_ode_zgbtrs(st->n, st->kl, st->ku, st->LUc, st->ldab, st->piv_c, st->dinv_c, st->pbc);
+        for (int i = 0; i < st->n; i++) b[st->perm[i]] = st->pbc[i];
+        return;
+    }
     if (st->band) {
         mp_ode_zgbtrs(st->n, st->kl, st->ku, st->LUc, st->ldab, st->piv_c, st->dinv_c, b);
         return;

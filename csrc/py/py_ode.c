@@ -825,20 +825,46 @@ static void event_fns_free(py_events *pe)
     memset(pe, 0, sizeof *pe);
 }
 
-/* Contract: the Jacobian's band of integrate.py's _jac_band (None: dense, or
- * (ml, mu) >= 0) set on p; -1 with an exception for anything else. */
-static int band_parse(PyObject *band, mp_ode_problem *p)
+/* Contract: the Jacobian's band of integrate.py's _jac_band set on p (of n
+ * states): None (dense), (ml, mu) >= 0, or (ml, mu, perm) with perm a
+ * permutation of 0..n-1 (a sequence of ints), copied into *perm_out, which
+ * the caller frees with PyMem_Free; -1 with an exception for anything else. */
+static int band_parse(PyObject *band, size_t n, mp_ode_problem *p, size_t **perm_out)
 {
+    *perm_out = NULL;
     if (band == Py_None) return 0;
     Py_ssize_t ml = -1, mu = -1;
-    if (!PyTuple_Check(band) || !PyArg_ParseTuple(band, "nn;band must be a tuple (ml, mu)", &ml,
-                                                  &mu)) {
+    PyObject *permo = Py_None;
+    if (!PyTuple_Check(band) ||
+        !PyArg_ParseTuple(band, "nn|O;band must be a tuple (ml, mu[, perm])", &ml, &mu, &permo)) {
         if (!PyErr_Occurred()) PyErr_SetString(PyExc_TypeError, "band must be a tuple (ml, mu)");
         return -1;
     }
     if (ml < 0 || mu < 0) {
         PyErr_SetString(PyExc_ValueError, "band (ml, mu) must be >= 0");
         return -1;
+    }
+    if (permo != Py_None) {
+        PyObject *seq = PySequence_Fast(permo, "band's perm must be a sequence");
+        if (!seq) return -1;
+        size_t *perm = PyMem_Calloc(n ? n : 1, sizeof *perm);
+        unsigned char *seen = PyMem_Calloc(n ? n : 1, 1);
+        int ok = perm && seen && (size_t)PySequence_Fast_GET_SIZE(seq) == n;
+        for (size_t i = 0; ok && i < n; i++) {
+            Py_ssize_t v = PyLong_AsSsize_t(PySequence_Fast_GET_ITEM(seq, (Py_ssize_t)i));
+            ok = v >= 0 && (size_t)v < n && !seen[v];
+            if (ok) seen[v] = 1, perm[i] = (size_t)v;
+        }
+        Py_DECREF(seq);
+        PyMem_Free(seen);
+        if (!ok) {
+            PyMem_Free(perm);
+            if (!PyErr_Occurred())
+                PyErr_Format(PyExc_ValueError, "band's perm must be a permutation of 0..%zu",
+                             n ? n - 1 : 0);
+            return -1;
+        }
+        p->perm = *perm_out = perm;
     }
     p->banded = 1;
     p->ml = (size_t)ml;
@@ -887,6 +913,7 @@ static PyObject *py_ode_solve(PyObject *self, PyObject *const *argv, Py_ssize_t 
     }
     PyArrayObject *y0 = NULL, *jm = NULL;
     PyObject *result = NULL;
+    size_t *perm = NULL;
     py_event_list el = {0};
     ode_args oa = {0};
     mp_ode_options o;
@@ -904,7 +931,7 @@ static PyObject *py_ode_solve(PyObject *self, PyObject *const *argv, Py_ssize_t 
     if (ode_args_from_argv(argv + 3, n, &oa, &o) < 0) goto out;
     if (py_system_parse(spec, n, &sys) < 0) goto out;
     mp_ode_problem prob = sys.prob;
-    if (band_parse(argv[19], &prob) < 0) goto out;
+    if (band_parse(argv[19], n, &prob, &perm) < 0) goto out;
     int holds_python = sys.holds_python;
     if (m->symplectic && !m->implicit && prob.nq == 0) { /* the scene rows say which are */
         char why[256];
@@ -953,6 +980,7 @@ out:
     event_list_clear(&el);
     Py_XDECREF(y0);
     Py_XDECREF(jm);
+    PyMem_Free(perm);
     return result;
 }
 
@@ -1245,6 +1273,7 @@ static PyObject *py_ode_solve_many(PyObject *self, PyObject *args, PyObject *kw)
     py_system sys;
     memset(&sys, 0, sizeof sys);
     size_t k = 0, np = 0;
+    size_t *perm = NULL;
 
     if (!(y0s = mp_py_array(y0o, "y0s", 2))) goto out;
     k = ad.k = (size_t)PyArray_DIM(y0s, 0);
@@ -1263,7 +1292,7 @@ static PyObject *py_ode_solve_many(PyObject *self, PyObject *args, PyObject *kw)
         np = (size_t)PyArray_DIM(par, 1);
     }
     if (py_system_parse(spec, n, &sys) < 0) goto out;
-    if (band_parse(bando, &sys.prob) < 0) goto out;
+    if (band_parse(bando, n, &sys.prob, &perm) < 0) goto out;
     const char *kind = PyUnicode_AsUTF8(PyTuple_GET_ITEM(spec, 0));
     if (par && !sys.model && !sys.params && !sys.holds_python && sys.cfn.nq) {
         PyErr_SetString(PyExc_ValueError, "params are not supported for SecondOrder C callbacks");
@@ -1376,6 +1405,7 @@ out:
     Py_XDECREF(par);
     Py_XDECREF(yout);
     Py_XDECREF(jm);
+    PyMem_Free(perm);
     return result;
 }
 

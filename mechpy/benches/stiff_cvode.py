@@ -264,8 +264,9 @@ def run(quick: bool):
                 ref = mp.solve(scene, span, y0, method="radau", rtol=1e-12,
                                atol=1e-14).y[:, -1]
             band = scene._jac_band    # from the symbolic Jacobian
-            if band is not None and not (n >= 16 and 3 * (band[0] + band[1] + 1) <= n):
-                band = None           # radau factorises it dense (integrate.solve)
+            if band is not None and (len(band) > 2 or
+                                     not (n >= 16 and 3 * (band[0] + band[1] + 1) <= n)):
+                band = None           # radau dense, or in an order CVODE's band has not
             exe = exe_band = None
             if why is None:
                 try:

@@ -106,8 +106,8 @@ def _meta(ir, source, constraints=(), numpy_blocks=False):
                 has_energy="energy" in ir.blocks, source=source,
                 equations=sp.srepr(ir.equations, order="none"),
                 constraints=[str(g) for g in constraints])
-    if ir.band is not None:
-        meta["band"] = list(ir.band)
+    if ir.jac_nonzeros is not None:
+        meta["jac_nonzeros"] = [list(e) for e in ir.jac_nonzeros]
     if numpy_blocks:
         sub = {p: sp.Symbol(f"mp_p{i}") for i, p in enumerate(ir.P)}
         meta["blocks"] = {k: sp.srepr([sp.sympify(e).xreplace(sub) for e in v], order="none")

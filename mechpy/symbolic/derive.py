@@ -57,9 +57,10 @@ class IR:
     sources: dict = field(default_factory=dict)
     #: plain symbol -> the symbol shown in messages (theta, theta', t)
     display: dict = field(default_factory=dict)
-    #: the Jacobian's band (ml, mu) from its symbolic zeros (equations), or None:
-    #: radau's band LU and grouped differences (integrate.solve's jac_sparsity)
-    band: tuple | None = None
+    #: the Jacobian's nonzero entries [(i, j), ...] from its symbolic zeros
+    #: (equations), or None: their band serves radau's band LU and grouped
+    #: differences (integrate.solve's jac_sparsity)
+    jac_nonzeros: list | None = None
 
     def show(self, e) -> str:
         """e as text in the user's names."""
@@ -536,8 +537,7 @@ def equations_ir(rhs, y, params=None, energy=None) -> IR:
     J = [d(fx[i], Y[j]) for i in range(n) for j in range(n)]
     ir = IR("equations", n, n, 0, 0, T, Y, P, [], [_name(x) for x in ys], names)
     ir.blocks = dict(f=fx, J=J)
-    d = [i - j for i in range(n) for j in range(n) if J[i * n + j] != 0]
-    ir.band = (max(max(d), 0), max(-min(d), 0)) if d else (0, 0)
+    ir.jac_nonzeros = [(i, j) for i in range(n) for j in range(n) if J[i * n + j] != 0]
     if ex:
         ir.blocks["energy"] = ex
     ir.sources = {**{f"rhs[{i}]": f for i, f in enumerate(fx)},

@@ -12,7 +12,7 @@ import ctypes
 import numpy as np
 
 from .. import _core
-from .._validate import as_array, as_finite_result, as_scalar
+from .._validate import as_array, as_finite_result, as_scalar, band_of_pattern
 from ..scenes import Scene
 
 __all__ = ["CompiledScene"]
@@ -116,9 +116,9 @@ class CompiledScene(Scene):
         self._nc = int(meta["nc"])
         self._k = int(meta["k"])
         self._backend = backend
-        band = meta.get("band")     # equations only: (ml, mu), when narrower than n
-        self._jac_band = (tuple(band) if band is not None and band[0] + band[1] + 1 < self._dim
-                          else None)
+        nz = meta.get("jac_nonzeros")   # equations only: their Jacobian's band, or None
+        self._jac_band = (None if nz is None else
+                          band_of_pattern([e[0] for e in nz], [e[1] for e in nz], self._dim))
         self._vec = np.array(list(self._params.values()), dtype=np.float64)
         self._eqs = None
         solve = ("the mass matrix d2L/dqd2" + (" with the constraint Jacobian" if self._k

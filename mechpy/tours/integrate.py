@@ -18,6 +18,50 @@ def _pendulum_exact(theta0, t, g=9.81, length=1.0):
     return np.array([2 * np.arcsin(k * sn), -2 * k * np.sqrt(g / length) * cn])
 
 
+def _brusselator(N):
+    """Hairer & Wanner's 1-D Brusselator with N grid points, the states (u_1,
+    v_1, u_2, ...): f and its Jacobian's pattern (band 2 + 2)."""
+    c = (N + 1) ** 2 / 50.0
+
+    def f(t, y):
+        u, v = y[0::2], y[1::2]
+        up, vp = np.concatenate(([1.0], u, [1.0])), np.concatenate(([3.0], v, [3.0]))
+        out = np.empty_like(y)
+        out[0::2] = 1 + u * u * v - 4 * u + c * (up[:-2] - 2 * u + up[2:])
+        out[1::2] = 3 * u - u * u * v + c * (vp[:-2] - 2 * v + vp[2:])
+        return out
+    i = np.arange(2 * N)
+    pattern = np.abs(i[:, None] - i[None, :]) <= 2
+    x = np.arange(1, N + 1) / (N + 1)
+    y0 = np.empty(2 * N)
+    y0[0::2], y0[1::2] = 1 + np.sin(2 * np.pi * x), 3.0
+    return f, pattern, y0
+
+
+def _stiff_banded():
+    """radau's band LU on a large stiff system, beside SciPy's Radau given the
+    same pattern (both finite-difference Jacobians, Python right-hand sides)."""
+    from scipy.integrate import solve_ivp
+    f, pattern, y0 = _brusselator(50)
+    ref = solve_ivp(f, (0, 10), y0, method="Radau", rtol=1e-11, atol=1e-12,
+                    jac_sparsity=pattern).y[:, -1]
+
+    def ours():
+        return mp.solve(f, (0, 10), y0, method="radau", rtol=1e-6, atol=1e-8,
+                        jac_sparsity=pattern)
+
+    def theirs():
+        return solve_ivp(f, (0, 10), y0, method="Radau", rtol=1e-6, atol=1e-8,
+                         jac_sparsity=pattern)
+    s, r = ours(), theirs()
+    e_mp = np.max(np.abs(s.y[:, -1] - ref)) / np.max(np.abs(ref))
+    e_sp = np.max(np.abs(r.y[:, -1] - ref)) / np.max(np.abs(ref))
+    line("Brusselator, 100 states, band 2+2, rtol 1e-6",
+         f"radau err {e_mp:.1e} nfev {s.nfev} nlu {s.nlu}",
+         t_mp=median_time(ours), t_ref=median_time(theirs, repeat=3),
+         ref_name=f"solve_ivp Radau (err {e_sp:.1e}, nfev {r.nfev})")
+
+
 def run(out: Path) -> None:
     from scipy.integrate import solve_ivp
 
@@ -62,6 +106,8 @@ def run(out: Path) -> None:
                                          atol=1e-12), repeat=3)
     line("Van der Pol to t = 100, rtol 1e-10", "dop853 C scene", t_mp=t_mp, t_ref=t_sp,
          ref_name="solve_ivp DOP853")
+
+    _stiff_banded()
 
     try:
         import matplotlib
