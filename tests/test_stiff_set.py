@@ -545,3 +545,21 @@ def test_band_without_scipy_keeps_the_states_order(monkeypatch):
     assert band_of_pattern(*np.nonzero(full), 2 * M) is None
     tri = np.eye(2 * M) + np.eye(2 * M, k=1)
     assert band_of_pattern(*np.nonzero(tri), 2 * M) == (0, 1)
+
+
+def test_band_lu_reads_only_the_band():
+    # the band form reads the analytic Jacobian within the band alone (the documented
+    # contract): entries added outside it change nothing, to the bit; dense, they
+    # change the Newton matrix and so the iterates
+    A, y0 = _chain()
+    far = np.zeros_like(A)
+    far[0, -1] = far[-1, 0] = 1e3
+
+    def f(t, y):
+        return A @ y
+    kw = dict(method="radau", rtol=1e-8, atol=1e-10, jac_sparsity=A != 0)
+    good = mp.solve(f, (0, 0.5), y0, jac=A, **kw)
+    noisy = mp.solve(f, (0, 0.5), y0, jac=A + far, **kw)
+    np.testing.assert_array_equal(noisy.y, good.y)
+    dense = mp.solve(f, (0, 0.5), y0, jac=A + far, method="radau", rtol=1e-8, atol=1e-10)
+    assert not np.array_equal(dense.y, good.y)
