@@ -399,13 +399,14 @@ def _jac_band(jac_sparsity, system, n: int):
     of its symbolic Jacobian); None: dense."""
     if jac_sparsity is None:
         return getattr(system, "_jac_band", None)
-    if hasattr(jac_sparsity, "tocoo"):     # scipy.sparse: its stored nonzeros
+    if hasattr(jac_sparsity, "tocoo"):
+        # scipy.sparse: its stored entries, explicit zeros too (as SciPy's
+        # group_columns reads a pattern: stored means possibly nonzero)
         if tuple(jac_sparsity.shape) != (n, n):
             raise ValueError(f"jac_sparsity must have shape ({n}, {n}), "
                              f"got {tuple(jac_sparsity.shape)}")
         c = jac_sparsity.tocoo()
-        keep = c.data != 0
-        rows, cols = c.row[keep], c.col[keep]
+        rows, cols = c.row, c.col
     else:
         rows, cols = np.nonzero(as_array(jac_sparsity, "jac_sparsity", shape=(n, n)))
     return band_of_pattern(rows, cols, n)

@@ -545,6 +545,25 @@ def test_band_without_scipy_keeps_the_states_order(monkeypatch):
     assert band_of_pattern(*np.nonzero(full), 2 * M) is None
     tri = np.eye(2 * M) + np.eye(2 * M, k=1)
     assert band_of_pattern(*np.nonzero(tri), 2 * M) == (0, 1)
+    # a band that spans the matrix (ml + mu + 1 = n) is dense
+    assert band_of_pattern(*np.nonzero(np.tril(full)), 2 * M) is None
+
+
+def test_band_reordering_is_tried_where_the_own_band_is_too_wide():
+    # at n = 29 the own band 4 + 5 (width 10, 3 x 10 > 29) is too wide for radau's band
+    # form: reverse Cuthill-McKee's order, the path 4 - 0 - 5, has band 1 + 1
+    from mechpy._validate import band_of_pattern
+    P = np.eye(29)
+    P[0, 5] = P[4, 0] = 1.0
+    b = band_of_pattern(*np.nonzero(P), 29)
+    assert len(b) == 3 and b[0] + b[1] <= 2, b
+    # a scipy.sparse pattern's stored entries count, explicit zeros too (as SciPy's)
+    import scipy.sparse
+    S = scipy.sparse.coo_matrix((np.r_[np.ones(29), 0.0], (np.r_[np.arange(29), 28],
+                                                           np.r_[np.arange(29), 0])))
+    from mechpy.integrate import _jac_band
+    b = _jac_band(S, None, 29)     # the stored zero at (28, 0): reordered to band 1 + 0
+    assert len(b) == 3 and b[0] + b[1] == 1, b
 
 
 def test_band_lu_reads_only_the_band():
