@@ -269,17 +269,40 @@ def test_integration_complex_as_real_pair():
         assert np.all(compute_error(res.sol(tc), y_true, rtol, atol) < 5)
 
 
-@pytest.mark.slow
-@pytest.mark.parametrize("method", ["radau", "gsl:msbdf", "BDF"])
+def medazko_sparsity(n):
+    # SciPy's, as its test writes it (a coo_matrix built (cols, rows))
+    from scipy.sparse import coo_matrix
+    cols, rows = [], []
+    i = np.arange(n) * 2
+    cols.append(i[1:])
+    rows.append(i[1:] - 2)
+    cols.append(i)
+    rows.append(i)
+    cols.append(i)
+    rows.append(i + 1)
+    cols.append(i[:-1])
+    rows.append(i[:-1] + 2)
+    i = np.arange(n) * 2 + 1
+    cols.append(i)
+    rows.append(i)
+    cols.append(i)
+    rows.append(i - 1)
+    cols, rows = np.hstack(cols), np.hstack(rows)
+    return coo_matrix((np.ones_like(cols), (cols, rows)))
+
+
+@pytest.mark.parametrize("method", ["radau", "Radau",    # GSL's BDF factorises dense: 1 s
+                                    pytest.param("gsl:msbdf", marks=pytest.mark.slow),
+                                    pytest.param("BDF", marks=pytest.mark.slow)])
 def test_integration_sparse_difference(method):
-    # SciPy passes jac_sparsity; mp.solve has none, so the 400 x 400 Jacobian is
-    # taken by dense finite differences (400 evaluations each: 5 s for radau,
-    # so "Radau", the same method, is not run again) - the same problem and
-    # reference values
+    # SciPy's test: the 400 x 400 Jacobian by finite differences with its
+    # jac_sparsity (band 2 + 2 here: 5 evaluations a Jacobian, and radau's band
+    # LU; with dense differences radau took 5 s), the same reference values
     n = 200
     y0 = np.zeros(2 * n)
     y0[1::2] = 1
-    res = mp.solve(fun_medazko, [0, 20], y0, method=method, rtol=1e-3, atol=1e-6)
+    res = mp.solve(fun_medazko, [0, 20], y0, method=method, rtol=1e-3, atol=1e-6,
+                   jac_sparsity=medazko_sparsity(n))
     assert_equal(res.t[0], 0)
     assert res.t_events is None and res.y_events is None
     assert res.success
