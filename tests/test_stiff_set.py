@@ -461,6 +461,20 @@ def test_jac_sparsity_forms_and_refusals():
     assert e.nfev[0] == a.nfev
     with pytest.raises(ValueError, match="jac_sparsity"):
         mp.solve_many(f, (0, 0.5), Ys, jac_sparsity=np.ones((n, 2)), **kw)
+    # the core refuses a band it cannot use (a system's own _jac_band reaches it
+    # unchecked by Python): a value error, never a read out of bounds
+    class Own:
+        def __call__(self, t, y):
+            return A @ y
+    own = Own()
+    for bad, what in [((n, 0), "< n"), ((0, 2**62), "< n"), ((-1, 1), ">= 0"),
+                      ((1, 1, list(range(n - 1)) + [0]), "permutation"),
+                      ((1, 1, [n] + list(range(1, n))), "permutation")]:
+        own._jac_band = bad
+        with pytest.raises(ValueError, match=what):
+            mp.solve(own, (0, 0.5), y0, **kw)
+    own._jac_band = (3, 1, list(range(n)))   # the chain's band in the identity order
+    np.testing.assert_array_equal(mp.solve(own, (0, 0.5), y0, **kw).y, a.y)
     # a complex state: the real system's pattern, the band then spans it (dense)
     c = mp.solve(lambda t, y: -1j * y, (0, 1.0), [1.0 + 0j, 0.5j], method="radau",
                  rtol=1e-10, atol=1e-12, jac_sparsity=np.eye(2))

@@ -826,7 +826,7 @@ static void event_fns_free(py_events *pe)
 }
 
 /* Contract: the Jacobian's band of integrate.py's _jac_band set on p (of n
- * states): None (dense), (ml, mu) >= 0, or (ml, mu, perm) with perm a
+ * states): None (dense), 0 <= ml, mu < n, or (ml, mu, perm) with perm a
  * permutation of 0..n-1 (a sequence of ints), copied into *perm_out, which
  * the caller frees with PyMem_Free; -1 with an exception for anything else. */
 static int band_parse(PyObject *band, size_t n, mp_ode_problem *p, size_t **perm_out)
@@ -840,8 +840,8 @@ static int band_parse(PyObject *band, size_t n, mp_ode_problem *p, size_t **perm
         if (!PyErr_Occurred()) PyErr_SetString(PyExc_TypeError, "band must be a tuple (ml, mu)");
         return -1;
     }
-    if (ml < 0 || mu < 0) {
-        PyErr_SetString(PyExc_ValueError, "band (ml, mu) must be >= 0");
+    if (ml < 0 || mu < 0 || (size_t)ml >= n || (size_t)mu >= n) {
+        PyErr_Format(PyExc_ValueError, "band (ml, mu) must be >= 0 and < n = %zu", n);
         return -1;
     }
     if (permo != Py_None) {
