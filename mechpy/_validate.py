@@ -13,6 +13,8 @@ import operator
 
 import numpy as np
 
+from . import _core
+
 __all__ = ["as_array", "as_scalar", "as_int", "as_vector3", "as_symmetric", "as_square",
            "as_finite_result"]
 
@@ -158,9 +160,9 @@ def as_finite_result(x, what: str, cause: str) -> np.ndarray:
     return x
 
 
-#: radau's band form pays where BAND_WIDE (ml + mu + 1) <= n and n >= 16
-#: (csrc/ode/radau.c's BAND_WIDE, lu.h's MP_ODE_LU_SMALL)
-BAND_WIDE, BAND_MIN_N = 3, 16
+#: radau's band form pays where BAND_WIDE (ml + mu + 1) <= n >= BAND_MIN_N
+#: (csrc/ode/lu.h's mp_ode_band_pays, whose numbers these are)
+BAND_WIDE, BAND_MIN_N = _core.BAND_WIDE, _core.BAND_MIN_N
 
 
 def band_of_pattern(rows, cols, n: int):

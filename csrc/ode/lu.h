@@ -20,6 +20,16 @@
 #include <stddef.h>
 
 #define MP_ODE_LU_SMALL 16 /* by hand below this size, by LAPACK from it */
+#define MP_ODE_BAND_WIDE 3 /* see mp_ode_band_pays */
+
+/* Contract: whether an n x n matrix of band ml + mu is factorised in band
+ * form (radau): where MP_ODE_BAND_WIDE (ml + mu + 1) <= n and n is not small
+ * (MP_ODE_LU_SMALL); below, the dense LU is as cheap.  Python's
+ * _validate.band_of_pattern reads both numbers from _core. */
+static inline int mp_ode_band_pays(size_t n, size_t ml, size_t mu)
+{
+    return n >= MP_ODE_LU_SMALL && MP_ODE_BAND_WIDE * (ml + mu + 1) <= n;
+}
 
 /* LAPACK (Fortran calling convention): the factorisations radau and gauss4
  * call, and the solves below for MP_ODE_LU_SMALL and larger */

@@ -41,7 +41,7 @@
  *   30x further from its reference, 5.4e-10).
  *
  * A banded problem (mp_ode_problem.banded, SciPy's jac_sparsity) whose band
- * is narrow (BAND_WIDE below) is factorised in LAPACK's band form: the pair
+ * is narrow (lu.h's mp_ode_band_pays) is factorised in LAPACK's band form: the pair
  * then costs O(n (ml + mu) ml) instead of O(n^3) (the 200-state Brusselator,
  * band 2 + 2: a dense pair took about 1.5 ms).
  */
@@ -62,8 +62,6 @@
 #define QUOT1 0.0        /* keep h and the LU pair when the new step is within */
 #define QUOT2 1.2        /* QUOT1 ... QUOT2 times the old */
 #define TOL_CAP 2.0      /* rtol' = 0.1 rtol^(2/3), at most TOL_CAP rtol */
-#define BAND_WIDE 3      /* band form while BAND_WIDE (ml + mu + 1) <= n and n is not
-                            small (MP_ODE_LU_SMALL): below, the dense LU is as cheap */
 
 static const double rc_c[3] = {(4.0 - S6) / 10.0, (4.0 + S6) / 10.0, 1.0};
 static const double rc_e[3] = {(-13.0 - 7.0 * S6) / 3.0, (-13.0 + 7.0 * S6) / 3.0, -1.0 / 3.0};
@@ -146,7 +144,7 @@ static int radau_alloc(mp_ode_ws *w)
     st->n = (int)n;
     const mp_ode_problem *p = w->p;
     size_t nlu = n * n;
-    if (p->banded && n >= MP_ODE_LU_SMALL && BAND_WIDE * (p->ml + p->mu + 1) <= n) {
+    if (p->banded && mp_ode_band_pays(n, p->ml, p->mu)) {
         st->band = 1;
         st->kl = (int)p->ml;
         st->ku = (int)p->mu;
@@ -280,32 +278,29 @@ static int radau_lu(mp_ode_ws *w, double h)
 
 static void solve_real(radau_state *st, double *b)
 {
-    if (st->band && st->perm) { /* P A P^T factorised: solve for P x from P b */
-        for (int i = 0; i < st->n; i++) st->pb[i] = b[st->perm[i]];
-        mp_ode_gbtrs(st->n, st->kl, st->ku, st->LUr, st->ldab, st->piv_r, st->dinv_r, st->pb);
-        for (int i = 0; i < st->n; i++) b[st->perm[i]] = st->pb[i];
+    if (!st->band) {
+        mp_ode_getrs(st->n, st->LUr, st->piv_r, b);
         return;
     }
-    if (st->band) {
-        mp_ode_gbtrs(st->n, st->kl, st->ku, st->LUr, st->ldab, st->piv_r, st->dinv_r, b);
-        return;
-    }
-    mp_ode_getrs(st->n, st->LUr, st->piv_r, b);
+    /* P A P^T factorised: solve for P x from P b */
+    const size_t *pm = st->perm;
+    double *x = pm ? st->pb : b;
+    for (int i = 0; pm && i < st->n; i++) x[i] = b[pm[i]];
+    mp_ode_gbtrs(st->n, st->kl, st->ku, st->LUr, st->ldab, st->piv_r, st->dinv_r, x);
+    for (int i = 0; pm && i < st->n; i++) b[pm[i]] = x[i];
 }
 
 static void solve_complex(radau_state *st, double complex *b)
 {
-    if (st->band && st->perm) {
-        for (int i = 0; i < st->n; i++) st->pbc[i] = b[st->perm[i]];
-        mp_ode_zgbtrs(st->n, st->kl, st->ku, st->LUc, st->ldab, st->piv_c, st->dinv_c, st->pbc);
-        for (int i = 0; i < st->n; i++) b[st->perm[i]] = st->pbc[i];
+    if (!st->band) {
+        mp_ode_zgetrs(st->n, st->LUc, st->piv_c, b);
         return;
     }
-    if (st->band) {
-        mp_ode_zgbtrs(st->n, st->kl, st->ku, st->LUc, st->ldab, st->piv_c, st->dinv_c, b);
-        return;
-    }
-    mp_ode_zgetrs(st->n, st->LUc, st->piv_c, b);
+    const size_t *pm = st->perm;
+    double complex *x = pm ? st->pbc : b;
+    for (int i = 0; pm && i < st->n; i++) x[i] = b[pm[i]];
+    mp_ode_zgbtrs(st->n, st->kl, st->ku, st->LUc, st->ldab, st->piv_c, st->dinv_c, x);
+    for (int i = 0; pm && i < st->n; i++) b[pm[i]] = x[i];
 }
 
 /* Newton iterations on the collocation system (RADAU5's loop); returns 1 when

@@ -4,6 +4,7 @@
 #include "mp_py.h"
 
 #include "ode/lanes.h"
+#include "ode/lu.h"
 
 extern const char mp_fixed_steps_text[]; /* fixed_text.c, made from ode/fixed.h */
 
@@ -35,6 +36,10 @@ PyMODINIT_FUNC PyInit__core(void)
     if (PyModule_AddStringConstant(m, "gsl_version", GSL_VERSION) < 0) goto fail;
     /* the ensembles' lane count: generated lane right-hand sides are built for it */
     if (PyModule_AddIntConstant(m, "LANES", MP_LANES) < 0) goto fail;
+    /* where radau's band form pays (ode/lu.h's mp_ode_band_pays): _validate's too */
+    if (PyModule_AddIntConstant(m, "BAND_WIDE", MP_ODE_BAND_WIDE) < 0 ||
+        PyModule_AddIntConstant(m, "BAND_MIN_N", MP_ODE_LU_SMALL) < 0)
+        goto fail;
     /* ode/fixed.h's text: generated systems build their fixed-step blocks from it */
     if (PyModule_AddStringConstant(m, "FIXED_STEPS_C", mp_fixed_steps_text) < 0) goto fail;
     return m;
