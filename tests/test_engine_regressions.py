@@ -15,6 +15,11 @@ from scipy.integrate import solve_ivp
 import mechpy as mp
 
 GSL = [m["name"] for m in mp.methods() if m["name"].startswith("gsl:")]
+# gsl:rk1imp (first order: ~10^5 steps at rtol 1e-8) drives the same output and event
+# paths as every other GSL row: under the sanitizers (-m "not slow") it is left to the
+# normal pass, where it runs as before
+GSL_CASES = [pytest.param(m, marks=pytest.mark.slow) if m == "gsl:rk1imp" else m
+             for m in GSL]
 DP = ctypes.POINTER(ctypes.c_double)
 CB = ctypes.CFUNCTYPE(None, ctypes.c_double, DP, DP, ctypes.c_void_p)
 # SciPy's LSODA wrapper leaks a few arrays under LeakSanitizer (not mechpy's
@@ -51,7 +56,7 @@ def test_every_gsl_row_is_measured():
     assert sorted(GSL) == sorted(GSL_TEVAL) == sorted(GSL_EVENTS)
 
 
-@pytest.mark.parametrize("method", GSL)
+@pytest.mark.parametrize("method", GSL_CASES)
 def test_gsl_t_eval_against_closed_form(method):
     t = np.linspace(0, 20, 77)
     sol = mp.solve(harmonic, (0, 20), [1.0, 0.0], method=method, rtol=1e-8, atol=1e-10,
@@ -66,7 +71,7 @@ def test_gsl_t_eval_against_closed_form(method):
     assert err < 5 * err_steps + 1e-9, (err, err_steps)  # measured ratio <= 1.0
 
 
-@pytest.mark.parametrize("method", GSL)
+@pytest.mark.parametrize("method", GSL_CASES)
 def test_gsl_event_times_against_closed_form(method):
     ev = lambda t, y: y[0]
     sol = mp.solve(harmonic, (0, 20), [1.0, 0.0], method=method, rtol=1e-8, atol=1e-10,
