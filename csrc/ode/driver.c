@@ -148,11 +148,14 @@ static int reserve_samples(mp_ode_result *r, size_t more)
     return MP_OK;
 }
 
-static int push_sample(mp_ode_result *r, double t, const double *y)
+/* One sample (t, y) appended: inline, the capacity test before any call and
+ * the copy a loop (a state of a few components, once per step). */
+static inline int push_sample(mp_ode_result *r, double t, const double *y)
 {
-    if (reserve_samples(r, 1) != MP_OK) return MP_ENOMEM;
+    if (r->m >= r->mcap && reserve_samples(r, 1) != MP_OK) return MP_ENOMEM;
     r->t[r->m] = t;
-    memcpy(r->y + r->m * r->n, y, r->n * sizeof(double));
+    double *dst = r->y + r->m * r->n;
+    for (size_t i = 0; i < r->n; i++) dst[i] = y[i];
     r->m++;
     return MP_OK;
 }

@@ -10,18 +10,25 @@
 #include "ode/dop853_tableau.h"
 
 /* out = y + h sum_j a[j] K[j] over the non-zero a[j] (Hairer's order of
- * operations).  Always inlined: called with a constant tableau row and stage
- * count, the zero tests fold away and the stage loop unrolls into the
- * explicit formulas of Hairer's codes. */
+ * operations: the sum starts at its first term, not at 0.0 + it).  Always
+ * inlined: called with a constant tableau row and stage count, the zero tests
+ * fold away and the stage loop unrolls into the explicit formulas of Hairer's
+ * codes.  out is none of y and the K[j] (the workspace's own vectors), so the
+ * components run in SIMD lanes, each with the same operations as alone. */
 MP_ODE_INLINE void
 stage_point(size_t n, const double *y, double h, const double *a, double *const *K, size_t ns,
             double *out)
 {
+#pragma omp simd
     for (size_t i = 0; i < n; i++) {
         double sum = 0.0;
+        int first = 1;
 #pragma GCC unroll 16
         for (size_t j = 0; j < ns; j++)
-            if (a[j] != 0.0) sum += a[j] * K[j][i];
+            if (a[j] != 0.0) {
+                sum = first ? a[j] * K[j][i] : sum + a[j] * K[j][i];
+                first = 0;
+            }
         out[i] = y[i] + h * sum;
     }
 }

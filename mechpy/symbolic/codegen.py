@@ -153,7 +153,10 @@ def _closed_rhs(ir) -> str | None:
     not clearly away from 0 and from overflow (|det| <= k eps (sum |A_ij|)^k
     for a k x k block, or a NaN or inf in the block, which the sum carries),
     gen_rhs_lu solves by mp_lu, whose pivoting and statuses (MP_ENONFINITE,
-    MP_ESINGULAR) decide, as for every larger system."""
+    MP_ESINGULAR) decide, as for every larger system.  A determinant printed
+    as a product (a 1 x 1 block, or a symbolic one without a sum) has nothing
+    to cancel: it needs only to be a normal number (mp_closed_normal), which
+    for k = 1 is the same test."""
     B = ir.blocks
     na, nc = ir.nc + ir.k, ir.nc
     A = sp.Matrix(na, na, [sp.sympify(e) for e in B["A"]])
@@ -191,7 +194,7 @@ def _closed_rhs(ir) -> str | None:
                 outs.append((f"mp_z{i}", sp.cancel(num / det) if symbolic else num / det))
         return outs
 
-    best = None
+    best, best_dets = None, None
     for symbolic in (False, True):
         outs = form(symbolic)
         if outs is None:
@@ -213,9 +216,17 @@ def _closed_rhs(ir) -> str | None:
             continue
         text = "\n".join(em.lines)
         if best is None or _ops(text) < _ops(best):
-            best = text
+            best, best_dets = text, [e for n, e in outs if n.startswith("mp_d")]
     checks = []
     for c, blk in enumerate(comps):
+        if len(blk) == 1 or not best_dets[c].has(sp.Add):
+            # a product (a 1 x 1 block's entry, or a symbolic determinant such as
+            # the heavy top's I1 I3 sin^2 theta): nothing cancels in it, so the
+            # closed form is as accurate as LU wherever the product is a normal
+            # number (for k = 1 this is mp_closed_ok's own test, |a| > eps |a|
+            # being implied)
+            checks.append(f"mp_closed_normal(mp_d{c})")
+            continue
         asum = " + ".join(f"fabs({entry[i, j].name})" for i in blk for j in blk
                           if (i, j) in entry) or "0.0"
         checks.append(f"mp_closed_ok(mp_d{c}, {asum}, {len(blk)})")
@@ -236,6 +247,14 @@ static MP_INLINE int mp_closed_ok(double det, double asum, int k)
     for (int i = 0; i < k; i++) tol *= asum;
     const double d = fabs(det);
     return d > tol && d > DBL_MIN && d <= DBL_MAX;
+}
+
+/* Whether det, a determinant printed as a product (no sum, so no cancellation
+ * in it), is a normal number: DBL_MIN < |det| <= DBL_MAX (false for a NaN). */
+static MP_INLINE int mp_closed_normal(double det)
+{
+    const double d = fabs(det);
+    return d > DBL_MIN && d <= DBL_MAX;
 }
 
 """ + _RHS_BY_LU + r"""
