@@ -27,6 +27,16 @@ typedef struct mp_ode_ctl {
 /* The controller at a trajectory's start (and after a switching row's switch). */
 static inline mp_ode_ctl mp_ode_ctl_start(void) { return (mp_ode_ctl){1e-4, 0, 0, 0, 0}; }
 
+/* Contract: err^expo, the controller's power, the same value in both widths:
+ * for expo = 1/8 (dop853) three square roots, each one correctly rounded
+ * instruction where pow is a call of about 100 instructions on every step
+ * (4% of the spherical pendulum's solve); else pow.  The lanes test expo
+ * outside their loop and take the same roots. */
+static inline double mp_ode_err_pow(double err, double expo)
+{
+    return expo == 0.125 ? sqrt(sqrt(sqrt(err))) : pow(err, expo);
+}
+
 /* Contract: Hairer's controller for a method with its own error estimate.
  * fac11 = err^expo and fold = facold^beta (1 when beta = 0) are the caller's
  * (the lanes take the powers of eight lanes at once).  Returns 1 when the
@@ -44,10 +54,11 @@ static inline int mp_ode_control(const mp_ode_method *m, mp_ode_ctl *c, double e
     }
     /* Lund stabilisation only for methods with beta > 0 (dopri5) */
     double fac = m->beta > 0.0 ? fac11 / fold : fac11;
-    fac = fmax(1.0 / m->fac_max, fmin(1.0 / m->fac_min, fac / m->safety));
+    /* accepted: 0 <= err <= 1, so fac11, fold and fac are finite */
+    fac = mp_ode_max(mp_ode_min(fac / m->safety, 1.0 / m->fac_min), 1.0 / m->fac_max);
     *hnew = *h / fac;
-    c->facold = fmax(err, 1e-4);
-    if (c->rejected) *hnew = fmin(*hnew, *h);
+    c->facold = mp_ode_max(err, 1e-4);
+    if (c->rejected) *hnew = mp_ode_min(*hnew, *h);
     c->rejected = c->nonfinite = 0;
     return 1;
 }
@@ -101,7 +112,7 @@ static inline double mp_ode_step_span(int adaptive, double t, double h, double t
  * a span of a few ulps of t0 is solved, as in SciPy. */
 static inline int mp_ode_step_floor(const mp_ode_ctl *c, double t, double hmax, double *h)
 {
-    double hmin = 16.0 * DBL_EPSILON * fmax(fabs(t), 1e-300);
+    double hmin = 16.0 * DBL_EPSILON * mp_ode_max(fabs(t), 1e-300);
     if (*h < hmin && !c->rejected && hmin <= hmax) *h = hmin;
     return *h < hmin;
 }

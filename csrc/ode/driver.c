@@ -469,7 +469,7 @@ static int output_step(mp_ode_result *r, const mp_ode_options *o, const mp_ode_w
 static int control(const mp_ode_method *cur, mp_ode_ctl *c, double err, double *h,
                    double *hnew)
 {
-    double fac11 = pow(err, cur->expo);
+    double fac11 = mp_ode_err_pow(err, cur->expo);
     double fold = cur->beta > 0.0 ? pow(c->facold, cur->beta) : 1.0;
     return mp_ode_control(cur, c, err, fac11, fold, h, hnew);
 }
@@ -793,7 +793,7 @@ static int accept_step(ode_run *s, double h, double hnew, double tnew)
     if (w->fnew_valid) { sw = w->f; w->f = w->fnew; w->fnew = sw; }
     s->t = tnew;
     s->nfixed += !s->cur->adaptive;
-    s->h = fmin(s->cur->adaptive ? hnew : o->h, s->hmax);
+    s->h = mp_ode_min(s->cur->adaptive ? hnew : o->h, s->hmax);
     /* the switching row: to the stiff method when the test fires, back when
      * the stiff method's steps are within the explicit stability region */
     return s->m->nonstiff ? switch_method(s->m, w, &s->cur, &s->c, s->t, s->h, r) : MP_OK;

@@ -352,6 +352,13 @@ static inline double mp_ode_absmax(double a, double b)
     return b > a ? b : a;
 }
 
+/* fmin and fmax as selects, without their library calls (the controller's
+ * arithmetic on every step): their values wherever b is not NaN, a NaN a
+ * giving b as fmin and fmax give it.  Every caller's b is a finite number or
+ * a bound (hmax <= inf). */
+static inline double mp_ode_min(double a, double b) { return a < b ? a : b; }
+static inline double mp_ode_max(double a, double b) { return a > b ? a : b; }
+
 /* Hairer's RMS error norm: sqrt(mean((e_i / (atol_i + rtol_i max(|y0_i|, |y1_i|)))^2)). */
 double mp_ode_err_norm(const mp_ode_ws *w, const double *e, const double *y0, const double *y1);
 

@@ -153,10 +153,9 @@ def _closed_rhs(ir) -> str | None:
     not clearly away from 0 and from overflow (|det| <= k eps (sum |A_ij|)^k
     for a k x k block, or a NaN or inf in the block, which the sum carries),
     gen_rhs_lu solves by mp_lu, whose pivoting and statuses (MP_ENONFINITE,
-    MP_ESINGULAR) decide, as for every larger system.  A determinant printed
-    as a product (a 1 x 1 block, or a symbolic one without a sum) has nothing
-    to cancel: it needs only to be a normal number (mp_closed_normal), which
-    for k = 1 is the same test."""
+    MP_ESINGULAR) decide, as for every larger system.  For a 1 x 1 block the
+    test is mp_closed_normal (DBL_MIN < |a| <= DBL_MAX), the same test in
+    fewer instructions."""
     B = ir.blocks
     na, nc = ir.nc + ir.k, ir.nc
     A = sp.Matrix(na, na, [sp.sympify(e) for e in B["A"]])
@@ -194,7 +193,7 @@ def _closed_rhs(ir) -> str | None:
                 outs.append((f"mp_z{i}", sp.cancel(num / det) if symbolic else num / det))
         return outs
 
-    best, best_dets = None, None
+    best = None
     for symbolic in (False, True):
         outs = form(symbolic)
         if outs is None:
@@ -216,15 +215,15 @@ def _closed_rhs(ir) -> str | None:
             continue
         text = "\n".join(em.lines)
         if best is None or _ops(text) < _ops(best):
-            best, best_dets = text, [e for n, e in outs if n.startswith("mp_d")]
+            best = text
     checks = []
     for c, blk in enumerate(comps):
-        if len(blk) == 1 or not best_dets[c].has(sp.Add):
-            # a product (a 1 x 1 block's entry, or a symbolic determinant such as
-            # the heavy top's I1 I3 sin^2 theta): nothing cancels in it, so the
-            # closed form is as accurate as LU wherever the product is a normal
-            # number (for k = 1 this is mp_closed_ok's own test, |a| > eps |a|
-            # being implied)
+        if len(blk) == 1:
+            # mp_closed_ok(a, |a|, 1) is this test: |a| > eps |a| is implied by
+            # |a| > DBL_MIN.  (A larger block whose determinant is a product,
+            # such as the heavy top's I1 I3 sin^2 theta, keeps the test on the
+            # entries' sum: a small determinant beside large entries is an
+            # ill-conditioned block, whose numerators may cancel.)
             checks.append(f"mp_closed_normal(mp_d{c})")
             continue
         asum = " + ".join(f"fabs({entry[i, j].name})" for i in blk for j in blk
@@ -249,8 +248,8 @@ static MP_INLINE int mp_closed_ok(double det, double asum, int k)
     return d > tol && d > DBL_MIN && d <= DBL_MAX;
 }
 
-/* Whether det, a determinant printed as a product (no sum, so no cancellation
- * in it), is a normal number: DBL_MIN < |det| <= DBL_MAX (false for a NaN). */
+/* mp_closed_ok(det, |det|, 1), the test of a 1 x 1 block: whether det is a
+ * normal number, DBL_MIN < |det| <= DBL_MAX (false for a NaN). */
 static MP_INLINE int mp_closed_normal(double det)
 {
     const double d = fabs(det);
