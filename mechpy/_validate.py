@@ -160,9 +160,15 @@ def as_finite_result(x, what: str, cause: str) -> np.ndarray:
     return x
 
 
-#: radau's band form pays where BAND_WIDE (ml + mu + 1) <= n >= BAND_MIN_N
-#: (csrc/ode/lu.h's mp_ode_band_pays, whose numbers these are)
+#: csrc/ode/lu.h's numbers for mp_ode_band_pays (band_pays below)
 BAND_WIDE, BAND_MIN_N = _core.BAND_WIDE, _core.BAND_MIN_N
+
+
+def band_pays(n: int, ml: int, mu: int) -> bool:
+    """Whether radau factorises an (n, n) matrix of band ml + mu in band form:
+    csrc/ode/lu.h's mp_ode_band_pays, BAND_WIDE (ml + mu + 1) <= n and
+    n >= BAND_MIN_N."""
+    return n >= BAND_MIN_N and BAND_WIDE * (ml + mu + 1) <= n
 
 
 def band_of_pattern(rows, cols, n: int):
@@ -180,7 +186,7 @@ def band_of_pattern(rows, cols, n: int):
         d = r - c
         return (int(max(d.max(), 0)), int(max(-d.min(), 0))) if d.size else (0, 0)
     ml, mu = band(rows, cols)
-    if BAND_WIDE * (ml + mu + 1) > n >= BAND_MIN_N:
+    if n >= BAND_MIN_N and not band_pays(n, ml, mu):
         try:
             from scipy.sparse import coo_matrix
             from scipy.sparse.csgraph import reverse_cuthill_mckee

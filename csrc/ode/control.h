@@ -27,14 +27,18 @@ typedef struct mp_ode_ctl {
 /* The controller at a trajectory's start (and after a switching row's switch). */
 static inline mp_ode_ctl mp_ode_ctl_start(void) { return (mp_ode_ctl){1e-4, 0, 0, 0, 0}; }
 
-/* Contract: err^expo, the controller's power, the same value in both widths:
- * for expo = 1/8 (dop853) three square roots, each one correctly rounded
- * instruction where pow is a call of about 100 instructions on every step
- * (4% of the spherical pendulum's solve); else pow.  The lanes test expo
- * outside their loop and take the same roots. */
+/* x^(1/8), dop853's controller power, as three square roots: each one
+ * correctly rounded instruction where pow is a call of about 100 instructions
+ * on every step (4% of the spherical pendulum's solve).  Both widths take it
+ * (mp_ode_err_pow; the lanes' loop), so that a lane repeats a lone solve. */
+#define MP_ODE_ROOT8_EXPO 0.125
+static inline double mp_ode_root8(double x) { return sqrt(sqrt(sqrt(x))); }
+
+/* Contract: err^expo, the controller's power: mp_ode_root8 for expo = 1/8,
+ * else pow. */
 static inline double mp_ode_err_pow(double err, double expo)
 {
-    return expo == 0.125 ? sqrt(sqrt(sqrt(err))) : pow(err, expo);
+    return expo == MP_ODE_ROOT8_EXPO ? mp_ode_root8(err) : pow(err, expo);
 }
 
 /* Contract: Hairer's controller for a method with its own error estimate.

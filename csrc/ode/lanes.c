@@ -707,8 +707,8 @@ static void lane_attempt(lane_group *g)
     else rk4_lanes(g, on, rc, err, rho);
     double fac11[W], fold[W], expo = g->m->expo, beta = g->m->beta; /* the controller's powers */
     if (g->adaptive) {
-        if (expo == 0.125) { /* control.h's mp_ode_err_pow, lane by lane */
-            MP_LANE_LOOP fac11[l] = sqrt(sqrt(sqrt(err[l])));
+        if (expo == MP_ODE_ROOT8_EXPO) { /* control.h's mp_ode_err_pow, lane by lane */
+            MP_LANE_LOOP fac11[l] = mp_ode_root8(err[l]);
         } else {
             MP_LANE_LOOP fac11[l] = mp_lane_pow(err[l], expo);
         }

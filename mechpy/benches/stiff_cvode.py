@@ -32,7 +32,7 @@ import numpy as np
 
 import mechpy as mp
 from mechpy._timing import median_time
-from mechpy._validate import BAND_MIN_N, BAND_WIDE
+from mechpy._validate import band_pays
 
 TITLE = "Stiff set: radau and auto against CVODE (SUNDIALS, C API) on one C right-hand side"
 ORDER = 21
@@ -265,8 +265,7 @@ def run(quick: bool):
                 ref = mp.solve(scene, span, y0, method="radau", rtol=1e-12,
                                atol=1e-14).y[:, -1]
             band = scene._jac_band    # from the symbolic Jacobian
-            if band is not None and (len(band) > 2 or n < BAND_MIN_N or
-                                     BAND_WIDE * (band[0] + band[1] + 1) > n):
+            if band is not None and (len(band) > 2 or not band_pays(n, band[0], band[1])):
                 band = None           # radau dense, or in an order CVODE's band has not
             exe = exe_band = None
             if why is None:
