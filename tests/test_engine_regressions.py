@@ -176,6 +176,25 @@ def test_non_finite_at_the_initial_state_is_an_error():
         mp.solve(lambda t, y: np.array([1.0, np.inf]), (0, 1), [1.0, 0.0])
 
 
+@pytest.mark.parametrize("n", [1, 6, 16, 17, 40])
+@pytest.mark.parametrize("bad", [np.nan, np.inf, -np.inf])
+def test_non_finite_component_is_named_on_both_paths_of_the_check(n, bad):
+    # a small system's evaluations are checked with scalar loads, a larger
+    # one's with a SIMD sum (ode.h): either way the first bad component is the
+    # one named, at the initial state and in a trial stage after it
+    for i in sorted({0, n // 2, n - 1}):
+        def f(t, y, i=i):
+            d = -y.copy()
+            if t > 0.5:
+                d[i] = bad
+            return d
+        with pytest.raises(mp.NonFiniteError, match=rf"dydt\[{i}\] = NaN or inf near t"):
+            mp.solve(f, (0, 1), np.ones(n))
+        g = lambda t, y, i=i: np.where(np.arange(n) >= i, bad, 0.0)  # noqa: E731
+        with pytest.raises(mp.NonFiniteError, match=rf"dydt\[{i}\]"):
+            mp.solve(g, (0, 1), np.ones(n), method="dopri5")
+
+
 # ---- 4. nothing evaluates f outside [t0, tf] -------------------------------------
 
 def _guarded(t0, tf):
