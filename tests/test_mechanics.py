@@ -405,6 +405,25 @@ def test_initial_state_off_the_constraints(disc):
     y0 = np.array([0.0, 0.2, 0.0, 0.0, 0.0, 0.3, 0.1, 5.0, 0.0, 0.0])
     with pytest.raises(ValueError, match=r"velocity constraint 0 .* by -2\.5"):
         mp.solve(scene, (0, 1), y0)
+    # among rows, the first row off its constraints is named; a row on them passes
+    on = scene.project(y0)
+    with pytest.raises(ValueError, match=r"y0 \(row 2 of y0s\) violates the velocity "
+                                         r"constraint 0 .* by -2\.5"):
+        mp.solve_many(scene, (0, 0.1), np.array([on, on, y0, y0]))
+    # the test is relative to the state's size, max(1, max |y|): 1e-8 of it.
+    # u3 moved by d puts the first velocity constraint off by -r d (r = 0.5)
+    fast = on.copy()
+    fast[7:] *= 100.0           # the speeds x 100 keep the velocity constraints
+    size = np.abs(fast).max()
+    assert size > 100.0
+    for factor, fails in ((0.5, False), (2.0, True)):
+        y = fast.copy()
+        y[7] += factor * 1e-8 * size / 0.5
+        if fails:
+            with pytest.raises(ValueError, match="velocity constraint 0"):
+                mp.solve(scene, (0, 1e-3), y)
+        else:
+            assert mp.solve(scene, (0, 1e-3), y).success
 
 
 def test_singular_mass_matrix_at_y0():

@@ -574,10 +574,12 @@ class MechanicsScene(CompiledScene):
         if nres:
             g = _core.compiled_eval(self._addr["residual"], vec, t0, Y, nres,
                                     self._context["residual"])
-            scale = np.maximum(1.0, np.max(np.abs(Y), axis=1))
-            bad = np.argwhere(~(np.abs(g) <= tol * scale[:, None]))
-            if bad.size:
-                i, c = bad[0]
+            # ndarray methods, not np.max's wrapper: this runs before every solve
+            scale = np.abs(Y).max(axis=1)
+            np.maximum(scale, 1.0, out=scale)
+            ok = np.abs(g) <= tol * scale[:, None]
+            if not ok.all():
+                i, c = np.argwhere(~ok)[0]
                 row = f" (row {first + i} of y0s)" if many else ""
                 raise ValueError(f"y0{row} violates the {self._info['res_names'][c]} by "
                                  f"{g[i, c]:.3g}: place the initial state on the constraints "
