@@ -365,6 +365,50 @@ def test_cartesian_pendulum_with_constraint():
     assert np.abs(J - Jref).max() < 5e-10 * np.abs(Jref).max()   # measured 5.0e-11
 
 
+def test_double_pendulum_in_cartesian_coordinates_with_two_constraints():
+    # two rods as two holonomic constraints (the only system here with k = 2:
+    # each constraint's column of the (n + k) system is its own) against the
+    # angles' equations of motion, solved by hand, in SciPy's DOP853
+    x1, y1, x2, y2 = mp.coordinates("x1 y1 x2 y2")
+    m1, m2, l1, l2, g = sp.symbols("m1 m2 l1 l2 g")
+    L = (m1 / 2 * (x1.diff(t) ** 2 + y1.diff(t) ** 2) + m2 / 2 * (x2.diff(t) ** 2
+         + y2.diff(t) ** 2) - m1 * g * y1 - m2 * g * y2)
+    P = dict(m1=1.0, m2=2.0, l1=1.0, l2=0.7, g=G)
+    s = mp.lagrangian(L, [x1, y1, x2, y2], params=P,
+                      constraints=[x1 ** 2 + y1 ** 2 - l1 ** 2,
+                                   (x2 - x1) ** 2 + (y2 - y1) ** 2 - l2 ** 2])
+    assert s._meta["k"] == 2 and s.dim == 8
+    M1, M2, L1, L2 = P["m1"], P["m2"], P["l1"], P["l2"]
+
+    def angles(_t, z):
+        a, b, wa, wb = z
+        c, d = np.cos(a - b), np.sin(a - b)
+        A = [[(M1 + M2) * L1 ** 2, M2 * L1 * L2 * c], [M2 * L1 * L2 * c, M2 * L2 ** 2]]
+        r = [-M2 * L1 * L2 * d * wb ** 2 - (M1 + M2) * G * L1 * np.sin(a),
+             M2 * L1 * L2 * d * wa ** 2 - M2 * G * L2 * np.sin(b)]
+        return np.r_[wa, wb, np.linalg.solve(A, r)]
+
+    def cartesian(a, b, wa, wb):
+        p1 = L1 * np.array([np.sin(a), -np.cos(a)])
+        v1 = L1 * wa * np.array([np.cos(a), np.sin(a)])
+        p2 = p1 + L2 * np.array([np.sin(b), -np.cos(b)])
+        v2 = v1 + L2 * wb * np.array([np.cos(b), np.sin(b)])
+        return np.r_[p1, p2, v1, v2]
+
+    z0 = [0.5, -0.3, 0.2, 0.0]
+    te = np.linspace(0, 3, 61)
+    ref = solve_ivp(angles, (0, 3), z0, method="DOP853", rtol=1e-12, atol=1e-12, t_eval=te)
+    sol = mp.solve(s, (0, 3), cartesian(*z0), rtol=1e-11, atol=1e-12, t_eval=te)
+    want = np.array([cartesian(*z) for z in ref.y.T]).T
+    assert np.abs(sol.y[:4] - want[:4]).max() < 4e-11   # positions, measured 3.8e-12
+    assert np.abs(sol.y[4:] - want[4:]).max() < 4e-10   # velocities, measured 4.4e-11
+    # the outer rod pulls mass 2 along the rod only
+    f = s.constraint_forces(0.0, sol.y)
+    rod = sol.y[2:4] - sol.y[0:2]
+    cross = f[2] * rod[1] - f[3] * rod[0]
+    assert np.abs(cross).max() < 5e-16 * np.abs(f[2:4]).max()   # measured 3.2e-17
+
+
 def test_constraint_forces_and_multipliers_take_a_solutions_times():
     # a mass on a vertically driven constraint y = A sin(w t): lambda = m (g + y''),
     # y'' = -A w^2 sin(w t), a force along y only.  The natural call with a
@@ -1576,3 +1620,26 @@ def test_a_mass_matrix_singular_up_to_rounding_is_refused():
     r = s.replace(a=2 / 49)
     want = np.linalg.solve(1000 * np.array([[49, 1], [1, 2 / 49]]), [-0.3, -0.2])
     assert np.allclose(r.rhs(0.0, [0.3, 0.2, 0.0, 0.0])[2:], want, rtol=1e-13, atol=0)
+
+
+def test_kane_block_split_is_taken_only_for_its_own_structure():
+    # codegen solves a Kane model by blocks (M u' = F and C C^T mu = ...) only
+    # when A has the blocks that split assumes: I and -C^T on the first rows,
+    # M alone on u', C alone on q'; any other A goes through the whole LU
+    from mechpy.symbolic.codegen import _kane_blocks
+    c0, c1, m = sp.symbols("c0 c1 m")
+    na, nc, ns = 4, 2, 3          # q' (2), u' (1), mu (1)
+
+    def A(**change):
+        rows = [[1, 0, 0, -c0], [0, 1, 0, -c1], [0, 0, m, 0], [c0, c1, 0, 0]]
+        for key, v in change.items():
+            i, j = int(key[1]), int(key[2])
+            rows[i][j] = v
+        return [e for r in rows for e in r]
+    assert _kane_blocks(A(), na, nc, ns)
+    assert not _kane_blocks(A(a03=c0), na, nc, ns)        # +C^T: mu would change sign
+    assert not _kane_blocks(A(a13=0), na, nc, ns)         # not the transpose of C
+    assert not _kane_blocks(A(a00=2), na, nc, ns)         # q' not alone
+    assert not _kane_blocks(A(a20=c0), na, nc, ns)        # M's row reaches q'
+    assert not _kane_blocks(A(a23=c1), na, nc, ns)        # ... or mu
+    assert not _kane_blocks(A(a32=c1), na, nc, ns)        # C reaches u'
