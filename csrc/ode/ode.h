@@ -302,6 +302,10 @@ struct mp_ode_ws {
  * not finite (w->bad_what, w->bad_index). */
 int mp_ode_ws_bad_rhs(mp_ode_ws *w, size_t i);
 
+/* Systems up to this size have their evaluations checked by scalar loads
+ * (mp_ode_ws_rhs). */
+#define MP_ODE_SCALAR_CHECK_N 16
+
 /* Contract: dydt = f(t, y), counted in nfev; MP_ENONFINITE (with the first
  * offending component in w->bad_index) when a value is NaN or inf.  Every
  * evaluation of f goes through here.  The one pass over dydt is the only
@@ -309,9 +313,6 @@ int mp_ode_ws_bad_rhs(mp_ode_ws *w, size_t i);
  * reject the step; at an accepted state it ends the solve.  (The fixed-step
  * blocks alone call f directly: the driver checks their state afterwards.)
  * Inline: it is called for every stage of every step. */
-/* Systems up to this size have their evaluations checked by scalar loads. */
-#define MP_ODE_SCALAR_CHECK_N 16
-
 static inline int mp_ode_ws_rhs(mp_ode_ws *w, double t, const double *y, double *dydt)
 {
     int rc = w->p->rhs(t, y, dydt, w->p->data);
