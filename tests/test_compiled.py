@@ -469,6 +469,20 @@ def test_initial_state_must_satisfy_the_constraint():
         mp.solve_many(s, (0, 1), [good, good], params={"l": [1.0, 2.0]})
     ens = mp.solve_many(s, (0, 1), [good, 2 * good], params={"l": [1.0, 2.0]}, rtol=1e-10)
     assert ens.success.all()
+    # the test is relative to the square of the state's size, max(1, max |y|)^2,
+    # as x^2 + y^2 - l^2 grows: 1e-8 of it.  Pendulums of 100 m and 1 cm at rest,
+    # x moved by d: g = 2 x d + d^2
+    for length, limit in ((100.0, 1e-8 * (100.0 * np.cos(0.5)) ** 2), (0.01, 1e-8)):
+        sized = s.replace(l=length)
+        at = cart_state(0.5, 0.0, l=length)
+        for factor, fails in ((0.5, False), (2.0, True)):
+            y = at.copy()
+            y[0] += factor * limit / (2 * at[0])
+            if fails:
+                with pytest.raises(ValueError, match="violates constraint 0"):
+                    mp.solve(sized, (0, 1e-3), y)
+            else:
+                assert mp.solve(sized, (0, 1e-3), y).success
     one = mp.solve(s, (0, 1), cart_state(-0.3, 1.0), rtol=1e-10)
     ens = mp.solve_many(s, (0, 1), [good, cart_state(-0.3, 1.0)], rtol=1e-10, lanes=False)
     assert np.array_equal(ens.y[1, :, -1], one.y[:, -1])

@@ -44,7 +44,7 @@ from sympy.physics.mechanics import dynamicsymbols
 
 from .. import _core
 from .derive import IR, _assumptions, _check_derived, _check_input, _Diff, baumgarte_rates
-from .scene import CompiledScene
+from .scene import CompiledScene, _first_over, _state_scale
 
 __all__ = ["mechanics_parts", "MechanicsScene"]
 
@@ -574,12 +574,9 @@ class MechanicsScene(CompiledScene):
         if nres:
             g = _core.compiled_eval(self._addr["residual"], vec, t0, Y, nres,
                                     self._context["residual"])
-            # ndarray methods, not np.max's wrapper: this runs before every solve
-            scale = np.abs(Y).max(axis=1)
-            np.maximum(scale, 1.0, out=scale)
-            ok = np.abs(g) <= tol * scale[:, None]
-            if not ok.all():
-                i, c = np.argwhere(~ok)[0]
+            bad = _first_over(g, tol * _state_scale(Y))
+            if bad is not None:
+                i, c = bad
                 row = f" (row {first + i} of y0s)" if many else ""
                 raise ValueError(f"y0{row} violates the {self._info['res_names'][c]} by "
                                  f"{g[i, c]:.3g}: place the initial state on the constraints "

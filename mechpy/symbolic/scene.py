@@ -30,6 +30,27 @@ _FUNCS = {
 }
 
 
+def _state_scale(Y) -> np.ndarray:
+    """Per row of the states Y (k, n): max(1, max |y|), the size an initial
+    state's constraint residuals are measured against (so that the check
+    reads the same in any units).  ndarray methods, not np.max's wrapper: it
+    runs before every solve."""
+    scale = np.abs(Y).max(axis=1)
+    np.maximum(scale, 1.0, out=scale)
+    return scale
+
+
+def _first_over(values, limit):
+    """(row, column) of the first entry of ``values`` (k, m) whose size is
+    not within its row's ``limit`` (k,) (NaN is not), or None: which
+    constraint of which initial state an error names."""
+    ok = np.abs(values) <= limit[:, None]
+    if ok.all():
+        return None
+    i, c = np.argwhere(~ok)[0]
+    return int(i), int(c)
+
+
 def _guard(fn):
     """fn (made by sympy.lambdify), with a function that NumPy lacks (lambdify
     leaves its name undefined) reported as a ValueError naming it."""
@@ -328,15 +349,17 @@ class CompiledScene(Scene):
     def _check_rows(self, t0, Y, vec, first, many, tol, singular=True):
         if self._k:
             gv = self._raw("constraints", t0, Y, vec)
-            scale = np.maximum(1.0, np.max(np.abs(Y), axis=1)) ** 2
+            # squared: a constraint such as x^2 + y^2 - l^2 (and its rate) grows
+            # as the square of the state's size
+            limit = tol * _state_scale(Y) ** 2
             checks = (("constraint", "g", slice(0, self._k),
                        "place the initial state on the constraint"),
                       ("the rate of constraint", "g'", slice(self._k, None),
                        "the initial velocity must be tangent to the constraint"))
             for what, sym, cols, hint in checks:
-                bad = np.argwhere(~(np.abs(gv[:, cols]) <= tol * scale[:, None]))
-                if bad.size:
-                    i, c = bad[0]
+                bad = _first_over(gv[:, cols], limit)
+                if bad is not None:
+                    i, c = bad
                     row = f" (row {first + i} of y0s)" if many else ""
                     raise ValueError(f"y0{row} violates {what} {c}: {sym} = "
                                      f"{gv[i, cols][c]!r} ({self._meta['constraints'][c]} = 0); "
