@@ -228,3 +228,46 @@ def test_bad_input():
     for call, exc, match in cases:
         with pytest.raises(exc, match=match):
             call()
+
+
+def _positions(w):
+    """The frames' body positions as the page receives them: (frames, bodies, 3)."""
+    import base64
+    pos = np.frombuffer(base64.b64decode(w.spec["pos"]), dtype="<f8")
+    return pos.reshape(w.spec["n"], w.spec["nb"], 3)
+
+
+def _rod_lengths(w):
+    """Per rod of the view, its length at every frame: a rod joins a fixed
+    point [x, y, z] or a body (its index) to a body."""
+    P = _positions(w)
+    out = []
+    for a, b, _ in w.spec["rods"]:
+        A = np.asarray(a, dtype=float) if isinstance(a, list) else P[:, a]
+        B = np.asarray(b, dtype=float) if isinstance(b, list) else P[:, b]
+        out.append(np.linalg.norm(B - A, axis=-1))
+    return out
+
+
+def test_rods_are_as_long_as_the_links_they_draw(double_pendulum):
+    """A rod from the pivot (or suspension) to a bob, or between two bobs,
+    keeps the length of the link at every frame: the pendulum's L, the double
+    pendulum's l1 and l2, the Foucault pendulum's 10 m wire, the top's pivot to
+    its centre of mass, l.  (Measured: 1.5e-16 relative at most.)"""
+    p = mp.scenes.Pendulum(length=1.5)
+    w = mp.live.animate(p, mp.solve(p, (0, 4), [2.0, 0.0], dense_output=True), duration=2)
+    (rod,) = _rod_lengths(w)
+    np.testing.assert_allclose(rod, 1.5, rtol=2e-15)
+    sol = mp.solve(double_pendulum, (0, 3), [2.0, 1.0, 0.0, 0.0], dense_output=True)
+    w = mp.live.animate(double_pendulum, sol, duration=2)
+    upper, lower = _rod_lengths(w)
+    np.testing.assert_allclose(upper, 1.0, rtol=2e-15)
+    np.testing.assert_allclose(lower, 0.5, rtol=2e-15)
+    f = mp.scenes.Foucault(48.857, 10.0, omega=0.25)
+    sol = mp.solve(f, (0, 20), [0.5, 0.0, 0.0, 0.0], dense_output=True)
+    (wire,) = _rod_lengths(mp.live.animate(f, sol, duration=2))
+    np.testing.assert_allclose(wire, 10.0, rtol=2e-15)
+    top = mp.scenes.HeavyTop(0.5, 0.2, 1.0, 9.81, 0.1)
+    sol = mp.solve(top, (0, 2), [0.3, 0.8, 0.1, 0.0, 0.0, 15.0], dense_output=True)
+    (axis,) = _rod_lengths(mp.live.animate(top, sol, duration=2))
+    np.testing.assert_allclose(axis, 0.1, rtol=2e-15)
