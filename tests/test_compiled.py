@@ -1657,3 +1657,39 @@ def test_kane_block_split_is_taken_only_for_its_own_structure():
     assert not _kane_blocks(A(a20=c0), na, nc, ns)        # M's row reaches q'
     assert not _kane_blocks(A(a23=c1), na, nc, ns)        # ... or mu
     assert not _kane_blocks(A(a32=c1), na, nc, ns)        # C reaches u'
+
+
+def test_each_parameter_vector_reaches_its_trajectory():
+    """Expressions of the parameters alone (a b + a c, a + b, and a Piecewise
+    whose condition compares two parameters) take each trajectory's values:
+    the scene's, replace()'s, solve_many's rows (one by one and in SIMD
+    lanes), against the exact solution expm(A t) y0."""
+    from scipy.linalg import expm
+    x, y = mp.coordinates("x y")
+    a, b, c = sp.symbols("a b c")
+    f = [sp.Piecewise((-a, a > b), (-b, True)) * x + (a * b + a * c) * y, -(a + b) * x - c * y]
+    s = mp.equations(f, [x, y], params=dict(a=0.5, b=0.2, c=0.3))
+
+    def exact(a_, b_, c_):
+        A = np.array([[-a_ if a_ > b_ else -b_, a_ * b_ + a_ * c_], [-(a_ + b_), -c_]])
+        return expm(2.0 * A) @ [1.0, 0.5]
+
+    rows = np.array([[0.5, 0.2, 0.3], [0.2, 0.5, 0.3], [1.5, 0.7, 0.1]])
+    opts = dict(rtol=1e-12, atol=1e-14)
+    one = []
+    for r in rows:
+        sol = mp.solve(s.replace(a=r[0], b=r[1], c=r[2]), (0, 2), [1.0, 0.5], **opts)
+        one.append(sol.y[:, -1])
+        # measured: 2.2e-15, 5.1e-15, 9.3e-14 (the fastest row); another
+        # row's values or the other branch is off by 1e-2 or more
+        assert np.abs(sol.y[:, -1] - exact(*r)).max() < 5e-13
+    for lanes in (False, True):
+        ens = mp.solve_many(s, (0, 2), np.tile([1.0, 0.5], (3, 1)), lanes=lanes,
+                            params={"a": rows[:, 0], "b": rows[:, 1], "c": rows[:, 2]}, **opts)
+        for i, r in enumerate(rows):
+            assert np.abs(ens.y[i, :, -1] - exact(*r)).max() < 5e-13
+            if not lanes:
+                assert np.array_equal(ens.y[i, :, -1], one[i])
+    # a row of the wrong length is named with the scene's parameters
+    with pytest.raises(ValueError, match=r"params must have 3 columns \(the scene's parameters"):
+        mp.solve_many(s, (0, 1), np.tile([1.0, 0.5], (3, 1)), params=rows[:, :2])
