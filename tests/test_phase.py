@@ -285,6 +285,9 @@ def test_logistic_at_the_ends_of_its_domain():
     x = mp.phase.logistic([4.0, 4.0], np.sin(th) ** 2, n=12)
     np.testing.assert_allclose(x[0], np.sin(2.0 ** np.arange(12) * th) ** 2, rtol=0,
                                atol=2e-14)   # measured 1.9e-15 (the error doubles each step)
+    # one orbit (a scalar r: its own loop) after skipped steps: x_6.. x_11
+    np.testing.assert_allclose(mp.phase.logistic(4.0, np.sin(th) ** 2, n=6, skip=6),
+                               np.sin(2.0 ** np.arange(6, 12) * th) ** 2, rtol=0, atol=2e-14)
     assert mp.phase.logistic(3.0, 1.0, n=3).tolist() == [1.0, 0.0, 0.0]
     assert mp.phase.logistic([0.0, 2.0], 0.0, n=2).tolist() == [[0.0, 0.0], [0.0, 0.0]]
     for bad in (-1e-12, 4.0 + 1e-12):
