@@ -86,6 +86,9 @@ def test_cm_frame_round_trip_and_zero_momentum():
         P.to_cm([1.0, -1.0], [0.0, 1.0])
     with pytest.raises(ValueError, match="velocities"):
         P.to_cm([1.0, 1.0], [0.0, 1.0, 2.0])
+    # vectors, but one per particle of another count: 3 particles, 4 velocities
+    with pytest.raises(ValueError, match=r"velocities must have the masses' shape \(3,\)"):
+        P.to_cm([1.0, 2.0, 3.0], np.zeros((4, 2)))
 
 
 def test_restitution_law_along_the_normal_both_moving():
