@@ -89,9 +89,12 @@ stamp=$( (buildfiles; echo "$extras") | sha256sum | cut -c1-16)
 if [ "$(cat .venv/.mechpy-stamp 2>/dev/null)" != "$stamp" ] || [ ! -f build/editable/build.ninja ]; then
     say "installing mechpy[$extras] into .venv (editable, built in build/editable)"
     "$vpy" -m pip install -q --upgrade pip >/dev/null
-    # the build tools in .venv itself: the editable install rebuilds with them on import
+    # the build tools in .venv itself: the editable install rebuilds with them on import.
+    # setuptools >= 70.1 (bdist_wheel built in): the install below runs without build
+    # isolation, so an extra published only as an sdist (pydy) is built with the venv's own
+    # setuptools, and the one a fresh venv carries (65.x, no wheel package) cannot
     "$vpy" -m pip install -q "meson-python>=0.18" "meson>=1.1" ninja "numpy>=2.0" \
-        "scipy-openblas32>=0.3.27"
+        "scipy-openblas32>=0.3.27" "setuptools>=70.1"
     # the distribution was called mechpy before it was mechpy-classical: one editable
     # install of the package, not two
     "$vpy" -m pip uninstall -q -y mechpy >/dev/null 2>&1 || true
