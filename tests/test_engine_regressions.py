@@ -195,6 +195,20 @@ def test_non_finite_component_is_named_on_both_paths_of_the_check(n, bad):
             mp.solve(g, (0, 1), np.ones(n), method="dopri5")
 
 
+@pytest.mark.parametrize("n", [6, 40])
+def test_largest_and_smallest_finite_values_pass_the_check(n):
+    # the check reads each value's exponent field (ode.h, mp_ode_nonfinite_bit):
+    # the largest finite exponent (DBL_MAX, 2^1023), subnormals and -0.0 are
+    # finite, on both paths.  rk4's first stage alone sees them (f is 0 after
+    # t = 0), so no sum of stages overflows: y = h v / 6.
+    big = np.finfo(float).max
+    v = np.resize(np.array([big, -big, 2.0 ** 1023, 5e-324, -0.0, -2.0 ** 1023]), n)
+    f = lambda t, y: v.copy() if t == 0 else np.zeros(n)  # noqa: E731
+    s = mp.solve(f, (0, 3.0), np.zeros(n), method="rk4", h=1.0)
+    assert s.status == 0
+    np.testing.assert_allclose(s.y[:, -1], v / 6, rtol=4e-16, atol=0)
+
+
 # ---- 4. nothing evaluates f outside [t0, tf] -------------------------------------
 
 def _guarded(t0, tf):

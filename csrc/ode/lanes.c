@@ -90,7 +90,8 @@ static void lane_eval_generic(lane_group *g, const double *t, const double *y, d
 static inline void lane_eval(lane_group *g, const double *s, const double *y, double *f,
                              int *on, int *rc)
 {
-    double tn[W], probe[W] = {0.0};
+    double tn[W];
+    uint64_t probe[W] = {0};
     const double *t = s; /* t = dir s: s itself forwards */
     int st[W], fails = 0, nonfinite = 0;
     size_t n = g->n;
@@ -103,18 +104,18 @@ static inline void lane_eval(lane_group *g, const double *s, const double *y, do
     else lane_eval_generic(g, t, y, f, on, st);
     if (g->dir < 0)
         for (size_t i = 0; i < g->nW; i++) f[i] = -f[i];
-    for (size_t c = 0; c < g->nW; c += W) /* x - x: 0 when finite, NaN otherwise */
-        MP_LANE_LOOP probe[l] += f[c + l] - f[c + l];
+    for (size_t c = 0; c < g->nW; c += W) /* bit 63: some value not finite (ode.h) */
+        MP_LANE_LOOP probe[l] |= mp_ode_nonfinite_bit(f[c + l]);
     MP_LANE_LOOP {
         g->nfev[l] += on[l];
         rc[l] = on[l] ? st[l] : rc[l];
         fails |= st[l];
-        nonfinite |= probe[l] != 0.0;
+        nonfinite |= (int)(probe[l] >> 63);
     }
     if (fails == 0 && !nonfinite) return; /* all well */
     for (int l = 0; l < W; l++) {
         if (!on[l]) continue;
-        if (st[l] == MP_OK && probe[l] != 0.0)
+        if (st[l] == MP_OK && probe[l] >> 63)
             for (size_t c = 0; c < n; c++)
                 if (!isfinite(f[c * W + l])) {
                     g->bad_what[l] = MP_ODE_BAD_RHS;
