@@ -249,7 +249,10 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
     ``KeyboardInterrupt``.  A NaN or inf in a trial stage rejects the step
     (h shrinks tenfold); at an accepted state, or when no step avoids it, it
     raises ``NonFiniteError`` naming the component; a C callback's outputs
-    are NaN until it writes them.  Integration failures (budget exhausted,
+    are NaN until it writes them.  Each step's new state is checked too (it
+    can overflow where f stays finite): an adaptive step is retried smaller,
+    a fixed step raises, naming ``y[i]`` and the step; an error estimate that
+    overflows from finite values is named as such.  Integration failures (budget exhausted,
     step below round-off) are reported in ``status``/``message`` as SciPy does
     (see ``errors``); ``Solution.raise_for_status()`` raises them.
 

@@ -204,6 +204,21 @@ def test_singular_heavy_top_in_a_lane_group(k):
         mp.solve_many(top, (0, 1), y0s, t_eval=te, lanes=True)
 
 
+@pytest.mark.parametrize("method, kw", [("dopri5", {}), ("rk4", {"h": 1e8}), ("dop853", {})])
+def test_an_overflowing_state_fails_a_lane_as_it_fails_a_lone_solve(method, kw):
+    """x' = 1e300 is finite everywhere, and x = 1e300 t overflows at t = 1.8e8
+    (dop853: its error estimate overflows first): each lane stops where and as
+    the lone solve stops, naming the same cause."""
+    x, v = mp.coordinates("x v")
+    s = mp.equations([sp.Float(1e300) + 0 * v, 0 * x], [x, v])
+    lone = mp.solve(s, (0, 1e10), [0.0, 0.0], method=method, errors="status", **kw)
+    assert lone.status == -2 and "right-hand side gave" not in lone.message
+    a, b = _both(s, (0, 1e10), np.zeros((3, 2)), method=method, errors="status", **kw)
+    assert list(a.status) == list(b.status) == [-2] * 3
+    _same_messages(a.message, b.message)
+    assert all(m == lone.message for m in b.message)
+
+
 def test_blow_up_of_compiled_equations():
     """y' = y^2 from y0 > 0 leaves every float at t = 1/y0: the lanes that
     start above 2/3 fail within (0, 1.5) as the scalar path fails them."""

@@ -852,6 +852,17 @@ static void fixed_block(ode_run *s)
     s->attempts += k;
 }
 
+/* Contract: MP_OK when the new state w->ynew of a step is finite, else
+ * mp_ode_ws_bad_state.  One OR of integers over a vector f has not just
+ * written (no SIMD split).  The controlled methods (dopri5, dop853) fold the
+ * same test into their error loops, which read ynew anyway. */
+static inline int check_state(mp_ode_ws *w)
+{
+    uint64_t any = 0;
+    for (size_t i = 0; i < w->n; i++) any |= mp_ode_nonfinite_bit(w->ynew[i]);
+    return any >> 63 ? mp_ode_ws_bad_state(w) : MP_OK;
+}
+
 /* Contract: the loop of a forward solve from start_run's state to tf: each
  * attempt within the budget (every MP_ODE_INTERRUPT_EVERY-th first polls for
  * an interrupt) steps, lets the controller accept or reject the step (a
@@ -886,8 +897,13 @@ static int run_loop(ode_run *s)
         w->fnew_valid = 0;
         w->rho = 0.0;
         rc = cur->step(w, t, h, &err);
+        /* the new state itself: it can overflow where f stays finite (an f
+         * bounded at infinity), and an error estimate scaled by that state does
+         * not see it (the controlled methods' steps check it themselves) */
+        if (rc == MP_OK && !controlled) rc = check_state(w);
         if (rc == MP_ENONFINITE && controlled) {
-            /* a trial stage overflowed: reject and shrink as Hairer's codes do */
+            /* a trial stage or the state overflowed: reject and shrink as Hairer's
+             * codes do */
             s->h = mp_ode_control_nonfinite(&s->c, h);
             r->nreject++;
             rc = MP_OK;
@@ -899,6 +915,7 @@ static int run_loop(ode_run *s)
             h = w->h_taken;
             hnew = w->h_next;
         } else if (controlled && !control(cur, &s->c, err, &h, &hnew)) {
+            if (s->c.nonfinite) mp_ode_ws_bad_norm(w); /* err overflowed: f and y are finite */
             s->h = h; /* rejected: retry with the smaller step */
             r->nreject++;
             continue;

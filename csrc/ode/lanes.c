@@ -128,6 +128,29 @@ static inline void lane_eval(lane_group *g, const double *s, const double *y, do
     }
 }
 
+/* Contract: driver.c's check of a step's new state, for lane l: a NaN or inf
+ * in it is the lane's MP_ENONFINITE (MP_ODE_BAD_STATE, naming the first such
+ * component); a non-finite error estimate of an adaptive lane is recorded as
+ * MP_ODE_BAD_ERR (the controller rejects the step). */
+static void lane_check_state(lane_group *g, int l, double err, int *rc)
+{
+    uint64_t any = 0;
+    for (size_t c = 0; c < g->n; c++) any |= mp_ode_nonfinite_bit(g->ynew[c * W + (size_t)l]);
+    if (any >> 63) {
+        for (size_t c = 0; c < g->n; c++)
+            if (!isfinite(g->ynew[c * W + (size_t)l])) {
+                g->bad_what[l] = MP_ODE_BAD_STATE;
+                g->bad_index[l] = c;
+                *rc = MP_ENONFINITE;
+                return;
+            }
+    }
+    if (g->adaptive && !isfinite(err)) {
+        g->bad_what[l] = MP_ODE_BAD_ERR;
+        g->bad_index[l] = 0;
+    }
+}
+
 /* out = y + h sum_j a[j] K[j] over the non-zero a[j], lane by lane (the scalar
  * stage_point's order of operations).  Always inlined with a constant row. */
 static inline __attribute__((always_inline)) void
@@ -721,7 +744,8 @@ static void lane_attempt(lane_group *g)
     }
     for (int l = 0; l < W; l++) {
         if (!att[l]) continue;
-        if (rc[l] == MP_ENONFINITE && g->adaptive) { /* a trial stage overflowed */
+        if (rc[l] == MP_OK) lane_check_state(g, l, err[l], &rc[l]);
+        if (rc[l] == MP_ENONFINITE && g->adaptive) { /* a trial stage or the state overflowed */
             g->h[l] = mp_ode_control_nonfinite(&g->ctl[l], g->h[l]);
             continue;
         }

@@ -162,7 +162,14 @@ typedef struct mp_ode_options {
 } mp_ode_options;
 
 /* What produced a non-finite value (mp_ode_result.bad_what). */
-enum { MP_ODE_BAD_RHS = 0, MP_ODE_BAD_EVENT = 1, MP_ODE_BAD_JAC = 2, MP_ODE_BAD_ACTION = 3 };
+enum {
+    MP_ODE_BAD_RHS = 0,    /* f gave NaN or inf */
+    MP_ODE_BAD_EVENT = 1,  /* an event function did */
+    MP_ODE_BAD_JAC = 2,    /* the Jacobian did */
+    MP_ODE_BAD_ACTION = 3, /* an event's action did */
+    MP_ODE_BAD_STATE = 4,  /* a step's new state did, f being finite (an f bounded at inf) */
+    MP_ODE_BAD_ERR = 5     /* a step's scaled norm overflowed, its inputs being finite */
+};
 
 /* Why events ended a solve (mp_ode_result.stop_reason): a terminal event; an
  * action event's count (max_events); its crossings accumulating (Zeno: the
@@ -177,7 +184,7 @@ typedef struct mp_ode_result {
     int stiff;                /* Hairer's stiffness test fired on an explicit method */
     long nswitch;             /* method switches of a switching row */
     double t_fail;            /* where a failure happened */
-    int bad_what;             /* MP_ENONFINITE: MP_ODE_BAD_RHS, _EVENT or _JAC */
+    int bad_what;             /* MP_ENONFINITE: MP_ODE_BAD_RHS, _EVENT, ... (above) */
     size_t bad_index;         /* ... and the component (or event) that was not finite */
     int stop_reason;          /* a terminal or action event ended it (MP_ODE_STOP_*) */
     size_t stop_event;        /* ... which event (and, for MP_EEVENT, the one re-firing) */
@@ -316,8 +323,50 @@ static inline uint64_t mp_ode_nonfinite_bit(double x)
 }
 
 /* Systems up to this size have their evaluations checked by scalar loads
- * (mp_ode_ws_rhs). */
+ * (mp_ode_first_nonfinite). */
 #define MP_ODE_SCALAR_CHECK_N 16
+
+/* Contract: the index of the first of v[0..n) that is NaN or inf, n when all
+ * are finite.  One OR of integers over the values (mp_ode_nonfinite_bit): one
+ * branch, not one per value, and it vectorises without -ffast-math.  (A sum
+ * of 0 * v[i] does too, but its chain of dependent additions costs the heavy
+ * top's solve 4% and the spherical pendulum's 3%, measured side by side.)  Up
+ * to MP_ODE_SCALAR_CHECK_N values are read one by one: f has just stored them
+ * one by one, and a 16-byte load of two separate 8-byte stores waits for them
+ * to reach the cache (measured: the heavy top's solve 3-8% slower with the
+ * SIMD loads at n = 6). */
+static inline size_t mp_ode_first_nonfinite(const double *v, size_t n)
+{
+    uint64_t any = 0;
+    if (n <= MP_ODE_SCALAR_CHECK_N) {
+        for (size_t i = 0; i < n; i++) any |= mp_ode_nonfinite_bit(v[i]);
+    } else {
+#pragma omp simd reduction(| : any)
+        for (size_t i = 0; i < n; i++) any |= mp_ode_nonfinite_bit(v[i]);
+    }
+    if (any >> 63)
+        for (size_t i = 0; i < n; i++)
+            if (!isfinite(v[i])) return i;
+    return n;
+}
+
+/* Contract: MP_ENONFINITE, recording the first NaN or inf of a step's new
+ * state w->ynew (MP_ODE_BAD_STATE), which has one. */
+static inline int mp_ode_ws_bad_state(mp_ode_ws *w)
+{
+    w->bad_what = MP_ODE_BAD_STATE;
+    w->bad_index = mp_ode_first_nonfinite(w->ynew, w->n);
+    return MP_ENONFINITE;
+}
+
+/* Contract: records that a step's scaled norm (its error estimate, radau's
+ * Newton increment) overflowed from finite inputs (MP_ODE_BAD_ERR): the
+ * method rejects the step as for a non-finite stage. */
+static inline void mp_ode_ws_bad_norm(mp_ode_ws *w)
+{
+    w->bad_what = MP_ODE_BAD_ERR;
+    w->bad_index = 0;
+}
 
 /* Contract: dydt = f(t, y), counted in nfev; MP_ENONFINITE (with the first
  * offending component in w->bad_index) when a value is NaN or inf.  Every
@@ -331,24 +380,8 @@ static inline int mp_ode_ws_rhs(mp_ode_ws *w, double t, const double *y, double 
     int rc = w->p->rhs(t, y, dydt, w->p->data);
     w->nfev++;
     if (rc != MP_OK) return rc;
-    /* One OR of integers over the values: one branch, not one per component,
-     * and it vectorises without -ffast-math.  (A sum of 0 * dydt[i] does too,
-     * but its chain of dependent additions costs the heavy top's solve 4% and
-     * the spherical pendulum's 3%, measured side by side.)  A small system's
-     * values are read one by one: f has just stored them one by one, and a
-     * 16-byte load of two separate 8-byte stores waits for them to reach the
-     * cache (measured: the heavy top's solve 3-8% slower with the SIMD loads
-     * at n = 6). */
-    uint64_t any = 0;
-    if (w->n <= MP_ODE_SCALAR_CHECK_N) {
-        for (size_t i = 0; i < w->n; i++) any |= mp_ode_nonfinite_bit(dydt[i]);
-    } else {
-#pragma omp simd reduction(| : any)
-        for (size_t i = 0; i < w->n; i++) any |= mp_ode_nonfinite_bit(dydt[i]);
-    }
-    if (any >> 63)
-        for (size_t i = 0; i < w->n; i++)
-            if (!isfinite(dydt[i])) return mp_ode_ws_bad_rhs(w, i);
+    size_t i = mp_ode_first_nonfinite(dydt, w->n);
+    if (i < w->n) return mp_ode_ws_bad_rhs(w, i);
     return MP_OK;
 }
 

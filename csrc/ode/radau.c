@@ -368,7 +368,12 @@ static int radau_newton(mp_ode_ws *w, double t, double h, int *iters, double *th
                 s += q * q;
             }
         double dyno = sqrt(s / (3.0 * (double)n));
-        if (!isfinite(dyno)) { *nonfinite = 1; *hfac = 0.1; return 0; }
+        if (!isfinite(dyno)) { /* f was finite (mp_ode_ws_rhs checked it): dW overflowed */
+            mp_ode_ws_bad_norm(w);
+            *nonfinite = 1;
+            *hfac = 0.1;
+            return 0;
+        }
         if (newt > 1 && newt < NEWTON_MAXITER) {
             double thq = dyno / dynold;
             *theta = newt == 2 ? thq : sqrt(thq * thqold);
@@ -474,6 +479,7 @@ static int radau_step(mp_ode_ws *w, double t, double h_req, double *err_out)
         for (size_t i = 0; i < n; i++)
             st->scale[i] = atol[i] + mp_ode_absmax(w->y[i], ynew[i]) * rtol[i];
         err = rms(n, e, st->scale);
+        if (!isfinite(err)) mp_ode_ws_bad_norm(w);
         double safety = 0.9 * (2 * NEWTON_MAXITER + 1) / (2 * NEWTON_MAXITER + iters);
         if ((rejected || st->q_h == 0) && err > 1.0) {
             /* Hairer's improved estimate on a first step or after a rejection */
@@ -483,6 +489,7 @@ static int radau_step(mp_ode_ws *w, double t, double h_req, double *err_out)
                 for (size_t i = 0; i < n; i++) e[i] += ZE[i];
                 solve_real(st, e);
                 err = rms(n, e, st->scale);
+                if (!isfinite(err)) mp_ode_ws_bad_norm(w);
             } else if (rc == MP_ENONFINITE) {
                 err = NAN; /* a trial value: reject */
             } else {

@@ -102,11 +102,14 @@ static int dopri5_step(mp_ode_ws *w, double t, double h, double *err)
     stage_point(n, w->y, h, dp_a[6], K, 6, w->ynew);
     if ((rc = mp_ode_ws_rhs(w, t + h, w->ynew, K[6])) != MP_OK) return rc; /* FSAL */
     w->rho = stiffness_ratio(n, h, K[6], K[5], w->ynew, yt); /* stages 6, 7 both at t + h */
+    uint64_t bad = 0; /* the new state's check (driver.c's check_state), in this loop */
     for (size_t i = 0; i < n; i++) {
         double e = 0.0;
         for (int s = 0; s < 7; s++) e += dp_e[s] * K[s][i];
         yt[i] = h * e;
+        bad |= mp_ode_nonfinite_bit(w->ynew[i]);
     }
+    if (bad >> 63) return mp_ode_ws_bad_state(w);
     *err = mp_ode_err_norm(w, yt, w->y, w->ynew);
     return MP_OK;
 }
@@ -171,8 +174,10 @@ static int dop853_step(mp_ode_ws *w, double t, double h, double *err)
 #undef D8_STAGE
     stage_point(n, w->y, h, mp_dop853_b, K, 12, w->ynew);
     double e5s = 0.0, e3s = 0.0;
+    uint64_t bad = 0; /* the new state's check (driver.c's check_state), in this loop */
     for (size_t i = 0; i < n; i++) {
         double e5 = 0.0, e3 = 0.0;
+        bad |= mp_ode_nonfinite_bit(w->ynew[i]);
 #pragma GCC unroll 12
         for (int s = 0; s < 12; s++) { /* constant weights: the zero terms fold away */
             if (mp_dop853_e5[s] != 0.0) e5 += mp_dop853_e5[s] * K[s][i];
@@ -182,6 +187,7 @@ static int dop853_step(mp_ode_ws *w, double t, double h, double *err)
         e5s += (e5 / sk) * (e5 / sk);
         e3s += (e3 / sk) * (e3 / sk);
     }
+    if (bad >> 63) return mp_ode_ws_bad_state(w);
     double deno = e5s + 0.01 * e3s;
     if (deno <= 0.0) deno = 1.0;
     *err = fabs(h) * e5s / sqrt(deno * (double)n);

@@ -440,6 +440,13 @@ static PyObject *ode_message(const py_system *sys, const mp_ode_outcome *out, lo
                  i, t);
     } else if (out->bad_what == MP_ODE_BAD_EVENT) {
         snprintf(detail, sizeof detail, "events[%zu] returned NaN or inf at t = %.17g", i, t);
+    } else if (out->bad_what == MP_ODE_BAD_STATE) {
+        snprintf(detail, sizeof detail, "the solution's y[%zu] overflowed to NaN or inf in the "
+                 "step from t = %.17g, the right-hand side being finite", i, t);
+    } else if (out->bad_what == MP_ODE_BAD_ERR) {
+        snprintf(detail, sizeof detail, "a step's error estimate (or Newton increment), scaled "
+                 "by atol and rtol, overflowed near t = %.17g, the state and the right-hand side "
+                 "being finite: rescale the system", t);
     } else if (out->bad_what == MP_ODE_BAD_JAC) {
         snprintf(detail, sizeof detail, "jac[%zu, %zu] is NaN or inf near t = %.17g",
                  i / sys->prob.n, i % sys->prob.n, t);
