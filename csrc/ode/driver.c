@@ -853,14 +853,16 @@ static void fixed_block(ode_run *s)
 }
 
 /* Contract: MP_OK when the new state w->ynew of a step is finite, else
- * mp_ode_ws_bad_state.  One OR of integers over a vector f has not just
- * written (no SIMD split).  The controlled methods (dopri5, dop853) fold the
- * same test into their error loops, which read ynew anyway. */
+ * MP_ENONFINITE recording its first NaN or inf (MP_ODE_BAD_STATE).  The
+ * controlled methods (dopri5, dop853) fold the same test into their error
+ * loops, which read ynew anyway. */
 static inline int check_state(mp_ode_ws *w)
 {
-    uint64_t any = 0;
-    for (size_t i = 0; i < w->n; i++) any |= mp_ode_nonfinite_bit(w->ynew[i]);
-    return any >> 63 ? mp_ode_ws_bad_state(w) : MP_OK;
+    size_t i = mp_ode_first_nonfinite_at(w->ynew, w->n, 1);
+    if (i == w->n) return MP_OK;
+    w->bad_what = MP_ODE_BAD_STATE;
+    w->bad_index = i;
+    return MP_ENONFINITE;
 }
 
 /* Contract: the loop of a forward solve from start_run's state to tf: each

@@ -134,16 +134,12 @@ static inline void lane_eval(lane_group *g, const double *s, const double *y, do
  * MP_ODE_BAD_ERR (the controller rejects the step). */
 static void lane_check_state(lane_group *g, int l, double err, int *rc)
 {
-    uint64_t any = 0;
-    for (size_t c = 0; c < g->n; c++) any |= mp_ode_nonfinite_bit(g->ynew[c * W + (size_t)l]);
-    if (any >> 63) {
-        for (size_t c = 0; c < g->n; c++)
-            if (!isfinite(g->ynew[c * W + (size_t)l])) {
-                g->bad_what[l] = MP_ODE_BAD_STATE;
-                g->bad_index[l] = c;
-                *rc = MP_ENONFINITE;
-                return;
-            }
+    size_t c = mp_ode_first_nonfinite_at(g->ynew + l, g->n, W);
+    if (c < g->n) {
+        g->bad_what[l] = MP_ODE_BAD_STATE;
+        g->bad_index[l] = c;
+        *rc = MP_ENONFINITE;
+        return;
     }
     if (g->adaptive && !isfinite(err)) {
         g->bad_what[l] = MP_ODE_BAD_ERR;

@@ -326,8 +326,22 @@ static inline uint64_t mp_ode_nonfinite_bit(double x)
  * (mp_ode_first_nonfinite). */
 #define MP_ODE_SCALAR_CHECK_N 16
 
+/* Contract: the index i of the first of v[0], v[s], ..., v[(n - 1) s] that is
+ * NaN or inf, n when all are finite: one OR of integers over the values
+ * (mp_ode_nonfinite_bit), read one by one, then a search only when it is set.
+ * For a step's new state (driver.c, the lanes at stride W). */
+static inline size_t mp_ode_first_nonfinite_at(const double *v, size_t n, size_t s)
+{
+    uint64_t any = 0;
+    for (size_t i = 0; i < n; i++) any |= mp_ode_nonfinite_bit(v[i * s]);
+    if (any >> 63)
+        for (size_t i = 0; i < n; i++)
+            if (!isfinite(v[i * s])) return i;
+    return n;
+}
+
 /* Contract: the index of the first of v[0..n) that is NaN or inf, n when all
- * are finite.  One OR of integers over the values (mp_ode_nonfinite_bit): one
+ * are finite (f's values: every evaluation).  One OR of integers over the values (mp_ode_nonfinite_bit): one
  * branch, not one per value, and it vectorises without -ffast-math.  (A sum
  * of 0 * v[i] does too, but its chain of dependent additions costs the heavy
  * top's solve 4% and the spherical pendulum's 3%, measured side by side.)  Up
@@ -337,17 +351,11 @@ static inline uint64_t mp_ode_nonfinite_bit(double x)
  * SIMD loads at n = 6). */
 static inline size_t mp_ode_first_nonfinite(const double *v, size_t n)
 {
+    if (n <= MP_ODE_SCALAR_CHECK_N) return mp_ode_first_nonfinite_at(v, n, 1);
     uint64_t any = 0;
-    if (n <= MP_ODE_SCALAR_CHECK_N) {
-        for (size_t i = 0; i < n; i++) any |= mp_ode_nonfinite_bit(v[i]);
-    } else {
 #pragma omp simd reduction(| : any)
-        for (size_t i = 0; i < n; i++) any |= mp_ode_nonfinite_bit(v[i]);
-    }
-    if (any >> 63)
-        for (size_t i = 0; i < n; i++)
-            if (!isfinite(v[i])) return i;
-    return n;
+    for (size_t i = 0; i < n; i++) any |= mp_ode_nonfinite_bit(v[i]);
+    return any >> 63 ? mp_ode_first_nonfinite_at(v, n, 1) : n;
 }
 
 /* Contract: MP_ENONFINITE, recording the first NaN or inf of a step's new
