@@ -252,9 +252,10 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
     are NaN until it writes them.  Each step's new state is checked too (it
     can overflow where f stays finite): an adaptive step is retried smaller,
     a fixed step raises, naming ``y[i]`` and the step; an error estimate that
-    overflows from finite values is named as such.  Integration failures (budget exhausted,
-    step below round-off) are reported in ``status``/``message`` as SciPy does
-    (see ``errors``); ``Solution.raise_for_status()`` raises them.
+    overflows from finite values is named as such.  Integration failures
+    (budget exhausted, step below round-off) are reported in
+    ``status``/``message`` as SciPy does (see ``errors``);
+    ``Solution.raise_for_status()`` raises them.
 
     As SciPy's ``solve_ivp``: ``t0 == tf`` (or an empty y0) takes no step and
     returns y0 at ``t = [t0, tf]``; ``tf = +-inf`` runs an adaptive method

@@ -853,16 +853,11 @@ static void fixed_block(ode_run *s)
 }
 
 /* Contract: MP_OK when the new state w->ynew of a step is finite, else
- * MP_ENONFINITE recording its first NaN or inf (MP_ODE_BAD_STATE).  The
- * controlled methods (dopri5, dop853) fold the same test into their error
- * loops, which read ynew anyway. */
+ * mp_ode_ws_bad_state.  The controlled methods (dopri5, dop853) fold the same
+ * test into their error loops, which read ynew anyway. */
 static inline int check_state(mp_ode_ws *w)
 {
-    size_t i = mp_ode_first_nonfinite_at(w->ynew, w->n, 1);
-    if (i == w->n) return MP_OK;
-    w->bad_what = MP_ODE_BAD_STATE;
-    w->bad_index = i;
-    return MP_ENONFINITE;
+    return mp_ode_first_nonfinite_at(w->ynew, w->n, 1) < w->n ? mp_ode_ws_bad_state(w) : MP_OK;
 }
 
 /* Contract: the loop of a forward solve from start_run's state to tf: each

@@ -130,20 +130,14 @@ static inline void lane_eval(lane_group *g, const double *s, const double *y, do
 
 /* Contract: driver.c's check of a step's new state, for lane l: a NaN or inf
  * in it is the lane's MP_ENONFINITE (MP_ODE_BAD_STATE, naming the first such
- * component); a non-finite error estimate of an adaptive lane is recorded as
- * MP_ODE_BAD_ERR (the controller rejects the step). */
-static void lane_check_state(lane_group *g, int l, double err, int *rc)
+ * component). */
+static void lane_check_state(lane_group *g, int l, int *rc)
 {
     size_t c = mp_ode_first_nonfinite_at(g->ynew + l, g->n, W);
     if (c < g->n) {
         g->bad_what[l] = MP_ODE_BAD_STATE;
         g->bad_index[l] = c;
         *rc = MP_ENONFINITE;
-        return;
-    }
-    if (g->adaptive && !isfinite(err)) {
-        g->bad_what[l] = MP_ODE_BAD_ERR;
-        g->bad_index[l] = 0;
     }
 }
 
@@ -740,7 +734,7 @@ static void lane_attempt(lane_group *g)
     }
     for (int l = 0; l < W; l++) {
         if (!att[l]) continue;
-        if (rc[l] == MP_OK) lane_check_state(g, l, err[l], &rc[l]);
+        if (rc[l] == MP_OK) lane_check_state(g, l, &rc[l]);
         if (rc[l] == MP_ENONFINITE && g->adaptive) { /* a trial stage or the state overflowed */
             g->h[l] = mp_ode_control_nonfinite(&g->ctl[l], g->h[l]);
             continue;
@@ -750,8 +744,13 @@ static void lane_attempt(lane_group *g)
             continue;
         }
         if (g->adaptive &&
-            !mp_ode_control(g->m, &g->ctl[l], err[l], fac11[l], fold[l], &g->h[l], &hnew[l]))
+            !mp_ode_control(g->m, &g->ctl[l], err[l], fac11[l], fold[l], &g->h[l], &hnew[l])) {
+            if (g->ctl[l].nonfinite) { /* err overflowed: f and y are finite (driver.c) */
+                g->bad_what[l] = MP_ODE_BAD_ERR;
+                g->bad_index[l] = 0;
+            }
             continue;
+        }
         acc[l] = 1;
         /* a fixed step's end is counted, as driver.c counts it: t0 + (i + 1) h, from
          * the start or the last action */

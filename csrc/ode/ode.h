@@ -341,14 +341,14 @@ static inline size_t mp_ode_first_nonfinite_at(const double *v, size_t n, size_t
 }
 
 /* Contract: the index of the first of v[0..n) that is NaN or inf, n when all
- * are finite (f's values: every evaluation).  One OR of integers over the values (mp_ode_nonfinite_bit): one
- * branch, not one per value, and it vectorises without -ffast-math.  (A sum
- * of 0 * v[i] does too, but its chain of dependent additions costs the heavy
- * top's solve 4% and the spherical pendulum's 3%, measured side by side.)  Up
- * to MP_ODE_SCALAR_CHECK_N values are read one by one: f has just stored them
- * one by one, and a 16-byte load of two separate 8-byte stores waits for them
- * to reach the cache (measured: the heavy top's solve 3-8% slower with the
- * SIMD loads at n = 6). */
+ * are finite (f's values: every evaluation).  One OR of integers over the
+ * values (mp_ode_nonfinite_bit): one branch, not one per value, and it
+ * vectorises without -ffast-math.  (A sum of 0 * v[i] does too, but its chain
+ * of dependent additions costs the heavy top's solve 4% and the spherical
+ * pendulum's 3%, measured side by side.)  Up to MP_ODE_SCALAR_CHECK_N values
+ * are read one by one: f has just stored them one by one, and a 16-byte load
+ * of two separate 8-byte stores waits for them to reach the cache (measured:
+ * the heavy top's solve 3-8% slower with the SIMD loads at n = 6). */
 static inline size_t mp_ode_first_nonfinite(const double *v, size_t n)
 {
     if (n <= MP_ODE_SCALAR_CHECK_N) return mp_ode_first_nonfinite_at(v, n, 1);
@@ -363,7 +363,7 @@ static inline size_t mp_ode_first_nonfinite(const double *v, size_t n)
 static inline int mp_ode_ws_bad_state(mp_ode_ws *w)
 {
     w->bad_what = MP_ODE_BAD_STATE;
-    w->bad_index = mp_ode_first_nonfinite(w->ynew, w->n);
+    w->bad_index = mp_ode_first_nonfinite_at(w->ynew, w->n, 1);
     return MP_ENONFINITE;
 }
 

@@ -193,11 +193,17 @@ static int radau_alloc(mp_ode_ws *w)
     return MP_OK;
 }
 
-static double rms(size_t n, const double *v, const double *scale)
+/* Contract: the error estimate's RMS norm, v scaled by scale; one that
+ * overflowed from finite v is recorded (mp_ode_ws_bad_norm) for the message
+ * should the step size then fail. */
+static double err_rms(mp_ode_ws *w, const double *v, const double *scale)
 {
+    size_t n = w->n;
     double s = 0.0;
     for (size_t i = 0; i < n; i++) s += (v[i] / scale[i]) * (v[i] / scale[i]);
-    return sqrt(s / (double)n);
+    double r = sqrt(s / (double)n);
+    if (!isfinite(r)) mp_ode_ws_bad_norm(w);
+    return r;
 }
 
 static int radau_jac(mp_ode_ws *w, double t)
@@ -478,8 +484,7 @@ static int radau_step(mp_ode_ws *w, double t, double h_req, double *err_out)
         solve_real(st, e);
         for (size_t i = 0; i < n; i++)
             st->scale[i] = atol[i] + mp_ode_absmax(w->y[i], ynew[i]) * rtol[i];
-        err = rms(n, e, st->scale);
-        if (!isfinite(err)) mp_ode_ws_bad_norm(w);
+        err = err_rms(w, e, st->scale);
         double safety = 0.9 * (2 * NEWTON_MAXITER + 1) / (2 * NEWTON_MAXITER + iters);
         if ((rejected || st->q_h == 0) && err > 1.0) {
             /* Hairer's improved estimate on a first step or after a rejection */
@@ -488,8 +493,7 @@ static int radau_step(mp_ode_ws *w, double t, double h_req, double *err_out)
             if (rc == MP_OK) {
                 for (size_t i = 0; i < n; i++) e[i] += ZE[i];
                 solve_real(st, e);
-                err = rms(n, e, st->scale);
-                if (!isfinite(err)) mp_ode_ws_bad_norm(w);
+                err = err_rms(w, e, st->scale);
             } else if (rc == MP_ENONFINITE) {
                 err = NAN; /* a trial value: reject */
             } else {
