@@ -52,7 +52,14 @@ class Solution(dict):
     sol : DenseOutput or None
         Continuous solution when ``dense_output=True``.
     t_events, y_events : list of ndarray or None
-        For each event function, the times and states at which it crossed zero.
+        For each event function, the times and states at which it crossed zero
+        (for an :func:`mechpy.events.impact`: its impacts, the point where
+        they accumulate and the body comes to rest on the wall, and each
+        lift-off from it).
+    rests : list of ndarray, shape (r, 2)
+        With events: for each event function, the intervals [t_on, t_off] in
+        which its body rested on the wall (an impact's); t_off is inf when it
+        still rested at the end; (0, 2) for an event that never rested.
     nfev, njev, nlu, nsteps, nreject : int
         Right-hand side evaluations, Jacobian evaluations, LU decompositions,
         accepted and rejected steps.

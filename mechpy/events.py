@@ -77,6 +77,12 @@ class Impact:
         self.direction = -1
         self.terminal = False
         self.max_events = None
+        self._walls = {}     # a moving wall compiled, per system's parameter names
+
+    @property
+    def moving(self) -> bool:
+        """Whether the wall moves (a SymPy expression of t)."""
+        return not isinstance(self.wall, float)
 
     def __repr__(self):
         return (f"impact({self.coordinate!r}, wall={self.wall!r}, "
@@ -105,13 +111,20 @@ class Impact:
                              f"{iq + 1} values and v after it (got {n} values)")
         return iq, iq + n // 2
 
+    def _standing(self, what):
+        if self.moving:
+            raise TypeError(f"impact.{what}: a moving wall runs compiled with its system; "
+                            "pass the impact to mp.solve or mp.solve_many")
+
     def __call__(self, t, y, *args):
+        self._standing("__call__")
         iq, _ = self._indices(None, np.shape(y)[0])
         return self.side * (float(np.asarray(y)[iq]) - self.wall)
 
     def action(self, t, y, *args):
         """The state after the impact: the coordinate at the wall, its velocity
         reflected and scaled by the restitution (a number)."""
+        self._standing("action")
         y = np.array(y, dtype=float)
         iq, iv = self._indices(None, y.shape[0])
         if not isinstance(self.restitution, numbers.Real):
@@ -119,6 +132,60 @@ class Impact:
         y[iv] = -float(self.restitution) * y[iv]
         y[iq] = self.wall
         return y
+
+    def _may_rest(self, system, n) -> bool:
+        """Whether the coordinate may rest on the wall, a contact force acting on
+        its own equation alone: a system written as explicit first-order
+        equations (a Python function, mp.equations, a Cartesian scene), or a
+        Lagrangian or Kane model of one coordinate.  A model whose mass matrix
+        may couple the coordinate to others ends at the accumulation instead."""
+        if _is_scene(system):
+            kind = getattr(system, "_meta", {}).get("kind") if hasattr(system, "_meta") \
+                else None
+            if kind is not None:
+                return kind == "equations" or n == 2
+            return type(system).__name__ in _SCENE_COORDINATES or n == 2
+        return True
+
+    def _wall_address(self, system) -> int:
+        """The address of the moving wall compiled for system (0: it stands):
+        mp_wall_fn (position, velocity and acceleration at t from the system's
+        parameters), printed from the SymPy expression and its derivatives."""
+        if not self.moving:
+            return 0
+        import ctypes
+
+        import sympy as sp
+
+        from .symbolic.build import ABI_VERSION, build
+        from .symbolic.codegen import _Printer
+        names = list(getattr(system, "params", {}) or {})
+        key = tuple(names)
+        if key not in self._walls:
+            t = sp.Symbol("t")
+            expr = self.wall
+            free = {str(x) for x in expr.free_symbols} - {"t"}
+            unknown = sorted(free - set(names))
+            if unknown:
+                raise ValueError(f"impact: the wall names {unknown}, which are not parameters "
+                                 f"of the system (its parameters: {names}); the time is "
+                                 "sympy.Symbol('t')")
+            pr = _Printer()
+            sub = {sp.Symbol(nm): sp.Symbol(f"mp_p{j}") for j, nm in enumerate(names)}
+            tt = [x for x in expr.free_symbols if str(x) == "t"]
+            e0 = expr.subs({x: t for x in tt})
+            ws = [e0, sp.diff(e0, t), sp.diff(e0, t, 2)]
+            lines = [f"    double mp_p{j} = p[{j} * ps];" for j in range(len(names))]
+            body = "\n".join(lines + [f"    w[{i}] = {pr.doprint(w.subs(sub))};"
+                                      for i, w in enumerate(ws)])
+            # mp_gen_dims: what the cache checks of every generated library (its ABI)
+            src = ("#include <math.h>\n#include <stddef.h>\n"
+                   f"const long mp_gen_dims[5] = {{0, 0, 0, 0, {ABI_VERSION}}};\n"
+                   "void mp_wall(double t, const double *p, size_t ps, double *w)\n{\n"
+                   f"    (void)p; (void)ps; (void)t;\n{body}\n}}\n")
+            lib = build(src)[0]
+            self._walls[key] = (lib, ctypes.cast(lib.mp_wall, ctypes.c_void_p).value)
+        return self._walls[key][1]
 
     def _c_entry(self, system, n, k=None):
         """The entry the C core takes: ("impact", iq, iv, wall, e, side, e_param):
@@ -141,7 +208,9 @@ class Impact:
                 raise ValueError("impact: restitution as an array is for solve_many (one per "
                                  "trajectory); solve takes a number")
             e = as_array(e, "restitution", shape=(k,), nonnegative=True)
-        return ("impact", iq, iv, float(self.wall), e, float(self.side), e_param)
+        wall = 0.0 if self.moving else float(self.wall)
+        return ("impact", iq, iv, wall, e, float(self.side), e_param,
+                self._wall_address(system), self._may_rest(system, n))
 
 
 #: Built-in scenes' coordinate names and, for the scenes whose state is not
@@ -150,6 +219,19 @@ _SCENE_COORDINATES = {"Pendulum": ("theta",), "Duffing": ("x",), "VanDerPol": ("
                       "Kepler": ("x", "y"), "RestrictedThreeBody": ("x", "y"),
                       "Foucault": ("x", "y"), "Rocket": ("height",)}
 _SCENE_VELOCITY = {"Rocket": {0: 1}, "RigidBody": {}, "HeavyTop": {0: 3, 1: 4, 2: 5}}
+
+
+def _wall(wall):
+    """A wall as given: a number (it stands there), or a SymPy expression of
+    the time sympy.Symbol('t') and the system's parameters (it moves)."""
+    if isinstance(wall, numbers.Real) or np.ndim(wall) == 0 and not hasattr(wall, "free_symbols"):
+        return as_scalar(wall, "wall")
+    import sympy as sp
+    if isinstance(wall, sp.Expr):
+        if not wall.free_symbols:
+            return as_scalar(float(wall), "wall")
+        return wall
+    raise TypeError(f"wall must be a number or a SymPy expression of t, got {type(wall).__name__}")
 
 
 def impact(coordinate, wall=0.0, restitution=1.0, side=+1) -> Impact:
@@ -201,7 +283,7 @@ def impact(coordinate, wall=0.0, restitution=1.0, side=+1) -> Impact:
     """
     if side not in (1, -1):
         raise ValueError(f"side must be +1 or -1, got {side!r}")
-    w = as_scalar(wall, "wall")
+    w = _wall(wall)
     if not isinstance(restitution, str) and np.ndim(restitution) == 0:
         e = as_scalar(restitution, "restitution")
         if e < 0:

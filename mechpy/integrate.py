@@ -347,15 +347,29 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
     sol = None
     if dense_output and dense is not None:
         sol = DenseOutput(*dense, backward=bool(backward))
-    t_events = y_events = None
+    fields = {"t_events": None, "y_events": None}
     if evs is not None:
-        t_events = [te for te, _ in events_out or ()]
-        y_events = [ye for _, ye in events_out or ()]
-    out = Solution(t=t, y=y.T, sol=sol, t_events=t_events, y_events=y_events, nfev=nfev,
-                   njev=njev, nlu=nlu, nsteps=nsteps, nreject=nreject, status=status,
-                   message=message, success=status >= 0)
+        fields = _event_fields(events_out or ())
+    out = Solution(t=t, y=y.T, sol=sol, nfev=nfev, njev=njev, nlu=nlu, nsteps=nsteps,
+                   nreject=nreject, status=status, message=message, success=status >= 0,
+                   **fields)
     object.__setattr__(out, "_code", code)
     return out
+
+
+def _event_fields(lists) -> dict:
+    """A solve's event lists (per event function: its times, its states, and
+    the times its body came to rest on a wall and lifted off, alternating) as
+    the Solution's ``t_events``, ``y_events`` and ``rests`` ((r, 2) per
+    event: [came to rest, lifted off], inf when it still rested at the end)."""
+    rests = []
+    for _, _, rs in lists:
+        rs = np.asarray(rs, dtype=float)
+        if rs.size % 2:
+            rs = np.append(rs, np.inf)
+        rests.append(rs.reshape(-1, 2))
+    return {"t_events": [te for te, _, _ in lists], "y_events": [ye for _, ye, _ in lists],
+            "rests": rests}
 
 
 def _no_step(t0, tf, y0, tev, dense_output, evs) -> Solution:
@@ -372,6 +386,7 @@ def _no_step(t0, tf, y0, tev, dense_output, evs) -> Solution:
                    sol=_ConstantDense(y0, t0, tf) if dense_output else None,
                    t_events=None if evs is None else [np.empty(0) for _ in evs],
                    y_events=None if evs is None else [np.empty((0, n)) for _ in evs],
+                   **({} if evs is None else {"rests": [np.empty((0, 2)) for _ in evs]}),
                    nfev=0, njev=0, nlu=0, nsteps=0, nreject=0, status=0,
                    message=_STATUS[0]["message"], success=True)
     object.__setattr__(out, "_code", 0)
@@ -707,9 +722,8 @@ def solve_many(system, t_span: Sequence[float], y0s, *, params=None, t_eval=None
     status = np.array([_STATUS[c]["solve_status"] for c in r["code"].tolist()], dtype=int)
     fields = {}
     if evs is not None:
-        found = r["events"] or [[] for _ in range(k)]
-        fields = dict(t_events=[[te for te, _ in row] for row in found],
-                      y_events=[[ye for _, ye in row] for row in found])
+        found = [_event_fields(row) for row in (r["events"] or [[] for _ in range(k)])]
+        fields = {key: [f[key] for f in found] for key in ("t_events", "y_events", "rests")}
     out = EnsembleSolution(t=tev, y=r["y"], success=status >= 0, status=status,
                            message=r["message"], nfev=r["nfev"], lanes=r["lanes"], **fields)
     object.__setattr__(out, "_code", r["code"])

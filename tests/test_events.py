@@ -46,12 +46,14 @@ def test_bouncing_ball_times_energy_and_rest(ball):
     np.testing.assert_allclose(-yb[:20, 1], v1 * e ** np.arange(20), rtol=1e-10)
     Eb = 0.5 * yb[:, 1] ** 2
     np.testing.assert_allclose(Eb[1:20] / Eb[:19], e**2, rtol=1e-9)
-    # past the accumulation time t_inf = t1 + 2 v1 e / (g (1 - e)) the solve ends
-    # there, as at a terminal event, naming the event
+    # at the accumulation time t_inf = t1 + 2 v1 e / (g (1 - e)) the ball comes to
+    # rest on the floor (gravity pushes it there) and the solve goes on to the end
     t_inf = want[0] + 2 * v1 * e / (G * (1 - e))
-    assert sol.status == 1 and sol.success
-    assert "events[0] accumulate (Zeno)" in sol.message
-    assert abs(sol.t[-1] - t_inf) < 1e-9 * t_inf        # 8.8e-12 relative measured
+    assert sol.status == 0 and sol.success
+    assert sol.rests[0].shape == (1, 2) and sol.rests[0][0, 1] == np.inf
+    assert abs(sol.rests[0][0, 0] - t_inf) < 1e-11 * t_inf   # 1.2e-13 relative measured
+    assert abs(sol.t_events[0][-1] - t_inf) < 1e-11 * t_inf  # the accumulation recorded
+    assert sol.t[-1] == 20.0 and np.all(sol.y[:, sol.t > t_inf] == 0.0)  # at rest
     assert sol.nfev < 20000                              # 242 bounces, ~3k evaluations
     # every sample between bounces is above the floor, each flight a parabola
     assert np.all(sol.y[0] > -1e-12)

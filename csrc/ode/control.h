@@ -224,27 +224,48 @@ static inline int mp_ode_event_root(int (*g)(void *ctx, double s, double *gs), v
 /* Sub-intervals of a step searched for event crossings (both widths). */
 #define MP_ODE_EVENT_SUBDIV 4
 
-/* Where a zero of g left by an action at t is probed after the restart: 1%
- * of the shortest gap between two actions that is not an accumulation (of a
- * solve that started at t_start), and never within round-off of t. */
-static inline double mp_ode_restart_probe(double t, double t_start)
+/* Contract: the shortest time between two actions that a solve started at
+ * t_start tells apart at t: MP_ODE_ZENO_FRAC of the time since the start,
+ * and never below 64 ulps of t (where the time grid itself stops). */
+static inline double mp_ode_time_resolution(double t, double t_start)
 {
-    return fmax(0.01 * MP_ODE_ZENO_FRAC * (t - t_start), 64.0 * DBL_EPSILON * fabs(t));
+    return fmax(MP_ODE_ZENO_FRAC * (t - t_start), 64.0 * DBL_EPSILON * fabs(t));
 }
 
 /* What an action event's new crossing at t means, its previous action at
  * t_prev (n_prev actions before), the solve started at t_start, the step h:
  * MP_OK (apply the action), MP_EEVENT (it fires again at once: within the
  * root finder's tolerance of the last action) or MP_TERMINATED (Zeno: the
- * gap below MP_ODE_ZENO_FRAC of the time since the start; *gap set). */
+ * gap below the time resolution; *gap set). */
 static inline int mp_ode_action_gap(double t, double t_prev, long n_prev, double t_start,
                                     double h, double *gap)
 {
     if (n_prev <= 0) return MP_OK;
     *gap = t - t_prev;
     if (*gap <= 8.0 * DBL_EPSILON * (fabs(t) + fabs(h))) return MP_EEVENT;
-    if (*gap <= MP_ODE_ZENO_FRAC * (t - t_start)) return MP_TERMINATED;
+    if (*gap <= mp_ode_time_resolution(t, t_start)) return MP_TERMINATED;
     return MP_OK;
+}
+
+/* Contract: whether a body leaves an impact's wall at t with the relative
+ * velocity rho >= 0 (side-signed: > 0 away from the wall) and the relative
+ * acceleration a (side-signed) comes to rest on it: the force pushes it back
+ * (a < 0) and the flights left cannot be resolved: rho = 0 (restitution 0),
+ * or with e < 1 (e = rho over the speed it arrived with) the next flight's
+ * height rho^2 / (2 |a|) within 16 ulps of the wall's position x, or all the
+ * flights left, 2 rho / (|a| (1 - e)), within the time resolution.  *t_left
+ * is the time to the accumulation (the sum of those flights: exact for a
+ * constant a).  An elastic impact (e >= 1) never accumulates. */
+static inline int mp_ode_impact_rests(double t, double t_start, double rho, double a, double e,
+                                      double x, double *t_left)
+{
+    *t_left = 0.0;
+    if (!(a < 0.0) || !(rho >= 0.0)) return 0;
+    if (rho == 0.0) return 1;
+    if (!(e < 1.0)) return 0;
+    *t_left = 2.0 * rho / (-a * (1.0 - e));
+    return rho * rho / (-2.0 * a) <= 16.0 * DBL_EPSILON * fabs(x) ||
+           *t_left <= mp_ode_time_resolution(t, t_start);
 }
 
 #endif

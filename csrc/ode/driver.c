@@ -11,6 +11,8 @@
 
 #define MP_ODE_INTERRUPT_EVERY 256   /* steps between interrupt checks */
 
+typedef struct ode_run ode_run; /* one forward solve in progress (below) */
+
 /* ---- small helpers ------------------------------------------------------ */
 
 void mp_ode_problem_at(mp_ode_problem *p, double t, const double *y)
@@ -188,6 +190,16 @@ static int push_event(mp_ode_result *r, size_t k, double t, const double *y)
     return MP_OK;
 }
 
+/* Append t to event k's rest list (r->rs_t: came to rest, lifted off, ...). */
+static int push_rest(mp_ode_result *r, size_t k, double t)
+{
+    if (!r->rs_t) return MP_OK;
+    if (grow((void **)&r->rs_t[k], &r->rs_cap[k], r->rs_count[k] + 1, sizeof(double)) != MP_OK)
+        return MP_ENOMEM;
+    r->rs_t[k][r->rs_count[k]++] = t;
+    return MP_OK;
+}
+
 int mp_ode_result_events_init(mp_ode_result *r, size_t n, size_t n_events)
 {
     memset(r, 0, sizeof *r);
@@ -221,6 +233,11 @@ void mp_ode_result_free(mp_ode_result *r)
     free(r->ev_y);
     free(r->ev_count);
     free(r->ev_cap);
+    if (r->rs_t)
+        for (size_t k = 0; k < r->n_events; k++) free(r->rs_t[k]);
+    free(r->rs_t);
+    free(r->rs_count);
+    free(r->rs_cap);
     memset(r, 0, sizeof *r);
 }
 
@@ -307,6 +324,14 @@ static int crosses(double g0, double g1, int dir)
     return dir > 0 ? up : dir < 0 ? down : (up || down);
 }
 
+/* Whether g is strictly on the side an event of direction dir is crossed
+ * from (dir 0: either side, g not zero): where an event that has acted must
+ * have been seen before it can fire again. */
+static int before_crossing(double g, int dir)
+{
+    return dir < 0 ? g > 0.0 : dir > 0 ? g < 0.0 : g != 0.0;
+}
+
 typedef struct { double s; size_t k; } ev_hit;
 
 static int ev_cmp(const void *a, const void *b)
@@ -315,108 +340,63 @@ static int ev_cmp(const void *a, const void *b)
     return x < y ? -1 : x > y;
 }
 
-/* Find every crossing in the accepted step [t, t + h]; g_old holds g at t and
- * is updated to g at the step end (first: t is the solve's start or where an
- * action restarted it).  Sets *s_stop <= 1 when a terminal event
- * fires or an action event crosses (the step is truncated there; *act = the
- * action event's index, else -1; a terminal count reached stops instead,
- * *act = -1, r->stop_reason saying which).  On the first step (first != 0) an
- * event that is exactly zero at t0 occurs at t0 when it leaves zero in its
- * direction (any way for direction 0), as SciPy's solve_ivp reports it; a
- * zero at a later step's start is the crossing the step before reported (but
- * after an action the state is new: first again). */
-static int ev_step(mp_ode_ws *w, mp_ode_result *r, const mp_ode_options *o, double t, double h,
-                   int first, double probe, double *g_old, double *g_sub, double *ytmp,
-                   double *gtmp, ev_hit *hits, double *s_stop, long *act)
+static const mp_impact *ev_impact(const ode_run *s, size_t k);
+static double ev_rho(const ode_run *s, const mp_impact *im, double t, const double *y,
+                     double *wall);
+
+/* an impact's relative velocity on the step's interpolant at fraction s */
+typedef struct {
+    const ode_run *s;
+    ev_ctx *c;
+    const mp_impact *im;
+} ev_rho_ctx;
+
+static int ev_rho_at(void *ctx, double sf, double *rho)
 {
-    size_t ne = o->n_events, nh = 0;
-    ev_ctx c = {w, o, t, h, ytmp, gtmp};
-    *s_stop = 2.0;
-    *act = -1;
-    double s_from = 0.0; /* where the search starts (after a restart's probe) */
-    if (first == 2) {
-        /* After an action the state is new: an event exactly zero there is
-         * probed just after it (at t + probe, far inside the shortest interval
-         * between two actions that is not an accumulation), and occurs there
-         * when g has left zero in its direction (the action left the state on
-         * the event surface, moving across it); otherwise its search starts at
-         * the probe (a bounce shorter than a sub-interval is found). */
-        int zero = 0;
-        for (size_t k = 0; k < ne; k++) zero |= g_old[k] == 0.0;
-        if (zero) {
-            s_from = fmin(probe / h, 0.5 / MP_ODE_EVENT_SUBDIV);
-            mp_ode_dense_eval(w->coef, w->ncoef, w->n, s_from, ytmp);
-            int rc = o->events(t + s_from * h, ytmp, g_sub, o->events_data);
-            if (rc != MP_OK) return rc;
-            for (size_t k = 0; k < ne; k++) {
-                if (g_old[k] != 0.0) continue;
-                int dk = o->direction[k];
-                if (dk == 0 ? g_sub[k] != 0.0 : dk > 0 ? g_sub[k] > 0.0 : g_sub[k] < 0.0) {
-                    hits[nh].s = 0.0;
-                    hits[nh].k = k;
-                    nh++;
-                }
-                g_old[k] = g_sub[k];
-            }
-        }
-    }
-    for (int j = 1; j <= MP_ODE_EVENT_SUBDIV; j++) {
-        double s0 = (double)(j - 1) / MP_ODE_EVENT_SUBDIV, s1 = (double)j / MP_ODE_EVENT_SUBDIV;
-        if (j == 1) s0 = s_from;
-        int rc;
-        if (j == MP_ODE_EVENT_SUBDIV) rc = o->events(t + h, w->ynew, g_sub, o->events_data);
-        else {
-            mp_ode_dense_eval(w->coef, w->ncoef, w->n, s1, ytmp);
-            rc = o->events(t + s1 * h, ytmp, g_sub, o->events_data);
-        }
-        if (rc != MP_OK) return rc;
-        for (size_t k = 0; k < ne; k++) {
-            if (!isfinite(g_sub[k])) {
-                w->bad_what = MP_ODE_BAD_EVENT;
-                w->bad_index = k;
-                return MP_ENONFINITE;
-            }
-            int dk = o->direction[k];
-            if (first == 1 && j == 1 && g_old[k] == 0.0) { /* zero at t0 */
-                if (dk == 0 || (dk > 0 ? g_sub[k] >= 0.0 : g_sub[k] <= 0.0)) {
-                    hits[nh].s = 0.0;
-                    hits[nh].k = k;
-                    nh++;
-                }
-            } else if (crosses(g_old[k], g_sub[k], dk)) {
-                double root;
-                rc = ev_root(&c, k, s0, g_old[k], s1, g_sub[k], &root);
-                if (rc != MP_OK) return rc;
-                hits[nh].s = root;
-                hits[nh].k = k;
-                nh++;
-            }
-            g_old[k] = g_sub[k];
-        }
-    }
-    qsort(hits, nh, sizeof *hits, ev_cmp);
-    for (size_t i = 0; i < nh; i++) {
-        size_t k = hits[i].k;
-        double s = hits[i].s;
-        mp_ode_dense_eval(w->coef, w->ncoef, w->n, s, ytmp);
-        int rc = k < r->n_events ? push_event(r, k, t + s * h, ytmp) : MP_OK; /* a switch: not */
-        if (rc != MP_OK) return rc;
-        int with_action = o->has_action && o->has_action[k];
-        if (o->terminal[k] > 0 && r->ev_count[k] >= (size_t)o->terminal[k]) {
-            *s_stop = s;
-            r->stop_reason = with_action ? MP_ODE_STOP_MAX_EVENTS : MP_ODE_STOP_TERMINAL;
-            r->stop_event = k;
-            r->stop_count = (long)r->ev_count[k];
-            break;
-        }
-        if (with_action) {
-            *s_stop = s;
-            *act = (long)k;
-            break;
-        }
-    }
+    ev_rho_ctx *r = ctx;
+    double wv[3];
+    mp_ode_dense_eval(r->c->w->coef, r->c->w->ncoef, r->c->w->n, sf, r->c->ytmp);
+    *rho = ev_rho(r->s, r->im, r->c->t + sf * r->c->h, r->c->ytmp, wv);
     return MP_OK;
 }
+
+/* Contract: where an impact's g = side (q - wall) has its extremum inside
+ * [a, b] of the step: the root of its relative velocity rho = g' (rho(a) and
+ * rho(b) of opposite signs) on the interpolant, *sm; g there in *gm. */
+static int ev_extremum(const ode_run *s, ev_ctx *c, const mp_impact *im, size_t k, double a,
+                       double rho_a, double b, double rho_b, double *sm, double *gm)
+{
+    ev_rho_ctx rc = {s, c, im};
+    int st = mp_ode_event_root(ev_rho_at, &rc, c->t, c->h, a, rho_a, b, rho_b, sm);
+    return st != MP_OK ? st : ev_at(c, *sm, k, gm);
+}
+
+/* Contract: event k acted at the step's start (or stands at zero there) and
+ * is not yet seen before its crossing; at the first sub-point s1 g is still
+ * not there (g1).  Did g leave zero and come back within [0, s1]?  For an
+ * impact the relative velocity says: leaving (rho > 0 at the start), back
+ * (rho < 0 at s1), g's maximum between them.  For another event g is looked
+ * at halfway back towards the start, down to the time resolution.  *sa (-1:
+ * no) is a point where g is before its crossing (ga) and [*sa, *sb] brackets
+ * the crossing after it (gb). */
+static int ev_returned(ode_run *s, ev_ctx *c, size_t k, double s1, double g1, double *sa,
+                       double *ga, double *sb, double *gb);
+
+/* Find every crossing in the accepted step [t, t + h]; s->g_old holds g at t
+ * and is updated to g at the step end (first: t is the solve's start).  Sets
+ * *s_stop <= 1 when a terminal event fires or an action event crosses (the
+ * step is truncated there; *act = the action event's index, else -1; a
+ * terminal count reached stops instead, *act = -1, r->stop_reason saying
+ * which).  On the first step (first != 0) an event that is exactly zero at t0
+ * occurs at t0 when it leaves zero in its direction (any way for direction 0),
+ * as SciPy's solve_ivp reports it; a zero at a later step's start is the
+ * crossing the step before reported.  An event that acted (or stood at zero
+ * where an action restarted the solve) is disarmed: it fires again only after
+ * g has been seen on the side its crossing starts from, wherever the wall is
+ * (ev_returned looks inside the first sub-interval).  An impact is also
+ * crossed where g touches zero between two sub-points (a grazing impact): g's
+ * minimum there is found on the interpolant from its velocity. */
+static int ev_step(ode_run *s, double t, double h, int first, double *s_stop, long *act);
 
 /* ---- the first step: Hairer's hinit ------------------------------------- */
 
@@ -513,7 +493,7 @@ static int switch_method(const mp_ode_method *m, mp_ode_ws *w, const mp_ode_meth
 
 /* One forward solve in progress: what the loop reads and writes besides the
  * method's workspace. */
-typedef struct {
+struct ode_run {
     const mp_ode_method *m;   /* the row asked for (a switching row: the pair) */
     const mp_ode_method *cur; /* the method running */
     const mp_ode_options *o;
@@ -530,15 +510,282 @@ typedef struct {
     long checked_until;       /* ... not before this many attempts (a block replayed) */
     double *buf, *ytmp, *save;                  /* the vectors: one block */
     double *g_old, *g_sub, *gtmp; ev_hit *hits; /* events: one block, and the hits */
+    double *rho_old, *rho_sub; /* ... an impact's relative velocity where g_old, g_sub are */
     double *act_t;            /* per event: the time of its last action (with act_n) */
     long *act_n;              /* per event: its actions applied */
-    int restarted;            /* an action restarted the solve: its point is a new start */
+    unsigned char *armed;     /* per event: 0 after it acted, until g is before its crossing */
     mp_ode_problem prob;      /* the problem on its current branch (switches taken) */
-    const mp_ode_options *user; /* the caller's options (s->o: with the switch as an event) */
-    mp_ode_options swo;       /* ... the options with it */
-    int *sw_int;              /* its terminal and direction arrays (2 (ne + 1)) */
-    unsigned char *sw_act;    /* its has_action array (ne + 1) */
-} ode_run;
+    const mp_ode_options *user; /* the caller's options (s->o: with the driver's own events) */
+    mp_ode_options swo;       /* ... the options with them: a switch, a lift-off */
+    long k_sw, k_lift;        /* their indices in swo (-1: none) */
+    int *sw_int;              /* its terminal and direction arrays (2 ne') */
+    unsigned char *sw_act;    /* its has_action array (ne') */
+    /* resting on a wall: the impact event resting (-1: none), the problem
+     * whose f follows the wall (w.p while resting), scratch for f, and an
+     * accumulation point to record once the solve passes it (acc_k >= 0) */
+    long resting;
+    mp_ode_problem rprob;
+    double *fscr;
+    long acc_k;
+    double acc_t;
+    const mp_impact **imps;   /* per caller's event: its impact (options' impact_of) */
+    const double *wall_p;     /* ... the parameters its moving wall reads */
+};
+
+/* ---- events: impacts, crossings, rest ----------------------------------- */
+
+/* event k's impact (a user event the options say is one), or NULL */
+static const mp_impact *ev_impact(const ode_run *s, size_t k)
+{
+    return s->imps && k < s->user->n_events ? s->imps[k] : NULL;
+}
+
+/* an impact's velocity relative to its wall at (t, y), side-signed (g' for
+ * g = side (q - wall), q' = v); wall[0..2] the wall at t */
+static double ev_rho(const ode_run *s, const mp_impact *im, double t, const double *y,
+                     double *wall)
+{
+    mp_impact_wall(im, t, s->wall_p, 1, wall);
+    return im->side * (y[im->iv] - wall[1]);
+}
+
+static int ev_returned(ode_run *s, ev_ctx *c, size_t k, double s1, double g1, double *sa,
+                       double *ga, double *sb, double *gb)
+{
+    const mp_impact *im = ev_impact(s, k);
+    int dk = s->o->direction[k], rc;
+    *sa = -1.0;
+    if (im) {
+        double sm, gm;
+        if (!(s->rho_old[k] > 0.0 && s->rho_sub[k] < 0.0)) return MP_OK;
+        if ((rc = ev_extremum(s, c, im, k, 0.0, s->rho_old[k], s1, s->rho_sub[k], &sm, &gm)))
+            return rc;
+        if (before_crossing(gm, dk)) {
+            *sa = sm, *ga = gm, *sb = s1, *gb = g1;
+        }
+        return MP_OK;
+    }
+    double res = mp_ode_time_resolution(c->t, s->w.t_start);
+    double sp = s1, gp = g1;
+    for (int i = 0; i < 40; i++) {
+        double sh = 0.5 * sp, gh;
+        if (!(sh * fabs(c->h) > res)) break;
+        if ((rc = ev_at(c, sh, k, &gh)) != MP_OK) return rc;
+        if (before_crossing(gh, dk)) {
+            *sa = sh, *ga = gh, *sb = sp, *gb = gp;
+            break;
+        }
+        sp = sh, gp = gh;
+    }
+    return MP_OK;
+}
+
+/* record a hit of event k at step fraction s */
+static void ev_hit_add(ode_run *s, size_t *nh, double sf, size_t k)
+{
+    s->hits[*nh].s = sf;
+    s->hits[*nh].k = k;
+    ++*nh;
+}
+
+static int ev_step(ode_run *s, double t, double h, int first, double *s_stop, long *act)
+{
+    mp_ode_ws *w = &s->w;
+    mp_ode_result *r = s->r;
+    const mp_ode_options *o = s->o;
+    size_t ne = o->n_events, nh = 0;
+    double *g_old = s->g_old, *g_sub = s->g_sub;
+    ev_ctx c = {w, o, t, h, s->ytmp, s->gtmp};
+    *s_stop = 2.0;
+    *act = -1;
+    for (int j = 1; j <= MP_ODE_EVENT_SUBDIV; j++) {
+        double s0 = (double)(j - 1) / MP_ODE_EVENT_SUBDIV, s1 = (double)j / MP_ODE_EVENT_SUBDIV;
+        const double *y1 = w->ynew;
+        if (j < MP_ODE_EVENT_SUBDIV) {
+            mp_ode_dense_eval(w->coef, w->ncoef, w->n, s1, s->ytmp);
+            y1 = s->ytmp;
+        }
+        int rc = o->events(t + s1 * h, y1, g_sub, o->events_data);
+        if (rc != MP_OK) return rc;
+        for (size_t k = 0; k < ne; k++) { /* before y1 (ytmp) is overwritten below */
+            const mp_impact *im = ev_impact(s, k);
+            double wv[3];
+            if (im) s->rho_sub[k] = ev_rho(s, im, t + s1 * h, y1, wv);
+        }
+        for (size_t k = 0; k < ne; k++) {
+            if (!isfinite(g_sub[k])) {
+                w->bad_what = MP_ODE_BAD_EVENT;
+                w->bad_index = k;
+                return MP_ENONFINITE;
+            }
+            int dk = o->direction[k];
+            const mp_impact *im = ev_impact(s, k);
+            double root;
+            if ((long)k == s->resting) { /* on its wall: g is round-off, never a crossing */
+            } else if (first && j == 1 && g_old[k] == 0.0) { /* zero at t0 */
+                if (dk == 0 || (dk > 0 ? g_sub[k] >= 0.0 : g_sub[k] <= 0.0))
+                    ev_hit_add(s, &nh, 0.0, k);
+            } else if (!s->armed[k]) { /* acted: it must leave towards its crossing's start */
+                if (before_crossing(g_sub[k], dk)) {
+                    s->armed[k] = 1;
+                } else if (j == 1) {
+                    double sa, ga = 0.0, sb = 0.0, gb = 0.0;
+                    if ((rc = ev_returned(s, &c, k, s1, g_sub[k], &sa, &ga, &sb, &gb)))
+                        return rc;
+                    if (sa >= 0.0) {
+                        s->armed[k] = 1;
+                        if (crosses(ga, gb, dk)) {
+                            if ((rc = ev_root(&c, k, sa, ga, sb, gb, &root)) != MP_OK) return rc;
+                            ev_hit_add(s, &nh, root, k);
+                        }
+                    }
+                }
+            } else if (crosses(g_old[k], g_sub[k], dk)) {
+                if ((rc = ev_root(&c, k, s0, g_old[k], s1, g_sub[k], &root)) != MP_OK) return rc;
+                ev_hit_add(s, &nh, root, k);
+            } else if (im && dk <= 0 && g_old[k] > 0.0 && g_sub[k] > 0.0 &&
+                       s->rho_old[k] < 0.0 && s->rho_sub[k] > 0.0) {
+                /* approaching, then leaving: g's minimum inside may reach the wall */
+                double sm, gm;
+                if ((rc = ev_extremum(s, &c, im, k, s0, s->rho_old[k], s1, s->rho_sub[k], &sm,
+                                      &gm)) != MP_OK)
+                    return rc;
+                if (gm <= 0.0) {
+                    if ((rc = ev_root(&c, k, s0, g_old[k], sm, gm, &root)) != MP_OK) return rc;
+                    ev_hit_add(s, &nh, root, k);
+                }
+            }
+            g_old[k] = g_sub[k];
+            if (im) s->rho_old[k] = s->rho_sub[k];
+        }
+    }
+    qsort(s->hits, nh, sizeof *s->hits, ev_cmp);
+    for (size_t i = 0; i < nh; i++) {
+        size_t k = s->hits[i].k;
+        double sf = s->hits[i].s;
+        mp_ode_dense_eval(w->coef, w->ncoef, w->n, sf, s->ytmp);
+        /* the driver's own events (a switch, a lift-off) are not reported */
+        int rc = k < r->n_events ? push_event(r, k, t + sf * h, s->ytmp) : MP_OK;
+        if (rc != MP_OK) return rc;
+        int with_action = o->has_action && o->has_action[k];
+        if (o->terminal[k] > 0 && r->ev_count[k] >= (size_t)o->terminal[k]) {
+            *s_stop = sf;
+            r->stop_reason = with_action ? MP_ODE_STOP_MAX_EVENTS : MP_ODE_STOP_TERMINAL;
+            r->stop_event = k;
+            r->stop_count = (long)r->ev_count[k];
+            break;
+        }
+        if (with_action) {
+            *s_stop = sf;
+            *act = (long)k;
+            break;
+        }
+    }
+    return MP_OK;
+}
+
+/* f of a body resting on impact k's wall: the problem's own f, the
+ * coordinate's rate and acceleration the wall's (the contact force acts on
+ * that coordinate alone: mp_impact's rest) */
+static int rest_rhs(double t, const double *y, double *f, void *data)
+{
+    ode_run *s = data;
+    const mp_impact *im = ev_impact(s, (size_t)s->resting);
+    int rc = s->prob.rhs(t, y, f, s->prob.data);
+    double wv[3];
+    mp_impact_wall(im, t, s->wall_p, 1, wv);
+    f[im->iq] = wv[1];
+    f[im->iv] = wv[2];
+    return rc;
+}
+
+/* its Jacobian: the problem's, the two rows of the wall zero */
+static int rest_jac(double t, const double *y, double *jac, void *data)
+{
+    ode_run *s = data;
+    const mp_impact *im = ev_impact(s, (size_t)s->resting);
+    size_t n = s->w.n;
+    int rc = s->prob.jac(t, y, jac, s->prob.data);
+    memset(jac + im->iq * n, 0, n * sizeof(double));
+    memset(jac + im->iv * n, 0, n * sizeof(double));
+    return rc;
+}
+
+/* The lift-off's g while resting: the acceleration away from the wall that
+ * the body would have without the contact (side-signed, relative to the
+ * wall's); the contact force pushes while it is < 0. */
+static int lift_g(ode_run *s, double t, const double *y, double *g)
+{
+    const mp_impact *im = ev_impact(s, (size_t)s->resting);
+    int rc = s->prob.rhs(t, y, s->fscr, s->prob.data);
+    s->w.nfev++;
+    double wv[3];
+    mp_impact_wall(im, t, s->wall_p, 1, wv);
+    *g = im->side * (s->fscr[im->iv] - wv[2]);
+    return rc;
+}
+
+/* Contract: the body of impact event k comes to rest on its wall at t (the
+ * accumulation t_left later): (q, v) put on the wall, the solve goes on with
+ * f following it (rest_rhs) and the lift-off as an event; the rest list
+ * records t + t_left, and the event list records the accumulation point once
+ * the solve passes it (t_left > 0; accept_step).  MP_OK or MP_ENOMEM. */
+static int rest_enter(ode_run *s, size_t k, double t, double t_left)
+{
+    const mp_impact *im = ev_impact(s, k);
+    double wv[3];
+    mp_impact_wall(im, t, s->wall_p, 1, wv);
+    s->w.y[im->iq] = wv[0];
+    s->w.y[im->iv] = wv[1];
+    s->resting = (long)k;
+    s->rprob = s->prob;
+    s->rprob.rhs = rest_rhs;
+    s->rprob.jac = s->prob.jac ? rest_jac : NULL;
+    s->rprob.data = s;
+    s->rprob.blocks = NULL;
+    s->rprob.replayable = 0;
+    s->w.p = &s->rprob;
+    if (t_left > 0.0) {
+        s->acc_k = (long)k;
+        s->acc_t = t + t_left;
+    }
+    return push_rest(s->r, k, t + t_left);
+}
+
+/* Contract: the accumulation point recorded in the event list of the resting
+ * impact, at acc_t (<= the step's end t + h; or at t_at when it lifts off
+ * first), its state on the interpolant put on the wall.  MP_OK or MP_ENOMEM. */
+static int rest_record_accumulation(ode_run *s, double t, double h, double t_at)
+{
+    const mp_impact *im = ev_impact(s, (size_t)s->acc_k);
+    double ta = fmin(s->acc_t, t_at), wv[3];
+    mp_ode_dense_eval(s->w.coef, s->w.ncoef, s->w.n, h != 0.0 ? (ta - t) / h : 0.0, s->ytmp);
+    mp_impact_wall(im, ta, s->wall_p, 1, wv);
+    s->ytmp[im->iq] = wv[0];
+    s->ytmp[im->iv] = wv[1];
+    int rc = push_event(s->r, (size_t)s->acc_k, ta, s->ytmp);
+    s->acc_k = -1;
+    return rc;
+}
+
+/* Contract: the resting body lifts off at (t, y): (q, v) on the wall, f the
+ * problem's own again; the lift-off in the impact's event and rest lists.
+ * MP_OK or MP_ENOMEM. */
+static int rest_leave(ode_run *s, double t, double *y)
+{
+    size_t k = (size_t)s->resting;
+    const mp_impact *im = ev_impact(s, k);
+    double wv[3];
+    mp_impact_wall(im, t, s->wall_p, 1, wv);
+    y[im->iq] = wv[0];
+    y[im->iv] = wv[1];
+    int rc = MP_OK;
+    if (s->acc_k >= 0) rc = rest_record_accumulation(s, t, 0.0, t);
+    s->resting = -1;
+    s->w.p = &s->prob;
+    if (rc == MP_OK) rc = push_event(s->r, k, t, y);
+    return rc == MP_OK ? push_rest(s->r, k, t) : rc;
+}
 
 int mp_ode_span_ok(const mp_ode_method *m, double t0, double tf, const mp_ode_options *o)
 {
@@ -570,22 +817,33 @@ static int check_args(const mp_ode_method *m, const mp_ode_problem *p, double t0
  * was allocated is freed by free_run and mp_ode_result_free). */
 static int alloc_events(ode_run *s)
 {
-    size_t ne = s->o->n_events;
+    size_t ne = s->o->n_events, nu = s->user->n_events;
     mp_ode_result *r = s->r;
     if (!ne) return MP_OK;
     r->ev_count = calloc(ne, sizeof(size_t));
     r->ev_cap = calloc(ne, sizeof(size_t));
     r->ev_t = calloc(ne, sizeof(double *));
     r->ev_y = calloc(ne, sizeof(double *));
-    s->g_old = malloc(4 * ne * sizeof(double));
+    s->g_old = malloc(6 * ne * sizeof(double));
     s->hits = malloc(ne * MP_ODE_EVENT_SUBDIV * sizeof(ev_hit));
     s->act_n = calloc(ne, sizeof(long));
+    s->armed = malloc(ne);
     if (!r->ev_count || !r->ev_cap || !r->ev_t || !r->ev_y || !s->g_old || !s->hits ||
-        !s->act_n)
+        !s->act_n || !s->armed)
         return MP_ENOMEM;
+    memset(s->armed, 1, ne);
     s->act_t = s->g_old + 3 * ne;
     s->g_sub = s->g_old + ne;
     s->gtmp = s->g_sub + ne;
+    s->rho_old = s->g_old + 4 * ne;
+    s->rho_sub = s->g_old + 5 * ne;
+    memset(s->rho_old, 0, 2 * ne * sizeof(double));
+    if (s->k_lift >= 0 && nu) { /* an impact may rest: its rest list */
+        r->rs_count = calloc(nu, sizeof(size_t));
+        r->rs_cap = calloc(nu, sizeof(size_t));
+        r->rs_t = calloc(nu, sizeof(double *));
+        if (!r->rs_count || !r->rs_cap || !r->rs_t) return MP_ENOMEM;
+    }
     return MP_OK;
 }
 
@@ -627,6 +885,28 @@ static int alloc_workspace(ode_run *s, const mp_ode_problem *p, double t0, doubl
     return s->cur->alloc ? s->cur->alloc(w) : MP_OK;
 }
 
+/* Contract: g and the impacts' relative velocities at (t, w.y) into g_old and
+ * rho_old (a non-finite g is MP_ENONFINITE naming the event).  MP_OK or the
+ * failure. */
+static int events_at(ode_run *s, double t)
+{
+    mp_ode_ws *w = &s->w;
+    const mp_ode_options *o = s->o;
+    int rc = o->events(t, w->y, s->g_old, o->events_data);
+    if (rc != MP_OK) return rc;
+    for (size_t k = 0; k < o->n_events; k++) {
+        const mp_impact *im = ev_impact(s, k);
+        double wv[3];
+        if (!isfinite(s->g_old[k])) {
+            w->bad_what = MP_ODE_BAD_EVENT;
+            w->bad_index = k;
+            return MP_ENONFINITE;
+        }
+        if (im) s->rho_old[k] = ev_rho(s, im, t, w->y, wv);
+    }
+    return MP_OK;
+}
+
 /* Contract: the start of the solve at (t0, y0): f(t0, y0), the first output
  * (y0 itself, or the t_eval points at t0), g at t0 when there are events (a
  * non-finite g is MP_ENONFINITE), and the first step (fixed h, the user's
@@ -647,15 +927,7 @@ static int start_run(ode_run *s, double t0, const double *y0)
         for (; s->ie < o->n_eval && o->t_eval[s->ie] <= t0; s->ie++)
             if ((rc = push_sample(s->r, o->t_eval[s->ie], w->y)) != MP_OK) return rc;
     }
-    if (ne) {
-        if ((rc = o->events(t0, w->y, s->g_old, o->events_data)) != MP_OK) return rc;
-        for (size_t k = 0; k < ne; k++)
-            if (!isfinite(s->g_old[k])) {
-                w->bad_what = MP_ODE_BAD_EVENT;
-                w->bad_index = k;
-                return MP_ENONFINITE;
-            }
-    }
+    if (ne && (rc = events_at(s, t0)) != MP_OK) return rc;
     s->hmax = fmin(o->max_step, s->tf - t0);
     if (!s->cur->adaptive) s->h = o->h;
     else if (o->first_step > 0) s->h = o->first_step;
@@ -677,17 +949,42 @@ static void stiffness_test(ode_run *s)
     mp_ode_stiffness_test(&s->c, s->w.rho, rho_stiff, &s->r->stiff);
 }
 
-/* Contract: event k's action at (s->t, w->y), the state just before it: the
- * action replaces y in place (a non-finite value is MP_ENONFINITE, naming
- * the action), the state after it is a sample (with no t_eval), and the
- * integration restarts there: f(t, y), g(t, y), the controller and the
- * first step afresh (a fixed-step method counts its steps from t), the
- * method's history forgotten.  An action that leaves the state where event k
- * fires again at once (two actions within the root finder's tolerance) is
- * MP_EEVENT; crossings accumulating (Zeno: the gap between two actions below
- * MP_ODE_ZENO_FRAC of the time since the start) end the solve at that point,
- * as a terminal event does (r->stop_reason MP_ODE_STOP_ZENO).  MP_OK or the
- * failure. */
+/* Contract: whether impact event k's body, just after its action at t (the
+ * state before it in s->ytmp, after it in w->y), comes to rest on the wall
+ * (mp_ode_impact_rests: the force pushes it into the wall and the flights
+ * left are below resolution); *t_left the time to the accumulation.  f(t, y)
+ * is left in w->f, *pushed = whether the force pushes the body back into the
+ * wall.  1 rests, 0 not, or a negative failure status. */
+static int impact_rests(ode_run *s, size_t k, double t, double *t_left, int *pushed)
+{
+    mp_ode_ws *w = &s->w;
+    const mp_impact *im = ev_impact(s, k);
+    double wv[3];
+    int rc = mp_ode_ws_rhs(w, t, w->y, w->f);
+    if (rc != MP_OK) return -rc;
+    double rho = ev_rho(s, im, t, w->y, wv), rho_in = -ev_rho(s, im, t, s->ytmp, wv);
+    double e = rho_in > 0.0 ? rho / rho_in : 1.0;
+    double a = im->side * (w->f[im->iv] - wv[2]);
+    *pushed = a < 0.0;
+    return mp_ode_impact_rests(t, w->t_start, rho, a, e, fmax(fabs(wv[0]), fabs(w->y[im->iq])),
+                               t_left);
+}
+
+/* Contract: event k's action at (s->t, w->y), the state just before it (also
+ * in s->ytmp): the action replaces y in place (a non-finite value is
+ * MP_ENONFINITE, naming the action), the state after it is a sample (with no
+ * t_eval), and the integration restarts there: f(t, y), g(t, y), the
+ * controller and the first step afresh (a fixed-step method counts its steps
+ * from t), the method's history forgotten; event k, and any event standing at
+ * zero there, disarmed (ev_step).  An impact whose flights left cannot be
+ * resolved (impact_rests) puts its body to rest on the wall (rest_enter), or
+ * where it may not rest (mp_impact's rest) ends the solve there as an
+ * accumulation (Zeno) does; the lift-off event takes it off again.  An action
+ * that leaves the state where event k fires again at once (two actions within
+ * the root finder's tolerance) is MP_EEVENT; crossings accumulating (Zeno:
+ * the gap between two actions below the time resolution) end the solve at
+ * that point, as a terminal event does (r->stop_reason MP_ODE_STOP_ZENO), or
+ * put an impact's body to rest.  MP_OK or the failure. */
 static int apply_action(ode_run *s, size_t k)
 {
     mp_ode_ws *w = &s->w;
@@ -695,19 +992,24 @@ static int apply_action(ode_run *s, size_t k)
     const mp_ode_options *o = s->o;
     size_t n = w->n, ne = o->n_events;
     double t = s->t;
-    int rc;
-    double gap = 0.0;
+    const mp_impact *im = ev_impact(s, k);
+    long was_resting = s->resting;
+    int rc, zeno = 0;
+    double gap = 0.0, t_left = 0.0;
     rc = mp_ode_action_gap(t, s->act_t[k], s->act_n[k], w->t_start, s->h, &gap);
     if (rc != MP_OK) r->stop_event = k;
     if (rc == MP_EEVENT) return rc;
-    if (rc == MP_TERMINATED) {
+    zeno = rc == MP_TERMINATED;
+    if (zeno && !(im && im->rest)) {
         r->stop_reason = MP_ODE_STOP_ZENO;
         r->stop_count = (long)r->ev_count[k];
         r->zeno_gap = gap;
         r->terminated = 1;
         return MP_OK;
     }
-    if ((rc = o->action(t, w->y, k, o->action_data)) != MP_OK) return rc;
+    if ((long)k == s->k_lift) rc = rest_leave(s, t, w->y);
+    else rc = o->action(t, w->y, k, o->action_data);
+    if (rc != MP_OK) return rc;
     for (size_t i = 0; i < n; i++)
         if (!isfinite(w->y[i])) {
             w->bad_what = MP_ODE_BAD_ACTION;
@@ -716,23 +1018,39 @@ static int apply_action(ode_run *s, size_t k)
         }
     s->act_t[k] = t;
     s->act_n[k]++;
+    int rest = 0;
+    if (im) {
+        int pushed = 0;
+        rest = impact_rests(s, k, t, &t_left, &pushed);
+        if (rest < 0) return -rest;
+        rest |= zeno && pushed; /* impacts closer than the time resolution, pushed back */
+        if ((rest && !im->rest) || (zeno && !rest)) { /* an accumulation, no rest: the end */
+            r->stop_event = k;
+            r->stop_reason = MP_ODE_STOP_ZENO;
+            r->stop_count = (long)r->ev_count[k];
+            r->zeno_gap = t_left;
+            r->terminated = 1;
+            r->n_actions++;
+            return o->n_eval == 0 ? push_sample(r, t, w->y) : MP_OK;
+        }
+        if (rest && (rc = rest_enter(s, k, t, t_left)) != MP_OK) return rc;
+    }
     if (k < r->n_events) { /* an event's action: the state before and after are samples */
         r->n_actions++;
         if (o->n_eval == 0 && (rc = push_sample(r, t, w->y)) != MP_OK) return rc;
-    } else if (o->n_eval == 0) { /* a switch: the sample at its time is the state after it */
+    } else if ((long)k == s->k_sw && o->n_eval == 0) { /* a switch: the sample at its time
+                                                         * is the state after it */
         memcpy(r->y + (r->m - 1) * n, w->y, n * sizeof(double));
     }
-    /* restart from (t, y): as at the start, the history forgotten */
-    if ((rc = mp_ode_ws_rhs(w, t, w->y, w->f)) != MP_OK) return rc;
-    if ((rc = o->events(t, w->y, s->g_old, o->events_data)) != MP_OK) return rc;
-    for (size_t q = 0; q < ne; q++)
-        if (!isfinite(s->g_old[q])) {
-            w->bad_what = MP_ODE_BAD_EVENT;
-            w->bad_index = q;
-            return MP_ENONFINITE;
-        }
+    /* restart from (t, y): as at the start, the history forgotten (f is
+     * impact_rests' where it did not move y) */
+    if (!(im && !rest) && (rc = mp_ode_ws_rhs(w, t, w->y, w->f)) != MP_OK) return rc;
+    if ((rc = events_at(s, t)) != MP_OK) return rc;
+    for (size_t q = 0; q < ne; q++) /* left on its surface, or past it: disarmed */
+        if ((q == k || s->g_old[q] == 0.0) && !before_crossing(s->g_old[q], o->direction[q]))
+            s->armed[q] = 0;
+    if ((long)k == s->k_lift && was_resting >= 0) s->armed[was_resting] = 0;
     s->c = mp_ode_ctl_start();
-    s->restarted = 1;
     memset(w->coef, 0, w->ncoef * n * sizeof(double));
     if (s->cur->restart) s->cur->restart(w);
     s->t0 = t;
@@ -764,16 +1082,20 @@ static int accept_step(ode_run *s, double h, double hnew, double tnew)
     if (w->rho > 0.0) stiffness_test(s);
     double s_stop = 2.0;
     long act = -1;
-    /* a zero of g at the start (or where an action restarted the solve) that g
-     * leaves in its direction is an event there */
-    int fresh = r->nsteps == 0 ? 1 : s->restarted ? 2 : 0;
-    s->restarted = 0;
-    double probe = mp_ode_restart_probe(t, w->t_start);
-    if (o->n_events && (rc = ev_step(w, r, o, t, h, fresh, probe, s->g_old, s->g_sub, s->ytmp,
-                                     s->gtmp, s->hits, &s_stop, &act)) != MP_OK)
+    if (s->resting >= 0) { /* resting: (q, v) exactly on the wall at the step's end */
+        const mp_impact *im = ev_impact(s, (size_t)s->resting);
+        double wv[3];
+        mp_impact_wall(im, tnew, s->wall_p, 1, wv);
+        w->ynew[im->iq] = wv[0];
+        w->ynew[im->iv] = wv[1];
+    }
+    if (o->n_events && (rc = ev_step(s, t, h, r->nsteps == 0, &s_stop, &act)) != MP_OK)
         return rc;
     double tend = s_stop <= 1.0 ? t + s_stop * h : tnew;
     if ((rc = output_step(r, o, w, t, h, tnew, tend, &s->ie, s->ytmp)) != MP_OK) return rc;
+    if (s->acc_k >= 0 && s->acc_t <= tend &&
+        (rc = rest_record_accumulation(s, t, h, tend)) != MP_OK)
+        return rc;
     r->nsteps++;
     if (s_stop <= 1.0) { /* the step ends at the event's point: the state just before it */
         mp_ode_dense_eval(w->coef, w->ncoef, n, s_stop, s->ytmp);
@@ -954,24 +1276,33 @@ static void free_run(ode_run *s, int rc)
     free(s->act_n);
     free(s->sw_int);
     free(s->sw_act);
+    free(s->armed);
+    free(s->fscr);
+    free(s->imps);
 }
 
-/* The events of a solve whose problem has a switch: the caller's events, then
- * the switch's g (1 once no switch is ahead). */
-static int sw_events(double t, const double *y, double *g, void *data)
+/* The events of a solve with the driver's own: the caller's events, then the
+ * switch's g (1 once no switch is ahead), then the lift-off's (-1 while no
+ * body rests on a wall). */
+static int drv_events(double t, const double *y, double *g, void *data)
 {
-    const ode_run *s = data;
+    ode_run *s = data;
     size_t ne = s->user->n_events;
     if (ne) {
         int rc = s->user->events(t, y, g, s->user->events_data);
         if (rc != MP_OK) return rc;
     }
-    g[ne] = s->prob.sw ? s->prob.sw->g(t, y, s->prob.data) : 1.0;
+    if (s->k_sw >= 0) g[s->k_sw] = s->prob.sw ? s->prob.sw->g(t, y, s->prob.data) : 1.0;
+    if (s->k_lift >= 0) {
+        if (s->resting < 0) g[s->k_lift] = -1.0;
+        else return lift_g(s, t, y, &g[s->k_lift]);
+    }
     return MP_OK;
 }
 
-/* The caller's actions, or the switch's: its act, then the branch after it. */
-static int sw_action(double t, double *y, size_t k, void *data)
+/* The caller's actions, or the switch's: its act, then the branch after it.
+ * (The lift-off's is apply_action's rest_leave.) */
+static int drv_action(double t, double *y, size_t k, void *data)
 {
     ode_run *s = data;
     if (k < s->user->n_events) return s->user->action(t, y, k, s->user->action_data);
@@ -984,32 +1315,49 @@ static int sw_action(double t, double *y, size_t k, void *data)
     return MP_OK;
 }
 
-/* Contract: s->o for a problem with a switch ahead: the caller's options with
- * the switch as one more event (downwards, with an action, never terminal,
- * not reported).  MP_OK or MP_ENOMEM (freed by free_run). */
-static int switch_options(ode_run *s)
+/* Contract: s->o with the driver's own events after the caller's: a switch
+ * of the problem ahead (downwards, with an action, never terminal, not
+ * reported) and, when an impact may rest on its wall, the lift-off (upwards:
+ * the contact force would pull).  The caller's options themselves when there
+ * is neither.  MP_OK or MP_ENOMEM (freed by free_run). */
+static int driver_options(ode_run *s)
 {
     const mp_ode_options *o = s->user;
-    size_t ne = o->n_events;
-    s->sw_int = malloc(2 * (ne + 1) * sizeof(int));
-    s->sw_act = calloc(ne + 1, 1);
+    size_t ne = o->n_events, nd = 0;
+    int can_rest = 0;
+    if (o->impact_of && ne) {
+        if (!(s->imps = malloc(ne * sizeof *s->imps))) return MP_ENOMEM;
+        for (size_t k = 0; k < ne; k++) {
+            s->imps[k] = o->impact_of(k, &s->wall_p, o->events_data);
+            can_rest |= s->imps[k] && s->imps[k]->rest && o->has_action && o->has_action[k];
+        }
+    }
+    s->k_sw = s->prob.sw ? (long)(ne + nd++) : -1;
+    s->k_lift = can_rest ? (long)(ne + nd++) : -1;
+    if (!nd) return MP_OK;
+    size_t nt = ne + nd;
+    s->sw_int = malloc(2 * nt * sizeof(int));
+    s->sw_act = calloc(nt, 1);
     if (!s->sw_int || !s->sw_act) return MP_ENOMEM;
+    if (can_rest && !(s->fscr = malloc(s->prob.n * sizeof(double)))) return MP_ENOMEM;
     for (size_t k = 0; k < ne; k++) {
         s->sw_int[k] = o->terminal[k];
-        s->sw_int[ne + 1 + k] = o->direction[k];
+        s->sw_int[nt + k] = o->direction[k];
         s->sw_act[k] = o->has_action ? o->has_action[k] : 0;
     }
-    s->sw_int[ne] = 0;
-    s->sw_int[2 * ne + 1] = -1;
-    s->sw_act[ne] = 1;
+    for (size_t k = ne; k < nt; k++) {
+        s->sw_int[k] = 0;
+        s->sw_int[nt + k] = (long)k == s->k_sw ? -1 : +1;
+        s->sw_act[k] = 1;
+    }
     s->swo = *o;
-    s->swo.n_events = ne + 1;
-    s->swo.events = sw_events;
+    s->swo.n_events = nt;
+    s->swo.events = drv_events;
     s->swo.events_data = s;
     s->swo.terminal = s->sw_int;
-    s->swo.direction = s->sw_int + ne + 1;
+    s->swo.direction = s->sw_int + nt;
     s->swo.has_action = s->sw_act;
-    s->swo.action = sw_action;
+    s->swo.action = drv_action;
     s->swo.action_data = s;
     s->o = &s->swo;
     return MP_OK;
@@ -1038,7 +1386,8 @@ static int solve_forward(const mp_ode_method *m, const mp_ode_problem *p, double
     s.c = mp_ode_ctl_start();
     s.prob = *p;
     mp_ode_problem_at(&s.prob, t0, y0); /* the branch y0 is on */
-    if (s.prob.sw) rc = switch_options(&s); /* a switch ahead: crossed as an event */
+    s.resting = s.acc_k = -1;
+    rc = driver_options(&s); /* a switch ahead, a lift-off: crossed as events */
     o = s.o;
     s.need_dense = o->n_eval > 0 || o->dense || o->n_events > 0;
     s.fast = m->block && p->replayable && o->n_events == 0 && !o->dense;
@@ -1107,6 +1456,7 @@ int mp_ode_solve(const mp_ode_method *m, const mp_ode_problem *p, double t0, dou
     pn.data = &c;
     pn.nq = 0; /* y' = -f is not of the form q' = v */
     mp_ode_options on = *o;
+    on.impact_of = NULL; /* backwards an impact is a general event: v is not g' in s */
     double *sev = NULL;
     if (o->n_eval) {
         sev = malloc(o->n_eval * sizeof(double));

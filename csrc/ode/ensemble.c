@@ -114,6 +114,25 @@ static void ens_run_lanes(ens_arg *a)
     if (rc != MP_OK && !atomic_exchange(&e->stop, 1)) e->fatal = rc;
 }
 
+/* Contract: trajectory i on the scalar path (mp_ode_solve with options o, its
+ * events data set here): its outcome, its samples in yout (NaN for those not
+ * reached) and, with results, its whole result (the caller frees it).
+ * Returns the solve's status. */
+static int ens_solve_one(ens_ctx *e, size_t i, mp_ode_options *o)
+{
+    mp_ode_result r;
+    if (e->events_data) o->events_data = o->action_data = e->events_data[i];
+    int rc = mp_ode_solve(e->m, &e->probs[i], e->t0, e->tf, e->y0s + i * e->n, o, &r);
+    mp_ode_result_outcome(&r, &e->out[i]);
+    double *dst = e->yout + i * e->n * e->nt; /* (n, nt) block */
+    for (size_t j = 0; j < e->nt; j++)
+        for (size_t c = 0; c < e->n; c++)
+            dst[c * e->nt + j] = j < r.m ? r.y[j * e->n + c] : NAN;
+    if (e->results) e->results[i] = r; /* the caller frees it */
+    else mp_ode_result_free(&r);
+    return rc;
+}
+
 static void *ens_run(void *argp)
 {
     ens_arg *a = argp;
@@ -129,16 +148,7 @@ static void *ens_run(void *argp)
         if (atomic_load(&e->stop)) break;
         size_t i = atomic_fetch_add(&e->next, 1);
         if (i >= e->k) break;
-        mp_ode_result r;
-        if (e->events_data) o.events_data = o.action_data = e->events_data[i];
-        int rc = mp_ode_solve(e->m, &e->probs[i], e->t0, e->tf, e->y0s + i * e->n, &o, &r);
-        mp_ode_result_outcome(&r, &e->out[i]);
-        double *dst = e->yout + i * e->n * e->nt; /* (n, nt) block */
-        for (size_t j = 0; j < e->nt; j++)
-            for (size_t c = 0; c < e->n; c++)
-                dst[c * e->nt + j] = j < r.m ? r.y[j * e->n + c] : NAN;
-        if (e->results) e->results[i] = r; /* the caller frees it */
-        else mp_ode_result_free(&r);
+        int rc = ens_solve_one(e, i, &o);
         if (rc == MP_EINTR || rc == MP_ECALLBACK || rc == MP_ENOMEM) {
             if (!atomic_exchange(&e->stop, 1)) e->fatal = rc;
             break;
@@ -241,7 +251,20 @@ int mp_ode_solve_many(const mp_ode_method *m, const mp_ode_problem *probs,
     for (int i = 0; i < started; i++) pthread_join(tid[i], NULL);
     free(tid);
     if (e.fatal) return e.fatal;
-    return atomic_load(&e.stop) ? MP_EINTR : MP_OK;
+    if (atomic_load(&e.stop)) return MP_EINTR;
+    /* a lane whose body came to rest on a wall: that trajectory again on the
+     * scalar path, which rests and lifts off (the lanes do not: it is rare, and
+     * a resting lane would hold its group's lock-step) */
+    mp_ode_options so = *o;
+    so.interrupt = main_interrupt;
+    so.interrupt_ctx = &e;
+    for (size_t i = 0; lanes && i < k; i++) {
+        if (out[i].stop_reason != MP_ODE_STOP_TO_SCALAR) continue;
+        if (results) mp_ode_result_free(&results[i]);
+        int rc = ens_solve_one(&e, i, &so);
+        if (rc == MP_EINTR || rc == MP_ECALLBACK || rc == MP_ENOMEM) return rc;
+    }
+    return MP_OK;
 }
 
 /* ---- an ensemble's problems --------------------------------------------------- */

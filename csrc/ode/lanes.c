@@ -50,7 +50,9 @@ typedef struct {
     mp_ode_result *results;   /* with impacts: each trajectory's event lists */
     size_t nimp;              /* impacts (ls->n_impacts) */
     double *g_old, *act_t;    /* per impact and lane [q * W + l]: g at t, the last action */
-    long *act_n;              /* ... and the actions applied */
+    double *rho_old;          /* ... g's rate dg/ds at t */
+    long *act_n;              /* ... the actions applied */
+    long *armed;              /* ... 0 after it acted, until g > 0 is seen (driver.c's) */
     double *y, *ynew, *f, *fnew, *kbuf, *coef, *par, *gy, *gf;
     int stop, exhausted;
     /* per lane */
@@ -59,7 +61,9 @@ typedef struct {
     double t[W], h[W];
     double tz[W];             /* where the lane's fixed steps are counted from (t0, an action) */
     long nfix[W];             /* ... and how many it took since */
-    int restarted[W];         /* an action restarted the lane: a zero of g there is new */
+    int first[W];             /* the lane's first step: a zero of g at t0 is an event there */
+    long act_k[W];            /* an impact that acted: which, and the rate it arrived at */
+    double rho_in[W];
     long attempts[W], nfev[W];
     mp_ode_ctl ctl[W]; /* each lane's controller (control.h) */
     int stiff[W], bad_what[W];
@@ -215,6 +219,13 @@ static double lane_interp(const lane_group *g, int l, size_t c, double s)
     return acc;
 }
 
+/* impact im's wall for lane l at s (time dir s): w[0..2] (its parameters
+ * the lane's, at stride W) */
+static void lane_wall(const lane_group *g, int l, const mp_impact *im, double s, double *w)
+{
+    mp_impact_wall(im, g->dir * s, g->par + l, W, w);
+}
+
 /* Contract: the t_eval samples of lane l's accepted step [t, t + h] ending at
  * tnew (or cut at tend < tnew by an event, exact_end 0): the step end itself
  * exactly, the others from the interpolant in coef (mp_ode_dense_eval's form,
@@ -307,13 +318,18 @@ static void lane_start(lane_group *g, int *fresh)
         for (size_t j = 0; j < np; j++) g->par[j * W + l] = row[j];
         g->t[l] = g->tz[l] = g->s0;
         g->nfix[l] = 0;
-        g->restarted[l] = 0;
+        g->first[l] = 1;
         g->ie[l] = 0;
         g->attempts[l] = g->nfev[l] = 0;
         for (size_t q = 0; q < g->nimp; q++) {
             const mp_impact *im = &g->ls->impacts[q];
-            g->g_old[q * W + (size_t)l] = mp_impact_g(im, y0[im->iq]);
-            g->act_n[q * W + (size_t)l] = 0;
+            size_t a = q * W + (size_t)l;
+            double wv[3];
+            lane_wall(g, l, im, g->s0, wv);
+            g->g_old[a] = mp_impact_g(im, y0[im->iq], wv[0]);
+            g->rho_old[a] = g->dir * im->side * (y0[im->iv] - wv[1]);
+            g->act_n[a] = 0;
+            g->armed[a] = 1;
         }
         if (g->results && mp_ode_result_events_init(&g->results[i], n, g->nimp) != MP_OK)
             g->stop = 1; /* out of memory: the group stops (MP_EINTR's path) */
@@ -550,7 +566,7 @@ static void finish_lanes(lane_group *g, int *on, const int *dense, int *rc, doub
 
 /* ---- impacts ------------------------------------------------------------------------ */
 
-/* impact q's g on lane l's interpolant at step fraction s */
+/* impact q's g (or its rate dg/ds) on lane l's interpolant at step fraction s */
 typedef struct {
     const lane_group *g;
     int l;
@@ -560,65 +576,111 @@ typedef struct {
 static int lane_g_at(void *ctx, double s, double *gs)
 {
     const lane_g_ctx *c = ctx;
-    *gs = mp_impact_g(c->im, lane_interp(c->g, c->l, c->im->iq, s));
+    double wv[3];
+    lane_wall(c->g, c->l, c->im, c->g->t[c->l] + s * c->g->h[c->l], wv);
+    *gs = mp_impact_g(c->im, lane_interp(c->g, c->l, c->im->iq, s), wv[0]);
     return MP_OK;
 }
 
+static int lane_rho_at(void *ctx, double s, double *rs)
+{
+    const lane_g_ctx *c = ctx;
+    double wv[3];
+    lane_wall(c->g, c->l, c->im, c->g->t[c->l] + s * c->g->h[c->l], wv);
+    *rs = c->g->dir * c->im->side * (lane_interp(c->g, c->l, c->im->iv, s) - wv[1]);
+    return MP_OK;
+}
+
+/* Contract: g's extremum inside [a, b] (its rate ra, rb of opposite signs) on
+ * lane l's interpolant: *sm and g there, *gm (driver.c's ev_extremum). */
+static void lane_extremum(lane_g_ctx *c, double a, double ra, double b, double rb, double *sm,
+                          double *gm)
+{
+    const lane_group *g = c->g;
+    *sm = b; /* lane_rho_at cannot fail: the root is always set */
+    mp_ode_event_root(lane_rho_at, c, g->t[c->l], g->h[c->l], a, ra, b, rb, sm);
+    lane_g_at(c, *sm, gm);
+}
+
+/* Contract: the first crossing of impact q in lane l's accepted step, as
+ * driver.c's ev_step finds it (sub-points, disarmed after an action until
+ * g > 0 is seen or its maximum inside the first sub-interval is, a grazing
+ * minimum from g's rate): its step fraction, or 2 for none.  Updates q's g,
+ * rate and armed state to the step's end. */
+static double lane_crossing(lane_group *g, int l, size_t q)
+{
+    const mp_impact *im = &g->ls->impacts[q];
+    lane_g_ctx c = {g, l, im};
+    size_t a = q * W + (size_t)l;
+    double g0 = g->g_old[a], r0 = g->rho_old[a], hit = 2.0, t = g->t[l], h = g->h[l];
+    for (int j = 1; j <= MP_ODE_EVENT_SUBDIV; j++) {
+        double s0 = (double)(j - 1) / MP_ODE_EVENT_SUBDIV, s1 = (double)j / MP_ODE_EVENT_SUBDIV;
+        double g1, r1, wv[3], root = s1, sm, gm;
+        lane_wall(g, l, im, t + s1 * h, wv);
+        if (j == MP_ODE_EVENT_SUBDIV) {
+            g1 = mp_impact_g(im, g->ynew[im->iq * W + (size_t)l], wv[0]);
+            r1 = g->dir * im->side * (g->ynew[im->iv * W + (size_t)l] - wv[1]);
+        } else {
+            g1 = mp_impact_g(im, lane_interp(g, l, im->iq, s1), wv[0]);
+            r1 = g->dir * im->side * (lane_interp(g, l, im->iv, s1) - wv[1]);
+        }
+        if (hit > 1.0) {
+            if (g->first[l] && j == 1 && g0 == 0.0) {
+                if (g1 <= 0.0) hit = 0.0;
+            } else if (!g->armed[a]) {
+                if (g1 > 0.0) {
+                    g->armed[a] = 1;
+                } else if (j == 1 && r0 > 0.0 && r1 < 0.0) { /* back within it? */
+                    lane_extremum(&c, 0.0, r0, s1, r1, &sm, &gm);
+                    if (gm > 0.0) {
+                        g->armed[a] = 1;
+                        mp_ode_event_root(lane_g_at, &c, t, h, sm, gm, s1, g1, &root);
+                        hit = root;
+                    }
+                }
+            } else if (g0 > 0.0 && g1 <= 0.0) {
+                mp_ode_event_root(lane_g_at, &c, t, h, s0, g0, s1, g1, &root);
+                hit = root;
+            } else if (g0 > 0.0 && g1 > 0.0 && r0 < 0.0 && r1 > 0.0) { /* grazing */
+                lane_extremum(&c, s0, r0, s1, r1, &sm, &gm);
+                if (gm <= 0.0) {
+                    mp_ode_event_root(lane_g_at, &c, t, h, s0, g0, sm, gm, &root);
+                    hit = root;
+                }
+            }
+        }
+        g0 = g1;
+        r0 = r1;
+    }
+    g->g_old[a] = g0;
+    g->rho_old[a] = r0;
+    return hit;
+}
+
 /* Contract: the impacts of lane l's accepted step [t, t + h] ending at tnew,
- * as driver.c's events and actions do them: the first crossing (downwards;
- * a zero where an action restarted the lane counts when g leaves it
- * downwards) located on the interpolant; the samples up to it, the state just
- * before it in the trajectory's event list; then max_events, an accumulation
- * (Zeno) or a re-firing at once end the lane; else the action, and the lane
- * is left at the impact with its state after it, to restart (lane_restart).
- * Returns 1 when the lane restarts there, 2 when it ended, 0 when no impact
- * cut the step (the impacts' g moved to the step end). */
+ * as driver.c's events and actions do them: the first crossing
+ * (lane_crossing); the samples up to it, the state just before it in the
+ * trajectory's event list; then max_events or a re-firing at once end the
+ * lane, and an accumulation (Zeno) ends it or, for an impact that may rest,
+ * hands the trajectory to the scalar path (MP_ODE_STOP_TO_SCALAR: solved
+ * again there); else the action, and the lane is left at the impact with its
+ * state after it, to restart (lane_restart).  Returns 1 when the lane
+ * restarts there, 2 when it ended, 0 when no impact cut the step (the
+ * impacts' g moved to the step end). */
 __attribute__((noinline, cold)) static int lane_impacts(lane_group *g, int l, double tnew)
 {
     size_t n = g->n, i = g->idx[l];
     double t = g->t[l], h = g->h[l], s_hit = 2.0;
     size_t k_hit = 0;
-    int fresh = g->restarted[l];
-    g->restarted[l] = 0;
-    /* where a zero left by an action is probed (driver.c's ev_step) */
-    double probe = mp_ode_restart_probe(t, g->s0);
     for (size_t q = 0; q < g->nimp; q++) {
-        const mp_impact *im = &g->ls->impacts[q];
-        lane_g_ctx c = {g, l, im};
-        double g0 = g->g_old[q * W + (size_t)l], s_from = 0.0;
-        if (fresh && g0 == 0.0) {
-            s_from = fmin(probe / h, 0.5 / MP_ODE_EVENT_SUBDIV);
-            lane_g_at(&c, s_from, &g0);
-            if (g0 < 0.0) { /* left the wall downwards at once */
-                s_hit = 0.0;
-                k_hit = q;
-                continue;
-            }
-        }
-        for (int j = 1; j <= MP_ODE_EVENT_SUBDIV; j++) { /* the scalar driver's sub-intervals */
-            double s0 = j == 1 ? s_from : (double)(j - 1) / MP_ODE_EVENT_SUBDIV;
-            double s1 = (double)j / MP_ODE_EVENT_SUBDIV, g1;
-            if (j == MP_ODE_EVENT_SUBDIV) g1 = mp_impact_g(im, g->ynew[im->iq * W + (size_t)l]);
-            else lane_g_at(&c, s1, &g1);
-            if (g0 > 0.0 && g1 <= 0.0) {
-                double root = s1; /* lane_g_at cannot fail: the root is always set */
-                mp_ode_event_root(lane_g_at, &c, t, h, s0, g0, s1, g1, &root);
-                if (root < s_hit) {
-                    s_hit = root;
-                    k_hit = q;
-                }
-                break;
-            }
-            g0 = g1;
+        double s = lane_crossing(g, l, q);
+        if (s < s_hit) {
+            s_hit = s;
+            k_hit = q;
         }
     }
-    if (s_hit > 1.0) { /* no impact: g at the step end */
-        for (size_t q = 0; q < g->nimp; q++) {
-            const mp_impact *im = &g->ls->impacts[q];
-            g->g_old[q * W + (size_t)l] = mp_impact_g(im, g->ynew[im->iq * W + (size_t)l]);
-        }
-        return 0;
-    }
+    g->first[l] = 0;
+    if (s_hit > 1.0) return 0;
     double tend = s_hit >= 1.0 ? tnew : t + s_hit * h;
     lane_output(g, l, h, tend, 0);
     for (size_t c = 0; c < n; c++) g->gy[c] = lane_interp(g, l, c, s_hit);
@@ -636,29 +698,41 @@ __attribute__((noinline, cold)) static int lane_impacts(lane_group *g, int l, do
         lane_end_ev(g, l, MP_TERMINATED, MP_ODE_STOP_MAX_EVENTS, k_hit, 0.0);
         return 2;
     }
-    double gap = 0.0;
+    double gap = 0.0, wv[3];
     int st = mp_ode_action_gap(tend, g->act_t[a], g->act_n[a], g->s0, h, &gap);
     if (st != MP_OK) {
         for (size_t c = 0; c < n; c++) g->y[c * W + (size_t)l] = g->gy[c];
-        lane_end_ev(g, l, st, st == MP_TERMINATED ? MP_ODE_STOP_ZENO : 0, k_hit, gap);
+        int scalar = st == MP_TERMINATED && im->rest && g->dir > 0.0;
+        lane_end_ev(g, l, scalar ? MP_OK : st,
+                    scalar ? MP_ODE_STOP_TO_SCALAR : st == MP_TERMINATED ? MP_ODE_STOP_ZENO : 0,
+                    k_hit, gap);
         return 2;
     }
     double p_e = im->e_param >= 0 ? g->par[(size_t)im->e_param * W + (size_t)l] : 0.0;
-    mp_impact_apply(im, mp_impact_e(im, i, p_e), g->gy, 1);
+    lane_wall(g, l, im, tend, wv);
+    g->rho_in[l] = -g->dir * im->side * (g->gy[im->iv] - wv[1]);
+    mp_impact_apply(im, mp_impact_e(im, i, p_e), wv, g->gy, 1);
     for (size_t c = 0; c < n; c++) g->y[c * W + (size_t)l] = g->gy[c];
     for (size_t q = 0; q < g->nimp; q++) {
         const mp_impact *iq = &g->ls->impacts[q];
-        g->g_old[q * W + (size_t)l] = mp_impact_g(iq, g->gy[iq->iq]);
+        size_t b = q * W + (size_t)l;
+        lane_wall(g, l, iq, tend, wv);
+        g->g_old[b] = mp_impact_g(iq, g->gy[iq->iq], wv[0]);
+        g->rho_old[b] = g->dir * iq->side * (g->gy[iq->iv] - wv[1]);
+        if ((q == k_hit || g->g_old[b] == 0.0) && !(g->g_old[b] > 0.0)) g->armed[b] = 0;
     }
     g->act_t[a] = tend;
     g->act_n[a]++;
+    g->act_k[l] = (long)k_hit;
     return 1;
 }
 
 /* Contract: the lanes in act, left at an impact with their state after it
  * (lane_impacts), restart there as driver.c's apply_action restarts a solve:
  * f afresh, the controller and the first step afresh, fixed steps counted
- * from the impact; a lane whose f fails ends. */
+ * from the impact; a lane whose f fails ends, and one whose body comes to rest
+ * on the wall (mp_ode_impact_rests, as driver.c's impact_rests decides it) is
+ * handed to the scalar path. */
 __attribute__((noinline, cold)) static void lane_restart(lane_group *g, int *act)
 {
     int rc[W];
@@ -672,11 +746,23 @@ __attribute__((noinline, cold)) static void lane_restart(lane_group *g, int *act
             act[l] = 0;
             continue;
         }
+        const mp_impact *im = &g->ls->impacts[g->act_k[l]];
+        size_t b = (size_t)g->act_k[l] * W + (size_t)l;
+        double wv[3], t_left;
+        lane_wall(g, l, im, g->t[l], wv);
+        double rho = g->rho_old[b], rin = g->rho_in[l], e = rin > 0.0 ? rho / rin : 1.0;
+        double acc = im->side * (g->fnew[im->iv * W + (size_t)l] - wv[2]);
+        double x = fmax(fabs(wv[0]), fabs(g->y[im->iq * W + (size_t)l]));
+        if (g->dir > 0.0 &&
+            mp_ode_impact_rests(g->t[l], g->s0, rho, acc, e, x, &t_left)) { /* driver.c's */
+            lane_end_ev(g, l, MP_OK, MP_ODE_STOP_TO_SCALAR, (size_t)g->act_k[l], 0.0);
+            act[l] = 0;
+            continue;
+        }
         for (size_t c = 0; c < g->n; c++) g->f[c * W + l] = g->fnew[c * W + l];
         g->ctl[l] = mp_ode_ctl_start();
         g->tz[l] = g->t[l];
         g->nfix[l] = 0;
-        g->restarted[l] = 1;
         if (!g->adaptive) g->h[l] = g->o->h;
         else if (g->o->first_step > 0) g->h[l] = g->o->first_step;
     }
@@ -844,9 +930,9 @@ int MP_LANES_RUN(const mp_ode_method *m, const mp_ode_problem *probs, const mp_l
     g.nimp = ls->n_impacts;
     g.results = g.nimp ? results : NULL;
     size_t nvec = 4 + m->nscratch + m->ncoef;
-    double *buf = calloc(nvec * g.nW + ls->np * W + g.nt + 2 * g.n + 2 * g.nimp * W,
+    double *buf = calloc(nvec * g.nW + ls->np * W + g.nt + 2 * g.n + 3 * g.nimp * W,
                          sizeof(double));
-    long *acts = g.nimp ? calloc(g.nimp * W, sizeof(long)) : NULL;
+    long *acts = g.nimp ? calloc(2 * g.nimp * W, sizeof(long)) : NULL;
     if (!buf || (g.nimp && !acts)) {
         free(buf);
         free(acts);
@@ -865,6 +951,8 @@ int MP_LANES_RUN(const mp_ode_method *m, const mp_ode_problem *probs, const mp_l
     g.gf = g.gy + g.n;
     g.g_old = g.gf + g.n;
     g.act_t = g.g_old + g.nimp * W;
+    g.rho_old = g.act_t + g.nimp * W;
+    g.armed = acts ? acts + g.nimp * W : NULL;
     for (size_t j = 0; j < g.nt; j++) sev[j] = g.dir * o->t_eval[j];
     g.sev = sev;
     long iter = 0;

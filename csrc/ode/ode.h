@@ -25,26 +25,52 @@ typedef int (*mp_ode_events)(double t, const double *y, double *g, void *data);
  * values) is replaced in place, and the integration restarts from it.
  * MP_OK or a status that stops the solve. */
 typedef int (*mp_ode_action)(double t, double *y, size_t k, void *data);
+/* A wall that moves: w[0], w[1], w[2] = its position, velocity and
+ * acceleration at t, for the trajectory's parameters p[j * ps] (a SymPy
+ * expression of t printed as C and compiled with the system). */
+typedef void (*mp_wall_fn)(double t, const double *p, size_t ps, double *w);
+
 /* An impact (mechpy.events.impact), the one event the engine knows by value
  * (so that it runs without the GIL, and in the SIMD lanes): the event
- * g = side (y[iq] - wall), and its action y[iq] = wall, y[iv] = -e y[iv] (the
- * coordinate exactly at the wall, its velocity reflected and scaled by the
- * restitution).  e is the trajectory's parameter e_param (>= 0), else its row
- * e_rows[i] (one per trajectory of an ensemble), else the constant e.
- * max_events > 0 ends a trajectory at that crossing (a terminal count; the
- * lanes' own, the scalar path has the options' terminal). */
+ * g = side (y[iq] - wall(t)), and its action y[iq] = wall(t),
+ * y[iv] - wall'(t) = -e (y[iv] - wall'(t)) (the coordinate exactly at the
+ * wall, its velocity relative to the wall reflected and scaled by the
+ * restitution).  The wall stands at `wall`, or moves as wall_fn says.  e is
+ * the trajectory's parameter e_param (>= 0), else its row e_rows[i] (one per
+ * trajectory of an ensemble), else the constant e.  max_events > 0 ends a
+ * trajectory at that crossing (a terminal count; the lanes' own, the scalar
+ * path has the options' terminal).  rest = 1: the coordinate's acceleration
+ * is not coupled to the other coordinates' (no mass-matrix term between
+ * them), so that it may rest on the wall with a contact force acting on it
+ * alone (the driver's resting mode); 0: an accumulation ends the solve. */
 typedef struct mp_impact {
     size_t iq, iv;
     double wall, side, e;
     const double *e_rows;
     long e_param;
     int max_events;
+    mp_wall_fn wall_fn;
+    int rest;
 } mp_impact;
 
-/* The impact's g for the coordinate's value x. */
-static inline double mp_impact_g(const mp_impact *im, double x)
+/* Contract: the wall of im at t into w[0..2] (position, velocity,
+ * acceleration), p the trajectory's parameters at stride ps (read only by a
+ * moving wall). */
+static inline void mp_impact_wall(const mp_impact *im, double t, const double *p, size_t ps,
+                                  double *w)
 {
-    return im->side * (x - im->wall);
+    if (im->wall_fn) {
+        im->wall_fn(t, p, ps, w);
+        return;
+    }
+    w[0] = im->wall;
+    w[1] = w[2] = 0.0;
+}
+
+/* The impact's g for the coordinate's value x, the wall at wall. */
+static inline double mp_impact_g(const mp_impact *im, double x, double wall)
+{
+    return im->side * (x - wall);
 }
 
 /* The impact's restitution for trajectory i with parameter e_param's value
@@ -54,11 +80,13 @@ static inline double mp_impact_e(const mp_impact *im, size_t i, double p_e)
     return im->e_param >= 0 ? p_e : im->e_rows ? im->e_rows[i] : im->e;
 }
 
-/* The impact's action on a state whose component c is y[c * stride]. */
-static inline void mp_impact_apply(const mp_impact *im, double e, double *y, size_t stride)
+/* The impact's action on a state whose component c is y[c * stride], the
+ * wall w[0..2] (mp_impact_wall) at the impact's time. */
+static inline void mp_impact_apply(const mp_impact *im, double e, const double *w, double *y,
+                                   size_t stride)
 {
-    y[im->iv * stride] = -e * y[im->iv * stride];
-    y[im->iq * stride] = im->wall;
+    y[im->iv * stride] = w[1] - e * (y[im->iv * stride] - w[1]);
+    y[im->iq * stride] = w[0];
 }
 
 /* Interrupt check, called every few hundred steps; non-zero stops the solve. */
@@ -157,6 +185,12 @@ typedef struct mp_ode_options {
     const unsigned char *has_action;
     mp_ode_action action;
     void *action_data;
+    /* event k's impact when it is one (NULL: a general event), *params the
+     * trajectory's parameters that a moving wall reads; events_data is the
+     * trajectory's.  NULL: no event is an impact.  With it the driver knows
+     * g' (no grazing crossing is missed), which way g leaves the wall after
+     * an action, and when a body rests on it. */
+    const mp_impact *(*impact_of)(size_t k, const double **params, void *events_data);
     mp_ode_interrupt interrupt;
     void *interrupt_ctx;
 } mp_ode_options;
@@ -174,7 +208,8 @@ enum {
 /* Why events ended a solve (mp_ode_result.stop_reason): a terminal event; an
  * action event's count (max_events); its crossings accumulating (Zeno: the
  * solve ends at the accumulation point, as at a terminal event). */
-enum { MP_ODE_STOP_NONE = 0, MP_ODE_STOP_TERMINAL, MP_ODE_STOP_MAX_EVENTS, MP_ODE_STOP_ZENO };
+enum { MP_ODE_STOP_NONE = 0, MP_ODE_STOP_TERMINAL, MP_ODE_STOP_MAX_EVENTS, MP_ODE_STOP_ZENO,
+       MP_ODE_STOP_TO_SCALAR /* a lane's body came to rest: solved again on the scalar path */ };
 
 /* Growable output storage of one solve.  Freed by mp_ode_result_free. */
 typedef struct mp_ode_result {
@@ -203,6 +238,11 @@ typedef struct mp_ode_result {
     size_t n_events;
     size_t *ev_count, *ev_cap;
     double **ev_t, **ev_y;
+    /* per impact event, where it rested: the times it came to rest on the
+     * wall and lifted off, alternating (an odd count: resting at the end);
+     * NULL when no event can rest */
+    size_t *rs_count, *rs_cap;
+    double **rs_t;
 } mp_ode_result;
 
 /* How a solve ended: what the binding turns into a status and a message. */

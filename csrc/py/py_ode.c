@@ -120,7 +120,9 @@ static int py_events_eval(double t, const double *y, double *g, void *data)
     const py_events *e = data;
     for (size_t k = 0; k < e->count; k++) {
         if (!e->fns[k].fun) {
-            g[k] = mp_impact_g(&e->imp[k], y[e->imp[k].iq]);
+            double w[3];
+            mp_impact_wall(&e->imp[k], t, e->params, 1, w);
+            g[k] = mp_impact_g(&e->imp[k], y[e->imp[k].iq], w[0]);
             continue;
         }
         int rc = py_call(&e->fns[k], t, y, &g[k]);
@@ -136,11 +138,22 @@ static int py_events_action(double t, double *y, size_t k, void *data)
     const py_events *e = data;
     if (!e->fns[k].fun) {
         const mp_impact *im = &e->imp[k];
+        double w[3];
+        mp_impact_wall(im, t, e->params, 1, w);
         mp_impact_apply(im, mp_impact_e(im, 0, im->e_param >= 0 ? e->params[im->e_param] : 0.0),
-                        y, 1);
+                        w, y, 1);
         return MP_OK;
     }
     return py_call(&e->acts[k], t, y, y);
+}
+
+/* mp_ode_options' impact_of: event k's impact (NULL: a Python event) and the
+ * trajectory's parameters its moving wall reads. */
+static const mp_impact *py_events_impact(size_t k, const double **params, void *data)
+{
+    const py_events *e = data;
+    *params = e->params;
+    return e->fns[k].fun ? NULL : &e->imp[k];
 }
 
 /* ---- C callbacks: void f(double t, const double *y, double *dydt, void *ud) -- */
@@ -479,6 +492,34 @@ static PyObject *array_from(const double *src, int nd, const npy_intp *shape)
     return (PyObject *)a;
 }
 
+/* Contract: r's event lists as Python: one triple (t (c,), y (c, n), rests)
+ * per event function, rests the times its body came to rest on a wall and
+ * lifted off, alternating ((0,) for an event that never rested).  NULL with
+ * an exception set. */
+static PyObject *event_lists(const mp_ode_result *r)
+{
+    PyObject *lst = PyList_New((Py_ssize_t)r->n_events);
+    if (!lst) return NULL;
+    for (size_t q = 0; q < r->n_events; q++) {
+        npy_intp c = r->ev_count ? (npy_intp)r->ev_count[q] : 0;
+        npy_intp cr = r->rs_count ? (npy_intp)r->rs_count[q] : 0;
+        npy_intp e1[1] = {c}, e2[2] = {c, (npy_intp)r->n}, e3[1] = {cr};
+        PyObject *et = array_from(c ? r->ev_t[q] : NULL, 1, e1);
+        PyObject *ey = array_from(c ? r->ev_y[q] : NULL, 2, e2);
+        PyObject *er = array_from(cr ? r->rs_t[q] : NULL, 1, e3);
+        PyObject *trip = (et && ey && er) ? Py_BuildValue("(NNN)", et, ey, er) : NULL;
+        if (!trip) {
+            Py_XDECREF(et);
+            Py_XDECREF(ey);
+            Py_XDECREF(er);
+            Py_DECREF(lst);
+            return NULL;
+        }
+        PyList_SET_ITEM(lst, (Py_ssize_t)q, trip);
+    }
+    return lst;
+}
+
 /* Contract: the tuple ode_solve returns for a finished solve (any status the
  * table lets be a status): (code, message, t (m,), y (m, n), nfev, njev, nlu,
  * nsteps, nreject, dense (seg_t, seg_h, seg_c) or None, events [(t, y) per
@@ -506,20 +547,8 @@ static PyObject *result_to_python(const py_system *sys, const mp_ode_result *r, 
     } else {
         den = Py_NewRef(Py_None);
     }
-    ev = r->n_events ? PyList_New((Py_ssize_t)r->n_events) : Py_NewRef(Py_None);
+    ev = r->n_events ? event_lists(r) : Py_NewRef(Py_None);
     if (!ev) goto fail;
-    for (size_t k = 0; k < r->n_events; k++) {
-        npy_intp c = (npy_intp)r->ev_count[k];
-        npy_intp e1[1] = {c}, e2[2] = {c, n};
-        PyObject *et = array_from(r->ev_t[k], 1, e1), *ey = array_from(r->ev_y[k], 2, e2);
-        PyObject *pair = (et && ey) ? Py_BuildValue("(NN)", et, ey) : NULL;
-        if (!pair) {
-            Py_XDECREF(et);
-            Py_XDECREF(ey);
-            goto fail;
-        }
-        PyList_SET_ITEM(ev, (Py_ssize_t)k, pair);
-    }
     mp_ode_outcome oc;
     mp_ode_result_outcome(r, &oc);
     PyObject *msg = ode_message(sys, &oc, max_steps);
@@ -697,27 +726,32 @@ static void event_list_clear(py_event_list *el)
     el->has_action = NULL;
 }
 
-/* Whether entry is a C impact: ("impact", iq, iv, wall, e, side, e_param). */
+/* Whether entry is a C impact: ("impact", iq, iv, wall, e, side, e_param,
+ * wall_fn, rest). */
 static int is_impact(PyObject *entry)
 {
-    if (!PyTuple_Check(entry) || PyTuple_GET_SIZE(entry) != 7) return 0;
+    if (!PyTuple_Check(entry) || PyTuple_GET_SIZE(entry) != 9) return 0;
     PyObject *tag = PyTuple_GET_ITEM(entry, 0);
     return PyUnicode_Check(tag) && PyUnicode_CompareWithASCIIString(tag, "impact") == 0;
 }
 
 /* Contract: events[k], an impact tuple ("impact", iq, iv, wall, e, side,
- * e_param) for states of n and parameter vectors of nparams, into *im (its
- * max_events 0, its e the float e or 0: *eo is e as given, borrowed: a float,
- * or one value per trajectory when e_param < 0).  0, or -1 with an exception
- * set (a coordinate, velocity or parameter out of range). */
+ * e_param, wall_fn, rest) for states of n and parameter vectors of nparams,
+ * into *im (its max_events 0, its e the float e or 0: *eo is e as given,
+ * borrowed: a float, or one value per trajectory when e_param < 0; wall_fn
+ * the address of a compiled mp_wall_fn, 0 for a wall standing at `wall`;
+ * rest 1 when the coordinate may rest on the wall).  0, or -1 with an
+ * exception set (a coordinate, velocity or parameter out of range). */
 static int parse_impact(PyObject *entry, Py_ssize_t k, size_t n, size_t nparams,
                         mp_impact *im, PyObject **eo)
 {
     Py_ssize_t iq, iv;
     long ep;
+    int rest;
+    unsigned long long wf;
     double wall, side;
     const char *tag;
-    if (!PyArg_ParseTuple(entry, "snndOdl", &tag, &iq, &iv, &wall, eo, &side, &ep))
+    if (!PyArg_ParseTuple(entry, "snndOdlKp", &tag, &iq, &iv, &wall, eo, &side, &ep, &wf, &rest))
         return -1;
     if (iq < 0 || iv < 0 || (size_t)iq >= n || (size_t)iv >= n ||
         (ep >= 0 && (size_t)ep >= nparams)) {
@@ -725,7 +759,8 @@ static int parse_impact(PyObject *entry, Py_ssize_t k, size_t n, size_t nparams,
                      "or restitution parameter is out of range", k);
         return -1;
     }
-    *im = (mp_impact){(size_t)iq, (size_t)iv, wall, side, 0.0, NULL, ep, 0};
+    *im = (mp_impact){(size_t)iq, (size_t)iv, wall, side, 0.0, NULL, ep, 0, NULL, rest};
+    if (wf) *(void **)&im->wall_fn = (void *)(uintptr_t)wf; /* an address handed over */
     if (ep < 0 && PyFloat_Check(*eo)) im->e = PyFloat_AS_DOUBLE(*eo);
     return 0;
 }
@@ -764,6 +799,7 @@ static int event_list_parse(PyObject *evo, PyObject *termo, PyObject *diro, py_e
         }
         el->has_action[k] = (unsigned char)(imp || pair);
         el->all_c &= imp;
+        if (imp) o->impact_of = py_events_impact;
     }
     o->n_events = (size_t)el->count;
     o->events = py_events_eval;
@@ -1198,23 +1234,9 @@ static PyObject *many_result(const py_system *sys, const mp_ode_outcome *outc,
     if (results) {
         if (!(evs = PyList_New((Py_ssize_t)k))) goto out;
         for (size_t i = 0; i < k; i++) {
-            const mp_ode_result *r = &results[i];
-            PyObject *lst = PyList_New((Py_ssize_t)r->n_events);
+            PyObject *lst = event_lists(&results[i]);
             if (!lst) goto out;
             PyList_SET_ITEM(evs, (Py_ssize_t)i, lst);
-            for (size_t q = 0; q < r->n_events; q++) {
-                npy_intp c = r->ev_count ? (npy_intp)r->ev_count[q] : 0;
-                npy_intp e1[1] = {c}, e2[2] = {c, (npy_intp)r->n};
-                PyObject *et = array_from(c ? r->ev_t[q] : NULL, 1, e1);
-                PyObject *ey = array_from(c ? r->ev_y[q] : NULL, 2, e2);
-                PyObject *pair = (et && ey) ? Py_BuildValue("(NN)", et, ey) : NULL;
-                if (!pair) {
-                    Py_XDECREF(et);
-                    Py_XDECREF(ey);
-                    goto out;
-                }
-                PyList_SET_ITEM(lst, (Py_ssize_t)q, pair);
-            }
         }
     } else {
         evs = Py_NewRef(Py_None);
