@@ -410,3 +410,154 @@ def test_impact_as_a_python_event_and_its_checks():
     stop.terminal = True
     s = mp.solve(f, (0, 4), [1.0, 0.0], events=stop, rtol=1e-12, atol=1e-12)
     assert s.status == 1 and abs(s.t[-1] - np.pi / 2) < 1e-10
+
+
+# ---- contact: floors anywhere, grazing, rest, sticking, lift-off -------------------------
+
+def _table(A, w, **extra):
+    """A ball x'' = -g over a table at A sin(w t) (A and w reach the equations through a
+    Piecewise that is always 0: parameters used by the wall alone)."""
+    x, v = mp.coordinates("x v")
+    g, As, ws = sp.symbols("g A w")
+    zero = sp.Piecewise((0, As * ws >= -1e300), (1, True))
+    return mp.equations([v, -g + zero], [x, v], params={"g": G, "A": A, "w": w, **extra})
+
+
+@pytest.mark.parametrize("wall", [0.0, 1e-3, 0.1, 1.0, 1000.3, -5.0, 1e6])
+@pytest.mark.parametrize("e", [0.5, 0.9])
+def test_ball_on_a_floor_anywhere_bounces_and_rests(ball, wall, e):
+    """A ball dropped 1 m onto a floor at `wall`: never below it by more than a few ulps,
+    the bounces at t_k = t1 + 2 e v1 (1 - e^k) / (g (1 - e)), at rest from t_inf =
+    t1 + 2 e v1 / (g (1 - e)) on (the floor far from 0 once let it fall through)."""
+    T = 3.0 if e == 0.5 else 12.0
+    ev = mp.events.impact("x", wall=wall, restitution=e)
+    sol = mp.solve(ball, (0, T), [wall + 1.0, 0.0], events=ev, rtol=1e-12, atol=1e-12,
+                   dense_output=True)
+    scale = max(1.0, abs(wall))
+    t1, v1 = np.sqrt(2 / G), np.sqrt(2 * G)
+    t_inf = t1 + 2 * e * v1 / (G * (1 - e))
+    assert sol.status == 0 and sol.t[-1] == T
+    ulps = 64 * np.spacing(scale)      # the located root's side: 8.3e-15 at most measured
+    assert (sol.y[0] - wall).min() >= -ulps
+    tq = np.linspace(0, T, 20001)
+    assert (sol.sol(tq)[0] - wall).min() >= -ulps
+    tb = sol.t_events[0][:-1]                    # the last: the accumulation point
+    k = np.arange(len(tb))
+    want = t1 + 2 * e * v1 / G * (1 - e ** k) / (1 - e)
+    # bounce times and t_inf to the integration's accuracy at the wall's scale (rtol
+    # 1e-12 of |x|): |t_inf error| / sqrt(scale) measured 1.7e-10 to 4.4e-10 (e = 0.5),
+    # 8.7e-9 to 1e-8 (e = 0.9) for walls at 1, 1000.3 and 1e6; 6e-15 at 0
+    bound = (2e-9 if e == 0.5 else 5e-8) * np.sqrt(scale)
+    assert np.abs(tb - want).max() < bound
+    assert sol.rests[0].shape == (1, 2) and sol.rests[0][0, 1] == np.inf
+    assert abs(sol.rests[0][0, 0] - t_inf) < bound
+    assert np.all(sol.y[:, sol.t > sol.rests[0][0, 0]] == [[wall], [0.0]])
+    # the same in solve_many, in lanes and on the scalar path: the same answer
+    tev = np.linspace(0, T, 301)
+    for lanes in (True, False):
+        ens = mp.solve_many(ball, (0, T), [[wall + 1.0, 0.0]] * 3, t_eval=tev, events=ev,
+                            rtol=1e-12, atol=1e-12, lanes=lanes)
+        assert ens.success.all()
+        np.testing.assert_array_equal(ens.t_events[1][0], sol.t_events[0])
+        np.testing.assert_array_equal(ens.rests[2][0], sol.rests[0])
+        assert (ens.y[:, 0] - wall).min() >= -ulps
+
+
+def test_grazing_impacts_are_not_missed():
+    """A pendulum released at 0.5 rad against a wall at -0.3 rad (e = 0.5) for 200 s:
+    every touch is an impact, the swing never passes the wall (it dipped 87 times, up
+    to 2.1e-5 rad, where g dips below 0 and back between two sub-points)."""
+    pend = mp.scenes.Pendulum()
+    sol = mp.solve(pend, (0, 200), [0.5, 0.0],
+                   events=mp.events.impact("theta", wall=-0.3, restitution=0.5),
+                   rtol=1e-10, atol=1e-12, dense_output=True)
+    assert sol.success
+    th = sol.sol(np.linspace(0, 200, 100001))[0]
+    assert th.min() >= -0.3 - 1e-12                     # 2.9e-11 above it measured
+    assert len(sol.t_events[0]) > 30
+
+
+def test_restitution_zero_rests_at_once_and_rides_the_table():
+    """e = 0 under gravity rests at once on a fixed floor; on a table vibrating with
+    A w^2 < g the ball rides it from its first touch, to 1e-10."""
+    b = _table(0.01, 20.0)
+    x = sp.Symbol("x")
+    t, A, w = sp.symbols("t A w")
+    sol = mp.solve(b, (0, 2), [0.5, 0.0], events=mp.events.impact("x", restitution=0.0),
+                   rtol=1e-12, atol=1e-12)
+    t1 = np.sqrt(2 * 0.5 / G)
+    assert sol.status == 0 and len(sol.t_events[0]) == 1
+    assert abs(sol.rests[0][0, 0] - t1) < 1e-12 and sol.rests[0][0, 1] == np.inf
+    assert np.all(sol.y[:, sol.t > t1] == 0.0)
+    del x
+    sol = mp.solve(b, (0, 3), [0.01, 0.2], events=mp.events.impact("x", wall=A * sp.sin(w * t),
+                                                                     restitution=0.0),
+                   rtol=1e-12, atol=1e-12, dense_output=True)
+    assert sol.status == 0 and sol.rests[0].shape == (1, 2)
+    ts = np.linspace(sol.rests[0][0, 0], 3, 5001)
+    y = sol.sol(ts)
+    np.testing.assert_allclose(y[0], 0.01 * np.sin(20 * ts), rtol=0, atol=1e-10)
+    np.testing.assert_allclose(y[1], 0.2 * np.cos(20 * ts), rtol=0, atol=1e-9)
+
+
+def test_a_table_that_shakes_harder_than_g_throws_the_ball_off():
+    """A w^2 > g: the ball resting on the table lifts off where the table's acceleration
+    -A w^2 sin(w t) reaches -g (sin(w t) = g / (A w^2)), each period; and the period-1
+    orbit (one bounce a period T = 2 pi / w) has its impact phase at
+    cos(phi) = g T (1 - e) / (2 A w (1 + e))."""
+    t, A, w = sp.symbols("t A w")
+    b = _table(0.05, 20.0)
+    sol = mp.solve(b, (0, 1.0), [0.0, 1.0], rtol=1e-12, atol=1e-12,
+                   events=mp.events.impact("x", wall=A * sp.sin(w * t), restitution=0.0))
+    assert sol.success
+    lift = sol.rests[0][:, 1]
+    phi = np.arcsin(G / (0.05 * 400))
+    want = phi / 20 + 2 * np.pi / 20 * np.arange(len(lift))
+    assert len(lift) >= 3
+    np.testing.assert_allclose(lift, want, rtol=0, atol=1e-12)   # 4e-18 measured (first)
+    e, Av, wv = 0.8, 0.02, 30.0
+    b = _table(Av, wv)
+    T = 2 * np.pi / wv
+    ph = np.arccos(G * T * (1 - e) / (2 * Av * wv * (1 + e)))
+    t0 = ph / wv
+    sol = mp.solve(b, (t0, t0 + 5 * T + 1e-3), [Av * np.sin(ph), G * T / 2],
+                   events=mp.events.impact("x", wall=A * sp.sin(w * t), restitution=e),
+                   rtol=1e-12, atol=1e-12)
+    te = sol.t_events[0]
+    assert len(te) == 5
+    np.testing.assert_allclose(te, t0 + T * np.arange(1, 6), rtol=0, atol=1e-12)  # 1.1e-13
+
+
+def test_tiny_restitutions_and_late_starts_rest():
+    """Restitutions of 1e-4 to 1e-8 rest after a few bounces (they raised EventError);
+    the same drop at t0 = 5000 rests at t0 + t_inf (10^7 bounces of 3e-11 s before)."""
+    x, v = mp.coordinates("x v")
+    b = mp.equations([v, -sp.Symbol("g")], [x, v], params={"g": G})
+    t1, v1 = np.sqrt(2 / G), np.sqrt(2 * G)
+    for e in (1e-3, 1e-4, 1e-5, 1e-6, 1e-8):
+        s = mp.solve(b, (0, 2), [1.0, 0.0], events=mp.events.impact("x", restitution=e),
+                     rtol=1e-12, atol=1e-12)
+        t_inf = t1 + 2 * e * v1 / (G * (1 - e))
+        assert s.status == 0 and abs(s.rests[0][0, 0] - t_inf) < 1e-12
+    for t0 in (0.0, 5000.0):
+        s = mp.solve(b, (t0, t0 + 3), [1.0, 0.0], events=mp.events.impact("x", restitution=0.5),
+                     rtol=1e-12, atol=1e-12, max_steps=100000)
+        t_inf = t0 + t1 + 2 * 0.5 * v1 / (G * 0.5)
+        assert s.status == 0 and abs(s.rests[0][0, 0] - t_inf) < 1e-9 * max(1, t0)
+
+
+def test_a_kick_goes_on_through_the_surface_the_same_with_every_method():
+    """An action that changes the speed only (a kick at x = 0, the motion going on
+    through it): one answer whatever the method (it raised EventError with dop853)."""
+    def f(t, y):
+        return [y[1], 0.0]
+
+    def g(t, y):
+        return y[0]
+    g.direction = -1
+    g.action = lambda t, y: [y[0], 2.0 * y[1]]
+    for method in ("dop853", "dopri5", "radau", "gsl:rkf45"):
+        s = mp.solve(f, (0, 2), [1.0, -1.0], events=g, method=method, rtol=1e-10, atol=1e-12)
+        assert s.success and len(s.t_events[0]) == 1
+        assert abs(s.t_events[0][0] - 1.0) < 1e-9
+        np.testing.assert_allclose(s.y[:, -1], [-2.0, -2.0], rtol=1e-8)
