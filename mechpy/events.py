@@ -10,12 +10,16 @@ the state before and the state after at the event's time.
 
 SciPy's ``terminal`` and ``direction`` keep their meaning: a terminal event
 stops instead; an integer count on an action event (``max_events``) stops the
-solve at that crossing (status 1, the message naming the event).  Crossings
-that accumulate (Zeno: a ball bouncing with restitution e < 1 comes to rest
-after infinitely many bounces in a finite time) end the solve at their
-accumulation point, also with status 1 and a message naming the event; an
-action that leaves the state where its event fires again at once raises
-:class:`mechpy.errors.EventError`.
+solve at that crossing (status 1, the message naming the event).  An event
+that acted fires again only after g has been seen on the side its crossing
+starts from, wherever the wall is.  Impacts that accumulate (Zeno: a ball
+bouncing with restitution e < 1 after infinitely many bounces in a finite
+time) put the body to rest on the wall at their accumulation point; it
+follows the wall (which may move: a SymPy expression of t) until the contact
+force would pull, then lifts off (``sol.rests``).  Other action events whose
+crossings accumulate end the solve there (status 1, a message naming the
+event); an action that leaves the state where its event fires again at once
+raises :class:`mechpy.errors.EventError`.
 
 :func:`impact` is the common case written in C: the velocity of one coordinate
 reflected and scaled by a coefficient of restitution at a wall.  It runs
@@ -245,12 +249,14 @@ def impact(coordinate, wall=0.0, restitution=1.0, side=+1) -> Impact:
         matching component of the second half, as in every (q, v) state), or
         its name (a compiled system's ``coordinates``; ``"theta"`` of a
         Pendulum, ``"height"`` of a Rocket, ...).
-    wall : float
-        Where the wall is (in q's units).
+    wall : float or SymPy expression
+        Where the wall is (in q's units): a number, or for a compiled system a
+        SymPy expression of ``sympy.Symbol('t')`` and the system's parameters
+        (a moving wall, compiled with its derivatives).
     restitution : float, (k,) array or str
         Coefficient of restitution e >= 0 (1: elastic, 0: the velocity
-        stops; against a force into the wall that re-fires the impact at once,
-        an :class:`~mechpy.errors.EventError`: make it terminal instead): a number; in :func:`mechpy.solve_many` one value per
+        relative to the wall stops; against a force into the wall the body
+        then rests on it): a number; in :func:`mechpy.solve_many` one value per
         trajectory; or the name of a parameter of the system (then swept
         through ``params``).
     side : {+1, -1}

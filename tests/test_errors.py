@@ -58,7 +58,7 @@ def _event():               # an action leaving the state where its event fires 
     def floor(t, y):
         return y[0]
     floor.direction = -1
-    floor.action = lambda t, y: [abs(y[0]), y[1]]    # still falling: crosses again at once
+    floor.action = lambda t, y: [1e-17, y[1]]    # above it, still falling: again at once
     mp.solve(lambda t, y: [y[1], -9.81], (0, 1), [1.0, 0.0], events=floor)
 
 
