@@ -252,19 +252,21 @@ static inline int mp_ode_action_gap(double t, double t_prev, long n_prev, double
  * acceleration a (side-signed) comes to rest on it: the force pushes it back
  * (a < 0) and the flights left cannot be resolved: rho = 0 (restitution 0),
  * or with e < 1 (e = rho over the speed it arrived with) the next flight's
- * height rho^2 / (2 |a|) within 16 ulps of the wall's position x, or all the
- * flights left, 2 rho / (|a| (1 - e)), within the time resolution.  *t_left
- * is the time to the accumulation (the sum of those flights: exact for a
- * constant a).  An elastic impact (e >= 1) never accumulates. */
+ * height rho^2 / (2 |a|) within 16 ulps of the wall's position x or within
+ * xtol, the solve's absolute tolerance on the coordinate there (atol + rtol
+ * |x|: a bounce the integration does not resolve), or all the flights left,
+ * 2 rho / (|a| (1 - e)), within the time resolution.  *t_left is the time to
+ * the accumulation (the sum of those flights: exact for a constant a).  An
+ * elastic impact (e >= 1) never accumulates. */
 static inline int mp_ode_impact_rests(double t, double t_start, double rho, double a, double e,
-                                      double x, double *t_left)
+                                      double x, double xtol, double *t_left)
 {
     *t_left = 0.0;
     if (!(a < 0.0) || !(rho >= 0.0)) return 0;
     if (rho == 0.0) return 1;
     if (!(e < 1.0)) return 0;
     *t_left = 2.0 * rho / (-a * (1.0 - e));
-    return rho * rho / (-2.0 * a) <= 16.0 * DBL_EPSILON * fabs(x) ||
+    return rho * rho / (-2.0 * a) <= fmax(16.0 * DBL_EPSILON * fabs(x), xtol) ||
            *t_left <= mp_ode_time_resolution(t, t_start);
 }
 

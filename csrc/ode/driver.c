@@ -966,8 +966,9 @@ static int impact_rests(ode_run *s, size_t k, double t, double *t_left, int *pus
     double e = rho_in > 0.0 ? rho / rho_in : 1.0;
     double a = im->side * (w->f[im->iv] - wv[2]);
     *pushed = a < 0.0;
-    return mp_ode_impact_rests(t, w->t_start, rho, a, e, fmax(fabs(wv[0]), fabs(w->y[im->iq])),
-                               t_left);
+    double x = fmax(fabs(wv[0]), fabs(w->y[im->iq]));
+    return mp_ode_impact_rests(t, w->t_start, rho, a, e, x,
+                               w->o->atol[im->iq] + w->o->rtolv[im->iq] * x, t_left);
 }
 
 /* Contract: event k's action at (s->t, w->y), the state just before it (also

@@ -204,7 +204,15 @@ static int gsl_finish(mp_ode_ws *w, double t, double h, int need_dense)
     st->status = MP_OK;
     const double *fin = st->half->type->can_use_dydt_in ? w->f : NULL;
     int g = gsl_odeiv2_step_apply(st->half, t, 0.5 * h, st->ym, st->yerr, fin, st->fm, &st->sys);
-    if (g != GSL_SUCCESS) return st->status != MP_OK ? st->status : MP_EGSL;
+    if (g != GSL_SUCCESS && st->status != MP_OK) return st->status;
+    if (g == GSL_EUNDRFLW || g == GSL_FAILURE) {
+        /* a half step too short for the stepper's own substeps (bsimp's, near
+         * an accumulation of impacts): the cubic Hermite, for this step */
+        mp_ode_dense_hermite(w->n, h, w->y, w->ynew, w->f, w->fnew, w->coef);
+        memset(w->coef + 4 * w->n, 0, 2 * w->n * sizeof(double));
+        return MP_OK;
+    }
+    if (g != GSL_SUCCESS) return MP_EGSL;
     if (!st->half->type->gives_exact_dydt_out &&
         (rc = mp_ode_ws_rhs(w, t + 0.5 * h, st->ym, st->fm)) != MP_OK)
         return rc;
@@ -215,6 +223,20 @@ static int gsl_finish(mp_ode_ws *w, double t, double h, int need_dense)
     return MP_OK;
 }
 
+/* Contract: after an action replaced the state (driver.c's apply_action, with
+ * w->f f at the new state): GSL's own memory forgotten, as at a start (the
+ * multistep rows' history, the evolve's and control's last step, the
+ * interpolant's step cap), so that the next step starts from the new state
+ * alone. */
+static void gsl_restart(mp_ode_ws *w)
+{
+    gsl_state *st = w->state;
+    gsl_odeiv2_driver_reset(st->d);
+    if (st->half) gsl_odeiv2_step_reset(st->half);
+    st->f_stale = 0;
+    st->h_cap = 0.0;
+}
+
 /* nc: 6 for the one-step rows of order >= 4 (quintic interpolant), 4 for the
  * low-order and multistep rows, whose short steps keep the cubic within
  * their own error (a low-order midpoint would not help a quintic) */
@@ -223,7 +245,7 @@ static int gsl_finish(mp_ode_ws *w, double t, double h, int need_dense)
         .name = nm, .order = ord, .adaptive = 1, .implicit = impl, .needs_jacobian = jac,      \
         .dense_order = nc - 1, .ncoef = nc, .nscratch = 0, .self_controlled = 1,              \
         .extra = &gsl_odeiv2_step_##T, .alloc = gsl_alloc, .free = gsl_free,                  \
-        .step = gsl_step, .finish = gsl_finish,                                               \
+        .step = gsl_step, .finish = gsl_finish, .restart = gsl_restart,                       \
     }
 
 MP_GSL_ROW("gsl:rk2", rk2, 2, 0, 0, 4);

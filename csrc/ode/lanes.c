@@ -753,8 +753,9 @@ __attribute__((noinline, cold)) static void lane_restart(lane_group *g, int *act
         double rho = g->rho_old[b], rin = g->rho_in[l], e = rin > 0.0 ? rho / rin : 1.0;
         double acc = im->side * (g->fnew[im->iv * W + (size_t)l] - wv[2]);
         double x = fmax(fabs(wv[0]), fabs(g->y[im->iq * W + (size_t)l]));
+        double xtol = g->o->atol[im->iq] + g->o->rtolv[im->iq] * x;
         if (g->dir > 0.0 &&
-            mp_ode_impact_rests(g->t[l], g->s0, rho, acc, e, x, &t_left)) { /* driver.c's */
+            mp_ode_impact_rests(g->t[l], g->s0, rho, acc, e, x, xtol, &t_left)) { /* driver.c's */
             lane_end_ev(g, l, MP_OK, MP_ODE_STOP_TO_SCALAR, (size_t)g->act_k[l], 0.0);
             act[l] = 0;
             continue;
