@@ -587,3 +587,37 @@ def test_every_method_bounces_and_rests(ball, method):
     t_inf = t1 + 2 * e * v1 / (G * (1 - e))
     assert abs(s.rests[0][0, 0] - t_inf) < (2e-5 if multistep else 1e-9)
     assert s.y[0].min() >= wall - 1e-14
+
+
+def test_chattering_on_a_shaking_table_in_lanes_and_alone():
+    """A ball on a table shaking at 40 rad/s (A w^2 from 3 to 32 m/s^2 across the rows):
+    bouncing, chattering (hundreds of impacts at relative speeds down to the tolerance,
+    which raised 'fires again at once'), sticking and lifting off each period.  Never
+    below the table (1.2e-13 measured); solve_many's lanes, its scalar path and lone
+    solves at each row's parameters equal to the bit."""
+    t, A, w = sp.symbols("t A w")
+    b = _table(0.01, 40.0)
+    wall = A * sp.sin(w * t)
+    for e in (0.3, 0.6, 0.9):
+        s = mp.solve(b, (0, 10), [0.05, 0.0], events=mp.events.impact("x", wall=wall,
+                                                                        restitution=e),
+                     rtol=1e-10, atol=1e-12, dense_output=True)
+        assert s.status == 0
+        ts = np.linspace(0, 10, 100001)
+        assert (s.sol(ts)[0] - 0.01 * np.sin(40 * ts)).min() > -1e-12
+        if e == 0.3:
+            assert len(s.t_events[0]) > 300 and len(s.rests[0]) > 30   # chatters, sticks
+    rows = np.array([[G, a, 40.0] for a in np.linspace(0.002, 0.02, 8)])
+    tev = np.linspace(0, 5, 501)
+    ev = mp.events.impact("x", wall=wall, restitution=0.5)
+    ens = [mp.solve_many(b, (0, 5), [[0.05, 0.0]] * 8, params=rows, t_eval=tev, events=ev,
+                         rtol=1e-10, atol=1e-12, lanes=lanes) for lanes in (True, False)]
+    assert ens[0].lanes and not ens[1].lanes and ens[0].success.all()
+    np.testing.assert_array_equal(ens[0].y, ens[1].y)
+    assert sum(len(r[0]) for r in ens[0].rests) > 10            # some rows rested
+    for i in (0, 2, 3, 7):
+        s = mp.solve(b.replace(A=rows[i, 1]), (0, 5), [0.05, 0.0], t_eval=tev, events=ev,
+                     rtol=1e-10, atol=1e-12)
+        np.testing.assert_array_equal(s.y, ens[0].y[i])
+        np.testing.assert_array_equal(s.t_events[0], ens[0].t_events[i][0])
+        np.testing.assert_array_equal(s.rests[0], ens[1].rests[i][0])
