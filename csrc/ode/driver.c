@@ -511,6 +511,8 @@ struct ode_run {
     double *buf, *ytmp, *save;                  /* the vectors: one block */
     double *g_old, *g_sub, *gtmp; ev_hit *hits; /* events: one block, and the hits */
     double *rho_old, *rho_sub; /* ... an impact's relative velocity where g_old, g_sub are */
+    double *rho_end;          /* ... at the step's end */
+    unsigned char *inner;     /* ... whether it is needed inside the step (ev_step) */
     double *act_t;            /* per event: the time of its last action (with act_n) */
     long *act_n;              /* per event: its actions applied */
     unsigned char *armed;     /* per event: 0 after it acted, until g is before its crossing */
@@ -598,6 +600,16 @@ static int ev_step(ode_run *s, double t, double h, int first, double *s_stop, lo
     ev_ctx c = {w, o, t, h, s->ytmp, s->gtmp};
     *s_stop = 2.0;
     *act = -1;
+    /* an impact's rate inside the step only where it is read: after an action
+     * (ev_returned), or where it turns from approaching to leaving over the
+     * step (a minimum inside: grazing) */
+    for (size_t k = 0; s->imps && k < ne; k++) {
+        const mp_impact *im = ev_impact(s, k);
+        double wv[3];
+        if (!im) continue;
+        s->rho_end[k] = ev_rho(s, im, t + h, w->ynew, wv);
+        s->inner[k] = !s->armed[k] || (s->rho_old[k] < 0.0 && s->rho_end[k] > 0.0);
+    }
     for (int j = 1; j <= MP_ODE_EVENT_SUBDIV; j++) {
         double s0 = (double)(j - 1) / MP_ODE_EVENT_SUBDIV, s1 = (double)j / MP_ODE_EVENT_SUBDIV;
         const double *y1 = w->ynew;
@@ -607,10 +619,12 @@ static int ev_step(ode_run *s, double t, double h, int first, double *s_stop, lo
         }
         int rc = o->events(t + s1 * h, y1, g_sub, o->events_data);
         if (rc != MP_OK) return rc;
-        for (size_t k = 0; k < ne; k++) { /* before y1 (ytmp) is overwritten below */
+        for (size_t k = 0; s->imps && k < ne; k++) { /* before ytmp is overwritten below */
             const mp_impact *im = ev_impact(s, k);
             double wv[3];
-            if (im) s->rho_sub[k] = ev_rho(s, im, t + s1 * h, y1, wv);
+            if (!im) continue;
+            s->rho_sub[k] = j == MP_ODE_EVENT_SUBDIV ? s->rho_end[k]
+                          : s->inner[k] ? ev_rho(s, im, t + s1 * h, y1, wv) : NAN;
         }
         for (size_t k = 0; k < ne; k++) {
             if (!isfinite(g_sub[k])) {
@@ -643,7 +657,7 @@ static int ev_step(ode_run *s, double t, double h, int first, double *s_stop, lo
             } else if (crosses(g_old[k], g_sub[k], dk)) {
                 if ((rc = ev_root(&c, k, s0, g_old[k], s1, g_sub[k], &root)) != MP_OK) return rc;
                 ev_hit_add(s, &nh, root, k);
-            } else if (im && dk <= 0 && g_old[k] > 0.0 && g_sub[k] > 0.0 &&
+            } else if (im && s->inner[k] && dk <= 0 && g_old[k] > 0.0 && g_sub[k] > 0.0 &&
                        s->rho_old[k] < 0.0 && s->rho_sub[k] > 0.0) {
                 /* approaching, then leaving: g's minimum inside may reach the wall */
                 double sm, gm;
@@ -824,10 +838,10 @@ static int alloc_events(ode_run *s)
     r->ev_cap = calloc(ne, sizeof(size_t));
     r->ev_t = calloc(ne, sizeof(double *));
     r->ev_y = calloc(ne, sizeof(double *));
-    s->g_old = malloc(6 * ne * sizeof(double));
+    s->g_old = malloc(7 * ne * sizeof(double));
     s->hits = malloc(ne * MP_ODE_EVENT_SUBDIV * sizeof(ev_hit));
     s->act_n = calloc(ne, sizeof(long));
-    s->armed = malloc(ne);
+    s->armed = malloc(2 * ne);
     if (!r->ev_count || !r->ev_cap || !r->ev_t || !r->ev_y || !s->g_old || !s->hits ||
         !s->act_n || !s->armed)
         return MP_ENOMEM;
@@ -837,7 +851,10 @@ static int alloc_events(ode_run *s)
     s->gtmp = s->g_sub + ne;
     s->rho_old = s->g_old + 4 * ne;
     s->rho_sub = s->g_old + 5 * ne;
-    memset(s->rho_old, 0, 2 * ne * sizeof(double));
+    s->rho_end = s->g_old + 6 * ne;
+    s->inner = s->armed + ne;
+    memset(s->rho_old, 0, 3 * ne * sizeof(double));
+    memset(s->inner, 0, ne);
     if (s->k_lift >= 0 && nu) { /* an impact may rest: its rest list */
         r->rs_count = calloc(nu, sizeof(size_t));
         r->rs_cap = calloc(nu, sizeof(size_t));

@@ -613,16 +613,19 @@ static double lane_crossing(lane_group *g, int l, size_t q)
     lane_g_ctx c = {g, l, im};
     size_t a = q * W + (size_t)l;
     double g0 = g->g_old[a], r0 = g->rho_old[a], hit = 2.0, t = g->t[l], h = g->h[l];
+    double g_end, r_end, we[3];
+    lane_wall(g, l, im, t + h, we);
+    g_end = mp_impact_g(im, g->ynew[im->iq * W + (size_t)l], we[0]);
+    r_end = g->dir * im->side * (g->ynew[im->iv * W + (size_t)l] - we[1]);
+    /* the rate inside the step only where it is read (driver.c's ev_step) */
+    int inner = !g->armed[a] || (r0 < 0.0 && r_end > 0.0);
     for (int j = 1; j <= MP_ODE_EVENT_SUBDIV; j++) {
         double s0 = (double)(j - 1) / MP_ODE_EVENT_SUBDIV, s1 = (double)j / MP_ODE_EVENT_SUBDIV;
-        double g1, r1, wv[3], root = s1, sm, gm;
-        lane_wall(g, l, im, t + s1 * h, wv);
-        if (j == MP_ODE_EVENT_SUBDIV) {
-            g1 = mp_impact_g(im, g->ynew[im->iq * W + (size_t)l], wv[0]);
-            r1 = g->dir * im->side * (g->ynew[im->iv * W + (size_t)l] - wv[1]);
-        } else {
+        double g1 = g_end, r1 = r_end, wv[3], root = s1, sm, gm;
+        if (j < MP_ODE_EVENT_SUBDIV) {
+            lane_wall(g, l, im, t + s1 * h, wv);
             g1 = mp_impact_g(im, lane_interp(g, l, im->iq, s1), wv[0]);
-            r1 = g->dir * im->side * (lane_interp(g, l, im->iv, s1) - wv[1]);
+            r1 = inner ? g->dir * im->side * (lane_interp(g, l, im->iv, s1) - wv[1]) : NAN;
         }
         if (hit > 1.0) {
             if (g->first[l] && j == 1 && g0 == 0.0) {
@@ -641,7 +644,7 @@ static double lane_crossing(lane_group *g, int l, size_t q)
             } else if (g0 > 0.0 && g1 <= 0.0) {
                 mp_ode_event_root(lane_g_at, &c, t, h, s0, g0, s1, g1, &root);
                 hit = root;
-            } else if (g0 > 0.0 && g1 > 0.0 && r0 < 0.0 && r1 > 0.0) { /* grazing */
+            } else if (inner && g0 > 0.0 && g1 > 0.0 && r0 < 0.0 && r1 > 0.0) { /* grazing */
                 lane_extremum(&c, s0, r0, s1, r1, &sm, &gm);
                 if (gm <= 0.0) {
                     mp_ode_event_root(lane_g_at, &c, t, h, s0, g0, sm, gm, &root);
