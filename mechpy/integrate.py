@@ -357,19 +357,28 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
     return out
 
 
+#: The rests of an event that never rested (shared, read-only: an ensemble has
+#: one per trajectory and event).
+_NO_RESTS = np.empty((0, 2))
+_NO_RESTS.flags.writeable = False
+
+
+def _rests(rs):
+    """Alternating rest and lift-off times as (r, 2) [came to rest, lifted off],
+    inf when it still rested at the end."""
+    if rs is None:
+        return _NO_RESTS
+    if rs.size % 2:
+        rs = np.append(rs, np.inf)
+    return rs.reshape(-1, 2)
+
+
 def _event_fields(lists) -> dict:
     """A solve's event lists (per event function: its times, its states, and
-    the times its body came to rest on a wall and lifted off, alternating) as
-    the Solution's ``t_events``, ``y_events`` and ``rests`` ((r, 2) per
-    event: [came to rest, lifted off], inf when it still rested at the end)."""
-    rests = []
-    for _, _, rs in lists:
-        rs = np.asarray(rs, dtype=float)
-        if rs.size % 2:
-            rs = np.append(rs, np.inf)
-        rests.append(rs.reshape(-1, 2))
-    return {"t_events": [te for te, _, _ in lists], "y_events": [ye for _, ye, _ in lists],
-            "rests": rests}
+    the times its body came to rest on a wall and lifted off, alternating, or
+    None) as the Solution's ``t_events``, ``y_events`` and ``rests``."""
+    te, ye, rs = zip(*lists) if lists else ((), (), ())
+    return {"t_events": list(te), "y_events": list(ye), "rests": [_rests(r) for r in rs]}
 
 
 def _no_step(t0, tf, y0, tev, dense_output, evs) -> Solution:
@@ -386,7 +395,7 @@ def _no_step(t0, tf, y0, tev, dense_output, evs) -> Solution:
                    sol=_ConstantDense(y0, t0, tf) if dense_output else None,
                    t_events=None if evs is None else [np.empty(0) for _ in evs],
                    y_events=None if evs is None else [np.empty((0, n)) for _ in evs],
-                   **({} if evs is None else {"rests": [np.empty((0, 2)) for _ in evs]}),
+                   **({} if evs is None else {"rests": [_NO_RESTS for _ in evs]}),
                    nfev=0, njev=0, nlu=0, nsteps=0, nreject=0, status=0,
                    message=_STATUS[0]["message"], success=True)
     object.__setattr__(out, "_code", 0)

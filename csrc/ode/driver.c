@@ -603,12 +603,14 @@ static int ev_step(ode_run *s, double t, double h, int first, double *s_stop, lo
     /* an impact's rate inside the step only where it is read: after an action
      * (ev_returned), or where it turns from approaching to leaving over the
      * step (a minimum inside: grazing) */
+    int any_inner = 0;
     for (size_t k = 0; s->imps && k < ne; k++) {
         const mp_impact *im = ev_impact(s, k);
         double wv[3];
         if (!im) continue;
         s->rho_end[k] = ev_rho(s, im, t + h, w->ynew, wv);
         s->inner[k] = !s->armed[k] || (s->rho_old[k] < 0.0 && s->rho_end[k] > 0.0);
+        any_inner |= s->inner[k];
     }
     for (int j = 1; j <= MP_ODE_EVENT_SUBDIV; j++) {
         double s0 = (double)(j - 1) / MP_ODE_EVENT_SUBDIV, s1 = (double)j / MP_ODE_EVENT_SUBDIV;
@@ -619,12 +621,12 @@ static int ev_step(ode_run *s, double t, double h, int first, double *s_stop, lo
         }
         int rc = o->events(t + s1 * h, y1, g_sub, o->events_data);
         if (rc != MP_OK) return rc;
-        for (size_t k = 0; s->imps && k < ne; k++) { /* before ytmp is overwritten below */
+        for (size_t k = 0; any_inner && k < ne; k++) { /* before ytmp is overwritten below */
             const mp_impact *im = ev_impact(s, k);
             double wv[3];
-            if (!im) continue;
-            s->rho_sub[k] = j == MP_ODE_EVENT_SUBDIV ? s->rho_end[k]
-                          : s->inner[k] ? ev_rho(s, im, t + s1 * h, y1, wv) : NAN;
+            if (im && s->inner[k])
+                s->rho_sub[k] = j == MP_ODE_EVENT_SUBDIV ? s->rho_end[k]
+                                                         : ev_rho(s, im, t + s1 * h, y1, wv);
         }
         for (size_t k = 0; k < ne; k++) {
             if (!isfinite(g_sub[k])) {
@@ -670,7 +672,8 @@ static int ev_step(ode_run *s, double t, double h, int first, double *s_stop, lo
                 }
             }
             g_old[k] = g_sub[k];
-            if (im) s->rho_old[k] = s->rho_sub[k];
+            /* (rho inside the step is read only where inner: set there) */
+            if (im) s->rho_old[k] = j == MP_ODE_EVENT_SUBDIV ? s->rho_end[k] : s->rho_sub[k];
         }
     }
     qsort(s->hits, nh, sizeof *s->hits, ev_cmp);
@@ -759,6 +762,7 @@ static int rest_enter(ode_run *s, size_t k, double t, double t_left)
     s->rprob.blocks = NULL;
     s->rprob.replayable = 0;
     s->w.p = &s->rprob;
+    s->o = &s->swo; /* the lift-off among the events */
     if (t_left > 0.0) {
         s->acc_k = (long)k;
         s->acc_t = t + t_left;
@@ -797,6 +801,7 @@ static int rest_leave(ode_run *s, double t, double *y)
     if (s->acc_k >= 0) rc = rest_record_accumulation(s, t, 0.0, t);
     s->resting = -1;
     s->w.p = &s->prob;
+    s->o = s->k_sw >= 0 ? &s->swo : s->user;
     if (rc == MP_OK) rc = push_event(s->r, k, t, y);
     return rc == MP_OK ? push_rest(s->r, k, t) : rc;
 }
@@ -831,7 +836,7 @@ static int check_args(const mp_ode_method *m, const mp_ode_problem *p, double t0
  * was allocated is freed by free_run and mp_ode_result_free). */
 static int alloc_events(ode_run *s)
 {
-    size_t ne = s->o->n_events, nu = s->user->n_events;
+    size_t ne = s->k_lift >= 0 ? s->swo.n_events : s->o->n_events, nu = s->user->n_events;
     mp_ode_result *r = s->r;
     if (!ne) return MP_OK;
     r->ev_count = calloc(ne, sizeof(size_t));
@@ -1377,7 +1382,9 @@ static int driver_options(ode_run *s)
     s->swo.has_action = s->sw_act;
     s->swo.action = drv_action;
     s->swo.action_data = s;
-    s->o = &s->swo;
+    /* the lift-off alone is looked for only while a body rests (rest_enter):
+     * until then the caller's events as they are */
+    if (s->k_sw >= 0) s->o = &s->swo;
     return MP_OK;
 }
 

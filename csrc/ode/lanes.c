@@ -221,7 +221,9 @@ static double lane_interp(const lane_group *g, int l, size_t c, double s)
 
 /* impact im's wall for lane l at s (time dir s): w[0..2] (its parameters
  * the lane's, at stride W) */
-static void lane_wall(const lane_group *g, int l, const mp_impact *im, double s, double *w)
+static inline __attribute__((always_inline)) void lane_wall(const lane_group *g, int l,
+                                                            const mp_impact *im, double s,
+                                                            double *w)
 {
     mp_impact_wall(im, g->dir * s, g->par + l, W, w);
 }

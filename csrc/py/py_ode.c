@@ -494,8 +494,8 @@ static PyObject *array_from(const double *src, int nd, const npy_intp *shape)
 
 /* Contract: r's event lists as Python: one triple (t (c,), y (c, n), rests)
  * per event function, rests the times its body came to rest on a wall and
- * lifted off, alternating ((0,) for an event that never rested).  NULL with
- * an exception set. */
+ * lifted off, alternating (None for an event that never rested: no array
+ * for each of an ensemble's many trajectories).  NULL with an exception set. */
 static PyObject *event_lists(const mp_ode_result *r)
 {
     PyObject *lst = PyList_New((Py_ssize_t)r->n_events);
@@ -506,7 +506,7 @@ static PyObject *event_lists(const mp_ode_result *r)
         npy_intp e1[1] = {c}, e2[2] = {c, (npy_intp)r->n}, e3[1] = {cr};
         PyObject *et = array_from(c ? r->ev_t[q] : NULL, 1, e1);
         PyObject *ey = array_from(c ? r->ev_y[q] : NULL, 2, e2);
-        PyObject *er = array_from(cr ? r->rs_t[q] : NULL, 1, e3);
+        PyObject *er = cr ? array_from(r->rs_t[q], 1, e3) : Py_NewRef(Py_None);
         PyObject *trip = (et && ey && er) ? Py_BuildValue("(NNN)", et, ey, er) : NULL;
         if (!trip) {
             Py_XDECREF(et);
