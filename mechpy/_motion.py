@@ -4,8 +4,14 @@ scene, the samples of a solution, and the places of the bodies.
 :func:`mechpy.plot.animate` draws these with matplotlib and
 :func:`mechpy.live.animate` with three.js; both take their geometry from here.
 Frames: x to the right and y up for the planar pendulums (angles from the
-downward vertical); x east, y north, z up for the Foucault pendulum; the
-space frame of the top (z up) and of the free body.
+downward vertical) and for a particle (one coordinate: its height, y up);
+x east, y north, z up for the Foucault pendulum; the space frame of the top
+(z up) and of the free body.
+
+A solution with jumps (an event's action, :mod:`mechpy.events`) has the state
+before and the state after each action at the same time: ``sol.t`` is
+monotonic, not strictly, and a time it holds twice shows the state after the
+action (:func:`after_jumps`, :func:`resample`; ``sol.sol`` gives it too).
 """
 from __future__ import annotations
 
@@ -17,12 +23,12 @@ from .integrate import solve
 from .rigid import nutation_bounds
 from .rotation import euler_matrix, matrix_from_quat
 
-KINDS = ("pendulum", "double_pendulum", "foucault", "top", "rigid", "chain")
+KINDS = ("pendulum", "double_pendulum", "foucault", "top", "rigid", "chain", "particle")
 #: the kinds that draw one scene class
 TYPED = {"foucault": "Foucault", "top": "HeavyTop", "rigid": "RigidBody", "chain": "SpringChain"}
 #: the default trail of each kind, as a fraction of the time span
 DEFAULT_TRAIL = {"pendulum": 0.2, "double_pendulum": 0.2, "foucault": np.inf, "top": np.inf,
-                 "rigid": 0.25, "chain": 0.0}
+                 "rigid": 0.25, "chain": 0.0, "particle": 0.2}
 
 
 def kind_of(system, kind) -> str:
@@ -43,6 +49,8 @@ def kind_of(system, kind) -> str:
             return "double_pendulum"
         if dim == 2 and ({"length"} & set(names) or {"l"} & set(names)):
             return "pendulum"
+        if particle_coordinates(system):
+            return "particle"
         raise TypeError(f"animate cannot tell what to draw for a {type(system).__name__}: "
                         f"give kind, one of {KINDS}")
     if not isinstance(kind, str) or kind not in KINDS:
@@ -50,6 +58,10 @@ def kind_of(system, kind) -> str:
     if kind in TYPED and not isinstance(system, getattr(S, TYPED[kind])):
         raise TypeError(f"kind={kind!r} draws a mp.scenes.{TYPED[kind]}, "
                         f"got {type(system).__name__}")
+    if kind == "particle" and not particle_coordinates(system):
+        raise TypeError("kind='particle' draws a system whose state is (q, v) with one or two "
+                        f"coordinates q (its coordinates: {getattr(system, 'coordinates', None)}, "
+                        f"{dim} states)")
     need = {"pendulum": 2, "double_pendulum": 4}.get(kind)
     if need is not None and dim != need:
         raise TypeError(f"kind={kind!r} needs a system of {need} states (angles from the "
@@ -79,28 +91,63 @@ def samples(system, sol, t):
     if y.shape[0] != system.dim:
         raise ValueError(f"sol.y has {y.shape[0]} rows but a {type(system).__name__} has "
                          f"{system.dim} states: the state axis comes first, (n, m)")
+    # a time held twice is an action's (the states before and after it): t
+    # is monotonic, strictly between the jumps
     dt = np.diff(tt)
-    if not (np.all(dt > 0) or np.all(dt < 0)):
-        raise ValueError("t must be strictly monotonic")
+    if not (np.any(dt != 0) or tt.size == 1) or not (np.all(dt >= 0) or np.all(dt <= 0)):
+        raise ValueError("t must be monotonic (a time held twice: the states before and after "
+                         "an action), and span an interval")
     return tt, y
+
+
+def after_jumps(t, idx):
+    """The sample indices ``idx`` moved to the last sample of their time, in
+    the order of the solve: at an action's time, the state after it."""
+    u = t if t[-1] >= t[0] else -t
+    return np.searchsorted(u, u[np.asarray(idx)], side="right") - 1
+
+
+def particle_coordinates(system) -> list:
+    """The coordinates' names of a particle to draw, else []: a compiled
+    system's state (q, v) with one or two coordinates q (``mp.lagrangian``'s
+    ``coordinates``; ``mp.equations`` names every state, the first half are
+    the coordinates, as :func:`mechpy.events.impact` reads them)."""
+    names = list(getattr(system, "coordinates", None) or ())
+    if len(names) == system.dim and system.dim % 2 == 0:
+        names = names[:system.dim // 2]
+    return names if 1 <= len(names) <= 2 and system.dim == 2 * len(names) else []
+
+
+def particle_places(y):
+    """The particle's places (3, m): one coordinate q at (0, q, 0), its height
+    (y up); two at (q1, q2, 0)."""
+    nq = y.shape[0] // 2
+    z = np.zeros(y.shape[1])
+    return np.stack([z, y[0], z]) if nq == 1 else np.stack([y[0], y[1], z])
 
 
 def resample(system, t, y, times):
     """States at ``times`` (within [t[0], t[-1]]) from samples ``(t, y)``: the
     cubic Hermite interpolant through the states and the system's own
     derivatives ``system.rhs`` at the samples (4th order in the spacing);
-    exact at the samples themselves.  One sample: that state."""
+    exact at the samples themselves.  One sample: that state.  With jumps (a
+    time held twice) each interval is one piece's, and an action's time
+    gives the state after it (in the order of the solve)."""
     if t.size == 1:
         return np.repeat(y, len(times), axis=1)
-    if t[0] > t[-1]:
-        t, y = t[::-1], y[:, ::-1]
-    times = np.clip(times, t[0], t[-1])
-    k = np.clip(np.searchsorted(t, times, side="right") - 1, 0, t.size - 2)
+    sign = 1.0 if t[-1] >= t[0] else -1.0
+    u, w = sign * t, sign * np.asarray(times, dtype=float)  # increasing, ties in solve order
+    w = np.clip(w, u[0], u[-1])
+    k = np.searchsorted(u, w, side="right") - 1             # the last sample at or before
+    # the end itself: the interval before it (a jump there: its last sample)
+    k = np.where(k >= t.size - 1, np.searchsorted(u, u[-1], side="left") - 1, k)
+    k = np.clip(k, 0, t.size - 2)
     f = np.zeros_like(y)
     for j in np.unique(np.concatenate([k, k + 1])):      # only where an interval is used
         f[:, j] = system.rhs(float(t[j]), y[:, j])
     h = t[k + 1] - t[k]
-    s = (times - t[k]) / h
+    times = sign * w
+    s = np.divide(times - t[k], h, out=np.ones_like(h), where=h != 0)
     h00, h10 = (1 + 2 * s) * (1 - s) ** 2, s * (1 - s) ** 2
     h01, h11 = s * s * (3 - 2 * s), s * s * (s - 1)
     return (h00 * y[:, k] + h10 * h * f[:, k] + h01 * y[:, k + 1] + h11 * h * f[:, k + 1])

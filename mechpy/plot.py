@@ -718,8 +718,37 @@ def _chain(ax, system, t, y, trail, lengths):
     return update
 
 
+def _particle(ax, system, t, y, trail, lengths):
+    """The particle at its place (one coordinate: its height, drawn up), with a
+    fading trail."""
+    P = _motion.particle_places(y)
+    one = y.shape[0] == 2
+    names = _motion.particle_coordinates(system)
+    if one:
+        lo, hi = float(P[1].min()), float(P[1].max())
+        pad = 0.08 * (hi - lo or 1.0)
+        ax.set_xlim(-0.5 * (hi - lo or 1.0), 0.5 * (hi - lo or 1.0))
+        ax.set_ylim(lo - pad, hi + pad)
+        ax.set_xticks([])
+        ax.set_ylabel(f"{names[0]} (up)")
+    else:
+        r = float(np.max(np.abs(P[:2]))) * 1.15 or 1.0
+        _square_view(ax, r, names[0], names[1])
+    ax.set_title(f"particle: ({', '.join(names)}) and its trail")
+    tr = _trail(ax, "tab:orange")
+    (dot,) = ax.plot([], [], "o", color="tab:blue", ms=10, gid="particle", zorder=3)
+    first = _window(t, trail)
+
+    def update(k):
+        dot.set_data(P[0, k:k + 1], P[1, k:k + 1])
+        _fade(tr, P[:2, first(k):k + 1].T)
+        return dot, tr
+    return update
+
+
 _DRAW = {"pendulum": _planar_pendulum, "double_pendulum": _planar_pendulum,
-         "foucault": _foucault, "top": _top, "rigid": _rigid, "chain": _chain}
+         "foucault": _foucault, "top": _top, "rigid": _rigid, "chain": _chain,
+         "particle": _particle}
 
 
 def _save(anim, path, fps):
@@ -773,6 +802,16 @@ def animate(system, sol, *, kind=None, t=None, frames=None, fps=20, trail=None, 
         against the mass index (markers), for linear springs the exact
         normal-mode superposition of :meth:`mechpy.modes.Modes.evolve` from the
         first sample (dashed), and the masses moving along the chain beneath.
+    ``"particle"``
+        a compiled system (:func:`mechpy.equations`, :func:`mechpy.lagrangian`)
+        whose state is (q, v) with one or two coordinates: the point at
+        (0, q), its height drawn up (a bouncing ball), or at (q1, q2), with
+        a fading trail.
+
+    A solution with jumps (events with an action, :mod:`mechpy.events`) is
+    drawn as it is: its samples hold the states before and after each
+    action at the same time, and a frame at that time shows the state after
+    it.
 
     Parameters
     ----------
@@ -784,12 +823,14 @@ def animate(system, sol, *, kind=None, t=None, frames=None, fps=20, trail=None, 
         to be shown (``t_eval``): frames show samples, not interpolants.
     kind : str, optional
         One of ``"pendulum"``, ``"double_pendulum"``, ``"foucault"``, ``"top"``,
-        ``"rigid"``, ``"chain"``.
+        ``"rigid"``, ``"chain"``, ``"particle"``.
     t : array_like, shape (m,), optional
-        The times of an array ``sol`` (s); strictly monotonic.
+        The times of an array ``sol`` (s); monotonic (a time held twice: the
+        states before and after an action).
     frames : int, optional
         Frames drawn: frame i shows sample ``anim.samples[i]``, the samples
-        evenly spread over ``sol`` (default ``min(m, 200)``).
+        evenly spread over ``sol`` (default ``min(m, 200)``; at an action's
+        time the sample after it).
     fps : float
         Frames per second when played or saved.
     trail : float, optional
@@ -855,7 +896,9 @@ def animate(system, sol, *, kind=None, t=None, frames=None, fps=20, trail=None, 
             raise ValueError(f"ax must be {'a 3-D' if three_d else 'a 2-D'} Axes for "
                              f"kind={kind!r}")
         fig = ax.figure
-    samples = np.unique(np.linspace(0, m - 1, frames).round().astype(np.intp))
+    # a frame at an action's time (a time held twice) shows the state after it
+    samples = np.unique(_motion.after_jumps(tt, np.linspace(0, m - 1, frames).round()
+                                            .astype(np.intp)))
     update = _DRAW[kind](ax, system, tt, y, trail, lengths)
     clock = (ax.text2D if three_d else ax.text)(0.98, 0.98, "", transform=ax.transAxes,
                                                 ha="right", va="top", gid="time")

@@ -1190,8 +1190,31 @@ def test_missing_parameter_is_named():
     L, q = double_pendulum_L()
     with pytest.raises(ValueError, match=r"\['l2', 'm2'\] have no value"):
         mp.lagrangian(L, q, params=dict(m1=1.0, l1=1.0, g=G))
-    with pytest.raises(ValueError, match="name no symbol"):
-        mp.lagrangian(L, q, params=dict(DP, mass=1.0))
+    # a misspelt name leaves the symbol it was meant for without a value: the
+    # message names both
+    bad = {("M2" if k == "m2" else k): v for k, v in DP.items()}
+    with pytest.raises(ValueError, match=r"\['m2'\] have no value.*\['M2'\], which no "
+                                         r"expression of the system uses: misspelt\?"):
+        mp.lagrangian(L, q, params=bad)
+    # a name of a coordinate or the time is no parameter
+    with pytest.raises(ValueError, match="'theta1' names a state"):
+        mp.lagrangian(L, q, params=dict(DP, theta1=1.0))
+    with pytest.raises(ValueError, match="'t' names the time"):
+        mp.lagrangian(L, q, params=dict(DP, t=1.0))
+
+
+def test_parameter_no_expression_uses_is_a_parameter():
+    """A name no expression uses is a parameter all the same (an event's
+    restitution may be its only reader): it keeps its place in scene.params
+    and in solve_many's rows, and the motion is the one without it."""
+    L, q = double_pendulum_L()
+    s = mp.lagrangian(L, q, params=dict(DP, mass=3.0))
+    assert list(s.params) == list(DP) + ["mass"] and s.params["mass"] == 3.0
+    ref = mp.lagrangian(L, q, params=DP)
+    y0 = [0.5, -0.3, 0.0, 0.2]
+    a = mp.solve(s, (0, 1), y0, rtol=1e-10, atol=1e-12)
+    b = mp.solve(ref, (0, 1), y0, rtol=1e-10, atol=1e-12)
+    assert np.array_equal(a.y, b.y)
 
 
 def test_coordinate_missing_from_L():

@@ -209,7 +209,7 @@ def test_bad_input():
         (lambda: a(p, np.zeros((3, 3)), t=[0, 1, 2]), ValueError, "2 states"),
         (lambda: a(p, np.zeros((2, 3))), ValueError, "give its times t"),
         (lambda: a(p, np.zeros((2, 3)), t=[0, 1]), ValueError, "3 samples"),
-        (lambda: a(p, np.zeros((2, 3)), t=[0, 1, 1]), ValueError, "monotonic"),
+        (lambda: a(p, np.zeros((2, 3)), t=[0, 2, 1]), ValueError, "monotonic"),
         (lambda: a(p, np.zeros((2, 0)), t=[]), ValueError, "empty"),
         (lambda: a(p, np.full((2, 3), np.nan), t=[0, 1, 2]), ValueError, "finite"),
         (lambda: a(p, "sol"), TypeError, "sol must be a Solution"),

@@ -279,7 +279,7 @@ def test_animate_bad_input():
         (lambda: mp.plot.animate(p, np.zeros((2, 0)), t=[]), ValueError, "empty"),
         (lambda: mp.plot.animate(p, np.zeros((2, 3))), ValueError, "give its times t"),
         (lambda: mp.plot.animate(p, np.zeros((3, 3)), t=[0, 1, 2]), ValueError, "2 states"),
-        (lambda: mp.plot.animate(p, np.zeros((2, 3)), t=[0, 1, 1]), ValueError, "monotonic"),
+        (lambda: mp.plot.animate(p, np.zeros((2, 3)), t=[0, 2, 1]), ValueError, "monotonic"),
         (lambda: mp.plot.animate(p, np.zeros((2, 3)), t=[0, 1]), ValueError, "3 samples"),
         (lambda: mp.plot.animate(p, "sol"), TypeError, "sol must be a Solution"),
         (lambda: mp.plot.animate(p, sol, frames=0), ValueError, "frames"),

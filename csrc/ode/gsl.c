@@ -156,6 +156,28 @@ static int gsl_step(mp_ode_ws *w, double t, double h, double *err)
     return MP_OK;
 }
 
+/* Contract: forget every history GSL keeps between steps, as at the start of a
+ * solve; the driver calls it after an action has replaced the state (ode.h's
+ * restart).  Two histories would otherwise carry the state before the jump
+ * into the first step after it:
+ *   - gsl_odeiv2_evolve_apply takes f at a step's start from the previous
+ *     step's end (dydt_out) once it has taken a step (its count > 0): the
+ *     first stage of an explicit row would use f before the action;
+ *   - msadams and msbdf continue from their Nordsieck history, not from the
+ *     y they are given.
+ * gsl_odeiv2_driver_reset resets the evolve object (count 0: f is evaluated
+ * at the new state) and the stepper (msadams/msbdf start again at order 1).
+ * The driver has made w->f = f(t, y) current; the interpolant's step cap is
+ * measured afresh from the new state. */
+static void gsl_restart(mp_ode_ws *w)
+{
+    gsl_state *st = w->state;
+    if (!st || !st->d) return;
+    gsl_odeiv2_driver_reset(st->d);
+    st->f_stale = 0;
+    st->h_cap = 0.0;
+}
+
 /* Contract: the quintic Hermite interpolant of [t, t + h] in the driver's
  * nested form from y, f at both ends (w) and at the midpoint (ym, fm): the
  * cubic Hermite part plus s^2 (1-s)^2 (c5 + s c6), whose value and slope at

@@ -194,6 +194,21 @@ def _chain(system, Y, spacing):
                 title=f"spring chain of {N} masses along x (units of x; spacing {sp:.4g})")
 
 
+def _particle(system, Y):
+    P = _motion.particle_places(Y)                                 # (3, frames)
+    names = _motion.particle_coordinates(system)
+    one = Y.shape[0] == 2
+    lo, hi = P.min(axis=1), P.max(axis=1)
+    r = float(np.max(hi - lo)) or 1.0
+    bodies = [_body("particle", _BLUE, 0.04 * r)]
+    lines = ([_polyline([[-0.3 * r, 0, 0], [0.3 * r, 0, 0]], _DARK, f"{names[0]} = 0")]
+             if one else [])
+    return dict(P=P.T[:, None, :], bodies=bodies, rods=[], lines=lines, up=[0, 1, 0], trail=[0],
+                center=(0.5 * (lo + hi)).tolist(), extent=0.7 * r, camera=[0.0, 0.0, 1.0],
+                title=(f"particle: its height {names[0]} (y up)" if one else
+                       f"particle: ({names[0]}, {names[1]}) in the plane"))
+
+
 def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0, trail=None,
             lengths=None, spacing=None) -> Motion:
     r"""The motion of a solution in 3D, in the browser (three.js).
@@ -228,11 +243,19 @@ def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0,
     ``"chain"``
         :class:`~mechpy.scenes.SpringChain`: mass i (from 1) at
         :math:`i\,s + x_i` along x, with springs and, for fixed ends, walls.
+    ``"particle"``
+        a compiled system whose state is (q, v) with one or two coordinates:
+        the point at (0, q, 0), its height up (a bouncing ball), or at
+        (q1, q2, 0), with its trail.
 
     The frames are the states at ``duration * fps + 1`` times evenly spread
     over the solution's span: from ``sol.sol`` (dense output) when the
     solution has it, else the cubic Hermite interpolant through the samples
-    and the system's derivatives there.  The page plays them with an orbit
+    and the system's derivatives there.  A solution with jumps (events with
+    an action, :mod:`mechpy.events`) is played piece by piece: its samples
+    hold the states before and after each action at the same time, its
+    dense output is one piece per interval between actions, and a frame at
+    an action's time shows the state after it.  The page plays them with an orbit
     camera, play/pause, a time slider and a speed slider, and exposes
     ``window.mechpyLive``: ``play()``, ``pause()``, ``frame(i)``, ``frames()``,
     ``time()``, ``positions()`` (the places of :attr:`Motion.bodies` at the
@@ -248,9 +271,10 @@ def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0,
         frames come from its interpolant), or states (n, m) with ``t``.
     kind : str, optional
         One of ``"pendulum"``, ``"double_pendulum"``, ``"foucault"``,
-        ``"top"``, ``"rigid"``, ``"chain"``.
+        ``"top"``, ``"rigid"``, ``"chain"``, ``"particle"``.
     t : array_like, shape (m,), optional
-        The times of an array ``sol``; strictly monotonic.
+        The times of an array ``sol``; monotonic (a time held twice: the
+        states before and after an action).
     fps : float
         Frames per second of the playback at speed 1 (at most 120).
     duration : float, optional
@@ -320,6 +344,8 @@ def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0,
         d = _top(system, Y)
     elif kind == "rigid":
         d = _rigid(system, times, Y)
+    elif kind == "particle":
+        d = _particle(system, Y)
     else:
         d = _chain(system, Y, spacing)
     n, nb = d["P"].shape[:2]

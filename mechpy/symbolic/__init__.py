@@ -194,7 +194,11 @@ def lagrangian(L, q, params=None, constraints=(), forces=None, *, baumgarte=None
     params : dict
         A value for every free symbol other than t, keyed by the symbol's
         name; their order is the order of ``scene.params`` and of the rows of
-        ``mp.solve_many(..., params=...)``.
+        ``mp.solve_many(..., params=...)``.  A name that no expression uses
+        is a parameter all the same, for an event to read (a restitution,
+        ``mp.events.impact(..., restitution="e")``), as SciPy's ``args``
+        carry what only an event function reads; a misspelt name is caught
+        where the symbol it was meant for is then left without a value.
     constraints : sequence of sympy.Expr
         Holonomic constraints g(q, t) = 0.  ``mp.solve`` checks that y0
         satisfies them (g and g') before it integrates.
@@ -223,7 +227,9 @@ def lagrangian(L, q, params=None, constraints=(), forces=None, *, baumgarte=None
     Raises
     ------
     ValueError
-        A free symbol without a value (named), a coordinate absent from L, a
+        A free symbol without a value (named, with the names in ``params``
+        that no expression uses: a misspelling), a name in ``params`` that is
+        a coordinate's or t, a coordinate absent from L, a
         wrong number of forces, a velocity-dependent constraint, or an
         expression that cannot be compiled, named with where it is.  The
         expressions may hold numbers and SymPy's constants (printed as
@@ -282,7 +288,9 @@ def equations(rhs, y, params=None, *, energy=None, backend: str = "c"):
     y : sequence of states
         From :func:`coordinates` (functions of t) or plain SymPy symbols.
     params : dict
-        A value for every free symbol other than t, keyed by name.
+        A value for every free symbol other than t, keyed by name; a name no
+        expression uses is a parameter all the same, for an event to read
+        (see :func:`lagrangian`).
     energy : sympy.Expr, optional
         A conserved quantity to expose as ``scene.energy(y)``.
     backend : {"c", "numba", "numpy"}
@@ -299,7 +307,9 @@ def equations(rhs, y, params=None, *, energy=None, backend: str = "c"):
     Raises
     ------
     ValueError
-        A free symbol without a value, a wrong number of expressions, or an
+        A free symbol without a value (named, with the names in ``params``
+        that no expression uses), a name in ``params`` that is a state's or t,
+        a wrong number of expressions, or an
         expression that cannot be compiled, named: the expressions may hold
         what :func:`lagrangian` lists (numbers and constants, ``+``, ``*``, powers,
         Piecewise, the elementary functions, erf, erfc, ...); an ``Eq`` in

@@ -128,9 +128,17 @@ def _name(qi):
     return qi.func.__name__ if isinstance(qi, sp.core.function.AppliedUndef) else qi.name
 
 
-def _params(params, exprs, t, allowed_extra=()):
+def _params(params, exprs, t, allowed_extra=(), states=()):
     """Parameter symbols in the order of ``params``; checks every free symbol
-    has a value, every key names a symbol, and no two symbols share a name."""
+    has a value and no two symbols share a name.
+
+    A key that names no symbol of the expressions is a parameter all the same
+    (an event may be its only reader: ``mp.events.impact(..., restitution="e")``),
+    bound to a plain Symbol of that name that no expression holds.  A
+    misspelt key is caught where it can be told apart: the symbol it was meant
+    for is then left without a value, and the message names the keys no
+    expression uses.  A key that names one of ``states`` (the states'
+    names) or the time ``t`` is refused: those are not parameters."""
     if params is None:
         params = {}
     if not isinstance(params, dict):
@@ -149,17 +157,24 @@ def _params(params, exprs, t, allowed_extra=()):
                 "different symbols, a parameter is one value; make every "
                 f"{s.name!r} the same symbol")
     missing = sorted(set(by_name) - set(params))
+    unused = [k for k in params if k not in by_name]
     if missing:
         hint = (" (the time is sympy.Symbol('t') with no assumptions, as mp.coordinates "
                 "uses it)" if "t" in missing else "")
+        if unused:
+            hint += (f"; params names {unused}, which no expression of the system uses: "
+                     "misspelt?")
         raise ValueError(f"symbol(s) {missing} have no value: give them in params "
                          f"(params={{{', '.join(repr(m) + ': ...' for m in missing)}}})"
                          + hint)
-    unknown = [k for k in params if k not in by_name]
-    if unknown:
-        raise ValueError(f"params {unknown} name no symbol of the system "
-                         f"(its symbols: {sorted(by_name)})")
-    return list(params), [by_name[k] for k in params]
+    for k in unused:
+        if k == "t" or k in states:
+            raise ValueError(f"params {k!r} names {'the time' if k == 't' else 'a state'} of "
+                             f"the system, not a parameter (its symbols: {sorted(by_name)})")
+        if _RESERVED.match(k):
+            raise ValueError(f"params {k!r} is a name mechpy reserves for its own variables: "
+                             "rename it")
+    return list(params), [by_name[k] if k in by_name else sp.Symbol(k) for k in params]
 
 
 def _assumptions(s):
@@ -423,7 +438,8 @@ def lagrangian_ir(L, q, params=None, constraints=(), forces=None, baumgarte=None
                              "constraints g(q, t) = 0 are supported")
         if not (set(Q) & g.free_symbols):
             raise ValueError(f"constraints[{i}] does not depend on the coordinates")
-    names, P = _params(params, [Lx] + cx + Fx, T, allowed_extra=Q + U)
+    names, P = _params(params, [Lx] + cx + Fx, T, allowed_extra=Q + U,
+                       states=[_name(qi) for qi in qs])
 
     # Derivatives are taken of the smallest pieces (SymPy's cost grows faster
     # than linearly with an expression's size): F and its Jacobian are
@@ -532,7 +548,7 @@ def equations_ir(rhs, y, params=None, energy=None) -> IR:
 
     fx = [plain(f, f"rhs[{i}]") for i, f in enumerate(fs)]
     ex = [] if energy is None else [plain(sp.sympify(energy), "energy")]
-    names, P = _params(params, fx + ex, T, allowed_extra=Y)
+    names, P = _params(params, fx + ex, T, allowed_extra=Y, states=[_name(x) for x in ys])
     d = _Diff()
     J = [d(fx[i], Y[j]) for i in range(n) for j in range(n)]
     ir = IR("equations", n, n, 0, 0, T, Y, P, [], [_name(x) for x in ys], names)
