@@ -245,20 +245,6 @@ static int gsl_finish(mp_ode_ws *w, double t, double h, int need_dense)
     return MP_OK;
 }
 
-/* Contract: after an action replaced the state (driver.c's apply_action, with
- * w->f f at the new state): GSL's own memory forgotten, as at a start (the
- * multistep rows' history, the evolve's and control's last step, the
- * interpolant's step cap), so that the next step starts from the new state
- * alone. */
-static void gsl_restart(mp_ode_ws *w)
-{
-    gsl_state *st = w->state;
-    gsl_odeiv2_driver_reset(st->d);
-    if (st->half) gsl_odeiv2_step_reset(st->half);
-    st->f_stale = 0;
-    st->h_cap = 0.0;
-}
-
 /* nc: 6 for the one-step rows of order >= 4 (quintic interpolant), 4 for the
  * low-order and multistep rows, whose short steps keep the cubic within
  * their own error (a low-order midpoint would not help a quintic) */
