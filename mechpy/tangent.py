@@ -26,6 +26,11 @@ t = 10, atol = rtol / 100) against ``scipy.linalg.expm``: S's error relative to 
 the plain solve's 9.4e-7, 9.4e-9, 8.3e-11), for one or two more steps than the plain solve:
 the sensitivities come out as accurate as the state, so no separate scaling is applied.
 
+Events.  With ``events`` carrying actions (:func:`mechpy.events.impact`, or a Python
+action with its Jacobian ``action.jac``), the event functions and actions run on y with
+the system's own indices and S jumps at each event by the saltation matrix
+(:func:`sensitivity`'s ``events``); ``fit`` takes the same events.
+
 ``mechpy.phase.lyapunov_spectrum`` and ``mechpy.phase.floquet`` are built on the same
 augmented system.  Ensembles of sensitivities (``y0`` of shape (K, n)) run as one
 ``mp.solve_many`` ensemble.
@@ -480,6 +485,21 @@ def sensitivity(system, t_span, y0, params=(), *, t_eval=None, method: str = "do
     ...                    params=("damping",), t_eval=[1.0])
     >>> s.S.shape
     (2, 3, 1)
+
+    Through an impact: a ball dropped from h0 = 1 m lands at t1 = sqrt(2 h0 / g) with
+    speed V = sqrt(2 g h0) and leaves at e V; at T = 0.7 s, dx/dh0 = -e + (1 + e) g
+    (T - t1) / V and dv/dh0 = (1 + e) g / V (the free fall's would be 1 and 0).
+
+    >>> import sympy as sp
+    >>> x, v = mp.coordinates("x v")
+    >>> ball = mp.equations([v, -sp.Symbol("g")], [x, v], params={"g": 9.81})
+    >>> s = mp.sensitivity(ball, (0, 0.7), [1.0, 0.0], t_eval=[0.7], rtol=1e-12,
+    ...                    atol=1e-12, events=mp.events.impact("x", restitution=0.8))
+    >>> s.S[:, 0, -1].round(10).tolist()                   # d(x, v)/dh0
+    [0.1905515584, 3.9865022263]
+    >>> V, t1 = np.sqrt(2 * 9.81), np.sqrt(2 / 9.81)
+    >>> [round(float(-0.8 + 1.8 * 9.81 * (0.7 - t1) / V), 10), round(float(1.8 * 9.81 / V), 10)]
+    [0.1905515584, 3.9865022263]
     """
     names = _param_names(system, params)
     y0 = as_array(y0, "y0", min_ndim=1)
