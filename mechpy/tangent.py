@@ -225,7 +225,7 @@ def _check(s, what: str):
         raise ConvergenceError(f"{what}: the integration failed: {s.message}")
 
 
-# ---- events: the jump of the sensitivities -----------------------------------------------
+# ---- events: the jump of the sensitivities --------------------------------------------
 class _AugEvent:
     """One event of the augmented solve (y, S): the event function and its action read
     the original state y = z[:n] (an impact's coordinate by its original index); the
