@@ -26,6 +26,11 @@ t = 10, atol = rtol / 100) against ``scipy.linalg.expm``: S's error relative to 
 the plain solve's 9.4e-7, 9.4e-9, 8.3e-11), for one or two more steps than the plain solve:
 the sensitivities come out as accurate as the state, so no separate scaling is applied.
 
+Events.  With ``events`` carrying actions (:func:`mechpy.events.impact`, or a Python
+action with its Jacobian ``action.jac``), the event functions and actions run on y with
+the system's own indices and S jumps at each event by the saltation matrix
+(:func:`sensitivity`'s ``events``); ``fit`` takes the same events.
+
 ``mechpy.phase.lyapunov_spectrum`` and ``mechpy.phase.floquet`` are built on the same
 augmented system.  Ensembles of sensitivities (``y0`` of shape (K, n)) run as one
 ``mp.solve_many`` ensemble.
@@ -41,7 +46,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ._validate import as_array, as_int, as_scalar
-from .errors import ConvergenceError
+from .errors import ConvergenceError, EventError
 from .integrate import Solution, solve, solve_many
 from .scenes import Scene, _row
 
@@ -220,9 +225,198 @@ def _check(s, what: str):
         raise ConvergenceError(f"{what}: the integration failed: {s.message}")
 
 
+# ---- events: the jump of the sensitivities --------------------------------------------
+class _AugEvent:
+    """One event of the augmented solve (y, S): the event function and its action read
+    the original state y = z[:n] (an impact's coordinate by its original index); the
+    action replaces y and jumps S by the saltation matrix (``_saltation``).
+
+    ``terminal``, ``direction`` and ``max_events`` are the user's event's; ``action`` is
+    None for an event without one (the sensitivities then pass it unchanged)."""
+
+    def __init__(self, g, n, src, action=None):
+        self._g = g
+        self._n = n
+        self.terminal = getattr(src, "terminal", False)
+        self.direction = getattr(src, "direction", 0)
+        most = getattr(src, "max_events", None)
+        if most is not None:
+            self.max_events = most
+        self.action = action
+
+    def __call__(self, t, z, *args):
+        return self._g(t, np.asarray(z)[:self._n], *args)
+
+
+def _saltation(t, S, A, a_t, gy, g_t, fm, fp, what):
+    r"""S just after an event: :math:`S^+ = A S^- - (f^+ - A f^- - a_t)\,d\tau/dz` with
+    :math:`d\tau/dz = -(g_y S^-)/(g_t + g_y f^-)`, A = D_y a, a_t = D_t a, the
+    gradient (g_t, g_y) of the event function at the crossing and f^-, f^+ the field
+    before and after the action.  (An event later by d tau meets the state
+    y^- + f^- d tau, leaves a(y^-) + (A f^- + a_t) d tau, which at the event's own time
+    is that minus f^+ d tau.)  A crossing with g_t + g_y f^- = 0 (grazing) has no finite
+    event-time derivative: EventError."""
+    den = g_t + gy @ fm
+    scale = abs(g_t) + np.abs(gy) @ np.abs(fm)
+    if not np.isfinite(den) or abs(den) <= 1e-13 * scale or scale == 0.0:
+        raise EventError(
+            f"{what} at t = {t:.17g} grazes (dg/dt + grad g . f = {den:.3g}): the event "
+            "time does not depend smoothly on the parameters there, so the sensitivities "
+            "have no jump")
+    dtau = -(gy @ S) / den
+    return A @ S - np.outer(fp - A @ fm - a_t, dtau)
+
+
+def _field(aug, t, y, n):
+    """f(t, y) at the augmented system's bound parameter values (its first n rows)."""
+    z = np.zeros(aug.dim)
+    z[:n] = y
+    return np.asarray(aug.rhs(t, z), dtype=np.float64)[:n]
+
+
+def _jump_of_impact(ev, system, n, cols, values, aug, i):
+    """An impact's event and its action on (y, S): g = side (y[iq] - wall),
+    y[iq] -> wall, y[iv] -> -e y[iv]; D_y a = diag(1, ..., 0 at iq, -e at iv, ...);
+    a restitution that is a differentiated parameter adds dy[iv]+/de = -y[iv]- in its
+    column."""
+    iq, iv = ev._indices(system, n)
+    e = ev.restitution
+    col = None
+    if isinstance(e, str):
+        if e not in values:
+            raise ValueError(f"events[{i}]: impact restitution {e!r} is not a parameter of "
+                             f"the system (its parameters: {list(values)})")
+        col = cols.get(e)
+        name = e
+    elif np.ndim(e) != 0:
+        raise ValueError(f"events[{i}]: a restitution per trajectory (an array) is for "
+                         "mp.solve_many; mp.sensitivity takes a number or a parameter's name")
+    else:
+        name = None
+        e = as_scalar(e, "restitution", nonnegative=True)
+    side, wall = float(ev.side), float(ev.wall)
+    gy = np.zeros(n)
+    gy[iq] = side
+
+    def g(t, y, *args):
+        return side * (float(y[iq]) - wall)
+
+    def action(t, z, *args):
+        z = np.array(z, dtype=np.float64)
+        y, S = z[:n], z[n:].reshape(n, -1)
+        ee = float(values[name]) if name is not None else e
+        yp = y.copy()
+        yp[iv] = -ee * y[iv]
+        yp[iq] = wall
+        A = np.eye(n)
+        A[iq, iq] = 0.0
+        A[iv, iv] = -ee
+        Sp = _saltation(t, S, A, 0.0, gy, 0.0, _field(aug, t, y, n), _field(aug, t, yp, n),
+                        f"events[{i}] (an impact)")
+        if col is not None:
+            Sp[iv, col] -= y[iv]
+        return np.concatenate([yp, Sp.ravel()])
+
+    return _AugEvent(g, n, ev, action)
+
+
+def _event_gradient(ev, t, y, args, n):
+    """(g_t, g_y) of a Python event function: ``ev.grad(t, y, *args)`` (dg/dy, or the
+    pair (dg/dy, dg/dt)) where given, else central differences of g (step
+    1e-6 max(1, |y_j|) in y, 1e-6 max(1, |t|) in t: about 1e-10 relative for a smooth g)."""
+    grad = getattr(ev, "grad", None)
+    if grad is not None:
+        out = grad(t, y, *args)
+        if isinstance(out, tuple):
+            gy, g_t = out
+        else:
+            gy, g_t = out, 0.0
+        gy = np.asarray(gy, dtype=np.float64).reshape(-1)
+        if gy.shape != (n,):
+            raise ValueError(f"event.grad(t, y) must give dg/dy of shape ({n},), got "
+                             f"{np.shape(gy)}")
+        return float(g_t), gy
+    gy = np.empty(n)
+    for j in range(n):
+        h = 1e-6 * max(1.0, abs(y[j]))
+        yp, ym = y.copy(), y.copy()
+        yp[j] += h
+        ym[j] -= h
+        gy[j] = (float(ev(t, yp, *args)) - float(ev(t, ym, *args))) / (2 * h)
+    h = 1e-6 * max(1.0, abs(t))
+    g_t = (float(ev(t + h, y, *args)) - float(ev(t - h, y, *args))) / (2 * h)
+    return g_t, gy
+
+
+def _jump_of_action(ev, action, n, aug, i):
+    """A Python event with an action: the action on y, its Jacobian from ``action.jac``
+    (D_y a, or the pair (D_y a, D_t a)), the event's gradient from ``ev.grad`` or central
+    differences."""
+    jac = getattr(action, "jac", None)
+    if jac is None or not callable(jac):
+        raise TypeError(
+            f"events[{i}] has an action without its Jacobian: the sensitivities jump at the "
+            "event by the saltation matrix, which needs D_y a of the action a(t, y).  Give "
+            "it as action.jac(t, y) -> (n, n) array (or the pair (D_y a, D_t a) when the "
+            "action depends on t), e.g. act.jac = lambda t, y: np.diag([0.0, -0.9])")
+
+    def action_aug(t, z, *args):
+        z = np.array(z, dtype=np.float64)
+        y, S = z[:n].copy(), z[n:].reshape(n, -1)
+        yp = np.asarray(action(t, y.copy(), *args), dtype=np.float64).reshape(-1)
+        if yp.shape != (n,):
+            raise ValueError(f"events[{i}].action(t, y) must return {n} values, got "
+                             f"shape {yp.shape}")
+        out = jac(t, y.copy(), *args)
+        A, a_t = out if isinstance(out, tuple) else (out, 0.0)
+        A = np.asarray(A, dtype=np.float64)
+        if A.shape != (n, n):
+            raise ValueError(f"events[{i}].action.jac(t, y) must give D_y a of shape "
+                             f"({n}, {n}), got {A.shape}")
+        a_t = np.broadcast_to(np.asarray(a_t, dtype=np.float64), (n,))
+        g_t, gy = _event_gradient(ev, t, y, args, n)
+        Sp = _saltation(t, S, A, a_t, gy, g_t, _field(aug, t, y, n), _field(aug, t, yp, n),
+                        f"events[{i}]")
+        return np.concatenate([yp, Sp.ravel()])
+
+    return _AugEvent(ev, n, ev, action_aug)
+
+
+def _aug_events(events, system, n, cols, values, aug):
+    """The events of the augmented solve (y, S), or None: each reads the original state,
+    and each action jumps S by the saltation matrix (:func:`_saltation`).  ``cols`` maps
+    the differentiated parameters to their columns of S, ``values`` the parameters' values
+    (an impact's restitution by name), ``aug`` the bound augmented system (its field)."""
+    if events is None:
+        return None
+    from .events import Impact
+    evs = [events] if callable(events) else events
+    try:
+        evs = list(evs)
+    except TypeError:
+        raise TypeError(f"events must be a callable or a sequence of callables, got "
+                        f"{type(events).__name__}") from None
+    out = []
+    for i, ev in enumerate(evs):
+        if not callable(ev):
+            raise TypeError(f"events[{i}] must be callable")
+        if isinstance(ev, Impact):
+            out.append(_jump_of_impact(ev, system, n, cols, values, aug, i))
+            continue
+        action = getattr(ev, "action", None)
+        if action is None:
+            out.append(_AugEvent(ev, n, ev))
+        elif not callable(action):
+            raise TypeError(f"events[{i}].action must be callable action(t, y) -> y_new, "
+                            f"got {type(action).__name__}")
+        else:
+            out.append(_jump_of_action(ev, action, n, aug, i))
+    return out
+
+
 # ---- sensitivities --------------------------------------------------------------------
 def sensitivity(system, t_span, y0, params=(), *, t_eval=None, method: str = "dop853",
-                rtol: float = 1e-8, atol=1e-10, **solve_kw) -> Solution:
+                rtol: float = 1e-8, atol=1e-10, events=None, **solve_kw) -> Solution:
     r"""The solution and its derivatives with respect to parameters and initial state.
 
     .. math:: S_{ij}(t) = \frac{\partial y_i(t)}{\partial \theta_j}, \qquad
@@ -250,10 +444,29 @@ def sensitivity(system, t_span, y0, params=(), *, t_eval=None, method: str = "do
     t_eval : array_like, optional
         Output times, as in :func:`mechpy.solve` (for an ensemble: default the final
         time only, as :func:`mechpy.solve_many`).
+    events : callable or list of callables, optional
+        As for :func:`mechpy.solve`: each event function sees the system's state y (n
+        values), and at an event with an action the state jumps and S with it, by the
+        saltation matrix
+
+        .. math:: S^+ = A S^- - (f^+ - A f^- - a_t)\,\frac{d\tau}{d\theta}, \qquad
+                  \frac{d\tau}{d\theta} = -\frac{g_y S^-}{g_t + g_y f^-},
+
+        A = D_y a and a_t = D_t a the action's derivatives, (g_t, g_y) the event
+        function's gradient, f^-, f^+ the field before and after.  For
+        :func:`mechpy.events.impact` everything is exact (a restitution given as the
+        name of a differentiated parameter adds its direct term dv+/de = -v-).  A Python
+        action needs its Jacobian as ``action.jac(t, y, *args)``, returning D_y a (n, n)
+        or the pair (D_y a, D_t a) (``TypeError`` without it); the event function's
+        gradient is ``event.grad(t, y, *args)`` (dg/dy, or the pair (dg/dy, dg/dt))
+        where given, else central differences of g (about 1e-10 relative for a smooth
+        g).  An action cannot depend on the system's parameters except an impact's
+        restitution.  A crossing that grazes (g_t + g_y f^- = 0): ``EventError``.
+        ``t_events`` / ``y_events`` as :func:`mechpy.solve` (y before each action).
     method, rtol, atol, **solve_kw
         Passed to :func:`mechpy.solve` (:func:`mechpy.solve_many`) for the augmented
-        system.  With ``dense_output`` or ``events``, ``sol`` and the event functions
-        see the augmented state (y, then S row by row).
+        system.  With ``dense_output``, ``sol`` gives the augmented state (y, then S
+        row by row).
 
     Returns
     -------
@@ -272,6 +485,21 @@ def sensitivity(system, t_span, y0, params=(), *, t_eval=None, method: str = "do
     ...                    params=("damping",), t_eval=[1.0])
     >>> s.S.shape
     (2, 3, 1)
+
+    Through an impact: a ball dropped from h0 = 1 m lands at t1 = sqrt(2 h0 / g) with
+    speed V = sqrt(2 g h0) and leaves at e V; at T = 0.7 s, dx/dh0 = -e + (1 + e) g
+    (T - t1) / V and dv/dh0 = (1 + e) g / V (the free fall's would be 1 and 0).
+
+    >>> import sympy as sp
+    >>> x, v = mp.coordinates("x v")
+    >>> ball = mp.equations([v, -sp.Symbol("g")], [x, v], params={"g": 9.81})
+    >>> s = mp.sensitivity(ball, (0, 0.7), [1.0, 0.0], t_eval=[0.7], rtol=1e-12,
+    ...                    atol=1e-12, events=mp.events.impact("x", restitution=0.8))
+    >>> s.S[:, 0, -1].round(10).tolist()                   # d(x, v)/dh0
+    [0.1905515584, 3.9865022263]
+    >>> V, t1 = np.sqrt(2 * 9.81), np.sqrt(2 / 9.81)
+    >>> [round(float(-0.8 + 1.8 * 9.81 * (0.7 - t1) / V), 10), round(float(1.8 * 9.81 / V), 10)]
+    [0.1905515584, 3.9865022263]
     """
     names = _param_names(system, params)
     y0 = as_array(y0, "y0", min_ndim=1)
@@ -279,21 +507,26 @@ def sensitivity(system, t_span, y0, params=(), *, t_eval=None, method: str = "do
         raise ValueError(f"y0 must have shape ({system.dim},) or (k, {system.dim}), got "
                          f"{y0.shape}")
     aug, pn = _augmented(system, names, True)
-    aug = _bind(aug, pn, _values(system))
+    values = _values(system)
+    aug = _bind(aug, pn, values)
     n, k = system.dim, len(names)
+    evs = _aug_events(events, system, n, {nm: j for j, nm in enumerate(names)}, values, aug)
     S0 = np.zeros((n, k + n))
     S0[:, k:] = np.eye(n)
     if y0.ndim == 2:
         z0 = np.hstack([y0, np.broadcast_to(S0.ravel(), (y0.shape[0], S0.size))])
         e = solve_many(aug, t_span, z0, t_eval=t_eval, method=method, rtol=rtol, atol=atol,
-                       **solve_kw)
+                       events=evs, **solve_kw)
         z = e.y
         e["y"] = np.ascontiguousarray(z[:, :n])
         e["S"] = np.ascontiguousarray(z[:, n:].reshape(z.shape[0], n, k + n, -1))
         e["params"] = list(names)
+        if e.get("y_events") is not None:
+            e["y_events"] = [[np.ascontiguousarray(np.asarray(v)[..., :n]) for v in row]
+                             for row in e["y_events"]]
         return e
     s = solve(aug, t_span, np.concatenate([y0, S0.ravel()]), method, rtol=rtol, atol=atol,
-              t_eval=t_eval, **solve_kw)
+              t_eval=t_eval, events=evs, **solve_kw)
     z = s.y
     out = Solution(s)
     out.__dict__.update(s.__dict__)
@@ -549,7 +782,7 @@ def _observer(observe, n):
 
 def fit(system, t, data, params, *, y0, observe=None, sigma=None, fit_y0=False,
         t0=None, method: str = "dop853", rtol: float = 1e-10, atol: float = 1e-12,
-        bounds=None, loss: str = "linear", max_nfev=None) -> FitResult:
+        bounds=None, loss: str = "linear", max_nfev=None, events=None) -> FitResult:
     r"""Fit parameters (and initial state) of a system to sampled data by least squares.
 
     .. math:: \min_\theta\ \sum_{i,j}\left(\frac{h_i(\mathbf y(t_j; \theta)) - d_{ij}}
@@ -597,6 +830,11 @@ def fit(system, t, data, params, *, y0, observe=None, sigma=None, fit_y0=False,
         standard errors then are those of the linearised problem).
     max_nfev : int, optional
         Budget of residual evaluations.
+    events : callable or list of callables, optional
+        Events with actions (:func:`mechpy.events.impact`, Python actions with their
+        ``action.jac``), as for :func:`sensitivity`: the Jacobian jumps with the state,
+        so a restitution that is a parameter of the system (``impact(...,
+        restitution="e")``) can be fitted.
 
     Returns
     -------
@@ -693,6 +931,10 @@ def fit(system, t, data, params, *, y0, observe=None, sigma=None, fit_y0=False,
     aug, pn = _augmented(system, names, with_y0)
     base = _values(system)
     ncol = np_ + (n if with_y0 else 0)
+    cols = {nm: j for j, nm in enumerate(names)}
+    # the events checked once, before the optimiser runs (a Python action without its
+    # Jacobian, a restitution naming no parameter)
+    _aug_events(events, system, n, cols, base, _bind(aug, pn, base))
     cache = {}
 
     def model(x):
@@ -706,8 +948,10 @@ def fit(system, t, data, params, *, y0, observe=None, sigma=None, fit_y0=False,
         S0 = np.zeros((n, ncol))
         if with_y0:
             S0[:, np_:] = np.eye(n)
-        s = solve(_bind(aug, pn, vals), (t0, float(t[-1])),
-                  np.concatenate([yy, S0.ravel()]), method, rtol=rtol, atol=atol, t_eval=t)
+        bound = _bind(aug, pn, vals)
+        evs = _aug_events(events, system, n, cols, vals, bound)
+        s = solve(bound, (t0, float(t[-1])), np.concatenate([yy, S0.ravel()]), method,
+                  rtol=rtol, atol=atol, t_eval=t, events=evs)
         if s.status < 0 or s.y.shape[1] != m:
             raise ConvergenceError(
                 f"fit: the integration failed at {dict(zip(labels, x.tolist()))}: "
