@@ -274,11 +274,32 @@ def _field(aug, t, y, n):
     return np.asarray(aug.rhs(t, z), dtype=np.float64)[:n]
 
 
+def _wall_of(ev, values, cols, i):
+    """The impact's wall as a function of t: (w, w', w'').  A moving wall (a SymPy
+    expression of t) at the system's parameter values; one that moves with a
+    differentiated parameter is refused (its column would need dw/dp)."""
+    if not ev.moving:
+        w = float(ev.wall)
+        return lambda t: (w, 0.0, 0.0)
+    import sympy as sp
+    expr = ev.wall
+    used = sorted(str(x) for x in expr.free_symbols if str(x) in cols)
+    if used:
+        raise ValueError(f"events[{i}]: the wall moves with {used}, among the parameters "
+                         "differentiated; mp.sensitivity takes walls that depend on t and "
+                         "on parameters held fixed")
+    t = sp.Symbol("t")
+    e0 = expr.subs({x: t for x in expr.free_symbols if str(x) == "t"})
+    e0 = e0.subs({sp.Symbol(k): v for k, v in values.items()})
+    fns = [sp.lambdify(t, d, "math") for d in (e0, sp.diff(e0, t), sp.diff(e0, t, 2))]
+    return lambda tt: tuple(float(f(tt)) for f in fns)
+
+
 def _jump_of_impact(ev, system, n, cols, values, aug, i):
-    """An impact's event and its action on (y, S): g = side (y[iq] - wall),
-    y[iq] -> wall, y[iv] -> -e y[iv]; D_y a = diag(1, ..., 0 at iq, -e at iv, ...);
-    a restitution that is a differentiated parameter adds dy[iv]+/de = -y[iv]- in its
-    column."""
+    """An impact's event and its action on (y, S): g = side (y[iq] - w(t)),
+    y[iq] -> w, y[iv] -> w' - e (y[iv] - w'); D_y a = diag(1, ..., 0 at iq, -e at iv,
+    ...), D_t a = (w' at iq, (1 + e) w'' at iv), g_t = -side w'; a restitution that is
+    a differentiated parameter adds dy[iv]+/de = -(y[iv]- - w') in its column."""
     iq, iv = ev._indices(system, n)
     e = ev.restitution
     col = None
@@ -294,27 +315,31 @@ def _jump_of_impact(ev, system, n, cols, values, aug, i):
     else:
         name = None
         e = as_scalar(e, "restitution", nonnegative=True)
-    side, wall = float(ev.side), float(ev.wall)
+    side = float(ev.side)
+    wall = _wall_of(ev, values, cols, i)
     gy = np.zeros(n)
     gy[iq] = side
 
     def g(t, y, *args):
-        return side * (float(y[iq]) - wall)
+        return side * (float(y[iq]) - wall(t)[0])
 
     def action(t, z, *args):
         z = np.array(z, dtype=np.float64)
         y, S = z[:n], z[n:].reshape(n, -1)
         ee = float(values[name]) if name is not None else e
+        w0, w1, w2 = wall(t)
         yp = y.copy()
-        yp[iv] = -ee * y[iv]
-        yp[iq] = wall
+        yp[iv] = w1 - ee * (y[iv] - w1)          # relative to the wall
+        yp[iq] = w0
         A = np.eye(n)
         A[iq, iq] = 0.0
         A[iv, iv] = -ee
-        Sp = _saltation(t, S, A, 0.0, gy, 0.0, _field(aug, t, y, n), _field(aug, t, yp, n),
-                        f"events[{i}] (an impact)")
+        a_t = np.zeros(n)                        # the action's own rate: the wall moving
+        a_t[iq], a_t[iv] = w1, (1.0 + ee) * w2
+        Sp = _saltation(t, S, A, a_t, gy, -side * w1, _field(aug, t, y, n),
+                        _field(aug, t, yp, n), f"events[{i}] (an impact)")
         if col is not None:
-            Sp[iv, col] -= y[iv]
+            Sp[iv, col] -= y[iv] - w1
         return np.concatenate([yp, Sp.ravel()])
 
     return _AugEvent(g, n, ev, action)
