@@ -376,9 +376,11 @@ static int ev_extremum(const ode_run *s, ev_ctx *c, const mp_impact *im, size_t 
  * not there (g1).  Did g leave zero and come back within [0, s1]?  For an
  * impact the relative velocity says: leaving (rho > 0 at the start), back
  * (rho < 0 at s1), g's maximum between them.  For another event g is looked
- * at halfway back towards the start, down to the time resolution.  *sa (-1:
+ * at halfway back towards the start, down to a few ulps of t.  *sa (-1:
  * no) is a point where g is before its crossing (ga) and [*sa, *sb] brackets
- * the crossing after it (gb). */
+ * the crossing after it (gb); *sa = -2 when g was not seen to leave but the
+ * state was (an impact's rate, or the field f at the start pointing away from
+ * the surface, unlike a kick's): a return too small for g to resolve. */
 static int ev_returned(ode_run *s, ev_ctx *c, size_t k, double s1, double g1, double *sa,
                        double *ga, double *sb, double *gb);
 
@@ -530,6 +532,7 @@ struct ode_run {
     double *fscr;
     long acc_k;
     double acc_t;
+    long unresolved;          /* an event back at its surface too soon to resolve (-1) */
     const mp_impact **imps;   /* per caller's event: its impact (options' impact_of) */
     const double *wall_p;     /* ... the parameters its moving wall reads */
 };
@@ -562,23 +565,32 @@ static int ev_returned(ode_run *s, ev_ctx *c, size_t k, double s1, double g1, do
         if (!(s->rho_old[k] > 0.0 && s->rho_sub[k] < 0.0)) return MP_OK;
         if ((rc = ev_extremum(s, c, im, k, 0.0, s->rho_old[k], s1, s->rho_sub[k], &sm, &gm)))
             return rc;
-        if (before_crossing(gm, dk)) {
-            *sa = sm, *ga = gm, *sb = s1, *gb = g1;
-        }
+        if (before_crossing(gm, dk)) *sa = sm, *ga = gm, *sb = s1, *gb = g1;
+        else *sa = -2.0; /* left the wall and came back, too little for g to show */
         return MP_OK;
     }
-    double res = mp_ode_time_resolution(c->t, s->w.t_start);
+    /* down to a few ulps of t (not the time resolution: a return found below
+     * that is an accumulation, which the action's gap check then ends) */
+    double res = 4.0 * DBL_EPSILON * fabs(c->t);
     double sp = s1, gp = g1;
-    for (int i = 0; i < 40; i++) {
+    for (int i = 0; i < 80; i++) {
         double sh = 0.5 * sp, gh;
-        if (!(sh * fabs(c->h) > res)) break;
+        if (!(sh * fabs(c->h) > res) || sh == 0.0) break;
         if ((rc = ev_at(c, sh, k, &gh)) != MP_OK) return rc;
         if (before_crossing(gh, dk)) {
             *sa = sh, *ga = gh, *sb = sp, *gb = gp;
-            break;
+            return MP_OK;
         }
         sp = sh, gp = gh;
     }
+    /* not seen: did the action send the state away from the surface (along f,
+     * the state at s1 would be before the crossing), or through it (a kick)?
+     * Away, and back at s1 without g showing it: a return too small to resolve */
+    mp_ode_ws *w = &s->w;
+    double d = s1 * c->h;
+    for (size_t i = 0; i < w->n; i++) c->ytmp[i] = w->y[i] + d * w->f[i];
+    if ((rc = s->o->events(c->t + d, c->ytmp, c->gtmp, s->o->events_data)) != MP_OK) return rc;
+    if (before_crossing(c->gtmp[k], dk)) *sa = -2.0;
     return MP_OK;
 }
 
@@ -654,6 +666,9 @@ static int ev_step(ode_run *s, double t, double h, int first, double *s_stop, lo
                             if ((rc = ev_root(&c, k, sa, ga, sb, gb, &root)) != MP_OK) return rc;
                             ev_hit_add(s, &nh, root, k);
                         }
+                    } else if (sa == -2.0) { /* an accumulation at the step's start */
+                        s->unresolved = (long)k;
+                        ev_hit_add(s, &nh, 0.0, k);
                     }
                 }
             } else if (crosses(g_old[k], g_sub[k], dk)) {
@@ -1019,9 +1034,17 @@ static int apply_action(ode_run *s, size_t k)
     long was_resting = s->resting;
     int rc, zeno = 0;
     double gap = 0.0, t_left = 0.0;
-    rc = mp_ode_action_gap(t, s->act_t[k], s->act_n[k], w->t_start, s->h, &gap);
+    if (s->unresolved == (long)k) { /* back at once, too little to resolve: accumulated */
+        rc = MP_TERMINATED;
+    } else {
+        rc = mp_ode_action_gap(t, s->act_t[k], s->act_n[k], w->t_start, s->h, &gap);
+        if (rc == MP_EEVENT) {
+            r->stop_event = k;
+            return rc;
+        }
+    }
+    s->unresolved = -1;
     if (rc != MP_OK) r->stop_event = k;
-    if (rc == MP_EEVENT) return rc;
     zeno = rc == MP_TERMINATED;
     if (zeno && !(im && im->rest)) {
         r->stop_reason = MP_ODE_STOP_ZENO;
@@ -1051,7 +1074,7 @@ static int apply_action(ode_run *s, size_t k)
             r->stop_event = k;
             r->stop_reason = MP_ODE_STOP_ZENO;
             r->stop_count = (long)r->ev_count[k];
-            r->zeno_gap = t_left;
+            r->zeno_gap = gap;
             r->terminated = 1;
             r->n_actions++;
             return o->n_eval == 0 ? push_sample(r, t, w->y) : MP_OK;
@@ -1411,7 +1434,7 @@ static int solve_forward(const mp_ode_method *m, const mp_ode_problem *p, double
     s.c = mp_ode_ctl_start();
     s.prob = *p;
     mp_ode_problem_at(&s.prob, t0, y0); /* the branch y0 is on */
-    s.resting = s.acc_k = -1;
+    s.resting = s.acc_k = s.unresolved = -1;
     rc = driver_options(&s); /* a switch ahead, a lift-off: crossed as events */
     o = s.o;
     s.need_dense = o->n_eval > 0 || o->dense || o->n_events > 0;

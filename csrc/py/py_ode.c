@@ -434,9 +434,11 @@ static PyObject *ode_message(const py_system *sys, const mp_ode_outcome *out, lo
         return PyUnicode_FromFormat("%s (%s)", mp_status_message(st), detail);
     }
     if (st == MP_TERMINATED && out->stop_reason == MP_ODE_STOP_ZENO) {
+        char gap[64] = "closer than t resolves";
+        if (out->zeno_gap > 0.0) snprintf(gap, sizeof gap, "%.3g apart in t", out->zeno_gap);
         snprintf(detail, sizeof detail, "events[%zu] accumulate (Zeno): %ld crossings, the "
-                 "last two %.3g apart in t; the solve ends at their accumulation point t = "
-                 "%.17g", out->stop_event, out->stop_count, out->zeno_gap, t);
+                 "last two %s; the solve ends at their accumulation point t = %.17g",
+                 out->stop_event, out->stop_count, gap, t);
         return PyUnicode_FromFormat("%s (%s)", mp_status_message(st), detail);
     }
     if (st == MP_OK || st == MP_TERMINATED) return PyUnicode_FromString(mp_status_message(st));
