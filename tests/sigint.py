@@ -38,6 +38,7 @@ def fire():
     sys.stdout.write("SENT\n")
     sys.stdout.flush()
     sent["t"] = time.perf_counter()
+    sent["cpu"] = time.process_time()
     os.kill(os.getpid(), signal.SIGINT)
 threading.Timer(delay, fire).start()
 t0 = time.perf_counter()
@@ -45,7 +46,8 @@ try:
     env["_call"]()
     print(f"FINISHED {time.perf_counter() - t0:.3f}", flush=True)
 except KeyboardInterrupt:
-    print(f"INTERRUPTED {time.perf_counter() - sent['t']:.3f}", flush=True)
+    print(f"INTERRUPTED {time.perf_counter() - sent['t']:.3f} "
+          f"{time.process_time() - sent['cpu']:.3f}", flush=True)
 '''
 
 
@@ -106,14 +108,25 @@ def run_child(argv, *, cwd=None, timeout: float = 900.0, lost_after: float = 60.
 
 def interrupt_delay(setup: str, call: str, delay: float = 0.3, timeout: float = 900.0,
                     lost_after: float = 60.0) -> float:
-    """Seconds from SIGINT to KeyboardInterrupt for ``eval(call)`` after ``exec(setup)``
-    in a fresh interpreter (names np and mp are defined).
+    """CPU seconds the child spent from SIGINT to KeyboardInterrupt for ``eval(call)``
+    after ``exec(setup)`` in a fresh interpreter (names np and mp are defined).
 
-    ``timeout`` bounds the child's start and set-up, ``lost_after`` the time from SIGINT
-    to its report (see :func:`run_child`).  Raises AssertionError if the interrupt was
-    lost, the call finished first or the child failed otherwise."""
+    The latency of an interrupt is the work done before the next check for it: counted
+    in the child's CPU time it is the same on a quiet machine and on one at load 10
+    (where the wall clock, a tenth of a core's, made 0.06 s into 1.1 s).  The wall clock
+    bounds hangs only: ``timeout`` the child's start and set-up, ``lost_after`` the time
+    from SIGINT to its report (see :func:`run_child`).  Raises AssertionError if the
+    interrupt was lost, the call finished first or the child failed otherwise."""
     rc, res, stderr = run_child([CHILD, setup, call, str(delay)], timeout=timeout,
                                 lost_after=lost_after, what=call)
     assert rc == 0 and res, f"exit status {rc}: {stderr[-3000:]}"
     assert res[-1].startswith("INTERRUPTED"), f"the call was not interrupted: {res[-1]}"
-    return float(res[-1].split()[1])
+    return float(res[-1].split()[2])
+
+
+def interrupt_delays(setup: str, call: str, delay: float = 0.3) -> tuple:
+    """(wall seconds, CPU seconds) from SIGINT to KeyboardInterrupt, as
+    :func:`interrupt_delay` measures them."""
+    rc, res, stderr = run_child([CHILD, setup, call, str(delay)], what=call)
+    assert rc == 0 and res and res[-1].startswith("INTERRUPTED"), stderr[-3000:]
+    return float(res[-1].split()[1]), float(res[-1].split()[2])

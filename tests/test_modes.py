@@ -511,7 +511,7 @@ def test_ctrl_c_in_the_eigensolvers_is_prompt(setup, call):
     # calling thread and Ctrl-C is asked for between chunks
     from sigint import interrupt_delay
     dt = interrupt_delay(setup, call, delay=0.5)
-    assert dt < 1.0, f"KeyboardInterrupt {dt} s after SIGINT"     # measured < 0.06 s
+    assert dt < 1.0, f"KeyboardInterrupt {dt} CPU s after SIGINT"     # measured < 0.06 s
 
 
 def test_dense_interrupt_exits():
@@ -524,7 +524,7 @@ def test_dense_interrupt_exits():
              "K = A @ A.T\nM = np.eye(1500) + 0.1 * np.diag(rng.uniform(size=1500))")
     dt = interrupt_delay(setup, "[mp.modes.normal_modes(K, M, method='dense') for _ in "
                          "range(50)]", delay=0.3)
-    assert dt < 20.0, f"KeyboardInterrupt {dt} s after SIGINT"   # one solve: ~1-3 s
+    assert dt < 20.0, f"KeyboardInterrupt {dt} CPU s after SIGINT"   # one solve: ~1-3 s
 
 
 def test_chain_interrupt_exits():
@@ -535,7 +535,7 @@ def test_chain_interrupt_exits():
     setup = "K, M = mp.modes.chain(6000, masses=np.linspace(1.0, 2.0, 6000), sparse=True)"
     dt = interrupt_delay(setup, "[mp.modes.normal_modes(K, M) for _ in range(5)]",
                          delay=0.5)
-    assert dt < 1.0, f"KeyboardInterrupt {dt} s after SIGINT"
+    assert dt < 1.0, f"KeyboardInterrupt {dt} CPU s after SIGINT"    # measured 0.096 CPU s
 
 
 def test_chunked_chain_solve_equals_one_call():

@@ -232,7 +232,7 @@ def test_sections_have_a_step_budget_and_a_size_budget():
 def test_ctrl_c_is_prompt(setup, call):
     from sigint import interrupt_delay
     dt = interrupt_delay(setup, call, delay=0.5)
-    assert dt < 1.0, f"KeyboardInterrupt {dt} s after SIGINT"   # measured < 0.05 s
+    assert dt < 1.0, f"KeyboardInterrupt {dt} CPU s after SIGINT"   # measured < 0.05 s
 
 
 # ---- closed orbits that are not limit cycles ----------------------------------------------
