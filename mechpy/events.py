@@ -84,7 +84,7 @@ class Impact:
         self._walls = {}     # a moving wall compiled, per system's parameter names
 
     @property
-    def moving(self) -> bool:
+    def _moving(self) -> bool:
         """Whether the wall moves (a SymPy expression of t)."""
         return not isinstance(self.wall, float)
 
@@ -116,7 +116,7 @@ class Impact:
         return iq, iq + n // 2
 
     def _standing(self, what):
-        if self.moving:
+        if self._moving:
             raise TypeError(f"impact.{what}: a moving wall runs compiled with its system; "
                             "pass the impact to mp.solve or mp.solve_many")
 
@@ -155,7 +155,7 @@ class Impact:
         """The address of the moving wall compiled for system (0: it stands):
         mp_wall_fn (position, velocity and acceleration at t from the system's
         parameters), printed from the SymPy expression and its derivatives."""
-        if not self.moving:
+        if not self._moving:
             return 0
         import ctypes
 
@@ -212,7 +212,7 @@ class Impact:
                 raise ValueError("impact: restitution as an array is for solve_many (one per "
                                  "trajectory); solve takes a number")
             e = as_array(e, "restitution", shape=(k,), nonnegative=True)
-        wall = 0.0 if self.moving else float(self.wall)
+        wall = 0.0 if self._moving else float(self.wall)
         return ("impact", iq, iv, wall, e, float(self.side), e_param,
                 self._wall_address(system), self._may_rest(system, n))
 

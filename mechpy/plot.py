@@ -593,14 +593,20 @@ def _foucault(ax, system, t, y, trail, lengths):
     _square_view(ax, np.max(np.hypot(y[0], y[1])) * 1.15 or 1.0, "x, east (m)",
                  "y, north (m)")
     ax.set_title("Foucault pendulum seen from above")
-    tr = _trail(ax, "tab:blue")
-    (bob,) = ax.plot([], [], "o", color="tab:red", ms=8, gid="bob", zorder=3)
+    return _dot_and_trail(ax, t, y, trail, "tab:red", "tab:blue", 8, "bob")
+
+
+def _dot_and_trail(ax, t, P, trail, color, trail_color, size, gid):
+    """The update of a dot at (P[0, k], P[1, k]) with its fading trail of the
+    last `trail` seconds."""
+    tr = _trail(ax, trail_color)
+    (dot,) = ax.plot([], [], "o", color=color, ms=size, gid=gid, zorder=3)
     first = _window(t, trail)
 
     def update(k):
-        bob.set_data(y[0, k:k + 1], y[1, k:k + 1])
-        _fade(tr, y[:2, first(k):k + 1].T)
-        return bob, tr
+        dot.set_data(P[0, k:k + 1], P[1, k:k + 1])
+        _fade(tr, P[:2, first(k):k + 1].T)
+        return dot, tr
     return update
 
 
@@ -735,15 +741,7 @@ def _particle(ax, system, t, y, trail, lengths):
         r = float(np.max(np.abs(P[:2]))) * 1.15 or 1.0
         _square_view(ax, r, names[0], names[1])
     ax.set_title(f"particle: ({', '.join(names)}) and its trail")
-    tr = _trail(ax, "tab:orange")
-    (dot,) = ax.plot([], [], "o", color="tab:blue", ms=10, gid="particle", zorder=3)
-    first = _window(t, trail)
-
-    def update(k):
-        dot.set_data(P[0, k:k + 1], P[1, k:k + 1])
-        _fade(tr, P[:2, first(k):k + 1].T)
-        return dot, tr
-    return update
+    return _dot_and_trail(ax, t, P, trail, "tab:blue", "tab:orange", 10, "particle")
 
 
 _DRAW = {"pendulum": _planar_pendulum, "double_pendulum": _planar_pendulum,

@@ -278,7 +278,7 @@ def _wall_of(ev, values, cols, i):
     """The impact's wall as a function of t: (w, w', w'').  A moving wall (a SymPy
     expression of t) at the system's parameter values; one that moves with a
     differentiated parameter is refused (its column would need dw/dp)."""
-    if not ev.moving:
+    if not ev._moving:
         w = float(ev.wall)
         return lambda t: (w, 0.0, 0.0)
     import sympy as sp

@@ -45,3 +45,24 @@ def rk4_fixed(f, t0, y0, h, n):
         y = y + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
         t += h
     return y
+
+
+def central_sensitivities(run, scene, y0, names, cols=None, h=1e-5):
+    """dy/d(params, y0) at the sample times by central differences of
+    run(scene, y0) -> y (n, m): one column per parameter name (a step of h
+    max(1, |p|), through scene.replace) then one per component of y0 (step h);
+    (n, len(names) + n, m)."""
+    y0 = np.asarray(y0, dtype=float)
+    base = run(scene, y0)
+    n = y0.size
+    fd = np.empty((base.shape[0], len(names) + n, base.shape[1]))
+    for j, nm in enumerate(names):
+        v = scene.params[nm]
+        d = h * max(1.0, abs(v))
+        fd[:, j] = (run(scene.replace(**{nm: v + d}), y0)
+                    - run(scene.replace(**{nm: v - d}), y0)) / (2 * d)
+    for j in range(n):
+        e = np.zeros(n)
+        e[j] = h
+        fd[:, len(names) + j] = (run(scene, y0 + e) - run(scene, y0 - e)) / (2 * h)
+    return fd
