@@ -137,18 +137,31 @@ class Impact:
         y[iq] = self.wall
         return y
 
-    def _may_rest(self, system, n) -> bool:
-        """Whether the coordinate may rest on the wall, a contact force acting on
+    def _may_rest(self, system, n, iq) -> bool:
+        """Whether coordinate iq may rest on the wall, a contact force acting on
         its own equation alone: a system written as explicit first-order
-        equations (a Python function, mp.equations, a Cartesian scene), or a
-        Lagrangian or Kane model of one coordinate.  A model whose mass matrix
-        may couple the coordinate to others ends at the accumulation instead."""
-        if _is_scene(system):
-            kind = getattr(system, "_meta", {}).get("kind") if hasattr(system, "_meta") \
-                else None
-            if kind is not None:
-                return kind == "equations" or n == 2
+        equations (a Python function, mp.equations, a Cartesian scene), a model
+        of one coordinate, or a Lagrangian without constraints whose mass matrix
+        does not couple iq to the others (no q_j'' in q_iq's equation, no
+        q_iq'' in theirs).  Any other model ends at the accumulation instead."""
+        if not _is_scene(system):
+            return True
+        meta = getattr(system, "_meta", None)
+        if meta is None:
             return type(system).__name__ in _SCENE_COORDINATES or n == 2
+        if meta["kind"] == "equations" or n == 2:
+            return True
+        if meta["kind"] != "lagrangian" or int(meta["k"]):
+            return False
+        import sympy as sp
+        t = sp.Symbol("t")
+        nc = int(meta["nc"])
+        acc = [sp.Function(nm)(t).diff(t, 2) for nm in meta["names"][:nc]]
+        for i, eq in enumerate(system.equations[:nc]):
+            lhs = sp.expand(eq.lhs - eq.rhs)
+            for j in range(nc):
+                if i != j and iq in (i, j) and lhs.coeff(acc[j]) != 0:
+                    return False
         return True
 
     def _wall_address(self, system) -> int:
@@ -214,7 +227,7 @@ class Impact:
             e = as_array(e, "restitution", shape=(k,), nonnegative=True)
         wall = 0.0 if self._moving else float(self.wall)
         return ("impact", iq, iv, wall, e, float(self.side), e_param,
-                self._wall_address(system), self._may_rest(system, n))
+                self._wall_address(system), self._may_rest(system, n, iq))
 
 
 #: Built-in scenes' coordinate names and, for the scenes whose state is not

@@ -640,3 +640,25 @@ def test_a_python_bounce_on_a_floor_anywhere_ends_at_its_accumulation(wall):
     assert s.status == 1 and "events[0] accumulate (Zeno)" in s.message
     assert (s.y[0] - wall).min() >= -64 * np.spacing(max(1.0, abs(wall)))
     assert 0 <= t_inf - s.t[-1] < 2e-7 * np.sqrt(max(1.0, abs(wall)))
+
+
+@pytest.mark.parametrize("c", [0.0, 1.0])
+def test_a_lagrangian_rests_only_where_its_mass_matrix_does_not_couple(c):
+    """A ball in a plane from mp.lagrangian, L = (x'^2 + y'^2 + c x' y') / 2 - g y,
+    bouncing on y = 0 with e = 0.5.  c = 0: it comes to rest on the floor at t_inf and
+    slides on, x = x0 + u t exactly.  c = 1 (the mass matrix couples y to x: a contact
+    force on y's equation alone would be the wrong constraint): the solve ends at the
+    accumulation (status 1, naming the event), as before contact was modelled."""
+    x, y = mp.coordinates("x y")
+    t, g = sp.symbols("t g")
+    L = (x.diff(t) ** 2 + y.diff(t) ** 2 + c * x.diff(t) * y.diff(t)) / 2 - g * y
+    plane = mp.lagrangian(L, [x, y], params={"g": G})
+    s = mp.solve(plane, (0, 3), [0.0, 1.0, 1.0, 0.0], rtol=1e-12, atol=1e-12,
+                 events=mp.events.impact("y", restitution=0.5))
+    if c == 0.0:
+        t_inf = np.sqrt(2 / G) + 2 * 0.5 * np.sqrt(2 * G) / (G * 0.5)
+        assert s.status == 0 and abs(s.rests[0][0, 0] - t_inf) < 1e-11
+        np.testing.assert_allclose(s.y[:, -1], [3.0, 0.0, 1.0, 0.0], rtol=0, atol=1e-12)
+    else:
+        assert s.status == 1 and "events[0] accumulate (Zeno)" in s.message
+        assert s.rests[0].shape == (0, 2) and s.y[1].min() > -1e-12
