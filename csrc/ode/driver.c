@@ -612,6 +612,7 @@ static int ev_step(ode_run *s, double t, double h, int first, double *s_stop, lo
     ev_ctx c = {w, o, t, h, s->ytmp, s->gtmp};
     *s_stop = 2.0;
     *act = -1;
+    s->unresolved = -1;
     /* an impact's rate inside the step only where it is read: after an action
      * (ev_returned), or where it turns from approaching to leaving over the
      * step (a minimum inside: grazing) */
