@@ -961,7 +961,9 @@ def lyapunov_spectrum(system, y0, t, *, dt: float = 1.0, transient: float = 0.0,
         Averaging time (after ``transient``), in the system's time units.
     dt : float
         Re-orthonormalisation interval (the frame's columns may grow or shrink by
-        exp(lambda dt) in between; keep that within float64's range).
+        exp(lambda dt) in between; keep lambda_max dt well below 709, float64's range:
+        beyond it the tangent vectors overflow and the error says to shorten dt, while
+        an orbit that itself fails is named as such).
     transient : float
         Time integrated first and discarded.
     method, rtol, atol
@@ -973,7 +975,9 @@ def lyapunov_spectrum(system, y0, t, *, dt: float = 1.0, transient: float = 0.0,
     Returns
     -------
     ndarray (dim,)
-        The exponents, descending (1/time units); with ``return_history``,
+        The exponents, descending (1/time units); -inf for a direction that collapses in
+        finite time (a switch of the field that pins a component, as
+        :class:`mechpy.scenes.Rocket`'s burn-out pins its mass); with ``return_history``,
         ``(spectrum, times, running)``.
 
     Examples
