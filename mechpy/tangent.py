@@ -878,6 +878,24 @@ def _first_return(system, y0, f0, t_max, method, rtol, atol):
     return float(te[0])
 
 
+def _check_forcing_period(system, T, y):
+    """ValueError unless f(t + T, y) = f(t, y) at a few (t, y) near the orbit's start:
+    a T that is not a period of the forcing has no periodic orbit to shoot for (Newton
+    still finds a fixed point of phi_T, the state after T, which is no orbit of f)."""
+    rng = np.random.default_rng(0)
+    scale = 1.0 + np.abs(y)
+    for t in (0.0, *(T * rng.random(4))):
+        yy = y + 0.1 * scale * rng.standard_normal(y.size)
+        a = np.asarray(system.rhs(t, yy), dtype=np.float64)
+        b = np.asarray(system.rhs(t + T, yy), dtype=np.float64)
+        gap = np.abs(b - a).max()
+        if gap > 1e-9 * max(1.0, np.abs(a).max(), np.abs(b).max()) * max(1.0, abs(t + T)):
+            raise ValueError(
+                f"floquet: period = {T:.17g} is not a period of the forcing: f(t + T, y) - "
+                f"f(t, y) reaches {gap:.3g} (t = {t:.6g}, y = {yy.tolist()}); give the "
+                "forcing's period (2 pi / omega for a drive at omega) or a multiple of it")
+
+
 def _floquet(system, y0, *, period=None, tol: float = 1e-10, max_iter: int = 50,
              method: str = "dop853", rtol: float = 1e-11, atol: float = 1e-12,
              t_max: float = 1e4, return_orbit: bool = False):
@@ -896,43 +914,71 @@ def _floquet(system, y0, *, period=None, tol: float = 1e-10, max_iter: int = 50,
     if period is None and forced:
         raise ValueError("floquet: the system is forced (its right-hand side depends on t): "
                          "give its period (period=...)")
-    T = None if period is None else as_scalar(period, "period", positive=True)
-    eye = np.eye(n)
-    if T is None:
+    guess = None if period is None else as_scalar(period, "period", positive=True)
+
+    def shoot(y, T):
+        """Newton's shooting from (y, T) -> (y, T, M)."""
+        eye = np.eye(n)
+        for it in range(max_iter + 1):
+            yT, M = _flow(aug, n, 0.0, T, y, eye, method, rtol, atol, "floquet", switches)
+            r = yT - y
+            scale = 1.0 + np.linalg.norm(y)
+            if np.linalg.norm(r) <= tol * scale:
+                return y, T, M
+            if it == max_iter:
+                raise ConvergenceError(
+                    f"floquet: Newton's shooting did not converge in {max_iter} iterations "
+                    f"(|phi_T(y) - y| = {np.linalg.norm(r):.3g}); start nearer the orbit")
+            if forced:
+                dy = np.linalg.solve(M - eye, -r)
+                dT = 0.0
+            else:
+                fy = system.rhs(0.0, y)
+                A = np.zeros((n + 1, n + 1))
+                A[:n, :n] = M - eye
+                A[:n, n] = system.rhs(T, yT)
+                A[n, :n] = fy
+                sol = np.linalg.lstsq(A, -np.concatenate([r, [0.0]]), rcond=None)[0]
+                dy, dT = sol[:n], sol[n]
+            y = y + dy
+            T = T + dT
+            if not T > 0:
+                raise ConvergenceError("floquet: the period went non-positive in Newton's "
+                                       "shooting; start nearer the orbit")
+
+    if forced:
+        # the period is the forcing's, fixed: refuse one that is not
+        _check_forcing_period(system, guess, y)
+        y, T, M = shoot(y, guess)
+    else:
         f0 = system.rhs(0.0, y)
         if not np.any(f0):
             raise ValueError("floquet: y0 is a fixed point (f(y0) = 0), not on a periodic orbit")
-        T = _first_return(system, y, f0, t_max, method, rtol, atol)
-    for it in range(max_iter + 1):
-        yT, M = _flow(aug, n, 0.0, T, y, eye, method, rtol, atol, "floquet", switches)
-        r = yT - y
-        scale = 1.0 + np.linalg.norm(y)
-        if np.linalg.norm(r) <= tol * scale:
-            break
-        if it == max_iter:
+        # the first guess of T is the first return to the section through y0 (a given
+        # period only bounds the search, to a few periods); Newton then refines it
+        horizon = t_max if guess is None else min(t_max, 4.0 * guess)
+        try:
+            T = _first_return(system, y, f0, horizon, method, rtol, atol)
+        except ConvergenceError:
+            if guess is None:
+                raise
+            T = guess
+        y, T, M = shoot(y, T)
+        if not np.linalg.norm(system.rhs(0.0, y)) > 1e-8 * (1.0 + np.linalg.norm(y)) / T:
             raise ConvergenceError(
-                f"floquet: Newton's shooting did not converge in {max_iter} iterations "
-                f"(|phi_T(y) - y| = {np.linalg.norm(r):.3g}); start nearer the orbit")
-        if forced:
-            dy = np.linalg.solve(M - eye, -r)
-            dT = 0.0
-        else:
-            fy = system.rhs(0.0, y)
-            A = np.zeros((n + 1, n + 1))
-            A[:n, :n] = M - eye
-            A[:n, n] = system.rhs(T, yT)
-            A[n, :n] = fy
-            sol = np.linalg.lstsq(A, -np.concatenate([r, [0.0]]), rcond=None)[0]
-            dy, dT = sol[:n], sol[n]
-        y = y + dy
-        T = T + dT
-        if not T > 0:
-            raise ConvergenceError("floquet: the period went non-positive in Newton's "
-                                   "shooting; start nearer the orbit or give period=...")
-    if not forced and np.linalg.norm(system.rhs(0.0, y)) <= 1e-8 * scale / T:
-        raise ConvergenceError(
-            f"floquet: Newton's shooting converged to a fixed point (y = {y.tolist()}, "
-            "f(y) = 0), not a periodic orbit: there is none near y0")
+                f"floquet: Newton's shooting converged to a fixed point (y = {y.tolist()}, "
+                "f(y) = 0), not a periodic orbit: there is none near y0")
+        # the minimal period: the converged orbit's first return to its own section; a T
+        # that is k of them (Newton from a guess near k periods) is replaced by it
+        t1 = _first_return(system, y, system.rhs(0.0, y), 1.5 * T, method, rtol, atol)
+        k = int(round(T / t1))
+        if k > 1 and abs(T - k * t1) <= 1e-6 * T:
+            y, T, M = shoot(y, t1)
+        elif abs(T - t1) > 1e-6 * T:
+            raise ConvergenceError(
+                f"floquet: Newton's shooting closed the orbit after T = {T:.10g}, but it first "
+                f"returns to its section after {t1:.10g}, which does not divide T: no "
+                "periodic orbit with a well-defined period was found; start nearer the orbit")
     mult = np.linalg.eigvals(M).astype(complex)
     mult = mult[np.argsort(-np.abs(mult), kind="stable")]
     if return_orbit:
