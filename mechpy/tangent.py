@@ -26,6 +26,13 @@ t = 10, atol = rtol / 100) against ``scipy.linalg.expm``: S's error relative to 
 the plain solve's 9.4e-7, 9.4e-9, 8.3e-11), for one or two more steps than the plain solve:
 the sensitivities come out as accurate as the state, so no separate scaling is applied.
 
+Non-smooth fields.  Abs, sign, Max and Min are differentiated as Piecewise functions
+(Abs' = sign), with states and parameters taken as real.  Where a Piecewise condition
+in the state switches the field's branch (the Rocket's burn-out, m > m_dry), the
+solution is continuous but its sensitivities jump: each such surface g = 0 is an event
+of the augmented solve, and S jumps there by the saltation matrix with A = I (below).
+A derivative SymPy cannot take is a ValueError naming the user's row f[i].
+
 Events.  With ``events`` carrying actions (:func:`mechpy.events.impact`, or a Python
 action with its Jacobian ``action.jac``), the event functions and actions run on y with
 the system's own indices and S jumps at each event by the saltation matrix
