@@ -16,7 +16,7 @@ import numpy as np
 from . import _core
 
 __all__ = ["as_array", "as_scalar", "as_int", "as_vector3", "as_symmetric", "as_square",
-           "as_finite_result"]
+           "as_finite_result", "as_args"]
 
 _INT64_MAX = 2 ** 63 - 1
 
@@ -202,3 +202,22 @@ def band_of_pattern(rows, cols, n: int):
             if pl + pu < ml + mu:
                 return (pl, pu, perm.tolist())
     return (ml, mu) if ml + mu + 1 < n else None
+
+
+def as_args(args, name: str = "args") -> tuple:
+    """Extra arguments of a Python right-hand side as a tuple, by SciPy's rule
+    (``scipy.integrate.solve_ivp``): None is no arguments, any iterable is
+    unpacked (a tuple, a list, an array's rows), anything else is a ``TypeError``
+    that shows the tuple meant (SciPy refuses it too; it is not wrapped, since
+    ``args=p`` where ``p`` happens to be a sequence would then mean something else)."""
+    if args is None:
+        return ()
+    if isinstance(args, tuple):
+        return args
+    try:
+        return tuple(args)
+    except TypeError:
+        raise TypeError(f"{name} must be a tuple of extra arguments (or None), got "
+                        f"{type(args).__name__} {args!r}, which cannot be unpacked: write "
+                        f"{name}=({args!r},) for one argument, as scipy.integrate.solve_ivp "
+                        "asks") from None

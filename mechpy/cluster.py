@@ -14,7 +14,8 @@ workers left (nothing lost, nothing duplicated: each chunk's result is kept
 once, under its key), ``dask.distributed.progress`` draws the progress, and
 ``lazy=True`` gives ``dask.array`` fields built with ``da.from_delayed``.
 Dask is imported only when a client is given (install it with
-``pip install "mechpy[cluster]"``).
+``pip install "mechpy-classical[cluster]"``; without it ``client=`` is a
+``ModuleNotFoundError`` that says so).
 
 What travels to the workers
 ---------------------------
@@ -62,6 +63,22 @@ def _solve_chunk(local, system, t_span, y0s, params, options):
     rule is applied once, on the joined result, so that an exception names the
     trajectory's index in the whole ensemble, not in its chunk."""
     return local(system, t_span, y0s, params=params, **dict(options, errors="status"))
+
+
+#: the extra of pyproject.toml that installs Dask
+INSTALL_DASK = 'pip install "mechpy-classical[cluster]"'
+
+
+def _require_dask() -> None:
+    """Import dask.distributed, or ModuleNotFoundError naming the extra that
+    installs it (Dask is optional: only ``client=`` needs it)."""
+    try:
+        import dask.distributed  # noqa: F401
+    except ImportError as exc:
+        raise ModuleNotFoundError(
+            f"solve_many(client=...) runs on Dask, which is not installed ({exc}): "
+            f"{INSTALL_DASK} (or pip install \"dask[distributed]\")",
+            name=getattr(exc, "name", None) or "dask") from exc
 
 
 def _client_threads(client) -> int:
@@ -186,6 +203,7 @@ def _solve_many(*, local, client, chunk_size, lazy, system, t_span, y0s, params=
     if options.get("events") is not None:
         raise ValueError("events are not taken with a client: the chunks' event lists are "
                          "not joined; solve the ensemble locally (client=None)")
+    _require_dask()
     nthreads = _client_threads(client)
     if not isinstance(lazy, (bool, np.bool_)):
         raise TypeError("lazy must be a bool")

@@ -27,7 +27,7 @@ from ._solution import (_STATUS, DenseOutput, EnsembleSolution, Solution,  # noq
 from ._system import (SCIPY_METHODS, SecondOrder, _as_args, _catch_unraisable,  # noqa: F401
                       _ensemble_params, _events_spec, _method_names, _python_fun,
                       _rigid_split_check, _system_spec, _watch_list, methods)
-from ._validate import as_array, as_int, as_scalar, band_of_pattern
+from ._validate import as_args, as_array, as_int, as_scalar, band_of_pattern
 
 __all__ = ["solve", "solve_many", "methods", "Solution", "EnsembleSolution", "DenseOutput",
            "SecondOrder"]
@@ -194,8 +194,10 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
         SciPy, a g exactly zero at t0 is an event at t0 when the solution
         leaves zero in its direction; a crossing landing exactly on zero at a
         step's end is reported once (SciPy: twice).  ``[]``: no event.
-    args : tuple
-        Extra arguments for a Python ``system``, ``jac`` and events.
+    args : tuple, optional
+        Extra arguments for a Python ``system``, ``jac`` and events.  As in
+        SciPy: None is none, any iterable is unpacked, anything else is a
+        ``TypeError`` (write ``args=(p,)`` for one argument).
     h : float
         Step of fixed-step methods.
     first_step, max_step : float
@@ -291,6 +293,7 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
         raise TypeError(f"vectorized must be a bool, got {vectorized!r}")
     if vectorized and _python_fun(system):
         system = _one_column(system)
+    args = as_args(args)
     if _is_complex(y0):
         return _solve_complex(system, t_span, y0, dict(
             method=method, rtol=rtol, atol=atol, t_eval=t_eval, dense_output=dense_output,
@@ -305,7 +308,6 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
     tev = None if t_eval is None else _t_eval(t_eval, t0, tf)
     if not isinstance(dense_output, (bool, np.bool_)):
         raise TypeError("dense_output must be a bool")
-    args = _as_args(args)
     if jac is not None and not callable(jac):
         if isinstance(jac, (str, bytes)):
             raise TypeError("jac must be callable or a constant (n, n) array")
@@ -689,7 +691,7 @@ def solve_many(system, t_span: Sequence[float], y0s, *, params=None, t_eval=None
     method, t0, tf, rtol, atol_a, hh, fs, ms, budget = _common(
         method, t_span, rtol, atol, n, h, first_step, max_step, max_steps)
     tev = np.array([tf]) if t_eval is None else _t_eval(t_eval, t0, tf)
-    args = _as_args(args)
+    args = as_args(args)
     _rigid_split_check(method, system)
     spec, dim = _system_spec(system, args, method)
     if dim is not None and dim != n:

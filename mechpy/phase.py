@@ -961,7 +961,9 @@ def lyapunov_spectrum(system, y0, t, *, dt: float = 1.0, transient: float = 0.0,
         Averaging time (after ``transient``), in the system's time units.
     dt : float
         Re-orthonormalisation interval (the frame's columns may grow or shrink by
-        exp(lambda dt) in between; keep that within float64's range).
+        exp(lambda dt) in between; keep lambda_max dt well below 709, float64's range:
+        beyond it the tangent vectors overflow and the error says to shorten dt, while
+        an orbit that itself fails is named as such).
     transient : float
         Time integrated first and discarded.
     method, rtol, atol
@@ -973,7 +975,9 @@ def lyapunov_spectrum(system, y0, t, *, dt: float = 1.0, transient: float = 0.0,
     Returns
     -------
     ndarray (dim,)
-        The exponents, descending (1/time units); with ``return_history``,
+        The exponents, descending (1/time units); -inf for a direction that collapses in
+        finite time (a switch of the field that pins a component, as
+        :class:`mechpy.scenes.Rocket`'s burn-out pins its mass); with ``return_history``,
         ``(spectrum, times, running)``.
 
     Examples
@@ -1001,9 +1005,13 @@ def floquet(system, y0, *, period=None, tol: float = 1e-10, max_iter: int = 50,
     (y0, T), closed by the phase condition
     :math:`\mathbf f(\mathbf y_0^{(k)})\cdot(\mathbf y_0 - \mathbf y_0^{(k)}) = 0`
     (the correction is normal to the flow), and the first guess of T is the first
-    return of the orbit from y0 to the plane through y0 normal to f(y0) (or ``period``
-    when given).  For a forced system (f depends on t) the period must be given: the
-    unknowns are y0 at t = 0, T is fixed.  The multipliers are M's eigenvalues; an
+    return of the orbit from y0 to the plane through y0 normal to f(y0) (a given
+    ``period`` bounds that search to four of it, and is the guess when there is no
+    return).  The period returned is the minimal one: a Newton solution at k periods
+    is replaced by the orbit's first return, and one whose first return does not
+    divide it is a ConvergenceError.  For a forced system (f depends on t) the period
+    must be given and is checked (f(t + T, y) = f(t, y) at a few points; a T that is no
+    period of the forcing is a ValueError): the unknowns are y0 at t = 0, T is fixed.  The multipliers are M's eigenvalues; an
     autonomous orbit has one equal to 1 (along f), and their product is
     :math:`\exp\int_0^T \nabla\cdot\mathbf f\,dt` (Liouville).  On a family of orbits
     (a conservative system's) the shooting is underdetermined and Newton's least-squares
@@ -1018,7 +1026,9 @@ def floquet(system, y0, *, period=None, tol: float = 1e-10, max_iter: int = 50,
     y0 : array_like, shape (dim,)
         A state on or near the orbit (after a transient for an attracting cycle).
     period : float, optional
-        The period: required for a forced system, a first guess for an autonomous one.
+        The period: required for a forced system (the forcing's period or a multiple),
+        a guess for an autonomous one (any from about half a period to a few periods
+        gives the minimal period).
     tol : float
         Newton stops when ``|phi_T(y0) - y0| <= tol (1 + |y0|)``.
     max_iter : int
@@ -1037,8 +1047,12 @@ def floquet(system, y0, *, period=None, tol: float = 1e-10, max_iter: int = 50,
 
     Raises
     ------
+    ValueError
+        A forced system without ``period``, or with one that is not a period of the
+        forcing; ``y0`` a fixed point.
     ConvergenceError
-        No return to the section, or Newton's shooting did not converge.
+        No return to the section, Newton's shooting did not converge (or closed the
+        orbit at a time its first return does not divide).
 
     Examples
     --------

@@ -14,7 +14,10 @@ from fixed components :math:`x'` to body components :math:`x`.  It is the
 transpose of the *active* matrix that SciPy builds:
 ``euler_matrix(phi, theta, psi) == Rotation.from_euler("ZXZ", [phi, theta,
 psi]).as_matrix().T``.  ``passive=False`` gives SciPy's active matrix
-:math:`R = \\lambda^T` (body components to space components).
+:math:`R = \\lambda^T` (body components to space components).  Every
+``passive`` flag defaults to True, the interchange with SciPy's too:
+``to_scipy(euler_matrix(phi, theta, psi))`` is ``Rotation.from_euler("ZXZ",
+[phi, theta, psi])``, and :func:`from_scipy` is its inverse.
 
 Quaternions are scalar-last ``(x, y, z, w)`` as in SciPy; a quaternion
 stands for the matrix that :func:`matrix_from_quat` makes of it.
@@ -611,21 +614,29 @@ def _scipy_rotation():
     return Rotation
 
 
-def to_scipy(R, *, passive: bool = False, orth_tol: float = ORTH_TOL):
+def to_scipy(R, *, passive: bool = True, orth_tol: float = ORTH_TOL):
     r"""A :class:`scipy.spatial.transform.Rotation` of rotation matrices.
+
+    The default follows the module's: ``R`` is read as the passive matrix
+    :math:`\lambda` that :func:`euler_matrix` gives by default, so
+    ``to_scipy(euler_matrix(phi, theta, psi)).as_euler("ZXZ")`` returns
+    ``(phi, theta, psi)``, and ``to_scipy`` and :func:`from_scipy` invert each
+    other with their defaults.  SciPy's own matrices (``Rotation.as_matrix()``,
+    active) need ``passive=False``.
 
     Parameters
     ----------
     R : array_like, shape (..., 3, 3)
-        Rotation matrices (more than one batch axis needs SciPy >= 1.17): active ones (``passive=False``, as
-        :func:`matrix_from_quat` and ``euler_matrix(..., passive=False)`` give
-        them and as SciPy's ``as_matrix`` reads them), or coordinate
-        transformations :math:`\lambda = R^T` (``passive=True``, as the default
-        ``euler_matrix`` gives them).  ``max|R R^T - I| <= orth_tol`` and
+        Rotation matrices (more than one batch axis needs SciPy >= 1.17):
+        coordinate transformations :math:`\lambda = R_{active}^T` (``passive=True``,
+        the default, as the default :func:`euler_matrix` and :func:`matrix_from_quat`
+        of a default :func:`quat_from_euler` give them), or active ones
+        (``passive=False``, as ``euler_matrix(..., passive=False)`` gives them and as
+        SciPy's ``as_matrix`` reads them).  ``max|R R^T - I| <= orth_tol`` and
         ``det R > 0`` are required (:class:`mechpy.DomainError` otherwise):
         the matrix is checked, never silently orthogonalised.
     passive : bool
-        Whether ``R`` is the passive matrix (default False).
+        Whether ``R`` is the passive matrix (default True, as in :func:`euler_matrix`).
     orth_tol : float
         Default :data:`ORTH_TOL`.
 
@@ -633,8 +644,8 @@ def to_scipy(R, *, passive: bool = False, orth_tol: float = ORTH_TOL):
     -------
     scipy.spatial.transform.Rotation
         Single for ``R`` of shape (3, 3), of shape ``R.shape[:-2]`` otherwise; built from
-        :func:`quat_from_matrix`, so ``to_scipy(R).as_matrix()`` is ``R`` (or
-        ``R.T`` when ``passive``) to round-off.
+        :func:`quat_from_matrix`, so ``to_scipy(R).as_matrix()`` is ``R.T`` (``R`` with
+        ``passive=False``) to round-off.
 
     See Also
     --------
@@ -645,8 +656,10 @@ def to_scipy(R, *, passive: bool = False, orth_tol: float = ORTH_TOL):
     >>> import numpy as np
     >>> import mechpy as mp
     >>> lam = mp.rotation.euler_matrix(0.3, 0.2, 0.1)          # textbook ZXZ, passive
-    >>> rot = mp.rotation.to_scipy(lam, passive=True)
-    >>> np.allclose(rot.as_euler("ZXZ"), [0.3, 0.2, 0.1])
+    >>> np.allclose(mp.rotation.to_scipy(lam).as_euler("ZXZ"), [0.3, 0.2, 0.1])
+    True
+    >>> R = mp.rotation.euler_matrix(0.3, 0.2, 0.1, passive=False)   # SciPy's matrix
+    >>> np.allclose(mp.rotation.to_scipy(R, passive=False).as_euler("ZXZ"), [0.3, 0.2, 0.1])
     True
     """
     Rotation = _scipy_rotation()
@@ -664,17 +677,21 @@ def to_scipy(R, *, passive: bool = False, orth_tol: float = ORTH_TOL):
         raise
 
 
-def from_scipy(rot, *, passive: bool = False) -> np.ndarray:
+def from_scipy(rot, *, passive: bool = True) -> np.ndarray:
     r"""Rotation matrices of a :class:`scipy.spatial.transform.Rotation`.
+
+    The default follows the module's (passive, as :func:`euler_matrix`), so
+    ``from_scipy(Rotation.from_euler("ZXZ", a))`` equals ``euler_matrix(a)`` and
+    ``from_scipy(to_scipy(R))`` is ``R``.
 
     Parameters
     ----------
     rot : scipy.spatial.transform.Rotation
         A single rotation or a stack of them.
     passive : bool
-        False (default): the active matrices ``rot.as_matrix()``; True: their
-        transposes, the coordinate transformations :math:`\lambda` that the
-        default :func:`euler_matrix` uses.
+        True (default): the coordinate transformations :math:`\lambda`, the transposes
+        of ``rot.as_matrix()``, as the default :func:`euler_matrix` gives them;
+        False: SciPy's active matrices ``rot.as_matrix()``.
 
     Returns
     -------
@@ -692,8 +709,9 @@ def from_scipy(rot, *, passive: bool = False) -> np.ndarray:
     >>> import mechpy as mp
     >>> from scipy.spatial.transform import Rotation
     >>> rot = Rotation.from_euler("ZXZ", [0.3, 0.2, 0.1])
-    >>> np.allclose(mp.rotation.from_scipy(rot, passive=True),
-    ...             mp.rotation.euler_matrix(0.3, 0.2, 0.1))
+    >>> np.allclose(mp.rotation.from_scipy(rot), mp.rotation.euler_matrix(0.3, 0.2, 0.1))
+    True
+    >>> np.allclose(mp.rotation.from_scipy(rot, passive=False), rot.as_matrix())
     True
     """
     Rotation = _scipy_rotation()

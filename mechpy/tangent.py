@@ -26,6 +26,13 @@ t = 10, atol = rtol / 100) against ``scipy.linalg.expm``: S's error relative to 
 the plain solve's 9.4e-7, 9.4e-9, 8.3e-11), for one or two more steps than the plain solve:
 the sensitivities come out as accurate as the state, so no separate scaling is applied.
 
+Non-smooth fields.  Abs, sign, Max and Min are differentiated as Piecewise functions
+(Abs' = sign), with states and parameters taken as real.  Where a Piecewise condition
+in the state switches the field's branch (the Rocket's burn-out, m > m_dry), the
+solution is continuous but its sensitivities jump: each such surface g = 0 is an event
+of the augmented solve, and S jumps there by the saltation matrix with A = I (below).
+A derivative SymPy cannot take is a ValueError naming the user's row f[i].
+
 Events.  With ``events`` carrying actions (:func:`mechpy.events.impact`, or a Python
 action with its Jacobian ``action.jac``), the event functions and actions run on y with
 the system's own indices and S jumps at each event by the saltation matrix
@@ -46,7 +53,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ._validate import as_array, as_int, as_scalar
-from .errors import ConvergenceError, EventError
+from .errors import (ConvergenceError, EventError, NonFiniteError, StepBudgetError,
+                     StepSizeError)
 from .integrate import Solution, solve, solve_many
 from .scenes import Scene, _row
 
@@ -118,20 +126,89 @@ def _augmented(system, pnames: tuple, with_y0: bool):
     P = [by_name.get(nm, sp.Symbol(nm)) for nm in pnames]
     ncol = len(P) + (n if with_y0 else 0)
     S = sp.Matrix(n, ncol, lambda i, j: sp.Symbol(f"mp_S{i}_{j}"))
-    J = sp.Matrix(n, n, lambda i, j: sp.diff(f[i], y[j]))
+    f, J, Fp = _derivatives(f, y, t, P, [str(s) for s in fld.y])
     dS = J * S
-    for j, p in enumerate(P):
+    for j in range(len(P)):
         for i in range(n):
-            dS[i, j] += sp.diff(f[i], p)
+            dS[i, j] += Fp[i, j]
     free = set().union(*(e.free_symbols for e in f)) if f else set()
     names = [str(s) for s in fld.params if s in free]
     values = {str(s): float(v) for s, v in fld.params.items()}
-    aug = equations(f + list(dS), y + list(S), params={nm: values[nm] for nm in names})
+    try:
+        aug = equations(f + list(dS), y + list(S), params={nm: values[nm] for nm in names})
+    except ValueError as exc:
+        raise ValueError(_user_rows(str(exc), n, ncol, list(pnames), [str(v) for v in y])) \
+            from None
     out = (aug, tuple(names))
     if skey is not None:
         _AUGMENTED[key] = out
         _store(disk, aug)
     return out
+
+
+def _piecewise(e):
+    """``e`` with Abs, sign, Max and Min written as Piecewise of their arguments: the
+    same values, and derivatives SymPy takes and mechpy compiles (Abs' = sign as a
+    Piecewise of +-1, not the complex ``Derivative(re(v), v)``; the compiled augmented
+    system is differentiated once more for its own Jacobian, where sign' = 0)."""
+    import sympy as sp
+    e = e.replace(sp.Abs, lambda a: sp.Piecewise((a, a >= 0), (-a, True)))
+    e = e.replace(sp.sign, lambda a: sp.Piecewise((1, a > 0), (-1, a < 0), (0, True)))
+    return e.rewrite(sp.Piecewise) if e.has(sp.Max, sp.Min) else e
+
+
+def _derivatives(f, y, t, P, names):
+    """(f, df/dy (n, n), df/dp (n, len(P))): the field as it is compiled and its
+    derivatives, as SymPy expressions and matrices.
+
+    States, time and parameters are differentiated as real symbols (a symbol of
+    unknown kind makes SymPy leave ``Derivative(re(v), v)`` for ``Abs(v)``), with
+    Abs, sign, Max and Min as Piecewise (:func:`_piecewise`); the results are written
+    back in the field's own symbols.  A derivative SymPy still cannot take (an
+    undefined function, a ``floor``) is a ValueError naming the user's row f[i] and
+    the state component or parameter, not a row of the generated augmented system."""
+    import sympy as sp
+    free = set(y) | {t} | set(P)
+    for e in f:
+        free |= {s for s in e.free_symbols if isinstance(s, sp.Symbol)}
+    real = {s: sp.Dummy(s.name, real=True) for s in free if not s.is_real}
+    back = {v: k for k, v in real.items()}
+    fr = [_piecewise(e.xreplace(real)) for e in f]
+    yr = [real.get(s, s) for s in y]
+    Pr = [real.get(s, s) for s in P]
+
+    def d(i, x, what):
+        out = sp.diff(fr[i], x).xreplace(back)
+        left = sorted({str(a) for a in out.atoms(sp.Derivative, sp.Subs)})
+        if left:
+            raise ValueError(
+                f"the variational equations need d f[{i}] / d {what} of the system's "
+                f"right-hand side, f[{i}] = {f[i]}, which SymPy leaves unevaluated: {left}; "
+                "write f[i] with functions SymPy can differentiate (the elementary "
+                "functions, Abs, sign, Max, Min, Piecewise)")
+        return out
+
+    n = len(y)
+    J = sp.Matrix(n, n, lambda i, j: d(i, yr[j], f"y[{j}] ({names[j]})"))
+    Fp = sp.Matrix(n, len(P), lambda i, j: d(i, Pr[j], f"the parameter {P[j]}"))
+    return [e.xreplace(back) for e in fr], J, Fp
+
+
+def _user_rows(msg: str, n: int, ncol: int, pnames: list, ynames: list) -> str:
+    """A message of the augmented system's compiler with its rows named as the user's:
+    rhs[k] for k < n is the system's f[k]; rhs[n + i ncol + j] is the variational
+    equation of S[i, j] = d y[i] / d (column j: a parameter, or y0[j - p])."""
+    import re
+
+    def name(m):
+        k = int(m.group(1))
+        if k < n:
+            return f"f[{k}] (the system's rhs[{k}])"
+        i, j = divmod(k - n, ncol)
+        col = pnames[j] if j < len(pnames) else f"y0[{j - len(pnames)}]"
+        return (f"the variational equation of S[{i}, {j}] = d {ynames[i]} / d {col} "
+                f"(from the system's rhs[{i}])")
+    return "the variational equations (mechpy.tangent): " + re.sub(r"\brhs\[(\d+)\]", name, msg)
 
 
 def _disk_key(system, skey, key):
@@ -248,13 +325,15 @@ class _AugEvent:
         return self._g(t, np.asarray(z)[:self._n], *args)
 
 
-def _saltation(t, S, A, a_t, gy, g_t, fm, fp, what):
+def _saltation(t, S, A, a_t, gy, g_t, fm, fp, what, g_p=0.0):
     r"""S just after an event: :math:`S^+ = A S^- - (f^+ - A f^- - a_t)\,d\tau/dz` with
     :math:`d\tau/dz = -(g_y S^-)/(g_t + g_y f^-)`, A = D_y a, a_t = D_t a, the
     gradient (g_t, g_y) of the event function at the crossing and f^-, f^+ the field
     before and after the action.  (An event later by d tau meets the state
     y^- + f^- d tau, leaves a(y^-) + (A f^- + a_t) d tau, which at the event's own time
-    is that minus f^+ d tau.)  A crossing with g_t + g_y f^- = 0 (grazing) has no finite
+    is that minus f^+ d tau.)  ``g_p`` adds the event function's own dependence on the
+    columns (a switch at a differentiated parameter's value): d tau/dz gains
+    -g_p/(g_t + g_y f^-).  A crossing with g_t + g_y f^- = 0 (grazing) has no finite
     event-time derivative: EventError."""
     den = g_t + gy @ fm
     scale = abs(g_t) + np.abs(gy) @ np.abs(fm)
@@ -263,7 +342,7 @@ def _saltation(t, S, A, a_t, gy, g_t, fm, fp, what):
             f"{what} at t = {t:.17g} grazes (dg/dt + grad g . f = {den:.3g}): the event "
             "time does not depend smoothly on the parameters there, so the sensitivities "
             "have no jump")
-    dtau = -(gy @ S) / den
+    dtau = -(gy @ S + g_p) / den
     return A @ S - np.outer(fp - A @ fm - a_t, dtau)
 
 
@@ -407,13 +486,141 @@ def _jump_of_action(ev, action, n, aug, i):
     return _AugEvent(ev, n, ev, action_aug)
 
 
+# ---- switches of the field: the jump of the sensitivities where f jumps ---------------
+#: switching surfaces of each system's field: system key -> list of _Switch (or [])
+_SWITCHES: dict = {}
+
+
+class _Switch:
+    """A surface g(t, y, p) = 0 across which the field changes branch (a condition of its
+    Piecewise, after Abs, sign, Max, Min are written as Piecewise): g, its gradient and
+    the field on either side (g > 0: ``f_pos``, g < 0: ``f_neg``), as Python functions of
+    (t, y..., params...)."""
+
+    def __init__(self, g, grad_t, grad_y, grad_p, f_pos, f_neg, text):
+        self.g, self.grad_t, self.grad_y, self.grad_p = g, grad_t, grad_y, grad_p
+        self.f_pos, self.f_neg, self.text = f_pos, f_neg, text
+
+
+def _switches(system):
+    """The switching surfaces of the system's field (cached per field; none, and no
+    SymPy, for a field without Piecewise, Abs, sign, Max or Min)."""
+    skey = _system_key(system)
+    if skey is not None and skey in _SWITCHES:
+        return _SWITCHES[skey]
+    text = repr(_row(system._model).get("field")) if skey and skey[0] == "scene" else \
+        (skey[1] if skey else None)
+    if text is not None and not any(w in text for w in ("Piecewise", "Abs", "sign", "Max",
+                                                          "Min", "fabs", "fmax", "fmin", "?")):
+        out = []
+    else:
+        out = _derive_switches(system)
+    if skey is not None:
+        _SWITCHES[skey] = out
+    return out
+
+
+def _derive_switches(system):
+    import sympy as sp
+    fld = system.symbolic()
+    y, t = list(fld.y), fld.t
+    params = list(fld.params)
+    f = [_piecewise(sp.sympify(e)) for e in fld.f]
+    rels = set()
+    for e in f:
+        for pw in e.atoms(sp.Piecewise):
+            for _, c in pw.args:
+                rels |= {r for r in sp.sympify(c).atoms(sp.Rel)
+                         if isinstance(r, (sp.StrictGreaterThan, sp.GreaterThan,
+                                           sp.StrictLessThan, sp.LessThan))}
+    groups = []          # [(g, [(relational, sign of its lhs - rhs against g)])]
+    for r in sorted(rels, key=str):
+        h = sp.expand(r.lhs - r.rhs)
+        if not (h.free_symbols & set(y)):
+            continue                     # a switch in t or the parameters alone: no jump of S
+        for g, members in groups:
+            if sp.expand(h - g) == 0:
+                members.append((r, 1))
+                break
+            if sp.expand(h + g) == 0:
+                members.append((r, -1))
+                break
+        else:
+            groups.append((h, [(r, 1)]))
+    args = [t, *y, *params]
+    out = []
+    for g, members in groups:
+        def side(sigma):
+            # each relational's truth value where sign(g) = sigma
+            sub = {}
+            for r, sg in members:
+                up = isinstance(r, (sp.StrictGreaterThan, sp.GreaterThan))
+                sub[r] = sp.true if (sg * sigma > 0) == up else sp.false
+            return [e.xreplace(sub) for e in f]
+        lam = lambda e: sp.lambdify(args, e, "math")   # noqa: E731
+        gp = [sp.diff(g, p) for p in params]
+        out.append(_Switch(lam(g), lam(sp.diff(g, t)), lam([sp.diff(g, v) for v in y]),
+                           lam(gp), lam(side(1)), lam(side(-1)), f"{g} = 0"))
+    return out
+
+
+def _switch_events(system, n, cols, values):
+    """The augmented solve's events at the field's switches: S jumps by the saltation
+    matrix with A = I (the state does not jump), f^- and f^+ the field's branches on
+    the sides the orbit leaves and enters."""
+    sw = _switches(system)
+    if not sw:
+        return []
+    fld_params = list(_values(system))
+    pv = [float(values[nm]) for nm in fld_params]
+    gp_cols = [(j, fld_params.index(nm)) for nm, j in cols.items() if nm in fld_params]
+    out = []
+    for k, w in enumerate(sw):
+        def g(t, y, *args, w=w):
+            return float(w.g(t, *y, *pv))
+
+        def action(t, z, *args, w=w):
+            z = np.array(z, dtype=np.float64)
+            y, S = z[:n], z[n:].reshape(n, -1)
+            a = (t, *y, *pv)
+            gt, gy = float(w.grad_t(*a)), np.asarray(w.grad_y(*a), dtype=float).ravel()
+            fpos = np.asarray(w.f_pos(*a), dtype=float).ravel()
+            fneg = np.asarray(w.f_neg(*a), dtype=float).ravel()
+            # the side left: the one whose flow moves g towards the other
+            rate_pos, rate_neg = gt + gy @ fpos, gt + gy @ fneg
+            if rate_pos < 0 and not rate_neg > 0:
+                fm, fp = fpos, fneg
+            elif rate_neg > 0 and not rate_pos < 0:
+                fm, fp = fneg, fpos
+            elif rate_pos < 0 and rate_neg > 0:
+                raise EventError(
+                    f"the field's switch {w.text} at t = {t:.17g}: the flow on both sides "
+                    "points into the surface (a sliding motion), where the sensitivities have "
+                    "no jump mechpy computes")
+            else:
+                return z                     # grazing or leaving on both sides: no crossing
+            gpv = np.zeros(S.shape[1])
+            if gp_cols:
+                allp = np.asarray(w.grad_p(*a), dtype=float).ravel()
+                for j, i in gp_cols:
+                    gpv[j] = allp[i]
+            Sp = _saltation(t, S, np.eye(n), np.zeros(n), gy, gt, fm, fp,
+                            f"the field's switch {w.text}", g_p=gpv)
+            return np.concatenate([y, Sp.ravel()])
+
+        ev = _AugEvent(g, n, None, action)
+        out.append(ev)
+    return out
+
+
 def _aug_events(events, system, n, cols, values, aug):
     """The events of the augmented solve (y, S), or None: each reads the original state,
     and each action jumps S by the saltation matrix (:func:`_saltation`).  ``cols`` maps
     the differentiated parameters to their columns of S, ``values`` the parameters' values
     (an impact's restitution by name), ``aug`` the bound augmented system (its field)."""
+    switches = _switch_events(system, n, cols, values)
     if events is None:
-        return None
+        return switches or None
     from .events import Impact
     evs = [events] if callable(events) else events
     try:
@@ -436,7 +643,7 @@ def _aug_events(events, system, n, cols, values, aug):
                             f"got {type(action).__name__}")
         else:
             out.append(_jump_of_action(ev, action, n, aug, i))
-    return out
+    return out + switches
 
 
 # ---- sensitivities --------------------------------------------------------------------
@@ -564,11 +771,12 @@ def sensitivity(system, t_span, y0, params=(), *, t_eval=None, method: str = "do
     return out
 
 
-def _flow(aug, n, t0, t1, y, cols0, method, rtol, atol, what):
-    """Integrate the augmented system from (y, S = cols0) over [t0, t1]; -> (y, S)."""
+def _flow(aug, n, t0, t1, y, cols0, method, rtol, atol, what, events=None):
+    """Integrate the augmented system from (y, S = cols0) over [t0, t1]; -> (y, S).
+    ``events``: the field's switches (:func:`_switch_events`), where S jumps."""
     ncol = cols0.shape[1]
     s = solve(aug, (t0, t1), np.concatenate([y, cols0.ravel()]), method, rtol=rtol,
-              atol=atol, t_eval=[t1])
+              atol=atol, t_eval=[t1], events=events or None)
     _check(s, what)
     z = s.y[:, -1]
     return z[:n].copy(), z[n:].reshape(n, ncol).copy()
@@ -595,6 +803,7 @@ def _lyapunov_spectrum(system, y0, t, *, dt: float = 1.0, transient: float = 0.0
     transient = as_scalar(transient, "transient", nonnegative=True)
     aug, pn = _augmented(system, (), True)
     aug = _bind(aug, pn, _values(system))
+    switches = _switch_events(system, n, {}, _values(system))
     t0 = 0.0
     if transient > 0:
         s = solve(system, (0.0, transient), y, method, rtol=rtol, atol=atol, t_eval=[transient])
@@ -607,21 +816,51 @@ def _lyapunov_spectrum(system, y0, t, *, dt: float = 1.0, transient: float = 0.0
     running = np.empty((m, n))
     ta = t0
     for i in range(m):
-        y, Phi = _flow(aug, n, ta, times[i], y, Q, method, rtol, atol, "lyapunov_spectrum")
+        try:
+            y1, Phi = _flow(aug, n, ta, times[i], y, Q, method, rtol, atol,
+                            "lyapunov_spectrum", switches)
+        except (NonFiniteError, StepSizeError, StepBudgetError, ConvergenceError) as exc:
+            raise _tangent_failure(exc, system, y, ta, times[i], method, rtol, atol) from exc
+        y = y1
         Q, R = np.linalg.qr(Phi)
         d = np.diag(R)
-        if not np.all(np.isfinite(d)) or np.any(d == 0.0):
+        if not np.all(np.isfinite(d)):
             raise ConvergenceError(
-                f"lyapunov_spectrum: the tangent vectors became degenerate at t = "
-                f"{times[i]:.6g} (a zero or non-finite diagonal of R); use a shorter dt")
-        sums += np.log(np.abs(d))
-        Q = Q * np.sign(d)
+                f"lyapunov_spectrum: the tangent vectors overflowed between t = {ta:.6g} and "
+                f"{times[i]:.6g} (R's diagonal {d.tolist()}): they grow by about "
+                f"exp(lambda dt) over one dt = {T / m:.6g}; use a shorter dt, so that "
+                "lambda_max dt stays well below 709 (float64's range)")
+        # a zero of R's diagonal: the tangent map is singular, a direction of the state
+        # collapsed in finite time (a switch of the field that pins a component, as the
+        # rocket's burn-out pins its mass): its exponent is -inf, and the frame keeps Q's
+        # column for it (any unit vector orthogonal to the others)
+        with np.errstate(divide="ignore"):
+            sums += np.log(np.abs(d))
+        Q = Q * np.where(d < 0, -1.0, 1.0)
         running[i] = sums / (times[i] - t0)
         ta = times[i]
     spec = np.sort(running[-1])[::-1].copy()
     if return_history:
         return spec, times, running
     return spec
+
+
+def _tangent_failure(exc, system, y, ta, tb, method, rtol, atol):
+    """The error of a failed tangent-flow interval of lyapunov_spectrum, in the user's
+    terms (the failing solve's message speaks of the hidden augmented system): the
+    orbit itself fails there (the plain system's own failure), or only the tangent
+    vectors do, which a shorter dt cures."""
+    plain = solve(system, (ta, tb), y, method, rtol=rtol, atol=atol, t_eval=[tb],
+                  errors="status")
+    if plain.status < 0:
+        msg = (f"lyapunov_spectrum: the orbit from y = {y.tolist()} at t = {ta:.6g} fails "
+               f"before t = {tb:.6g}: {plain.message}")
+    else:
+        msg = (f"lyapunov_spectrum: the tangent vectors outgrow float64 between t = "
+               f"{ta:.6g} and {tb:.6g}, though the orbit does not (they grow by about "
+               f"exp(lambda dt) over one dt = {tb - ta:.6g}); use a shorter dt, so that "
+               "lambda_max dt stays well below 709")
+    return type(exc)(msg)
 
 
 # ---- Floquet multipliers --------------------------------------------------------------
@@ -646,6 +885,24 @@ def _first_return(system, y0, f0, t_max, method, rtol, atol):
     return float(te[0])
 
 
+def _check_forcing_period(system, T, y):
+    """ValueError unless f(t + T, y) = f(t, y) at a few (t, y) near the orbit's start:
+    a T that is not a period of the forcing has no periodic orbit to shoot for (Newton
+    still finds a fixed point of phi_T, the state after T, which is no orbit of f)."""
+    rng = np.random.default_rng(0)
+    scale = 1.0 + np.abs(y)
+    for t in (0.0, *(T * rng.random(4))):
+        yy = y + 0.1 * scale * rng.standard_normal(y.size)
+        a = np.asarray(system.rhs(t, yy), dtype=np.float64)
+        b = np.asarray(system.rhs(t + T, yy), dtype=np.float64)
+        gap = np.abs(b - a).max()
+        if gap > 1e-9 * max(1.0, np.abs(a).max(), np.abs(b).max()) * max(1.0, abs(t + T)):
+            raise ValueError(
+                f"floquet: period = {T:.17g} is not a period of the forcing: f(t + T, y) - "
+                f"f(t, y) reaches {gap:.3g} (t = {t:.6g}, y = {yy.tolist()}); give the "
+                "forcing's period (2 pi / omega for a drive at omega) or a multiple of it")
+
+
 def _floquet(system, y0, *, period=None, tol: float = 1e-10, max_iter: int = 50,
              method: str = "dop853", rtol: float = 1e-11, atol: float = 1e-12,
              t_max: float = 1e4, return_orbit: bool = False):
@@ -657,49 +914,78 @@ def _floquet(system, y0, *, period=None, tol: float = 1e-10, max_iter: int = 50,
     max_iter = as_int(max_iter, "max_iter", minimum=1)
     aug, pn = _augmented(system, (), True)
     aug = _bind(aug, pn, _values(system))
+    switches = _switch_events(system, n, {}, _values(system))
     # forced: f depends on t at these parameter values (a drive of amplitude 0 is none)
     fld = system.symbolic()
     forced = any(fld.t in sp.sympify(e).xreplace(fld.params).free_symbols for e in fld.f)
     if period is None and forced:
         raise ValueError("floquet: the system is forced (its right-hand side depends on t): "
                          "give its period (period=...)")
-    T = None if period is None else as_scalar(period, "period", positive=True)
-    eye = np.eye(n)
-    if T is None:
+    guess = None if period is None else as_scalar(period, "period", positive=True)
+
+    def shoot(y, T):
+        """Newton's shooting from (y, T) -> (y, T, M)."""
+        eye = np.eye(n)
+        for it in range(max_iter + 1):
+            yT, M = _flow(aug, n, 0.0, T, y, eye, method, rtol, atol, "floquet", switches)
+            r = yT - y
+            scale = 1.0 + np.linalg.norm(y)
+            if np.linalg.norm(r) <= tol * scale:
+                return y, T, M
+            if it == max_iter:
+                raise ConvergenceError(
+                    f"floquet: Newton's shooting did not converge in {max_iter} iterations "
+                    f"(|phi_T(y) - y| = {np.linalg.norm(r):.3g}); start nearer the orbit")
+            if forced:
+                dy = np.linalg.solve(M - eye, -r)
+                dT = 0.0
+            else:
+                fy = system.rhs(0.0, y)
+                A = np.zeros((n + 1, n + 1))
+                A[:n, :n] = M - eye
+                A[:n, n] = system.rhs(T, yT)
+                A[n, :n] = fy
+                sol = np.linalg.lstsq(A, -np.concatenate([r, [0.0]]), rcond=None)[0]
+                dy, dT = sol[:n], sol[n]
+            y = y + dy
+            T = T + dT
+            if not T > 0:
+                raise ConvergenceError("floquet: the period went non-positive in Newton's "
+                                       "shooting; start nearer the orbit")
+
+    if forced:
+        # the period is the forcing's, fixed: refuse one that is not
+        _check_forcing_period(system, guess, y)
+        y, T, M = shoot(y, guess)
+    else:
         f0 = system.rhs(0.0, y)
         if not np.any(f0):
             raise ValueError("floquet: y0 is a fixed point (f(y0) = 0), not on a periodic orbit")
-        T = _first_return(system, y, f0, t_max, method, rtol, atol)
-    for it in range(max_iter + 1):
-        yT, M = _flow(aug, n, 0.0, T, y, eye, method, rtol, atol, "floquet")
-        r = yT - y
-        scale = 1.0 + np.linalg.norm(y)
-        if np.linalg.norm(r) <= tol * scale:
-            break
-        if it == max_iter:
+        # the first guess of T is the first return to the section through y0 (a given
+        # period only bounds the search, to a few periods); Newton then refines it
+        horizon = t_max if guess is None else min(t_max, 4.0 * guess)
+        try:
+            T = _first_return(system, y, f0, horizon, method, rtol, atol)
+        except ConvergenceError:
+            if guess is None:
+                raise
+            T = guess
+        y, T, M = shoot(y, T)
+        if not np.linalg.norm(system.rhs(0.0, y)) > 1e-8 * (1.0 + np.linalg.norm(y)) / T:
             raise ConvergenceError(
-                f"floquet: Newton's shooting did not converge in {max_iter} iterations "
-                f"(|phi_T(y) - y| = {np.linalg.norm(r):.3g}); start nearer the orbit")
-        if forced:
-            dy = np.linalg.solve(M - eye, -r)
-            dT = 0.0
-        else:
-            fy = system.rhs(0.0, y)
-            A = np.zeros((n + 1, n + 1))
-            A[:n, :n] = M - eye
-            A[:n, n] = system.rhs(T, yT)
-            A[n, :n] = fy
-            sol = np.linalg.lstsq(A, -np.concatenate([r, [0.0]]), rcond=None)[0]
-            dy, dT = sol[:n], sol[n]
-        y = y + dy
-        T = T + dT
-        if not T > 0:
-            raise ConvergenceError("floquet: the period went non-positive in Newton's "
-                                   "shooting; start nearer the orbit or give period=...")
-    if not forced and np.linalg.norm(system.rhs(0.0, y)) <= 1e-8 * scale / T:
-        raise ConvergenceError(
-            f"floquet: Newton's shooting converged to a fixed point (y = {y.tolist()}, "
-            "f(y) = 0), not a periodic orbit: there is none near y0")
+                f"floquet: Newton's shooting converged to a fixed point (y = {y.tolist()}, "
+                "f(y) = 0), not a periodic orbit: there is none near y0")
+        # the minimal period: the converged orbit's first return to its own section; a T
+        # that is k of them (Newton from a guess near k periods) is replaced by it
+        t1 = _first_return(system, y, system.rhs(0.0, y), 1.5 * T, method, rtol, atol)
+        k = int(round(T / t1))
+        if k > 1 and abs(T - k * t1) <= 1e-6 * T:
+            y, T, M = shoot(y, t1)
+        elif abs(T - t1) > 1e-6 * T:
+            raise ConvergenceError(
+                f"floquet: Newton's shooting closed the orbit after T = {T:.10g}, but it first "
+                f"returns to its section after {t1:.10g}, which does not divide T: no "
+                "periodic orbit with a well-defined period was found; start nearer the orbit")
     mult = np.linalg.eigvals(M).astype(complex)
     mult = mult[np.argsort(-np.abs(mult), kind="stable")]
     if return_orbit:

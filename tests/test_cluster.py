@@ -296,3 +296,21 @@ def test_chunks_are_a_few_per_worker_thread(client):
         lazy = _run(mp.solve_many, SCENE, (0, 1), y0s, params=params, client=client,
                     chunk_size=chunk_size, lazy=True)
         assert lazy.y.chunks[0] == rows and lazy.status.chunks[0] == rows
+
+
+def test_client_without_dask_names_the_extra_that_installs_it(monkeypatch):
+    # issue 51, item 20: without Dask, client= names the install command, with the
+    # extra of pyproject.toml that holds dask[distributed] (not a bare import error)
+    import pathlib
+    import tomllib
+    meta = tomllib.loads((pathlib.Path(__file__).parents[1] / "pyproject.toml").read_text())
+    project = meta["project"]
+    extra = next(name for name, reqs in project["optional-dependencies"].items()
+                 if name not in ("test", "docs") and any(r.startswith("dask[distributed]")
+                                                         for r in reqs))
+    want = f'pip install "{project["name"]}[{extra}]"'
+    for mod in ("dask.distributed", "distributed"):
+        monkeypatch.setitem(sys.modules, mod, None)   # an import of it now fails
+    with pytest.raises(ModuleNotFoundError) as exc:
+        mp.solve_many(SCENE, (0, 1), [[0.1, 0.0]], client=object())
+    assert want in str(exc.value) and "client" in str(exc.value)

@@ -814,3 +814,30 @@ def test_splitting_methods_on_several_coordinates(method, order):
     assert errs[0] < {2: 2e-2, 4: 5e-4, 6: 5e-7}[order], errs
     rate = np.log2(errs[0] / errs[1])
     assert abs(rate - order) < 0.1, (errs, rate)
+
+
+# ---- args as SciPy takes them (issue 51, item 17) ---------------------------
+
+def test_args_none_is_no_arguments_and_a_non_iterable_is_refused_as_scipy_does():
+    # solve_ivp: args=None means no extra arguments, an iterable is unpacked, and a
+    # value that cannot be unpacked is a TypeError (not wrapped into a 1-tuple)
+    def decay(t, y):
+        return -y
+
+    def rate(t, y, a):
+        return -a * y
+
+    s = mp.solve(decay, (0, 1), [1.0], args=None, rtol=1e-10, atol=1e-12)
+    assert abs(s.y[0, -1] - np.exp(-1.0)) < 1e-9
+    e = mp.solve_many(decay, (0, 1), [[1.0], [2.0]], args=None, rtol=1e-10, atol=1e-12)
+    assert np.allclose(e.y[:, 0, -1], [np.exp(-1.0), 2 * np.exp(-1.0)], rtol=1e-8, atol=0)
+    with pytest.raises(TypeError, match="cannot be unpacked"):
+        solve_ivp(rate, (0, 1), [1.0], args=2.0)
+    with pytest.raises(TypeError, match=r"args must be a tuple.*args=\(2\.0,\)"):
+        mp.solve(rate, (0, 1), [1.0], args=2.0)
+    with pytest.raises(TypeError, match=r"args must be a tuple.*args=\(2\.0,\)"):
+        mp.solve_many(rate, (0, 1), [[1.0]], args=2.0)
+    # a list is unpacked, as by SciPy: y' = -2 y
+    ref = solve_ivp(rate, (0, 1), [1.0], args=[2.0], rtol=1e-10, atol=1e-12).y[0, -1]
+    got = mp.solve(rate, (0, 1), [1.0], args=[2.0], rtol=1e-10, atol=1e-12).y[0, -1]
+    assert abs(got - np.exp(-2.0)) < 1e-9 and abs(ref - np.exp(-2.0)) < 1e-8

@@ -1,6 +1,7 @@
 """Phase space: vector fields, fixed points, limit cycles, sections, Lyapunov exponents."""
 import numpy as np
 import pytest
+import sympy as sp
 from scipy.integrate import solve_ivp
 
 import mechpy as mp
@@ -296,3 +297,41 @@ def test_logistic_at_the_ends_of_its_domain():
     for bad in (-1e-12, 1.0 + 1e-12):
         with pytest.raises(ValueError, match=r"x0 must lie in \[0, 1\]"):
             mp.phase.logistic(2.0, bad)
+
+
+# ---- floquet: the minimal period, and a forcing's period checked (issue 51) --------------
+
+VDP_PERIOD = 6.6632868593231301          # Van der Pol's limit cycle at mu = 1 (published)
+
+
+@pytest.mark.parametrize("guess", [None, 6.0, 13.3, 20.0])
+def test_floquet_van_der_pol_minimal_period_from_any_guess(guess):
+    # a guess 10 % low, or near 2 or 3 periods, gives the minimal period and its
+    # multipliers: 1 (along f) and exp of the divergence mu (1 - x^2) integrated over it
+    T, mu = mp.phase.floquet(mp.scenes.VanDerPol(1.0), [2.0, 0.0], period=guess)
+    assert abs(T - VDP_PERIOD) < 3e-12                      # measured 2.9e-13
+
+    def aug(t, z):
+        x, v = z[:2]
+        return [v, (1 - x * x) * v - x, 1 - x * x]
+    _, _, orbit = mp.tangent._floquet(mp.scenes.VanDerPol(1.0), [2.0, 0.0],
+                                      return_orbit=True)
+    div = solve_ivp(aug, (0, VDP_PERIOD), [*orbit, 0.0], method="DOP853", rtol=1e-12,
+                    atol=1e-12).y[2, -1]
+    assert abs(mu[0] - 1) < 2e-11                           # measured 1.9e-12
+    assert abs(mu[1] / np.exp(div) - 1) < 8e-11             # measured 8.3e-12
+
+
+def test_floquet_refuses_a_period_that_is_not_the_forcings():
+    # x'' + 0.3 x' + x = cos(1.3 t): the multipliers are exp(-0.15 P) at P = 2 pi / 1.3 (and
+    # at 2P their squares); T = 1.37 P is no period of the forcing: a ValueError, not the
+    # multipliers of an orbit that does not close
+    x, v, t = sp.symbols("x v t")
+    osc = mp.equations([v, -x - 0.3 * v + sp.cos(1.3 * t)], [x, v])
+    P = 2 * np.pi / 1.3
+    for k in (1, 2):
+        T, mu = mp.phase.floquet(osc, [0.0, 0.0], period=k * P)
+        assert T == k * P   # measured below 2e-12:
+        assert np.abs(np.abs(mu) / np.exp(-0.15 * k * P) - 1).max() < 2e-11
+    with pytest.raises(ValueError, match="not a period of the forcing"):
+        mp.phase.floquet(osc, [0.0, 0.0], period=1.37 * P)

@@ -287,3 +287,77 @@ def test_bad_input():
         mp.phase.floquet(mp.scenes.VanDerPol(), [0.0, 0.0])
     with pytest.raises(ValueError, match="sigma must be positive"):
         mp.fit(sc, t, data, {"damping": 0.1}, y0=[0.1, 0.0], observe=0, sigma=-1.0)
+
+
+# ---- issue 51: non-smooth fields, and failures in the user's terms ---------------------
+
+def test_rocket_sensitivities_across_burnout_against_central_differences():
+    # drag k v|v| (Abs' = sign) and the burn-out switch m > m_dry (the sensitivities
+    # jump there by the saltation matrix: the burn-out time depends on b, m_dry and m0)
+    base = dict(exhaust_speed=2500.0, burn_rate=10.0, m0=1000.0, m_dry=200.0, g=9.81,
+                drag=2e-3)
+    rk = mp.scenes.Rocket(**base)
+    y0 = rk.initial_state()
+    te = [60.0, 120.0]                       # burn-out at 80 s
+    names = ("exhaust_speed", "burn_rate", "m_dry", "g", "drag")
+    s = mp.sensitivity(rk, (0, 120), y0, params=names, t_eval=te, rtol=1e-12, atol=1e-12)
+
+    def run(kw, yy):
+        sc = mp.scenes.Rocket(**{**base, **kw})
+        return mp.solve(sc, (0, 120), yy, t_eval=te, rtol=1e-13, atol=1e-12).y
+
+    cols = []
+    for nm in names:
+        h = 1e-5 * base[nm]
+        cols.append((run({nm: base[nm] + h}, y0) - run({nm: base[nm] - h}, y0)) / (2 * h))
+    for k, h in enumerate((1.0, 1e-2, 1e-2)):     # height enters linearly
+        e = np.zeros(3)
+        e[k] = h
+        cols.append((run({}, y0 + e) - run({}, y0 - e)) / (2 * h))
+    cd = np.stack(cols, axis=1)                  # (3, 8, 2)
+    # measured: at most 4.5e-10 of each column's largest entry (burn_rate's)
+    for j in range(8):
+        scale = np.abs(cd[:, j]).max()
+        assert np.abs(s.S[:, j] - cd[:, j]).max() <= 5e-9 * scale, (j, s.S[:, j], cd[:, j])
+    # after burn-out the mass is m_dry whatever b or m0: its row vanishes but for m_dry
+    assert np.abs(s.S[2, :, -1] - [0, 0, 1, 0, 0, 0, 0, 0]).max() < 1e-12
+
+
+def test_rocket_fit_and_lyapunov_spectrum():
+    # fit recovers drag and burn rate (the latter needs the jump at burn-out); the
+    # Lyapunov spectrum has -inf for the mass, pinned at m_dry after burn-out
+    base = dict(exhaust_speed=2500.0, burn_rate=10.0, m0=1000.0, m_dry=200.0, g=9.81,
+                drag=2e-3)
+    rk = mp.scenes.Rocket(**base)
+    y0 = rk.initial_state()
+    t = np.linspace(0, 120, 25)
+    data = mp.solve(rk, (0, 120), y0, t_eval=t, rtol=1e-12, atol=1e-12).y[:2]
+    r = mp.fit(rk, t, data, {"drag": 1e-3, "burn_rate": 9.0}, y0=y0, observe=[0, 1])
+    assert r.success
+    assert abs(r.params["drag"] / 2e-3 - 1) < 1e-8 and abs(r.params["burn_rate"] / 10 - 1) < 1e-8
+    lam = mp.phase.lyapunov_spectrum(rk, y0, 100.0, dt=10.0)
+    assert lam[0] == 0.0 and -0.1 < lam[1] < 0 and lam[2] == -np.inf
+
+
+def test_underivable_field_names_the_users_row():
+    # a function SymPy cannot differentiate: the message names f[1] and the component,
+    # not a row of the generated augmented system
+    x, v = sp.symbols("x v")
+    F = sp.Function("F")
+    with pytest.raises(ValueError, match=r"d f\[1\] / d y\[0\]"):
+        mp.tangent._derivatives([v, -F(x)], [x, v], sp.Symbol("t"), [], ["x", "v"])
+
+
+def test_lyapunov_overflow_within_dt_says_shorten_dt():
+    # x'' = 900 x: the tangent vectors grow by exp(30 dt); over dt = 40 that is past
+    # float64 (the state, started at 1e-300, is not): the error names dt, not the solver
+    x, v = sp.symbols("x v")
+    sad = mp.equations([v, 900 * x], [x, v])
+    with pytest.raises(mp.MechpyError, match="shorter dt") as exc:
+        mp.phase.lyapunov_spectrum(sad, [1e-300, 0.0], 40.0, dt=40.0)
+    assert "dydt" not in str(exc.value) and "radau" not in str(exc.value)
+    # with dt = 0.1: |Phi(t) e1| = |(cosh 30t, 30 sinh 30t)| -> e^(30 t) sqrt(901) / 2, so
+    # lambda_1 over 40 s is 30 + ln(sqrt(901) / 2) / 40; the sum is the divergence, 0
+    lam = mp.phase.lyapunov_spectrum(sad, [1e-300, 0.0], 40.0, dt=0.1)
+    assert abs(lam[0] - (30 + np.log(np.sqrt(901) / 2) / 40)) < 3e-9   # measured 2.9e-10
+    assert abs(lam.sum()) < 1e-9                 # measured 8.2e-11
