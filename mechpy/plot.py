@@ -1,4 +1,4 @@
-"""Plots (matplotlib, an optional dependency: ``pip install mechpy[plot]``).
+"""Plots (matplotlib, an optional dependency: ``pip install "mechpy-classical[plot]"``).
 
 Array shapes follow the layout rule in :mod:`mechpy` (``help(mechpy)``):
 a path in space as ``Solution.y`` gives it, (3, m).
@@ -362,7 +362,7 @@ def animate_field(system, xlim=(-2 * np.pi, 2 * np.pi), ylim=(-4.0, 4.0), *, par
     param : str, optional
         The name of a parameter of the scene ``system`` (e.g. ``"mu"`` for
         :class:`mechpy.scenes.VanDerPol`) to offer on a slider; needs
-        ipywidgets (``pip install mechpy[plot]``).
+        ipywidgets (``pip install "mechpy-classical[plot]"``).
     values : array_like, shape (m,), optional
         The values the slider offers (required with ``param``).
 
@@ -427,7 +427,7 @@ def animate_field(system, xlim=(-2 * np.pi, 2 * np.pi), ylim=(-4.0, 4.0), *, par
         import ipywidgets as widgets
     except ImportError as exc:
         raise ImportError("animate_field(param=...) draws a slider and needs ipywidgets: "
-                          "pip install ipywidgets (or mechpy[plot])") from exc
+                          "pip install ipywidgets (or mechpy-classical[plot])") from exc
     plt = _plt()
     opts = dict(particles=particles, frames=frames, dt=dt, trail=trail, respawn=respawn, t=t,
                 seed=seed, path=None, interval=interval)

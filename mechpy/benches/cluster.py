@@ -44,7 +44,7 @@ def run(quick: bool):
         from dask.distributed import Client, LocalCluster
         import dask.array as da
     except ImportError:
-        print("  (dask[distributed] is not installed: pip install 'mechpy[cluster]')")
+        print("  (dask[distributed] is not installed: pip install 'mechpy-classical[cluster]')")
         return []
     p = mp.scenes.Pendulum()
     rows = []

@@ -19,7 +19,7 @@ page exposes ``window.mechpyLive`` (``pause``, ``play``, ``step``,
 ``particles``, ``seeds``, ``setParam``, ``frame``, ``positions``, ``overlays``,
 ``fps``) for tests and automation.
 
-Needs anywidget (the ``live`` extra: ``pip install "mechpy[live]"``).
+Needs anywidget (the ``live`` extra: ``pip install "mechpy-classical[live]"``).
 """
 from __future__ import annotations
 
