@@ -128,16 +128,23 @@ def _make(kind, ir_fn, key_parts, params, backend, constraints=()):
         meta = build.load_meta(key)
         if meta is not None and meta.get("param_names") == list(params):
             return CompiledScene(meta, params, "c")
+    from .. import _progress
     from . import codegen    # SymPy's C printer: loaded only to derive
-    ir = ir_fn()
-    try:
-        source = codegen.c_source(ir, _core.STATUS)
-    except ValueError as exc:
-        if backend == "c":
-            raise
-        source = f"/* not printable as C: {exc} */"    # NumPy evaluates it
-    meta = _meta(ir, source, constraints, numpy_blocks=backend in ("numpy", "numba"))
-    scene = CompiledScene(meta, params, backend)
+    steps = ("deriving the equations", "printing C",
+             "compiling" if backend != "numpy" else "binding")
+    with _progress.Stages(f"mp.{kind}", steps) as bar:   # shown past a second
+        bar.stage(steps[0])
+        ir = ir_fn()
+        bar.stage(steps[1])
+        try:
+            source = codegen.c_source(ir, _core.STATUS)
+        except ValueError as exc:
+            if backend == "c":
+                raise
+            source = f"/* not printable as C: {exc} */"    # NumPy evaluates it
+        meta = _meta(ir, source, constraints, numpy_blocks=backend in ("numpy", "numba"))
+        bar.stage(steps[2])
+        scene = CompiledScene(meta, params, backend)
     if backend == "c":
         build.store_meta(key, meta)
     return scene
