@@ -59,9 +59,10 @@ def test_mixed_calls_from_8_threads_equal_serial():
 
 
 LONG = {
-    "ode_solve": lambda: mp.solve(mp.scenes.Kepler(), (0, 4000.0),
+    # (each call at least ~0.1 s: 20 switch intervals are 0.02 s, which a release build
+    # of a 4000-unit Kepler orbit, 0.020 s, and 400 lane trajectories reached)
+    "ode_solve": lambda: mp.solve(mp.scenes.Kepler(), (0, 20000.0),
                                   mp.scenes.Kepler().initial_state(0.6), rtol=1e-12),
-    # (0.02 s in lanes for 400 trajectories: at the 20-switch limit; 2000 take 0.1 s)
     "ode_solve_many": lambda: mp.solve_many(mp.scenes.Pendulum(), (0, 50.0),
                                             np.c_[np.linspace(0.1, 3, 2000), np.zeros(2000)],
                                             threads=1, rtol=1e-10),
