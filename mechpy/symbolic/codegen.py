@@ -656,6 +656,11 @@ class _Emitter:
                 for a in reversed(args[:-1]):
                     text = f"{f}({a}, {text})"
                 return text
+            if name == "sign" and len(x.args) == 1:
+                # SymPy's sign: 1, -1, or the argument itself at 0 (0.0 or
+                # -0.0) and at NaN (kept NaN, as every other function keeps it)
+                a = self.expr(x.args[0])
+                return f"({a} > 0.0 ? 1.0 : ({a} < 0.0 ? -1.0 : {a}))"
             r = _RECIPROCAL.get(name)
             if r is not None and len(x.args) == 1:
                 return f"(1.0/{self.funcs[r]}({self.expr(x.args[0])}))"
@@ -667,7 +672,8 @@ class _Emitter:
 
 #: Why an expression cannot be printed.
 _NOT_C = ("mechpy cannot print it as C (it prints numbers, +, *, powers, Piecewise and the "
-          "functions " + ", ".join(sorted(set(_FUNCS1) - {"pow"} | set(_RECIPROCAL))) + ")")
+          "functions " + ", ".join(sorted(set(_FUNCS1) - {"pow"} | set(_RECIPROCAL)
+                                          | {"sign"})) + ")")
 
 
 def _first_unprintable(x):

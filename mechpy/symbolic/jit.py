@@ -14,6 +14,13 @@ give the same solution to round-off.  What the numba build lacks: the lane
 right-hand side of ensembles (``solve_many`` runs trajectory by trajectory)
 and the fixed-step blocks with the rhs inlined (fixed steps call the rhs).
 
+Every function is compiled with numba's NumPy error model
+(``error_model="numpy"``): a division by zero gives inf or NaN as IEEE 754
+says and as the C build computes it, and the engine reports the non-finite
+value (NonFiniteError).  Python's error model would raise inside the cfunc,
+where nothing can catch it: numba prints "Exception ignored" and the caller
+reads whatever the output held.
+
 The generated module is written to the cache folder (``jit_<key>.py``) and
 numba caches its machine code beside it (``cache=True``): a second process
 loads the system without compiling.
@@ -39,16 +46,28 @@ def available() -> bool:
     return True
 
 
+def _printer_class():
+    """SymPy's Python printer with sign printed as the C build prints it (1,
+    -1, or the argument itself at 0 and NaN; SymPy's own gives +-1 for NaN)."""
+    from sympy.printing.pycode import PythonCodePrinter
+
+    class Printer(PythonCodePrinter):
+        def _print_sign(self, e):
+            a = self._print(e.args[0])
+            return f"(1.0 if ({a}) > 0.0 else (-1.0 if ({a}) < 0.0 else ({a})))"
+    return Printer
+
+
 def _block(name: str, exprs, with_z: bool = False) -> str:
     """A numba-compiled function ``name(t, y, p[, z], out)`` writing ``exprs``
     (in mp_t, mp_y*, mp_p*, mp_z*) to out[], after common subexpression
     elimination."""
     import sympy as sp
-    from sympy.printing.pycode import PythonCodePrinter
 
+    printer = _printer_class()
     exprs = [sp.sympify(e) for e in exprs]
     subs, red = sp.cse(exprs, symbols=sp.numbered_symbols("mp_c"))
-    pr = PythonCodePrinter({"fully_qualified_modules": True, "standard": "python3"})
+    pr = printer({"fully_qualified_modules": True, "standard": "python3"})
     body = [f"    {s} = {pr.doprint(e)}" for s, e in subs]
     body += [f"    out[{i}] = {pr.doprint(e)}" for i, e in enumerate(red)]
     text = "\n".join(body)
@@ -58,12 +77,13 @@ def _block(name: str, exprs, with_z: bool = False) -> str:
     if re.search(r"\bmp_t\b", text):
         head.append("    mp_t = t")
     args = "t, y, p, z, out" if with_z else "t, y, p, out"
-    return (f"@numba.njit(cache=True, fastmath=False)\ndef {name}({args}):\n"
+    return (f"@numba.njit(cache=True, fastmath=False, error_model=\"numpy\")\n"
+            f"def {name}({args}):\n"
             + "\n".join(head + body + ["    return 0"]) + "\n")
 
 
 _RUNTIME = '''
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def mp_lu(A, piv, dinv):
     """mp_lu of the C build (codegen.RUNTIME), operation for operation."""
     amax = 0.0
@@ -101,7 +121,7 @@ def mp_lu(A, piv, dinv):
     return MP_OK
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def mp_lu_solve(LU, piv, dinv, x):
     for k in range(NA):
         p = piv[k]
@@ -121,7 +141,7 @@ def mp_lu_solve(LU, piv, dinv, x):
         x[i] = s * dinv[i]
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def gen_solve(t, y, p, A0, LU, piv, dinv, z):
     gen_A(t, y, p, A0)
     if NA == 1:
@@ -215,7 +235,7 @@ def constraints(t, y_, out_, p_):
     return MP_OK
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _lambda(t, y, p, A0, z):
     LU = STACKF(NA * NA)
     dinv = STACKF(NA)
@@ -329,7 +349,8 @@ class CFuncs(dict):
         import numba
         if name not in self.names:
             raise KeyError(name)
-        f = self[name] = numba.cfunc(self._mod.SIG, cache=True)(getattr(self._mod, name))
+        f = self[name] = numba.cfunc(self._mod.SIG, cache=True, error_model="numpy")(
+            getattr(self._mod, name))
         return f
 
 
