@@ -230,9 +230,13 @@ def _compile(source: str, cmd: list, target: str, folder: str) -> None:
             with os.fdopen(fd, "w") as f:
                 f.write(text)
             srcs.append(src)
+        # every compiler process stays in procs until it has been waited for:
+        # an exception while waiting (a unit failed, KeyboardInterrupt) kills
+        # the ones still running, the one being waited on included, so that no
+        # compiler outlives the call
         if len(srcs) == 1:
             full = cmd + flags + ["-o", tmp_so, srcs[0]] + list(LIBS)
-            _wait(_run(full), full)
+            procs.append((_run(full), full))
         else:
             compile_flags = [f for f in flags if f != "-shared"]
             objs = [src[:-2] + ".o" for src in srcs]
@@ -241,19 +245,24 @@ def _compile(source: str, cmd: list, target: str, folder: str) -> None:
                 full = cmd + compile_flags + ["-c", "-o", obj, src]
                 procs.append((_run(full), full))
             while procs:
-                proc, full = procs.pop(0)
+                proc, full = procs[0]
                 _wait(proc, full)
+                procs.pop(0)
             full = cmd + ["-shared", "-o", tmp_so] + objs + list(LIBS)
-            _wait(_run(full), full)
+            procs.append((_run(full), full))
+        proc, full = procs[0]
+        _wait(proc, full)
+        procs.pop(0)
         if os.path.getsize(tmp_so) == 0:
             raise CompileError(f"the C compiler {' '.join(full)!r} exited 0 but wrote no "
                                "library: set MECHPY_CC to a working C compiler or use "
                                "backend='numpy'")
         os.replace(tmp_so, target)
     finally:
-        for proc, _ in procs:      # a unit failed: stop the others
-            proc.kill()
-            proc.communicate()
+        for proc, _ in procs:      # a unit failed or the wait was interrupted
+            if proc.poll() is None:
+                proc.kill()
+            proc.communicate()     # reaped: no zombie, its pipes closed
         for f in made:
             try:
                 os.unlink(f)
