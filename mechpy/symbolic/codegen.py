@@ -695,9 +695,12 @@ def _product(factors):
     return factors[0] if len(factors) == 1 else sp.Mul._from_args(factors)
 
 
-def _block(name, exprs, ir, args, what, static=True):
+def _block(name, exprs, ir, args, what, static=True, sparse=False):
     """A function ``name`` (static unless ``static`` is False) writing the
-    expressions to out[]."""
+    expressions to out[].  ``sparse``: out[] is zeroed by one loop and only the
+    entries not identically zero are printed, so that the text grows with the
+    nonzeros, not with the block's length (a Jacobian: n^2 entries, a few per
+    row nonzero in a chain)."""
     names = {ir.T: "t"}
     for i, p in enumerate(ir.P):
         names[p] = f"mp_p{i}"
@@ -705,9 +708,11 @@ def _block(name, exprs, ir, args, what, static=True):
     em = _Emitter(names, ir.P)
     for e in exprs:
         em.scan(e)
-    outs = []
+    outs = [f"    for (int i = 0; i < {len(exprs)}; i++) out[i] = 0.0;"] if sparse else []
     try:
         for i, e in enumerate(exprs):
+            if sparse and e == 0:
+                continue
             outs.append(f"    out[{i}] = {em.expr(e)};")
     except _Unprintable as exc:
         from .derive import explain
@@ -1077,7 +1082,7 @@ def _equations_source(ir, status):
     B = ir.blocks
     parts = [_header(ir, status), _dims(ir),
              _block("gen_f", B["f"], ir, _ARGS, "rhs"),
-             _block("gen_J", B["J"], ir, _ARGS, "the Jacobian")]
+             _block("gen_J", B["J"], ir, _ARGS, "the Jacobian", sparse=True)]
     parts.append(r"""
 /* dy/dt = f(t, y). */
 int mp_gen_rhs(double t, const double *y, double *dydt, void *params)

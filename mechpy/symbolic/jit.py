@@ -58,10 +58,11 @@ def _printer_class():
     return Printer
 
 
-def _block(name: str, exprs, with_z: bool = False) -> str:
+def _block(name: str, exprs, with_z: bool = False, sparse: bool = False) -> str:
     """A numba-compiled function ``name(t, y, p[, z], out)`` writing ``exprs``
     (in mp_t, mp_y*, mp_p*, mp_z*) to out[], after common subexpression
-    elimination."""
+    elimination.  ``sparse``: out[] zeroed by one loop, then only the entries
+    not identically zero written (the module grows with the nonzeros)."""
     import sympy as sp
 
     printer = _printer_class()
@@ -69,7 +70,10 @@ def _block(name: str, exprs, with_z: bool = False) -> str:
     subs, red = sp.cse(exprs, symbols=sp.numbered_symbols("mp_c"))
     pr = printer({"fully_qualified_modules": True, "standard": "python3"})
     body = [f"    {s} = {pr.doprint(e)}" for s, e in subs]
-    body += [f"    out[{i}] = {pr.doprint(e)}" for i, e in enumerate(red)]
+    if sparse:
+        body += [f"    for i in range({len(red)}):", "        out[i] = 0.0"]
+    body += [f"    out[{i}] = {pr.doprint(e)}" for i, e in enumerate(red)
+             if not (sparse and e == 0)]
     text = "\n".join(body)
     import re
     used = sorted(set(re.findall(r"\bmp_[ypz]\d+\b", text)), key=lambda s: (s[3], int(s[4:])))
@@ -328,7 +332,7 @@ def module_source(meta: dict, status: dict) -> str:
             parts.append(_block("gen_g", blocks["g"]))
         parts += [_RUNTIME, _LAGRANGIAN] + ([_CONSTRAINED] if k else [])
     else:
-        parts += [_block("gen_f", blocks["f"]), _block("gen_J", blocks["J"])]
+        parts += [_block("gen_f", blocks["f"]), _block("gen_J", blocks["J"], sparse=True)]
         if "energy" in blocks:
             parts += [_block("gen_energy", blocks["energy"]), _ENERGY_EQ]
         parts.append(_EQUATIONS)
