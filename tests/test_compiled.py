@@ -1883,6 +1883,5 @@ def test_jacobian_source_grows_with_its_nonzeros():
                                        atol=0)
     assert per[1] < 1.5 * per[0], per
     # the whole source is linear too: measured 172 characters a nonzero at 160
-    # states (the rhs, its lane version, the fixed-step blocks), 3,600 with the
-    # dense Jacobian
+    # states (the rhs, its lane version, the fixed-step blocks beside the Jacobian)
     assert len(s.c_source) < 500 * nnz
