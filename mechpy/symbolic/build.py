@@ -142,12 +142,28 @@ def _mkstemp(folder: str, suffix: str):
         raise _Unwritable(folder, exc) from None
 
 
+def _env_cc() -> str:
+    """``MECHPY_CC`` stripped; blank (empty or spaces) counts as unset (it was
+    split into no words, and the first flag, -O2, ran as the compiler)."""
+    return os.environ.get("MECHPY_CC", "").strip()
+
+
 def compiler() -> list:
-    """The compiler command: ``MECHPY_CC`` if set, else sysconfig's ``CC``, else ``cc``."""
+    """The compiler command: ``MECHPY_CC`` if set (and not blank), else
+    sysconfig's ``CC``, else ``cc``, split as a shell splits words.  A command
+    that does not split (an unclosed quote) is a CompileError naming where it
+    comes from."""
     import shlex
     import sysconfig
-    cc = os.environ.get("MECHPY_CC") or sysconfig.get_config_var("CC") or "cc"
-    return shlex.split(cc)
+    env = _env_cc()
+    cc = env or sysconfig.get_config_var("CC") or "cc"
+    try:
+        words = shlex.split(cc)
+    except ValueError as exc:
+        where = "MECHPY_CC" if env else "sysconfig's CC"
+        raise CompileError(f"the compiler command {where} = {cc!r} cannot be split into "
+                           f"words ({exc}): fix its quoting") from None
+    return words or ["cc"]
 
 
 def have_compiler() -> bool:
@@ -157,7 +173,7 @@ def have_compiler() -> bool:
     names a program on PATH.  Where there is none, ``backend="c"`` takes the
     numba build (:mod:`.jit`) with one warning, if numba is installed."""
     import shutil
-    if os.environ.get("MECHPY_CC"):
+    if _env_cc():
         return True
     cmd = compiler()
     return bool(cmd) and shutil.which(cmd[0]) is not None
