@@ -1885,3 +1885,64 @@ def test_jacobian_source_grows_with_its_nonzeros():
     # the whole source is linear too: measured 172 characters a nonzero at 160
     # states (the rhs, its lane version, the fixed-step blocks beside the Jacobian)
     assert len(s.c_source) < 500 * nnz
+
+
+# ---- clear errors (issue 51) ------------------------------------------------------
+
+def test_a_singular_lagrangian_says_what_is_singular():
+    """A Lagrangian with no kinetic term was reported as "singular
+    configuration (gimbal lock, singular matrix)"; the error now says that L
+    has no kinetic term, or which constraint Jacobian is rank-deficient."""
+    th, = mp.coordinates("theta")
+    pot = mp.lagrangian(-sp.cos(th), [th])
+    for call in (lambda: pot.rhs(0.0, [0.1, 0.0]), lambda: mp.solve(pot, (0, 1), [0.1, 0.0])):
+        with pytest.raises(mp.SingularityError, match=r"L has no kinetic term: its mass "
+                           r"matrix d2L/dq'dq' is 0 at t = 0\.0, y = \[0\.1, 0\.0\]") as err:
+            call()
+        assert "gimbal" not in str(err.value)
+    x, y = mp.coordinates("x y")
+    ring = mp.lagrangian((x.diff(t) ** 2 + y.diff(t) ** 2) / 2, [x, y],
+                         constraints=[x ** 2 + y ** 2 - 1])
+    with pytest.raises(mp.SingularityError, match=r"the constraints' Jacobian dg/dq has rank "
+                       r"0 of 1 at t = 0\.0"):
+        ring.rhs(0.0, [0.0, 0.0, 0.0, 0.0])     # dg/dq = 2 (x, y) = 0 at the centre
+    np.testing.assert_allclose(ring.rhs(0.0, [1.0, 0.0, 0.0, 0.5])[2:], [-0.25, 0.0],
+                               atol=1e-15)    # centripetal: -v^2 / r on the circle
+
+
+def test_compiler_command_errors_name_mechpy_cc(monkeypatch):
+    """MECHPY_CC='gcc "' gave shlex's bare "No closing quotation", and a blank
+    MECHPY_CC ran "-O2" as the compiler: the first names MECHPY_CC, the second
+    counts as unset."""
+    from mechpy.symbolic import build
+    monkeypatch.setenv("MECHPY_CC", 'gcc "')
+    with pytest.raises(mp.CompileError, match=r"MECHPY_CC = 'gcc \"' cannot be split into "
+                       r"words \(No closing quotation\)"):
+        build.compiler()
+    for blank in ("", "   "):
+        monkeypatch.setenv("MECHPY_CC", blank)
+        assert build.compiler()[0] != "-O2" and build.compiler() == _default_cc(monkeypatch)
+        x, v = sp.symbols("x v")
+        osc = mp.equations([v, -2.5 * x], [x, v])
+        np.testing.assert_array_equal(osc.rhs(0.0, [1.0, 0.0]), [0.0, -2.5])
+
+
+def _default_cc(monkeypatch):
+    """The compiler command with MECHPY_CC unset."""
+    from mechpy.symbolic import build
+    with monkeypatch.context() as m:
+        m.delenv("MECHPY_CC", raising=False)
+        return build.compiler()
+
+
+def test_first_step_below_the_normal_range_is_refused():
+    """first_step=5e-324 made radau report an overflow ("rescale the system");
+    a first step below the smallest normal double is refused as a fixed h below
+    the spacing of t is (radau overflowed at 1e-308 and ran at 2.2e-308)."""
+    P = mp.scenes.Pendulum()
+    for fs in (5e-324, 1e-308):
+        with pytest.raises(ValueError, match=r"first_step = .* is below the smallest normal "
+                           r"double"):
+            mp.solve(P, (0, 1), [0.1, 0.0], method="radau", first_step=fs)
+    s = mp.solve(P, (0, 1), [0.1, 0.0], method="radau", first_step=2.2250738585072014e-308)
+    assert s.success

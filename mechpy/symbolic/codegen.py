@@ -1380,6 +1380,14 @@ int mp_gen_residual_jac(double t, const double *y, double *out, void *params)
     gen_GJ(t, y, (const double *)params, out);
     return MP_OK;
 }
+
+/* out (NA * NA + NA) = A (row-major), then b, unsolved: what a failed solve
+ * is diagnosed from (which row is not finite, which block is singular). */
+int mp_gen_Ab(double t, const double *y, double *out, void *params)
+{
+    gen_Ab(t, y, (const double *)params, out);
+    return MP_OK;
+}
 """)
     parts[-1] = parts[-1].replace("MP_GEN_RHS\n", rhs)
     parts.append(_first_order_tail("energy" in B, "a mechanics model"))
