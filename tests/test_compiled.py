@@ -1946,3 +1946,31 @@ def test_first_step_below_the_normal_range_is_refused():
             mp.solve(P, (0, 1), [0.1, 0.0], method="radau", first_step=fs)
     s = mp.solve(P, (0, 1), [0.1, 0.0], method="radau", first_step=2.2250738585072014e-308)
     assert s.success
+
+
+def test_a_truncated_numba_cache_file_is_rebuilt(tmp_path):
+    """A truncated numba cache file (jit_<key>.*.nbc) made every later build
+    of that system fail with numba's raw UnpicklingError, in every process;
+    it is deleted and compiled again, as a damaged C library is."""
+    pytest.importorskip("numba")
+    code = textwrap.dedent("""
+        import sympy as sp, mechpy as mp
+        x, v = sp.symbols("x v")
+        s = mp.equations([v, -3.0 * x], [x, v], backend="numba")
+        print(s.rhs(0.0, [1.0, 0.5]).tolist())
+    """)
+    env = dict(os.environ, MECHPY_CACHE_DIR=str(tmp_path))
+
+    def run():
+        r = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
+                           text=True, timeout=600)
+        assert r.returncode == 0, r.stderr[-3000:]
+        return r.stdout.strip().splitlines()[-1]
+    assert run() == "[0.5, -3.0]"
+    data = [p for p in tmp_path.rglob("jit_*.nbc")]
+    assert data
+    for p in data:
+        p.write_bytes(p.read_bytes()[:20])
+    assert run() == "[0.5, -3.0]"
+    assert all(p.stat().st_size > 20 for p in tmp_path.rglob("jit_*.nbc"))
+    assert run() == "[0.5, -3.0]"      # and the rebuilt files load

@@ -353,9 +353,47 @@ class CFuncs(dict):
         import numba
         if name not in self.names:
             raise KeyError(name)
-        f = self[name] = numba.cfunc(self._mod.SIG, cache=True, error_model="numpy")(
-            getattr(self._mod, name))
+
+        def make():
+            return numba.cfunc(self._mod.SIG, cache=True, error_model="numpy")(
+                getattr(self._mod, name))
+        try:
+            f = make()
+        except Exception:
+            # numba's cache files of this module (jit_<key>.*.nbi, .nbc) may be
+            # truncated or damaged (an interrupted write, a full disk): numba
+            # then raises from its unpickling in every later process.  They are
+            # deleted and the function compiled again, once; an error that is
+            # not the cache's comes back from the second attempt.
+            if not _purge_cache(self._mod):
+                raise
+            f = make()
+        self[name] = f
         return f
+
+
+def _purge_cache(mod) -> bool:
+    """Delete numba's cache files of the generated module ``mod`` (index and
+    data, ``<module file>.*.nbi`` / ``.nbc``, in the folder numba's locator
+    chose); whether there were any."""
+    import glob
+    import numba
+    stem = os.path.splitext(os.path.basename(mod.__file__))[0]
+    folders = set()
+    for obj in vars(mod).values():
+        cache = getattr(obj, "_cache", None)
+        path = getattr(cache, "cache_path", None)
+        if isinstance(obj, numba.core.dispatcher.Dispatcher) and isinstance(path, str):
+            folders.add(path)
+    gone = False
+    for folder in folders:
+        for f in glob.glob(os.path.join(glob.escape(folder), glob.escape(stem) + ".*.nb[ci]")):
+            try:
+                os.unlink(f)
+                gone = True
+            except FileNotFoundError:
+                pass
+    return gone
 
 
 #: The systems built in this process, by their description's hash (a scene's
