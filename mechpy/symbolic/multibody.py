@@ -477,8 +477,9 @@ class MechanicsScene(CompiledScene):
             bad = np.flatnonzero(~np.isfinite(b))
             if bad.size:
                 i = bad[0]
-                return (f"{row(i)} evaluates to {float(b[i])!r} {at} (its right-hand side: a 0/0 or "
-                        "a singular expression of the model, e.g. sin(q)/tan(q) at q = 0)")
+                return (f"{row(i)} evaluates to {float(b[i])!r} {at} (its right-hand side: a "
+                        "0/0 or a singular expression of the model, e.g. sin(q)/tan(q) at "
+                        "q = 0)")
             tol = na * np.finfo(float).eps * max(np.abs(A).max(), np.finfo(float).tiny)
             if np.linalg.matrix_rank(A, tol=tol) == na:
                 continue
