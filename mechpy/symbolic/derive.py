@@ -328,7 +328,6 @@ class _Diff:
     piece.  A Jacobian is then exact wherever the function is smooth and the
     one-sided value at its kinks and jumps (at a jump of sign(v), such as dry
     friction's -mu g sign(v), it has no term for the jump).
-    
     """
 
     def __init__(self):
