@@ -19,6 +19,8 @@ __all__ = ["as_array", "as_scalar", "as_int", "as_vector3", "as_symmetric", "as_
            "as_finite_result", "as_args"]
 
 _INT64_MAX = 2 ** 63 - 1
+#: The smallest positive normal double (sys.float_info.min): the floor of a first_step.
+_DBL_MIN = 2.2250738585072014e-308
 
 
 def as_array(x, name: str, *, ndim=None, shape=None, min_ndim=None, finite=True,
@@ -81,6 +83,13 @@ def as_scalar(x, name: str, *, positive=False, nonnegative=False, finite=True,
         raise ValueError(f"{name} must be finite, got {v}")
     if positive and not v > 0:
         raise ValueError(f"{name} must be positive, got {v}")
+    if name == "first_step" and 0 < v < _DBL_MIN:
+        # a step below the smallest normal double: the step-size controls divide
+        # by it and scale errors with it (radau's overflowed at 1e-308), as a
+        # fixed step h is checked against the spacing of t's floats
+        raise ValueError(f"first_step = {v!r} is below the smallest normal double "
+                         f"({_DBL_MIN!r}): the step-size control cannot work with it; give "
+                         "a larger first_step, or None to let the solver choose")
     if nonnegative and not v >= 0:
         raise ValueError(f"{name} must be non-negative, got {v}")
     if lo is not None and v < lo:

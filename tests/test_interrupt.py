@@ -119,3 +119,35 @@ def test_interrupt_latency_is_cpu_time_and_holds_under_load():
     assert cpu_s < 1.0, f"KeyboardInterrupt {cpu_s} CPU s after SIGINT"
     assert wall > 2 * cpu_s     # the load was real: the wall clock stretched
     assert wall < 30.0, f"KeyboardInterrupt {wall} s after SIGINT (a hang)"
+
+
+def test_interrupt_during_a_compile_kills_the_compiler(tmp_path):
+    """Ctrl-C while mp.equations waits for the C compiler: KeyboardInterrupt
+    comes back at once and the compiler process is killed with it (it was left
+    running, an orphan, when the unit being waited on was not in the list of
+    processes to stop).  The "compiler" is a script that records its process id
+    and sleeps, so the test reads which process to look for."""
+    import signal
+    import time
+
+    from sigint import CHILD, run_child
+    pidfile = tmp_path / "cc.pid"
+    cc = tmp_path / "slowcc"
+    cc.write_text(f"#!/bin/sh\necho $$ > {pidfile}\nexec sleep 60\n")
+    cc.chmod(0o755)
+    setup = (f"import os\nos.environ['MECHPY_CC'] = {str(cc)!r}\n"
+             f"os.environ['MECHPY_CACHE_DIR'] = {str(tmp_path / 'cache')!r}\n"
+             "import sympy\nx, v = sympy.symbols('x v')")
+    rc, out, err = run_child([CHILD, setup, "mp.equations([v, -x], [x, v])", "3.0"],
+                             timeout=300.0, what="a compile")
+    assert rc == 0 and out and out[-1].startswith("INTERRUPTED"), err[-3000:]
+    pid = int(pidfile.read_text())
+    for _ in range(50):         # SIGKILL is delivered at once; allow for a loaded machine
+        try:
+            os.kill(pid, 0)
+        except ProcessLookupError:
+            break
+        time.sleep(0.1)
+    else:
+        os.kill(pid, signal.SIGKILL)
+        pytest.fail(f"the compiler (pid {pid}) outlived the interrupted compile")

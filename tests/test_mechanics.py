@@ -458,7 +458,8 @@ def test_lagrange_with_a_holonomic_constraint():
     assert abs(np.arctan2(ys, xs) - ref.y[0, -1]) < 1e-8                 # measured 1e-10
     assert abs((xs * vs - ys * us) / L**2 - ref.y[1, -1]) < 1e-8
     full = mp.solve(scene, (0, 5), y0)
-    assert scene.coordinates == ["x", "y", "x'", "y'"]
+    assert scene.coordinates == ["x", "y"] and scene.speeds == ["x'", "y'"]
+    assert scene.states == ["x", "y", "x'", "y'"]
     assert np.abs(scene.constraint_residual(full.y)).max() < 1e-7        # measured 1.0e-8
     E = scene.energy(full.y)
     assert np.ptp(E) < 1e-7                                              # measured 2e-9
@@ -527,3 +528,114 @@ def test_building_leaves_the_function_in_place():
     that name would)."""
     mp.mechanics(_pendulum_kane(), PARAMS)
     assert callable(mp.symbolic.mechanics) and mp.symbolic.mechanics is mp.mechanics
+
+
+# ---------------------------------------------------------------- issue 51: clear errors
+
+def _torque_pendulum():
+    th, w = dynamicsymbols("theta omega")
+    T = dynamicsymbols("T")
+    g, l, m = sp.symbols("g l m", positive=True)
+    N = ReferenceFrame("N")
+    A = N.orientnew("A", "Axis", (th, N.z))
+    A.set_ang_vel(N, w * N.z)
+    O = Point("O")
+    O.set_vel(N, 0)
+    P = O.locatenew("P", l * A.x)
+    P.v2pt_theory(O, N, A)
+    kane = KanesMethod(N, [th], [w], kd_eqs=[th.diff() - w])
+    kane.kanes_equations([Particle("bob", P, m)], [(P, m * g * N.x), (A, T * N.z)])
+    return kane, th, w
+
+
+def test_a_specified_input_that_returns_nan_is_named():
+    """A callable input returning NaN was blamed on "the mass matrix of Kane's
+    equations"; the error names the input, its value and the state."""
+    kane, _, _ = _torque_pendulum()
+    pend = mp.mechanics(kane, PARAMS, specified={"T": lambda t, y: float("nan")})
+    with pytest.raises(mp.NonFiniteError, match=r"the specified input 'T' is nan at t = 0\.0"):
+        pend.rhs(0.0, [0.1, 0.0])
+    with pytest.raises(mp.NonFiniteError, match=r"specified input 'T' is nan"):
+        mp.solve(pend, (0, 1), [0.1, 0.0])
+
+
+def test_solve_many_params_with_a_callable_input():
+    """solve_many(params=...) on a model with a callable input failed with the
+    internal "rhs() takes 2 positional arguments but 6 were given"; each row's
+    parameters now reach its trajectory (against mp.solve of the scene with
+    that row's values), the input's slot taken by the callable."""
+    kane, _, _ = _torque_pendulum()
+    drive = lambda t, y: 0.3 * np.sin(t)  # noqa: E731
+    pend = mp.mechanics(kane, PARAMS, specified={"T": drive})
+    names = list(pend.params)
+    rows = np.array([[PARAMS[k] if k in PARAMS else 0.0 for k in names] for _ in range(3)])
+    rows[:, names.index("g")] = [9.81, 3.7, 1.6]
+    y0s = np.array([[0.5, 0.0], [0.3, 0.1], [1.0, -0.2]])
+    ens = mp.solve_many(pend, (0, 2), y0s, params=rows, rtol=1e-10, atol=1e-12)
+    for i in range(3):
+        one = mp.solve(pend.replace(g=rows[i, names.index("g")], T=drive), (0, 2), y0s[i],
+                       rtol=1e-10, atol=1e-12, t_eval=[2.0])
+        np.testing.assert_allclose(ens.y[i, :, -1], one.y[:, -1], rtol=0, atol=1e-12)
+    # the g = 1.6 row is not the g = 9.81 one: the rows were used
+    assert abs(ens.y[2, 0, -1] - mp.solve(pend, (0, 2), y0s[2], rtol=1e-10,
+                                          atol=1e-12).y[0, -1]) > 1e-2
+
+
+def test_states_speeds_coordinates_as_pydy_names_them():
+    """.coordinates returned the speeds too; PyDy's names now: coordinates (q),
+    speeds (u), states (both), and an initial state keyed by names or by the
+    model's dynamic symbols."""
+    kane, th, w = _torque_pendulum()
+    pend = mp.mechanics(kane, PARAMS, specified={"T": 0.0})
+    assert pend.coordinates == ["theta"] and pend.speeds == ["omega"]
+    assert pend.states == ["theta", "omega"]
+    np.testing.assert_array_equal(pend.initial_state({th: 0.4, w: -0.1}), [0.4, -0.1])
+    np.testing.assert_array_equal(pend.initial_state({"omega": 2.0, "theta": 1.0}), [1.0, 2.0])
+    s = mp.solve(pend, (0, 1), pend.initial_state({th: 0.4, "omega": 0.0}), t_eval=[1.0])
+    assert s.success
+    with pytest.raises(ValueError, match=r"no value for the state\(s\) \['omega'\]"):
+        pend.initial_state({th: 0.4})
+    with pytest.raises(ValueError, match=r"'phi' is not a state"):
+        pend.initial_state({"theta": 0.4, "omega": 0.0, "phi": 1.0})
+    with pytest.raises(ValueError, match=r"gives the state 'theta' twice"):
+        pend.initial_state({"theta": 0.4, th: 0.4, "omega": 0.0})
+    lm = mp.mechanics(_pendulum_lagrange(), PARAMS)
+    q = _pendulum_lagrange().q[0]
+    assert lm.coordinates == ["theta"] and lm.speeds == ["theta'"]
+    np.testing.assert_array_equal(lm.initial_state({q: 0.2, q.diff(): 0.5}), [0.2, 0.5])
+    # mp.lagrangian and mp.equations say the same of themselves
+    x, = mp.coordinates("x")
+    osc = mp.lagrangian(x.diff() ** 2 / 2 - x ** 2 / 2, [x])
+    assert (osc.coordinates, osc.speeds, osc.states) == (["x"], ["x'"], ["x", "x'"])
+    np.testing.assert_array_equal(osc.initial_state({x: 1.0, x.diff(): 0.0}), [1.0, 0.0])
+
+
+def test_a_failed_solve_says_what_is_singular_where():
+    """A 0/0 in the kinematical equations of a model with a constant mass
+    matrix and no constraints was reported as "the mass matrix ... with the
+    rows of the constraints"; a massless bob as the same.  The error now names
+    the row that is NaN (the kinematical equation of theta) or the singular
+    block (the mass matrix of the speeds), and the state."""
+    th, w = dynamicsymbols("theta omega")
+    g, l, m = sp.symbols("g l m", positive=True)
+    N = ReferenceFrame("N")
+    A = N.orientnew("A", "Axis", (th, N.z))
+    A.set_ang_vel(N, w * N.z)
+    O = Point("O")
+    O.set_vel(N, 0)
+    P = O.locatenew("P", l * A.x)
+    P.v2pt_theory(O, N, A)
+    # sin/tan = cos, which SymPy leaves unsimplified: 0/0 at theta = 0
+    kane = KanesMethod(N, [th], [w], kd_eqs=[th.diff() - w * sp.sin(th) / sp.tan(th)])
+    kane.kanes_equations([Particle("bob", P, m)], [(P, m * g * N.x)])
+    pend = mp.mechanics(kane, PARAMS)
+    np.testing.assert_allclose(pend.rhs(0.0, [0.3, 0.2]),
+                               [0.2 * np.cos(0.3), -G / L * np.sin(0.3)], rtol=1e-14)
+    with pytest.raises(mp.NonFiniteError, match=r"the kinematical equation of theta "
+                       r"evaluates to nan at t = 0\.0, y = \[0\.0, 0\.2\]") as err:
+        pend.rhs(0.0, [0.0, 0.2])
+    assert "constraint" not in str(err.value)
+    massless = mp.mechanics(_pendulum_kane(), {**PARAMS, "m": 0.0})
+    with pytest.raises(mp.SingularityError, match=r"the mass matrix of the speeds is "
+                       r"singular at t = 0\.0, y = \[0\.1, 0\.0\] \(rank 0 of 1"):
+        mp.solve(massless, (0, 1), [0.1, 0.0])

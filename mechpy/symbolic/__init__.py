@@ -242,13 +242,16 @@ def lagrangian(L, q, params=None, constraints=(), forces=None, *, baumgarte=None
         expressions may hold numbers and SymPy's constants (printed as
         doubles), ``+``, ``*``, powers, ``Piecewise`` and the functions sin, cos, tan,
         cot, sec, csc, their inverses asin, acos, atan, atan2, the hyperbolic
-        ones and their inverses, exp, log, erf, erfc and
+        ones and their inverses, exp, log, erf, erfc,
         ``sympy.codegen.cfunctions``' expm1, log1p, exp2, log2, log10, Cbrt,
-        hypot.  Refused: other functions (Sum, besselj), the imaginary unit,
-        oo or numbers beyond the double range, an ``Eq`` where an expression
-        is expected, two symbols of one name with different assumptions; and,
-        through the Jacobian (their derivatives cannot be printed), Abs, sign,
-        Max, Min, floor, ceiling, gamma, loggamma.
+        hypot, and the non-smooth Abs, sign, Max, Min, floor, ceiling
+        (differentiated almost everywhere: Abs' = sign, sign' = floor' =
+        ceiling' = 0, Max' and Min' the larger or smaller argument's
+        derivative; dry friction -F sign(v) compiles).  Refused: other
+        functions (Sum, besselj), the imaginary unit, oo or numbers beyond the
+        double range, an ``Eq`` where an expression is expected, two symbols
+        of one name with different assumptions; and, through the Jacobian
+        (their derivative, polygamma, cannot be printed), gamma, loggamma.
     CompileError
         No C compiler and no numba, or the compiler failed (the command and
         its first lines), or it wrote no library.
@@ -321,8 +324,9 @@ def equations(rhs, y, params=None, *, energy=None, backend: str = "c"):
         what :func:`lagrangian` lists (numbers and constants, ``+``, ``*``, powers,
         Piecewise, the elementary functions, erf, erfc, ...); an ``Eq`` in
         place of a right-hand side, the imaginary unit, numbers beyond the
-        double range and other functions are refused, and Abs, sign, Max,
-        Min, floor, ceiling, gamma through the Jacobian.
+        double range and other functions are refused, and gamma, loggamma
+        through the Jacobian (Abs, sign, Max, Min, floor, ceiling compile:
+        see :func:`lagrangian`).
     CompileError
         No C compiler and no numba, or the compiler failed, or it wrote no
         library.

@@ -142,12 +142,28 @@ def _mkstemp(folder: str, suffix: str):
         raise _Unwritable(folder, exc) from None
 
 
+def _env_cc() -> str:
+    """``MECHPY_CC`` stripped; blank (empty or spaces) counts as unset (it was
+    split into no words, and the first flag, -O2, ran as the compiler)."""
+    return os.environ.get("MECHPY_CC", "").strip()
+
+
 def compiler() -> list:
-    """The compiler command: ``MECHPY_CC`` if set, else sysconfig's ``CC``, else ``cc``."""
+    """The compiler command: ``MECHPY_CC`` if set (and not blank), else
+    sysconfig's ``CC``, else ``cc``, split as a shell splits words.  A command
+    that does not split (an unclosed quote) is a CompileError naming where it
+    comes from."""
     import shlex
     import sysconfig
-    cc = os.environ.get("MECHPY_CC") or sysconfig.get_config_var("CC") or "cc"
-    return shlex.split(cc)
+    env = _env_cc()
+    cc = env or sysconfig.get_config_var("CC") or "cc"
+    try:
+        words = shlex.split(cc)
+    except ValueError as exc:
+        where = "MECHPY_CC" if env else "sysconfig's CC"
+        raise CompileError(f"the compiler command {where} = {cc!r} cannot be split into "
+                           f"words ({exc}): fix its quoting") from None
+    return words or ["cc"]
 
 
 def have_compiler() -> bool:
@@ -157,7 +173,7 @@ def have_compiler() -> bool:
     names a program on PATH.  Where there is none, ``backend="c"`` takes the
     numba build (:mod:`.jit`) with one warning, if numba is installed."""
     import shutil
-    if os.environ.get("MECHPY_CC"):
+    if _env_cc():
         return True
     cmd = compiler()
     return bool(cmd) and shutil.which(cmd[0]) is not None
@@ -230,9 +246,13 @@ def _compile(source: str, cmd: list, target: str, folder: str) -> None:
             with os.fdopen(fd, "w") as f:
                 f.write(text)
             srcs.append(src)
+        # every compiler process stays in procs until it has been waited for:
+        # an exception while waiting (a unit failed, KeyboardInterrupt) kills
+        # the ones still running, the one being waited on included, so that no
+        # compiler outlives the call
         if len(srcs) == 1:
             full = cmd + flags + ["-o", tmp_so, srcs[0]] + list(LIBS)
-            _wait(_run(full), full)
+            procs.append((_run(full), full))
         else:
             compile_flags = [f for f in flags if f != "-shared"]
             objs = [src[:-2] + ".o" for src in srcs]
@@ -241,19 +261,24 @@ def _compile(source: str, cmd: list, target: str, folder: str) -> None:
                 full = cmd + compile_flags + ["-c", "-o", obj, src]
                 procs.append((_run(full), full))
             while procs:
-                proc, full = procs.pop(0)
+                proc, full = procs[0]
                 _wait(proc, full)
+                procs.pop(0)
             full = cmd + ["-shared", "-o", tmp_so] + objs + list(LIBS)
-            _wait(_run(full), full)
+            procs.append((_run(full), full))
+        proc, full = procs[0]
+        _wait(proc, full)
+        procs.pop(0)
         if os.path.getsize(tmp_so) == 0:
             raise CompileError(f"the C compiler {' '.join(full)!r} exited 0 but wrote no "
                                "library: set MECHPY_CC to a working C compiler or use "
                                "backend='numpy'")
         os.replace(tmp_so, target)
     finally:
-        for proc, _ in procs:      # a unit failed: stop the others
-            proc.kill()
-            proc.communicate()
+        for proc, _ in procs:      # a unit failed or the wait was interrupted
+            if proc.poll() is None:
+                proc.kill()
+            proc.communicate()     # reaped: no zombie, its pipes closed
         for f in made:
             try:
                 os.unlink(f)

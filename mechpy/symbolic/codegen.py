@@ -656,6 +656,11 @@ class _Emitter:
                 for a in reversed(args[:-1]):
                     text = f"{f}({a}, {text})"
                 return text
+            if name == "sign" and len(x.args) == 1:
+                # SymPy's sign: 1, -1, or the argument itself at 0 (0.0 or
+                # -0.0) and at NaN (kept NaN, as every other function keeps it)
+                a = self.expr(x.args[0])
+                return f"({a} > 0.0 ? 1.0 : ({a} < 0.0 ? -1.0 : {a}))"
             r = _RECIPROCAL.get(name)
             if r is not None and len(x.args) == 1:
                 return f"(1.0/{self.funcs[r]}({self.expr(x.args[0])}))"
@@ -667,7 +672,8 @@ class _Emitter:
 
 #: Why an expression cannot be printed.
 _NOT_C = ("mechpy cannot print it as C (it prints numbers, +, *, powers, Piecewise and the "
-          "functions " + ", ".join(sorted(set(_FUNCS1) - {"pow"} | set(_RECIPROCAL))) + ")")
+          "functions " + ", ".join(sorted(set(_FUNCS1) - {"pow"} | set(_RECIPROCAL)
+                                          | {"sign"})) + ")")
 
 
 def _first_unprintable(x):
@@ -689,9 +695,12 @@ def _product(factors):
     return factors[0] if len(factors) == 1 else sp.Mul._from_args(factors)
 
 
-def _block(name, exprs, ir, args, what, static=True):
+def _block(name, exprs, ir, args, what, static=True, sparse=False):
     """A function ``name`` (static unless ``static`` is False) writing the
-    expressions to out[]."""
+    expressions to out[].  ``sparse``: out[] is zeroed by one loop and only the
+    entries not identically zero are printed, so that the text grows with the
+    nonzeros, not with the block's length (a Jacobian: n^2 entries, a few per
+    row nonzero in a chain)."""
     names = {ir.T: "t"}
     for i, p in enumerate(ir.P):
         names[p] = f"mp_p{i}"
@@ -699,9 +708,11 @@ def _block(name, exprs, ir, args, what, static=True):
     em = _Emitter(names, ir.P)
     for e in exprs:
         em.scan(e)
-    outs = []
+    outs = [f"    for (int i = 0; i < {len(exprs)}; i++) out[i] = 0.0;"] if sparse else []
     try:
         for i, e in enumerate(exprs):
+            if sparse and e == 0:
+                continue
             outs.append(f"    out[{i}] = {em.expr(e)};")
     except _Unprintable as exc:
         from .derive import explain
@@ -1071,7 +1082,7 @@ def _equations_source(ir, status):
     B = ir.blocks
     parts = [_header(ir, status), _dims(ir),
              _block("gen_f", B["f"], ir, _ARGS, "rhs"),
-             _block("gen_J", B["J"], ir, _ARGS, "the Jacobian")]
+             _block("gen_J", B["J"], ir, _ARGS, "the Jacobian", sparse=True)]
     parts.append(r"""
 /* dy/dt = f(t, y). */
 int mp_gen_rhs(double t, const double *y, double *dydt, void *params)
@@ -1367,6 +1378,14 @@ int mp_gen_residual(double t, const double *y, double *out, void *params)
 int mp_gen_residual_jac(double t, const double *y, double *out, void *params)
 {
     gen_GJ(t, y, (const double *)params, out);
+    return MP_OK;
+}
+
+/* out (NA * NA + NA) = A (row-major), then b, unsolved: what a failed solve
+ * is diagnosed from (which row is not finite, which block is singular). */
+int mp_gen_Ab(double t, const double *y, double *out, void *params)
+{
+    gen_Ab(t, y, (const double *)params, out);
     return MP_OK;
 }
 """)

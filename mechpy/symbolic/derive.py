@@ -270,19 +270,18 @@ def explain(ir, what, culprit, reason, numpy_ok=True) -> str:
     if rough:
         where = ", ".join(f"{f} (in {name})" for f, name in sorted(rough.items()))
         return (f"{where}: its derivative, {shown} (needed by {what}), cannot be compiled. "
-                "Functions without a derivative mechpy can print (Abs, sign, Max, Min, "
-                "floor, ceiling; gamma and loggamma, whose derivative is polygamma) are "
+                "Functions without a derivative mechpy can print (gamma and loggamma, "
+                "whose derivative is polygamma; functions SymPy leaves underived) are "
                 "refused through the Jacobian (the equations of motion and their Jacobian "
-                "differentiate the system): write a smooth form instead, e.g. "
-                "sqrt(x**2 + eps**2) for Abs(x)")
+                "differentiate the system): write the expression with other functions")
     return (f"{what} (derived from {', '.join(ir.sources)}) contains {shown}: "
             f"{reason}{fix}")
 
 
 def _check_derived(ir):
     """No unevaluated derivative (Derivative, Subs) in the blocks: SymPy could
-    not differentiate one of the user's functions (Abs of a complex
-    argument, sign, floor, ...)."""
+    not differentiate one of the user's functions (one that neither SymPy nor
+    _Diff knows how to differentiate)."""
     seen = set()
     names = {"A": "the equations of motion (mass matrix)", "b": "the equations of motion",
              "D": "the Jacobian", "J": "the Jacobian", "f": "the equations", "g":
@@ -321,6 +320,14 @@ class _Diff:
     once per variable, and anything else falls back to ``sympy.diff``.  The
     results are equal (``==`` after SymPy's automatic evaluation) to
     ``sympy.diff``'s up to the order of factors and terms.
+
+    The non-smooth functions are differentiated almost everywhere, where
+    SymPy leaves an unevaluated derivative or a distribution: Abs' = sign,
+    sign' = floor' = ceiling' = 0, Max' and Min' the derivative of the
+    argument that is the maximum (minimum), as a Piecewise; Piecewise piece by
+    piece.  A Jacobian is then exact wherever the function is smooth and the
+    one-sided value at its kinks and jumps (at a jump of sign(v), such as dry
+    friction's -mu g sign(v), it has no term for the jump).
     """
 
     def __init__(self):
@@ -341,6 +348,18 @@ class _Diff:
             t.atan: lambda a: 1 / (1 + a ** 2),
         }
         self._d1 = d1
+
+    def _minmax(self, e, v):
+        """d Max(a_1, ..., a_n)/dv (or Min's) as a Piecewise: a_i' where a_i is
+        the largest (smallest) of the arguments, the first such i at a tie."""
+        args = e.args
+        better = (lambda a, b: a >= b) if isinstance(e, sp.Max) else (lambda a, b: a <= b)
+        pieces = []
+        for i, a in enumerate(args[:-1]):
+            cond = sp.And(*[better(a, b) for j, b in enumerate(args) if j != i])
+            pieces.append((self(a, v), cond))
+        pieces.append((self(args[-1], v), True))
+        return sp.Piecewise(*pieces)
 
     def free(self, e):
         """The free symbols of ``e`` (memoised)."""
@@ -384,6 +403,20 @@ class _Diff:
         elif e.is_Function and len(e.args) == 1 and type(e) in self._d1:
             a = e.args[0]
             r = self._d1[type(e)](a) * self(a, v)
+        elif isinstance(e, (sp.Abs, sp.sign, sp.floor, sp.ceiling)):
+            # almost everywhere: |a|' = sign(a) a', and sign, floor and ceiling
+            # are piecewise constant (their jumps, a set of measure zero, have
+            # no derivative a solver could use: a DiracDelta is no number)
+            a = e.args[0]
+            r = sp.sign(a) * self(a, v) if isinstance(e, sp.Abs) else sp.S.Zero
+        elif isinstance(e, (sp.Max, sp.Min)):
+            # the derivative of the argument that is the maximum (minimum): at
+            # a tie the first argument's, a choice on a set of measure zero
+            r = self._minmax(e, v)
+        elif e.is_Piecewise:
+            # piece by piece, the conditions kept (SymPy's diff would call
+            # itself on the pieces, and refuse the rules above)
+            r = sp.Piecewise(*[(self(x, v), c) for x, c in e.args])
         else:
             r = sp.diff(e, v)
         self._memo[key] = r

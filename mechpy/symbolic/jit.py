@@ -14,6 +14,13 @@ give the same solution to round-off.  What the numba build lacks: the lane
 right-hand side of ensembles (``solve_many`` runs trajectory by trajectory)
 and the fixed-step blocks with the rhs inlined (fixed steps call the rhs).
 
+Every function is compiled with numba's NumPy error model
+(``error_model="numpy"``): a division by zero gives inf or NaN as IEEE 754
+says and as the C build computes it, and the engine reports the non-finite
+value (NonFiniteError).  Python's error model would raise inside the cfunc,
+where nothing can catch it: numba prints "Exception ignored" and the caller
+reads whatever the output held.
+
 The generated module is written to the cache folder (``jit_<key>.py``) and
 numba caches its machine code beside it (``cache=True``): a second process
 loads the system without compiling.
@@ -39,18 +46,34 @@ def available() -> bool:
     return True
 
 
-def _block(name: str, exprs, with_z: bool = False) -> str:
-    """A numba-compiled function ``name(t, y, p[, z], out)`` writing ``exprs``
-    (in mp_t, mp_y*, mp_p*, mp_z*) to out[], after common subexpression
-    elimination."""
-    import sympy as sp
+def _printer_class():
+    """SymPy's Python printer with sign printed as the C build prints it (1,
+    -1, or the argument itself at 0 and NaN; SymPy's own gives +-1 for NaN)."""
     from sympy.printing.pycode import PythonCodePrinter
 
+    class Printer(PythonCodePrinter):
+        def _print_sign(self, e):
+            a = self._print(e.args[0])
+            return f"(1.0 if ({a}) > 0.0 else (-1.0 if ({a}) < 0.0 else ({a})))"
+    return Printer
+
+
+def _block(name: str, exprs, with_z: bool = False, sparse: bool = False) -> str:
+    """A numba-compiled function ``name(t, y, p[, z], out)`` writing ``exprs``
+    (in mp_t, mp_y*, mp_p*, mp_z*) to out[], after common subexpression
+    elimination.  ``sparse``: out[] zeroed by one loop, then only the entries
+    not identically zero written (the module grows with the nonzeros)."""
+    import sympy as sp
+
+    printer = _printer_class()
     exprs = [sp.sympify(e) for e in exprs]
     subs, red = sp.cse(exprs, symbols=sp.numbered_symbols("mp_c"))
-    pr = PythonCodePrinter({"fully_qualified_modules": True, "standard": "python3"})
+    pr = printer({"fully_qualified_modules": True, "standard": "python3"})
     body = [f"    {s} = {pr.doprint(e)}" for s, e in subs]
-    body += [f"    out[{i}] = {pr.doprint(e)}" for i, e in enumerate(red)]
+    if sparse:
+        body += [f"    for i in range({len(red)}):", "        out[i] = 0.0"]
+    body += [f"    out[{i}] = {pr.doprint(e)}" for i, e in enumerate(red)
+             if not (sparse and e == 0)]
     text = "\n".join(body)
     import re
     used = sorted(set(re.findall(r"\bmp_[ypz]\d+\b", text)), key=lambda s: (s[3], int(s[4:])))
@@ -58,12 +81,13 @@ def _block(name: str, exprs, with_z: bool = False) -> str:
     if re.search(r"\bmp_t\b", text):
         head.append("    mp_t = t")
     args = "t, y, p, z, out" if with_z else "t, y, p, out"
-    return (f"@numba.njit(cache=True, fastmath=False)\ndef {name}({args}):\n"
+    return (f"@numba.njit(cache=True, fastmath=False, error_model=\"numpy\")\n"
+            f"def {name}({args}):\n"
             + "\n".join(head + body + ["    return 0"]) + "\n")
 
 
 _RUNTIME = '''
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def mp_lu(A, piv, dinv):
     """mp_lu of the C build (codegen.RUNTIME), operation for operation."""
     amax = 0.0
@@ -101,7 +125,7 @@ def mp_lu(A, piv, dinv):
     return MP_OK
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def mp_lu_solve(LU, piv, dinv, x):
     for k in range(NA):
         p = piv[k]
@@ -121,7 +145,7 @@ def mp_lu_solve(LU, piv, dinv, x):
         x[i] = s * dinv[i]
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def gen_solve(t, y, p, A0, LU, piv, dinv, z):
     gen_A(t, y, p, A0)
     if NA == 1:
@@ -215,7 +239,7 @@ def constraints(t, y_, out_, p_):
     return MP_OK
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _lambda(t, y, p, A0, z):
     LU = STACKF(NA * NA)
     dinv = STACKF(NA)
@@ -308,7 +332,7 @@ def module_source(meta: dict, status: dict) -> str:
             parts.append(_block("gen_g", blocks["g"]))
         parts += [_RUNTIME, _LAGRANGIAN] + ([_CONSTRAINED] if k else [])
     else:
-        parts += [_block("gen_f", blocks["f"]), _block("gen_J", blocks["J"])]
+        parts += [_block("gen_f", blocks["f"]), _block("gen_J", blocks["J"], sparse=True)]
         if "energy" in blocks:
             parts += [_block("gen_energy", blocks["energy"]), _ENERGY_EQ]
         parts.append(_EQUATIONS)
@@ -329,8 +353,47 @@ class CFuncs(dict):
         import numba
         if name not in self.names:
             raise KeyError(name)
-        f = self[name] = numba.cfunc(self._mod.SIG, cache=True)(getattr(self._mod, name))
+
+        def make():
+            return numba.cfunc(self._mod.SIG, cache=True, error_model="numpy")(
+                getattr(self._mod, name))
+        try:
+            f = make()
+        except Exception:
+            # numba's cache files of this module (jit_<key>.*.nbi, .nbc) may be
+            # truncated or damaged (an interrupted write, a full disk): numba
+            # then raises from its unpickling in every later process.  They are
+            # deleted and the function compiled again, once; an error that is
+            # not the cache's comes back from the second attempt.
+            if not _purge_cache(self._mod):
+                raise
+            f = make()
+        self[name] = f
         return f
+
+
+def _purge_cache(mod) -> bool:
+    """Delete numba's cache files of the generated module ``mod`` (index and
+    data, ``<module file>.*.nbi`` / ``.nbc``, in the folder numba's locator
+    chose); whether there were any."""
+    import glob
+    import numba
+    stem = os.path.splitext(os.path.basename(mod.__file__))[0]
+    folders = set()
+    for obj in vars(mod).values():
+        cache = getattr(obj, "_cache", None)
+        path = getattr(cache, "cache_path", None)
+        if isinstance(obj, numba.core.dispatcher.Dispatcher) and isinstance(path, str):
+            folders.add(path)
+    gone = False
+    for folder in folders:
+        for f in glob.glob(os.path.join(glob.escape(folder), glob.escape(stem) + ".*.nb[ci]")):
+            try:
+                os.unlink(f)
+                gone = True
+            except FileNotFoundError:
+                pass
+    return gone
 
 
 #: The systems built in this process, by their description's hash (a scene's

@@ -38,6 +38,8 @@ forces (T + V, or the Jacobi integral of L plus V).
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import sympy as sp
 from sympy.physics.mechanics import dynamicsymbols
@@ -407,15 +409,22 @@ class MechanicsScene(CompiledScene):
         super().__init__(meta, params, "c")
         info = meta["mechanics"]
         self._info = info
-        what = ("the mass matrix of Kane's equations (with the rows of the constraints)"
-                if info["method"] == "kane" else
-                "the mass matrix of Lagrange's equations (with the constraint rows)")
+        # what the solve of each evaluation solves: A x' = b, its rows the
+        # kinematical equations, the dynamic ones and the constraints' (when
+        # the model has constraints); _diagnose says which part failed
+        rows = "the kinematical equations, the mass matrix" + (
+            ", the constraints' rows" if info["na"] > info["nq"] + info["nu"]
+            or info["nres"] else "")
+        what = (f"the linear system of {'Kane' if info['method'] == 'kane' else 'Lagrange'}'s "
+                f"equations ({rows})")
         for w in list(self._context):
             self._context[w] = f"{w} of the compiled mechanics model: {what}"
         import ctypes
         for w, sym in self._EXTRA.items():
             self._addr[w] = ctypes.cast(getattr(self._lib, sym), ctypes.c_void_p).value
             self._context[w] = f"{w} of the compiled mechanics model: {what}"
+        ab = getattr(self._lib, "mp_gen_Ab", None)
+        self._addr_ab = None if ab is None else ctypes.cast(ab, ctypes.c_void_p).value
         inputs = info["inputs"]
         self._functions = dict(functions or {})
         bad = [k for k in self._functions if k not in inputs]
@@ -425,6 +434,67 @@ class MechanicsScene(CompiledScene):
 
     # -- outputs beyond the compiled scene's ----------------------------------
     def _raw(self, what, t, Y, vec=None):
+        try:
+            return self._raw_eval(what, t, Y, vec)
+        except (_core.SingularityError, _core.NonFiniteError) as exc:
+            if what not in ("rhs", "jac", "linear") or self._addr_ab is None:
+                raise
+            msg = self._diagnose(t, Y, self._vec if vec is None else vec)
+            if msg is None:
+                raise
+            raise type(exc)(f"{what} of the compiled mechanics model: {msg}") from None
+
+    def _diagnose(self, t, Y, vec):
+        """What makes A x' = b fail at the first state of Y (rows (m, NS))
+        where it fails, in the model's terms, or None when A and b look sound
+        there (a solution that overflows): a row of A or b that is NaN or inf,
+        named by its equation (the kinematical equation of a coordinate, the
+        dynamic equation of a speed, a constraint's row), else the singular
+        block (the mass matrix of the speeds, or the constraints' rows)."""
+        info, names = self._info, self._meta["names"]
+        na, n, ns = info["na"], info["nq"], self._dim
+        kane = info["method"] == "kane"
+
+        def row(i):
+            if i < n:
+                return f"the kinematical equation of {names[i]}"
+            if i < ns:
+                return (f"the dynamic equation of {names[i]}" if kane else
+                        f"Lagrange's equation of {names[i - n]}")
+            return f"the constraint row {i - ns}"
+        for y in np.asarray(Y, dtype=float).reshape(-1, ns):
+            v = np.asarray(self._with_inputs(t, y, vec) if self._functions else vec, float)
+            ab = _core.compiled_eval(self._addr_ab, np.ascontiguousarray(v), float(t),
+                                     np.ascontiguousarray(y)[None, :], na * na + na, "A, b")[0]
+            A, b = ab[:na * na].reshape(na, na), ab[na * na:]
+            at = f"at t = {float(t)!r}, y = {y.tolist()}"
+            bad = np.argwhere(~np.isfinite(A))
+            if bad.size:
+                i, j = bad[0]
+                return (f"{row(i)} has a coefficient {float(A[i, j])!r} (column {j}, the "
+                        f"derivative of {names[j] if j < ns else 'a multiplier'}) {at}: a "
+                        "0/0 or a singular expression of the model")
+            bad = np.flatnonzero(~np.isfinite(b))
+            if bad.size:
+                i = bad[0]
+                return (f"{row(i)} evaluates to {float(b[i])!r} {at} (its right-hand side: a "
+                        "0/0 or a singular expression of the model, e.g. sin(q)/tan(q) at "
+                        "q = 0)")
+            tol = na * np.finfo(float).eps * max(np.abs(A).max(), np.finfo(float).tiny)
+            if np.linalg.matrix_rank(A, tol=tol) == na:
+                continue
+            M = A[n:ns, n:ns]
+            rank = np.linalg.matrix_rank(M, tol=tol)
+            if rank < ns - n:
+                zero = [names[n + j] for j in range(ns - n) if not np.any(M[:, j])]
+                what = (f"; no equation holds the rate of {zero}" if zero else "")
+                return (f"the mass matrix of the {'speeds' if kane else 'coordinates'} is "
+                        f"singular {at} (rank {rank} of {ns - n}{what})")
+            return (f"the constraints' rows are singular {at}: the constraints are dependent "
+                    "or stationary there (their Jacobian is rank-deficient)")
+        return None
+
+    def _raw_eval(self, what, t, Y, vec=None):
         if what not in self._EXTRA and not (what in ("rhs", "jac") and self._functions):
             return super()._raw(what, t, Y, vec)
         NS = self._dim
@@ -442,14 +512,24 @@ class MechanicsScene(CompiledScene):
         return _core.compiled_eval(self._addr[what], vec, t, Y, nout, self._context[what])
 
     def _with_inputs(self, t, y, vec):
+        """The parameter vector ``vec`` with the callable inputs' values at
+        (t, y) in their slots.  A value that is not a number is a TypeError, a
+        NaN or inf a NonFiniteError naming the input (the model would report
+        it as its own non-finite result)."""
         v = np.array(vec, dtype=float)
         for nm, f in self._functions.items():
             val = f(t, y)
             try:
-                v[self._rslot[nm]] = float(val)
+                x = float(val)
             except (TypeError, ValueError):
                 raise TypeError(f"specified[{nm!r}](t, y) must return a number, got "
                                 f"{type(val).__name__}") from None
+            if not math.isfinite(x):
+                raise _core.NonFiniteError(
+                    f"the specified input {nm!r} is {x!r} at t = {t!r}, y = "
+                    f"{np.asarray(y).tolist()}: specified[{nm!r}](t, y) must return a finite "
+                    "number")
+            v[self._rslot[nm]] = x
         return v
 
     def _spec(self, method):
@@ -458,8 +538,10 @@ class MechanicsScene(CompiledScene):
         addr, ctx, NS = self._addr["rhs"], self._context["rhs"], self._dim
         vec = self._vec
 
-        def rhs(t, y):
-            v = self._with_inputs(t, y, vec)
+        # *p: a parameter row of solve_many(params=...) (the inputs' slots are
+        # then overwritten by the callables' values), else the scene's vector
+        def rhs(t, y, *p):
+            v = self._with_inputs(t, y, np.asarray(p, dtype=float) if p else vec)
             return _core.compiled_eval(addr, v, t, np.ascontiguousarray(y)[None, :], NS,
                                        ctx)[0]
         return ("python", rhs, ())
@@ -486,6 +568,26 @@ class MechanicsScene(CompiledScene):
     def constraint_names(self) -> list:
         """What each row of :meth:`constraint_residual` is."""
         return list(self._info["res_names"])
+
+    @property
+    def coordinates(self) -> list:
+        """The names of the generalized coordinates q, in the state's order
+        (independent, then dependent), as PyDy's ``System.coordinates``."""
+        return list(self._meta["names"][:self._info["nq"]])
+
+    @property
+    def speeds(self) -> list:
+        """The names of the generalized speeds u (Kane) or of the coordinates'
+        rates ``q'`` (Lagrange), in the state's order, as PyDy's
+        ``System.speeds``."""
+        return list(self._meta["names"][self._info["nq"]:])
+
+    @property
+    def states(self) -> list:
+        """The names of the state components: :attr:`coordinates` then
+        :attr:`speeds` (PyDy's ``System.states``).  :meth:`initial_state`
+        takes a dict keyed by these names or by the model's dynamic symbols."""
+        return list(self._meta["names"])
 
     @property
     def inputs(self) -> list:
@@ -582,13 +684,12 @@ class MechanicsScene(CompiledScene):
                                  f"{g[i, c]:.3g}: place the initial state on the constraints "
                                  "(dependent coordinates from the configuration constraints, "
                                  "dependent speeds from the velocity constraints)")
-        if singular:
+        if singular:    # through _raw: its error says what is singular, where
             if self._functions:
                 for row in Y:
                     self._raw("rhs", t0, row[None, :], vec)
             else:
-                _core.compiled_eval(self._addr["rhs"], vec, t0, Y, self._dim,
-                                    self._context["rhs"])
+                self._raw("rhs", t0, Y, vec)
 
     def replace(self, **changes):
         """A copy with some parameters (or specified inputs' values) changed

@@ -252,8 +252,53 @@ class CompiledScene(Scene):
         nout = _FUNCS[what][1](self._dim, self._nc, self._k)
         vec = self._vec if vec is None else vec
         if self._backend in ("c", "numba"):
-            return _core.compiled_eval(self._addr[what], vec, t, Y, nout, self._context[what])
+            try:
+                return _core.compiled_eval(self._addr[what], vec, t, Y, nout,
+                                           self._context[what])
+            except _core.SingularityError:
+                msg = (self._singular_where(t, Y, vec) if self._meta["kind"] == "lagrangian"
+                       else None)
+                if msg is None:
+                    raise
+                raise _core.SingularityError(f"{what} of the compiled system: {msg}") from None
         return np.array([self._np(what, t, row, vec) for row in Y]).reshape(-1, nout)
+
+    def _singular_where(self, t, Y, vec):
+        """What is singular in a Lagrangian system's A = [[M, C^T], [C, 0]] at
+        the first state of Y (m, dim) where it is: the mass matrix
+        M = d2L/dq'dq' (no kinetic term at all, or none for some coordinate's
+        velocity, or M rank-deficient), else the constraints' Jacobian C =
+        dg/dq (read off the rates g' = C q' + dg/dt, linear in q'); None when
+        neither is (the solve's own message stands)."""
+        n, k, names = self._nc, self._k, self._meta["names"]
+        for y in np.asarray(Y, dtype=float).reshape(-1, self._dim):
+            at = f"at t = {float(t)!r}, y = {y.tolist()}"
+            v = self._lagrangian_values(t, y[:n], y[n:]) if self._backend == "c" else \
+                _core.compiled_eval(self._addr["lag"], vec, float(t), y[None, :],
+                                    1 + 2 * n + 3 * n * n, "L")[0]
+            M = v[1 + 2 * n + 2 * n * n:].reshape(n, n)
+            if not np.all(np.isfinite(M)):
+                continue        # the status would have been MP_ENONFINITE
+            scale = max(np.abs(M).max(), np.finfo(float).tiny)
+            if not np.any(M):
+                return (f"L has no kinetic term: its mass matrix d2L/dq'dq' is 0 {at} (L "
+                        "must hold the velocities, e.g. m q'**2/2)")
+            zero = [names[i] for i in range(n) if not np.any(M[i])]
+            if zero:
+                return (f"L has no kinetic term in the velocity of {zero}: d2L/dq'dq' has a "
+                        f"zero row {at}")
+            rank = np.linalg.matrix_rank(M, tol=n * np.finfo(float).eps * scale)
+            if rank < n:
+                return f"the mass matrix d2L/dq'dq' is singular {at} (rank {rank} of {n})"
+            if k:
+                g0 = self._raw("constraints", t, np.r_[y[:n], np.zeros(n)][None, :], vec)[0]
+                C = np.array([self._raw("constraints", t, np.r_[y[:n], e][None, :],
+                                        vec)[0, k:] - g0[k:] for e in np.eye(n)]).T
+                rank = np.linalg.matrix_rank(C)
+                if rank < k:
+                    return (f"the constraints' Jacobian dg/dq has rank {rank} of {k} {at}: the "
+                            "constraints are dependent or stationary in q there")
+        return None
 
     @staticmethod
     def _shape(out, rest, lead):
@@ -370,8 +415,65 @@ class CompiledScene(Scene):
     # -- what a Lagrangian gives besides -----------------------------------------
     @property
     def coordinates(self) -> list:
-        """The names of the coordinates (or states)."""
+        """The names of the coordinates (mp.lagrangian) or of the states
+        (mp.equations)."""
         return list(self._meta["names"])
+
+    @property
+    def speeds(self) -> list:
+        """The names of the coordinates' velocities, ``"q'"`` for a coordinate
+        q (mp.lagrangian); none for a first-order system (mp.equations)."""
+        if self._meta["kind"] == "lagrangian":
+            return [nm + "'" for nm in self._meta["names"]]
+        return []
+
+    @property
+    def states(self) -> list:
+        """The names of the state components, in order: the coordinates then
+        their velocities (mp.lagrangian), the states (mp.equations)."""
+        if self._meta["kind"] == "equations":
+            return list(self._meta["names"])
+        return self.coordinates + self.speeds
+
+    def initial_state(self, values) -> np.ndarray:
+        """A state vector (dim,) from ``values``: a dict keyed by the names of
+        :attr:`states` or by the SymPy objects they name (a coordinate
+        ``q(t)``, its velocity ``q(t).diff()``, a dynamic symbol of
+        ``mp.mechanics``' model, a plain symbol of ``mp.equations``), every
+        state once; or a sequence of dim numbers, returned as an array.
+
+        Raises
+        ------
+        ValueError
+            A state without a value, a key that names no state, a state
+            given twice (by its name and by its symbol), or a sequence of
+            the wrong length.
+
+        Examples
+        --------
+        >>> import sympy
+        >>> x, v = sympy.symbols("x v")
+        >>> osc = mp.equations([v, -x], [x, v])
+        >>> osc.initial_state({"v": 0.5, x: 1.0}).tolist()
+        [1.0, 0.5]
+        """
+        names = self.states
+        if not isinstance(values, dict):
+            return as_array(values, "y0", shape=(len(names),))
+        out = {}
+        for k, val in values.items():
+            nm = k if isinstance(k, str) else _state_name(k)
+            if nm not in names:
+                raise ValueError(f"y0: {k!r} is not a state of the system (its states: "
+                                 f"{names})")
+            if nm in out:
+                raise ValueError(f"y0 gives the state {nm!r} twice")
+            out[nm] = as_scalar(val, f"y0[{nm!r}]")
+        missing = [nm for nm in names if nm not in out]
+        if missing:
+            raise ValueError(f"y0 has no value for the state(s) {missing} (its states: "
+                             f"{names})")
+        return np.array([out[nm] for nm in names])
 
     @property
     def cyclic(self) -> list:
@@ -503,6 +605,19 @@ class CompiledScene(Scene):
             raise TypeError("a numpy-backend scene made in this process pickles only with "
                             "its blocks: rebuild it with mp.lagrangian on the other side")
         return (_rebuild_compiled, (meta, self._params, self._backend))
+
+
+def _state_name(k) -> str | None:
+    """The state name a SymPy key stands for: ``q`` for q(t), ``q'`` for
+    q(t).diff(t), a symbol's name; None for anything else."""
+    import sympy as sp
+    if isinstance(k, sp.Derivative) and isinstance(k.expr, sp.core.function.AppliedUndef):
+        return k.expr.func.__name__ + "'" * k.derivative_count
+    if isinstance(k, sp.core.function.AppliedUndef):
+        return k.func.__name__
+    if isinstance(k, sp.Symbol):
+        return k.name
+    return None
 
 
 class _JitAddresses(dict):
