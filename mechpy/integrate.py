@@ -294,6 +294,7 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
     if vectorized and _python_fun(system):
         system = _one_column(system)
     args = as_args(args)
+    y0 = _named_state(system, y0)
     if _is_complex(y0):
         return _solve_complex(system, t_span, y0, dict(
             method=method, rtol=rtol, atol=atol, t_eval=t_eval, dense_output=dense_output,
@@ -373,6 +374,19 @@ def _rests(rs):
     if rs.size % 2:
         rs = np.append(rs, np.inf)
     return rs.reshape(-1, 2)
+
+
+def _named_state(system, y0):
+    """y0 as given, or a dict of values keyed by the system's state names (or the
+    SymPy objects they name) as its state vector: a compiled system's
+    ``initial_state`` (PyDy's habit)."""
+    if not isinstance(y0, dict):
+        return y0
+    make = getattr(system, "initial_state", None)
+    if getattr(system, "states", None) is None or make is None:
+        raise TypeError("y0 as a dict needs a system with named states (mp.lagrangian, "
+                        "mp.equations, mp.mechanics); give a sequence of numbers")
+    return make(y0)
 
 
 def _event_fields(lists) -> dict:
@@ -684,6 +698,8 @@ def solve_many(system, t_span: Sequence[float], y0s, *, params=None, t_eval=None
     if client is not None or chunk_size is not None or lazy:
         given = dict(locals())              # every argument, new ones too
         return _cluster._solve_many(local=solve_many, **given)   # dask is imported there
+    if isinstance(y0s, (list, tuple)) and any(isinstance(r, dict) for r in y0s):
+        y0s = [_named_state(system, r) for r in y0s]
     Y0 = as_array(y0s, "y0s", ndim=2, allow_empty=True)
     k, n = Y0.shape
     if n == 0:

@@ -639,3 +639,22 @@ def test_a_failed_solve_says_what_is_singular_where():
     with pytest.raises(mp.SingularityError, match=r"the mass matrix of the speeds is "
                        r"singular at t = 0\.0, y = \[0\.1, 0\.0\] \(rank 0 of 1"):
         mp.solve(massless, (0, 1), [0.1, 0.0])
+
+
+def test_solve_takes_an_initial_state_keyed_by_names_or_symbols():
+    """PyDy's habit: y0 as a dict keyed by the states' names or SymPy's objects, in
+    mp.solve and in each row of mp.solve_many; the same trajectory as the vector."""
+    import sympy as sp
+    x, v = sp.symbols("x v")
+    osc = mp.equations([v, -4 * x], [x, v])
+    want = mp.solve(osc, (0, 1), [1.0, 0.5], t_eval=[1.0], rtol=1e-10).y
+    got = mp.solve(osc, (0, 1), {"v": 0.5, x: 1.0}, t_eval=[1.0], rtol=1e-10).y
+    np.testing.assert_array_equal(got, want)
+    ens = mp.solve_many(osc, (0, 1), [{"x": 1.0, "v": 0.5}, [2.0, 0.0]], t_eval=[1.0],
+                        rtol=1e-10)
+    np.testing.assert_array_equal(ens.y[0], want)
+    np.testing.assert_allclose(ens.y[1, 0, -1], 2.0 * np.cos(2.0), rtol=1e-9)
+    with pytest.raises(TypeError, match="y0 as a dict needs a system with named states"):
+        mp.solve(lambda t, y: -y, (0, 1), {"x": 1.0})
+    with pytest.raises(ValueError):
+        mp.solve(osc, (0, 1), {"x": 1.0})          # v without a value
