@@ -16,7 +16,7 @@ systems.
 Each returns an ``anywidget.AnyWidget`` (JupyterLab, Notebook 7, VS Code) whose
 ``save(path)`` writes one self-contained HTML file that runs offline.  Every
 page exposes ``window.mechpyLive`` (``pause``, ``play``, ``step``,
-``particles``, ``seeds``, ``setParam``, ``frame``, ``positions``, ``overlays``,
+``particles``, ``seeds``, ``setParam``, ``field``, ``frame``, ``positions``, ``overlays``,
 ``fps``) for tests and automation.
 
 Needs anywidget (the ``live`` extra: ``pip install "mechpy-classical[live]"``).

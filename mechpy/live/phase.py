@@ -8,6 +8,7 @@ import warnings
 import numpy as np
 
 from .. import phase as _phase
+from ..errors import MechpyError
 from .._validate import as_int, as_scalar
 from ..integrate import solve
 from . import _field
@@ -44,6 +45,73 @@ def _state_names(system, dim: int) -> list:
     else:
         names = _STATES.get(type(system).__name__, [])
     return names if len(names) == dim else [f"y[{i}]" for i in range(dim)]
+
+
+def _states(ax: int, ay: int, h, v) -> np.ndarray:
+    """2-D states (2, m) with the horizontal values ``h`` as component ``ax`` and the
+    vertical ``v`` as ``ay``."""
+    S = np.empty((2, len(h)))
+    S[ax], S[ay] = h, v
+    return S
+
+
+def _field_where_defined(sysv, S) -> np.ndarray:
+    """The field at the states S (dim, m), NaN where it is undefined: a block of states
+    whose right-hand side raises (NonFiniteError at a pole, DomainError, ...) is halved
+    down to the single states that do."""
+    out = np.full(S.shape, np.nan)
+    todo = [(0, S.shape[1])]
+    while todo:
+        a, b = todo.pop()
+        try:
+            with np.errstate(all="ignore"):
+                out[:, a:b] = sysv.rhs(0.0, S[:, a:b])
+        except (MechpyError, ArithmeticError):
+            if b - a > 1:
+                m = (a + b) // 2
+                todo += [(a, m), (m, b)]
+    out[~np.isfinite(out)] = np.nan
+    return out
+
+
+def _refine_zeros(sysv, ax, ay, which, pts, xs, ys, Fw):
+    """Each contour vertex of component ``which`` moved onto the zero of the grid edge
+    it lies on (30 bisections, then the secant in the last bracket), and whether it is
+    one: a zero's bracket ends shrink with the bracket (to 1e-9 of the edge's ends for
+    a simple zero), a pole's grow; kept when they end below 1e-2 of the edge's ends."""
+    x0, hx = xs[0], xs[1] - xs[0]
+    y0, hy = ys[0], ys[1] - ys[0]
+    n = len(xs)
+    fi, fj = (pts[:, 0] - x0) / hx, (pts[:, 1] - y0) / hy
+    vert = np.abs(fi - np.round(fi)) < 1e-7          # on a vertical grid line: a y-edge
+    i = np.where(vert, np.round(fi), np.floor(fi)).astype(int).clip(0, n - 1)
+    j = np.where(vert, np.floor(fj), np.round(fj)).astype(int).clip(0, n - 1)
+    i2 = np.where(vert, i, i + 1).clip(0, n - 1)
+    j2 = np.where(vert, j + 1, j).clip(0, n - 1)
+    A = np.stack([xs[i], ys[j]], axis=1)
+    B = np.stack([xs[i2], ys[j2]], axis=1)
+    fa, fb = Fw[j, i], Fw[j2, i2]
+    scale = np.fmax(np.abs(fa), np.abs(fb))
+    lo, hi, flo, fhi = np.zeros(len(pts)), np.ones(len(pts)), fa.copy(), fb.copy()
+    ok = np.isfinite(fa) & np.isfinite(fb) & (np.sign(fa) * np.sign(fb) <= 0)
+
+    def f(u):
+        P = A + u[:, None] * (B - A)
+        return _field_where_defined(sysv, _states(ax, ay, P[:, 0], P[:, 1]))[which]
+
+    for _ in range(30):
+        mid = 0.5 * (lo + hi)
+        fm = f(mid)
+        ok &= np.isfinite(fm)
+        left = np.sign(fm) * np.sign(flo) <= 0          # the zero is in [lo, mid]
+        hi, fhi = np.where(left, mid, hi), np.where(left, fm, fhi)
+        lo, flo = np.where(left, lo, mid), np.where(left, flo, fm)
+    keep = ok & (np.fmax(np.abs(flo), np.abs(fhi)) <= 1e-2 * scale)
+    with np.errstate(all="ignore"):
+        u = np.where(flo != fhi, lo + (hi - lo) * flo / (flo - fhi), lo)
+    u = np.where(np.isfinite(u), u.clip(lo, hi), lo)
+    refined = A + u[:, None] * (B - A)
+    return np.where(keep[:, None], refined, pts), keep
 
 
 class PhasePortrait(LiveWidget):
@@ -111,23 +179,47 @@ class PhasePortrait(LiveWidget):
         return out
 
     def _nullclines(self, sysv) -> list:
+        """The curves where one component of the field vanishes, in the plane shown
+        (the horizontal grid is component ``axes[0]``): contours of each component on
+        a 201 x 201 grid, masked where the field is undefined, each vertex refined
+        onto the zero of its grid edge by bisection; a vertex whose edge holds a pole
+        (the field grows instead of vanishing as the bracket shrinks: x'' = -1/x
+        changes sign at x = 0 without a zero) is dropped, its line split there."""
         import contourpy
         spec = self.spec
+        ax, ay = spec["axes"]
         (x0, x1), (y0, y1) = spec["xlim"], spec["ylim"]
-        X, Y = np.meshgrid(np.linspace(x0, x1, 201), np.linspace(y0, y1, 201))
-        F = sysv.rhs(0.0, np.stack([X, Y]))
+        n = 201
+        xs, ys = np.linspace(x0, x1, n), np.linspace(y0, y1, n)
+        X, Y = np.meshgrid(xs, ys)
+        F = _field_where_defined(sysv, _states(ax, ay, X.ravel(), Y.ravel())).reshape(2, n, n)
         out = []
         for which in (0, 1):
-            gen = contourpy.contour_generator(X, Y, F[which])
+            Z = np.ma.masked_invalid(F[which])
+            if Z.mask.all() or Z.min() > 0 or Z.max() < 0:
+                continue
+            gen = contourpy.contour_generator(X, Y, Z)
             for line in gen.lines(0.0):
-                if len(line) >= 2:
-                    out.append({"which": which, "points": np.round(line, 6).tolist()})
+                if len(line) < 2:
+                    continue
+                pts, keep = _refine_zeros(sysv, ax, ay, which, np.asarray(line, dtype=float),
+                                          xs, ys, F[which])
+                # split where a vertex was dropped
+                cuts = np.flatnonzero(~keep)
+                for piece in np.split(np.arange(len(pts)), cuts):
+                    piece = piece[keep[piece]]
+                    if len(piece) >= 2:
+                        out.append({"which": which, "points": np.round(pts[piece], 9).tolist()})
         return out
 
     @staticmethod
     def _cycle(sysv, x, spec):
-        (x0, x1), (y0, y1) = spec["xlim"], spec["ylim"]
-        start = np.array(x, dtype=float) + np.array([0.05 * (x1 - x0), 0.0])
+        """The limit cycle around the fixed point ``x``, as points in the plane shown
+        (``axes[0]`` horizontal), with its period and mechpy.phase's amplitude."""
+        ax, ay = spec["axes"]
+        (x0, x1), _ = spec["xlim"], spec["ylim"]
+        start = np.array(x, dtype=float)
+        start[ax] += 0.05 * (x1 - x0)          # off the fixed point, along the horizontal
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
@@ -140,7 +232,7 @@ class PhasePortrait(LiveWidget):
         s = solve(sysv, (0.0, period), sol.y[:, -1], rtol=1e-10, atol=1e-12,
                   t_eval=np.linspace(0.0, period, 721))
         return {"period": float(period), "amplitude": float(amp),
-                "points": np.round(s.y.T, 8).tolist()}
+                "points": np.round(np.stack([s.y[ax], s.y[ay]], axis=1), 8).tolist()}
 
     def precompute(self, n: int | None = None) -> None:
         """The overlays over each slider's range (``n`` values each, the others at
@@ -162,6 +254,10 @@ class PhasePortrait(LiveWidget):
         self.spec = spec
 
     def html(self, title: str = "mechpy live phase portrait") -> str:
+        """The page as one HTML string; ValueError, never a blank page, when the printed
+        field is not code a page can run (:func:`mechpy.live._field.check_code`)."""
+        _field.check_code(self.spec["js"], "javascript")
+        _field.check_code(self.spec["glsl"], "glsl")
         self.precompute()
         return super().html(title)
 

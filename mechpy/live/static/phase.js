@@ -67,7 +67,134 @@ float mp_log(float x) {
   y += -0.5 * z;
   return m + y + 0.693359375 * fe;
 }
-float mp_pow(float b, float x) { return mp_exp(x * mp_log(b)); }
+// b^n for an integer n by repeated squaring: a negative base keeps its sign by parity, as
+// C's pow (GLSL's pow is undefined for b < 0); about log2|n| float32 roundings.
+float mp_powi(float b, int n) {
+  uint m = uint(n < 0 ? -n : n);
+  float r = 1.0;
+  while (m != 0u) {
+    if ((m & 1u) != 0u) r *= b;
+    m >>= 1;
+    if (m != 0u) b *= b;
+  }
+  return n < 0 ? 1.0 / r : r;
+}
+// C's pow for a real exponent: 1 at x = 0 or b = 1; an integral x by mp_powi (beyond 2^24
+// every float is an even integer); a negative base and a non-integral x NaN.
+float mp_pow(float b, float x) {
+  const float inf = intBitsToFloat(0x7f800000), nan = intBitsToFloat(0x7fc00000);
+  if (x == 0.0 || b == 1.0) return 1.0;
+  if (isnan(b) || isnan(x)) return nan;
+  if (isinf(x)) {
+    float a = abs(b);
+    return a == 1.0 ? 1.0 : ((a > 1.0) == (x > 0.0) ? inf : 0.0);
+  }
+  bool integral = floor(x) == x;
+  if (integral && abs(x) <= 16777216.0) return mp_powi(b, int(x));
+  if (b < 0.0) {
+    if (isinf(b) && !integral) return x > 0.0 ? inf : 0.0;
+    return integral ? mp_exp(x * mp_log(-b)) : nan;
+  }
+  return mp_exp(x * mp_log(b));
+}
+// log(1 + u) without the rounding of 1 + u: below |u| = 0.3 by the series of
+// 2 atanh(u / (2 + u)) (|u / (2 + u)| < 0.18: seven terms), else mp_log(1 + u).  (Not
+// Goldberg's mp_log(w) u / (w - 1): a shader compiler may fold (1 + u) - 1 to u.)
+float mp_log1p(float u) {
+  if (!(abs(u) < 0.3)) return mp_log(1.0 + u);
+  float s = u / (2.0 + u), z = s * s;
+  return 2.0 * s * (1.0 + z * (1.0 / 3.0 + z * (1.0 / 5.0 + z * (1.0 / 7.0 + z * (1.0 / 9.0
+         + z * (1.0 / 11.0 + z * (1.0 / 13.0)))))));
+}
+// The hyperbolic functions and their inverses from mp_exp and mp_log (sinh by its Taylor
+// series below 1, tanh through it below 0.625, the inverses through mp_log1p): a few float32
+// ulps, where software WebGL's built-ins lose the small arguments.
+float mp_sinh(float x) {
+  float a = abs(x), r;
+  if (a < 1.0) {
+    float z = a * a;
+    r = a * (1.0 + z * (1.0 / 6.0 + z * (1.0 / 120.0 + z * (1.0 / 5040.0 + z * (1.0 / 362880.0
+        + z * (1.0 / 39916800.0))))));
+  } else if (a > 88.0) {
+    float e = mp_exp(0.5 * a);
+    r = (0.5 * e) * e;
+  } else {
+    float e = mp_exp(a);
+    r = 0.5 * (e - 1.0 / e);
+  }
+  return x < 0.0 ? -r : r;
+}
+float mp_cosh(float x) {
+  float a = abs(x);
+  if (a > 88.0) { float e = mp_exp(0.5 * a); return (0.5 * e) * e; }
+  float e = mp_exp(a);
+  return 0.5 * (e + 1.0 / e);
+}
+float mp_tanh(float x) {
+  float a = abs(x), r;
+  if (a < 0.625) { float s = mp_sinh(a); r = s / sqrt(1.0 + s * s); }
+  else if (a > 9.1) r = 1.0;
+  else r = 1.0 - 2.0 / (mp_exp(2.0 * a) + 1.0);
+  return x < 0.0 ? -r : r;
+}
+float mp_asinh(float x) {
+  float a = abs(x), r;
+  if (a > 4096.0) r = mp_log(a) + 0.693147180559945309;
+  else r = mp_log1p(a + a * a / (1.0 + sqrt(1.0 + a * a)));
+  return x < 0.0 ? -r : r;
+}
+float mp_acosh(float x) {
+  if (!(x >= 1.0)) return intBitsToFloat(0x7fc00000);
+  if (x > 4096.0) return mp_log(x) + 0.693147180559945309;
+  float z = x - 1.0;
+  return mp_log1p(z + sqrt(z * (x + 1.0)));
+}
+float mp_atanh(float x) {
+  float a = abs(x);
+  if (!(a < 1.0)) return a == 1.0 ? x * intBitsToFloat(0x7f800000) : intBitsToFloat(0x7fc00000);
+  float r = 0.5 * mp_log1p(2.0 * a / (1.0 - a));
+  return x < 0.0 ? -r : r;
+}
+// exp(-a^2) for 0 <= a < 16 with a^2 split (ah: 12 significant bits, so ah^2 is exact):
+// the rounding of a^2 would cost a^2 float32 ulps.
+float mp_expmsq(float a) {
+  float ah = floor(a * 256.0) / 256.0, al = a - ah;
+  return mp_exp(-ah * ah) * mp_exp(-al * (ah + a));
+}
+// erf and erfc in float32: erf below 2 by its series exp(-a^2) sum (2a^2)^n a / (2n+1)!!
+// (positive terms), erfc by 1 - erf below 0.5, exp(-a^2) times a degree-10 fit of
+// exp(a^2) erfc(a) on [0.5, 2] (1.2e-7 relative in float32), its continued fraction beyond
+// (24 terms: float32's precision from a = 2 on).
+float mp_erf_series(float a) {
+  float term = a, sum = a, z = 2.0 * a * a;
+  for (int n = 1; n < 60; n++) {
+    term *= z / float(2 * n + 1);
+    sum += term;
+    if (term < 1.0e-8 * sum) break;
+  }
+  return 1.1283791670955126 * mp_expmsq(a) * sum;
+}
+float mp_erfc_pos(float a) {
+  if (a < 0.5) return 1.0 - mp_erf_series(a);
+  if (a < 2.0) {
+    float u = (2.0 * a - 2.5) / 1.5;
+    float q = (((((((((3.608895106e-06 * u - 1.445295319e-05) * u + 4.679475406e-05) * u
+               - 1.746835557e-04) * u + 6.327226311e-04) * u - 2.156129037e-03) * u
+               + 6.964451501e-03) * u - 2.118565134e-02) * u + 6.007251602e-02) * u
+               - 1.566164162e-01) * u + 3.678229164e-01;
+    return mp_expmsq(a) * q;
+  }
+  if (a > 10.1) return 0.0;
+  float f = a;
+  for (int n = 24; n > 0; n--) f = a + 0.5 * float(n) / f;
+  return mp_expmsq(a) / (1.7724538509055160 * f);
+}
+float mp_erf(float x) {
+  float a = abs(x);
+  float r = a < 2.0 ? mp_erf_series(a) : 1.0 - mp_erfc_pos(a);
+  return x < 0.0 ? -r : r;
+}
+float mp_erfc(float x) { return x < 0.0 ? 2.0 - mp_erfc_pos(-x) : mp_erfc_pos(x); }
 `;
 
 function mpFieldGlsl(spec) {
@@ -231,6 +358,36 @@ function mpRk4Path(f, y0, t0, dt, nsteps, p, keep, ax, ay) {
   return out;
 }
 
+// erf and erfc in double precision for the printed field (JavaScript's Math has neither;
+// mechpy.live._field prints them as mp.erf, mp.erfc): erf below 2.5 by its series
+// exp(-a^2) sum (2a^2)^n a / (2n+1)!! (positive terms), erfc by 1 - erf below 2 and by its
+// continued fraction (80 terms) from 2 on; exp(-a^2) with a^2 split (Dekker) so that its
+// rounding does not count a^2 times.
+function mpExpMsq(a) {
+  const c = 134217729 * a, ah = c - (c - a), al = a - ah;
+  return Math.exp(-ah * ah) * Math.exp(-al * (ah + a));
+}
+function mpErfSeries(a) {
+  let term = a, sum = a;
+  const z = 2 * a * a;
+  for (let n = 1; n < 200 && term > 1e-17 * sum; n++) { term *= z / (2 * n + 1); sum += term; }
+  return 1.1283791670955126 * mpExpMsq(a) * sum;
+}
+function mpErfcPos(a) {
+  if (a < 2) return 1 - mpErfSeries(a);
+  if (a > 27.3) return 0;
+  let f = a;
+  for (let n = 80; n > 0; n--) f = a + 0.5 * n / f;
+  return mpExpMsq(a) / (1.7724538509055160 * f);
+}
+const MP_JS_MATH = {
+  erf(x) {
+    const a = Math.abs(x), r = a < 2.5 ? mpErfSeries(a) : 1 - mpErfcPos(a);
+    return x < 0 ? -r : r;
+  },
+  erfc(x) { return x < 0 ? 2 - mpErfcPos(-x) : mpErfcPos(x); },
+};
+
 function render({model, el}) {
   const spec = model.get("spec");
   const offline = !!model.get("_offline");
@@ -239,7 +396,11 @@ function render({model, el}) {
   const width = spec.width, height = spec.height;
   const pvals = new Float32Array(Math.max(1, spec.params.length));
   spec.params.forEach((q, j) => { pvals[j] = q.value; });
-  const jsField = new Function("s", "t", "p", spec.js);
+  // the printed field in double precision: (state, t, parameters) -> dy/dt, with the
+  // parameters as doubles (pvals, the shader's uniform, holds them in float32)
+  const jsBody = new Function("s", "t", "p", "mp", spec.js);
+  const jsField = (s, tt, p) => jsBody(s, tt, p, MP_JS_MATH);
+  const pv64 = spec.params.map((q) => q.value);
   let view = [spec.xlim[0], spec.xlim[1], spec.ylim[0], spec.ylim[1]];
   let t = spec.t0, frameNo = 0, playing = !!spec.play, disposed = false;
   const fps = mpFps();
@@ -301,7 +462,7 @@ function render({model, el}) {
     const sp = [];
     for (let k = 0; k < Math.min(N, 2000); k++) {
       const s = Array.from(seeds.subarray(4 * k, 4 * k + dim));
-      const f = jsField(s, t, pvals);
+      const f = jsField(s, t, pv64);
       const v = Math.hypot(f[ax], f[ay]);
       if (Number.isFinite(v)) sp.push(v);
     }
@@ -438,7 +599,7 @@ function render({model, el}) {
       let d = 0;
       spec.params.forEach((q, j) => {
         const span = (q.max !== null && q.max > q.min) ? q.max - q.min : 1;
-        d += ((s.values[q.name] - pvals[j]) / span) ** 2;
+        d += ((s.values[q.name] - pv64[j]) / span) ** 2;
       });
       if (d < bd) { bd = d; best = s; }
     }
@@ -459,7 +620,7 @@ function render({model, el}) {
     model.send(Object.assign({id}, content));
     setTimeout(() => { if (pending[id]) { delete pending[id]; resolve(null); } }, timeoutMs);
   });
-  const paramDict = () => Object.fromEntries(spec.params.map((q, j) => [q.name, pvals[j]]));
+  const paramDict = () => Object.fromEntries(spec.params.map((q, j) => [q.name, pv64[j]]));
 
   let overlayTimer = null;
   function refreshOverlays() {
@@ -483,7 +644,7 @@ function render({model, el}) {
     if (reply && reply.type === "trajectory") path = reply.points;
     else {
       const mx = view[1] - view[0], my = view[3] - view[2];
-      path = mpRk4Path(jsField, y0, t, spec.dt, spec.path_steps, Array.from(pvals),
+      path = mpRk4Path(jsField, y0, t, spec.dt, spec.path_steps, pv64.slice(),
         [view[0] - mx, view[1] + mx, view[2] - my, view[3] + my], ax, ay);
     }
     paths.push(path);
@@ -564,11 +725,14 @@ function render({model, el}) {
       const j = spec.params.findIndex((q) => q.name === name);
       if (j < 0) throw new Error(`no parameter ${name}; the parameters are ${spec.params.map((q) => q.name).join(", ")}`);
       pvals[j] = value;
+      pv64[j] = value;
       if (sliders[name]) sliders[name].set(value);
       refreshOverlays();
       if (!playing) draw();
     },
     params() { return paramDict(); },
+    // dy/dt at a state from the page's printed JavaScript (double precision; t: now)
+    field(s, tt) { return jsField(Array.from(s), tt === undefined ? t : tt, pv64); },
     overlays() { return shown ? JSON.parse(JSON.stringify(shown)) : {fixed_points: [], nullclines: [], limit_cycle: []}; },
     paths() { return JSON.parse(JSON.stringify(paths)); },
     dropPath(x, y) { return dropPath(x, y); },
