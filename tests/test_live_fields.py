@@ -234,3 +234,15 @@ def test_overlays_skip_a_pole(driver, tmp_path, rhs, xlim):
     P = np.concatenate([np.array(c["points"]) for c in ov["nullclines"]])
     assert np.abs(P[:, 1]).max() == 0.0 and np.abs(P[:, 0]).min() > 0
     assert P[:, 0].min() == xlim[0] and P[:, 0].max() == xlim[1]
+
+
+def test_portrait_arguments_are_named_when_malformed():
+    """params as a list (not {name: (min, max)}) raised AttributeError; a hidden entry
+    that is not a pair raised 'too many values to unpack'."""
+    vdp = mp.scenes.VanDerPol(1.0)
+    with pytest.raises(TypeError, match=r"params must be a dict \{name: \(min, max\)\}"):
+        mp.live.phase_portrait(vdp, (-3, 3), (-3, 3), params=["mu"], overlays=False)
+    kep = mp.scenes.Kepler()
+    with pytest.raises(TypeError, match=r"hidden\[1\] must be a pair \(min, max\)"):
+        mp.live.phase_portrait(kep, (-2, 2), (-2, 2), hidden=[(0, 1), (0, 1, 2), (0, 0), (0, 0)],
+                               overlays=False)

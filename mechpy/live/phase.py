@@ -400,6 +400,9 @@ def phase_portrait(system, xlim, ylim, *, params=None, particles: int = 10_000,
     if not 0 <= drop <= 1:
         raise ValueError(f"drop must lie in [0, 1], got {drop}")
     sliders = {}
+    if params is not None and not isinstance(params, dict):
+        raise TypeError("params must be a dict {name: (min, max)} of the system's parameters "
+                        f"(sliders), got {type(params).__name__}")
     for name, rng in (params or {}).items():
         if name not in fd.names:
             raise ValueError(f"params: {type(system).__name__} has no parameter {name!r}; its "
@@ -408,13 +411,22 @@ def phase_portrait(system, xlim, ylim, *, params=None, particles: int = 10_000,
     if hidden is None:
         hid = [(0.0, 0.0)] * dim
     else:
-        hid = list(hidden)
+        try:
+            hid = list(hidden)
+        except TypeError:
+            raise TypeError(f"hidden must be a sequence of {dim} pairs (min, max), got "
+                            f"{hidden!r}") from None
         if len(hid) != dim:
             raise ValueError(f"hidden must give a (min, max) for each of the {dim} components")
-        hid = [(float(a), float(b)) for a, b in hid]
-        for i, (a, b) in enumerate(hid):
+        for i, h in enumerate(hid):
+            try:
+                a, b = (float(x) for x in h)
+            except (TypeError, ValueError):
+                raise TypeError(f"hidden[{i}] must be a pair (min, max) of numbers, got "
+                                f"{h!r}") from None
             if not (math.isfinite(a) and math.isfinite(b) and a <= b):
                 raise ValueError(f"hidden[{i}] must be finite with min <= max, got ({a}, {b})")
+            hid[i] = (a, b)
     names = _state_names(system, dim)
     plist = []
     for nm, v in zip(fd.names, fd.values):
