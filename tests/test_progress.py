@@ -59,3 +59,17 @@ def test_a_lagrangian_names_its_stages(monkeypatch, capsys):
     err = capsys.readouterr().err
     for stage in ("deriving the equations", "printing C", "compiling", "done"):
         assert f"mp.lagrangian: {stage}" in err
+
+
+def test_a_portraits_overlays_name_their_values(monkeypatch, capsys):
+    """A saved portrait precomputes its overlays over each slider (4 s for a few
+    sliders): the values named as they are computed."""
+    import mechpy as mp
+    monkeypatch.setattr(_progress, "AFTER", 0.0)
+    monkeypatch.setitem(sys.modules, "tqdm.auto", None)
+    p = mp.live.phase_portrait(mp.scenes.VanDerPol(1.0), (-3, 3), (-3, 3),
+                               params={"mu": (0.5, 2.0)}, overlay_grid=3)
+    p.precompute()
+    err = capsys.readouterr().err
+    for v in ("0.5", "1.25", "2"):
+        assert f"phase_portrait: overlays at mu = {v}" in err

@@ -242,14 +242,16 @@ class PhasePortrait(LiveWidget):
         if not ov or ov.get("complete"):
             return
         n = self._grid if n is None else as_int(n, "n", minimum=2)
+        from .._progress import Stages
         base = {q["name"]: q["value"] for q in spec["params"]}
         sets = list(ov["sets"])
-        for q in spec["params"]:
-            if q["min"] is None:
-                continue
-            for v in np.linspace(q["min"], q["max"], n):
-                vals = dict(base, **{q["name"]: float(v)})
-                sets.append(self._overlays_at(vals))
+        todo = [(q["name"], float(v)) for q in spec["params"] if q["min"] is not None
+                for v in np.linspace(q["min"], q["max"], n)]
+        names = [f"overlays at {nm} = {v:.4g}" for nm, v in todo]
+        with Stages("phase_portrait", names) as bar:          # shown past a second
+            for (nm, v), label in zip(todo, names):
+                bar.stage(label)
+                sets.append(self._overlays_at(dict(base, **{nm: v})))
         spec["overlays"] = dict(ov, sets=sets, complete=True)
         self.spec = spec
 
