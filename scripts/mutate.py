@@ -71,6 +71,7 @@ LANES = ["csrc/ode/lanes.c", "csrc/ode/lanes.h", "csrc/ode/fixed.h"]
 MODULES = {
     "ode": (["csrc/ode/*.c", "csrc/ode/*.h"],
             ENGINE_TESTS + ["tests/test_rigid.py", "tests/test_lanes.py", "tests/test_events.py",
+                            "tests/test_events_gsl.py", "tests/test_events_pins.py",
                             "tests/test_widths.py", "-k", FAST]),
     # fixed.h's kick-drift-kick steps run in the method rows too (verlet, yoshida):
     # test_integrate.py holds their tests
@@ -79,8 +80,10 @@ MODULES = {
     "integrate.py": (["mechpy/integrate.py", "mechpy/_callbacks.py", "mechpy/_solution.py",
                       "mechpy/_system.py"],
                      ENGINE_TESTS + ["tests/test_lanes.py", "tests/test_widths.py",
-                                     "tests/test_events.py", "-k", FAST]),
-    "events.py": (["mechpy/events.py"], ["tests/test_events.py"]),
+                                     "tests/test_events.py", "tests/test_events_pins.py",
+                                     "-k", FAST]),
+    "events.py": (["mechpy/events.py"], ["tests/test_events.py", "tests/test_events_pins.py",
+                                         "tests/test_tangent_events.py"]),
     "models": (["csrc/models/*.c", "csrc/models/*.h"], SCENE_TESTS),
     "scenes.py": (["mechpy/scenes.py"], SCENE_TESTS),
     # (the Ctrl-C cases time a SIGINT in wall-clock seconds: they fail on a loaded machine)
@@ -118,7 +121,9 @@ MODULES = {
     "rigid.py": (["mechpy/rigid.py"], ["tests/test_rigid.py"]),
     "stress.py": (["mechpy/stress.py"], ["tests/test_stress.py"]),
     "plot.py": (["mechpy/plot.py", "mechpy/_motion.py"], ["tests/test_plot.py"]),
-    "live": (["mechpy/live/*.py"], ["tests/test_live.py", "tests/test_live_motion.py"]),
+    "live": (["mechpy/live/*.py"], ["tests/test_live.py", "tests/test_live_motion.py",
+                                    "tests/test_live_fields.py"]),
+    "progress": (["mechpy/_progress.py"], ["tests/test_progress.py"]),
     "support": (["mechpy/_validate.py", "mechpy/errors.py", "mechpy/__init__.py"],
                 ["tests/test_validate.py", "tests/test_errors.py", "tests/test_integrate.py",
                  "tests/test_imports.py", "-k", FAST]),

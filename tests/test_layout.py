@@ -743,7 +743,8 @@ METHODS = {
                                            "multipliers", "constraint_forces", "cyclic",
                                            "small_oscillations")},
     **{f"CompiledScene.{n}": None for n in ("params", "constraints", "coordinates",
-                                           "c_source", "equations")},
+                                           "c_source", "equations", "speeds", "states")},
+    "CompiledScene.initial_state": _LAG,
 }
 
 
