@@ -73,3 +73,27 @@ def test_a_portraits_overlays_name_their_values(monkeypatch, capsys):
     err = capsys.readouterr().err
     for v in ("0.5", "1.25", "2"):
         assert f"phase_portrait: overlays at mu = {v}" in err
+
+
+def test_a_kane_model_names_its_stages(monkeypatch, capsys):
+    """mp.mechanics (the bicycle builds for 10-22 s) through its stages."""
+    import sympy as sp
+    from sympy.physics import mechanics as me
+
+    import mechpy as mp
+    monkeypatch.setattr(_progress, "AFTER", 0.0)
+    monkeypatch.setitem(sys.modules, "tqdm.auto", None)
+    q, u = me.dynamicsymbols("q u")
+    c = sp.Symbol(f"c{time.time_ns()}")
+    N = me.ReferenceFrame("N")
+    O = me.Point("O")
+    O.set_vel(N, 0)
+    P = O.locatenew("P", q * N.x)
+    P.set_vel(N, u * N.x)
+    kane = me.KanesMethod(N, [q], [u], kd_eqs=[q.diff() - u])
+    kane.kanes_equations([me.Particle("p", P, 1.0)], [(P, -c * q * N.x)])
+    mp.mechanics(kane, {c.name: 4.0})
+    err = capsys.readouterr().err
+    for stage in ("reading the model", "deriving the equations", "printing C", "compiling",
+                  "done"):
+        assert f"mp.mechanics: {stage}" in err

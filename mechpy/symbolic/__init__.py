@@ -443,11 +443,6 @@ def mechanics(method, params=None, *, specified=None, baumgarte=None):
     >>> np.round(A, 6).tolist()                  # [[0, 1], [-g/l, 0]]
     [[0.0, 1.0], [-9.81, 0.0]]
     """
-    import hashlib
-
-    from .. import _core
-    from . import build
-    from .multibody import MechanicsScene, _digest, finish, mechanics_parts
     params = _check_params(params)
     if specified is not None and not isinstance(specified, dict):
         raise TypeError("specified must be a dict {input name: value or f(t, y)}, got "
@@ -455,6 +450,20 @@ def mechanics(method, params=None, *, specified=None, baumgarte=None):
     spec = {getattr(k, "name", None) or (k.func.__name__ if hasattr(k, "func") and
                                          not isinstance(k, str) else k): v
             for k, v in (specified or {}).items()}
+    from .. import _progress
+    steps = ("reading the model", "deriving the equations", "printing C", "compiling")
+    with _progress.Stages("mp.mechanics", steps) as bar:       # shown past a second
+        bar.stage(steps[0])
+        return _mechanics_build(method, params, spec, baumgarte, bar, steps)
+
+
+def _mechanics_build(method, params, spec, baumgarte, bar, steps):
+    """mechanics' work, its stages told to ``bar``."""
+    import hashlib
+
+    from .. import _core
+    from . import build
+    from .multibody import MechanicsScene, _digest, finish, mechanics_parts
     ir, info, parts = mechanics_parts(method, params, spec, baumgarte)
     with open(os.path.join(os.path.dirname(__file__), "multibody.py"), "rb") as f:
         parts.append(hashlib.sha256(f.read()).hexdigest())
@@ -473,9 +482,12 @@ def mechanics(method, params=None, *, specified=None, baumgarte=None):
     meta = build.load_meta(key)
     if meta is None or meta.get("param_names") != ir.param_names or "mechanics" not in meta:
         from . import codegen
+        bar.stage(steps[1])
         finish(ir, info)
+        bar.stage(steps[2])
         source = codegen.c_source(ir, _core.STATUS)
         meta = _meta(ir, source)
         meta["mechanics"] = info
         build.store_meta(key, meta)
+    bar.stage(steps[3])
     return MechanicsScene(meta, values, functions=functions)
