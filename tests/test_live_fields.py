@@ -246,3 +246,69 @@ def test_portrait_arguments_are_named_when_malformed():
     with pytest.raises(TypeError, match=r"hidden\[1\] must be a pair \(min, max\)"):
         mp.live.phase_portrait(kep, (-2, 2), (-2, 2), hidden=[(0, 1), (0, 1, 2), (0, 0), (0, 0)],
                                overlays=False)
+
+
+# ---- 6. issue 52: behaviours a mutation audit of phase.js found unpinned ----------------------
+def test_shader_sin_cos_of_large_arguments(driver, tmp_path):
+    """The shader's own float32 sin and cos (mp_sincos: Cody-Waite reduction by pi/4 in
+    three terms, 0.78515625 + 2.4187564849853515625e-4 + 3.77489497744594108e-8) at
+    |x| up to 10^4, read from the GPU's particles (float32, one RK4 step of dt = 6 of
+    the field (0, 0, sin x, cos y)) against NumPy's float64 sin and cos of the same
+    float32 seeds.  Measured: 1.3e-7 absolute at most (the RK4 sum's roundings included;
+    the page's JavaScript, Math.sin and Math.cos in float64, exact).  Dropping the
+    reduction's third term (y 3.8e-8, y up to 1.27e4) measured 4.8e-4, the second 2.0.
+    """
+    seeds, s, c, js, jc = _values(driver, tmp_path, sp.sin(X), sp.cos(Y), (-1e4, 1e4),
+                                  (-1e4, 1e4))
+    assert np.abs(seeds).max() > 9.9e3
+    rs, rc = np.sin(seeds[:, 0]), np.cos(seeds[:, 1])
+    assert np.abs(s - rs).max() < 1.3e-6 and np.abs(c - rc).max() < 1.3e-6
+    assert np.abs(js - rs).max() < 1e-15 and np.abs(jc - rc).max() < 1e-15   # Math.sin, cos
+
+
+def _rk4_np(f, t0, y0, h, n):
+    """float64 RK4 of y' = f(t, y) from (t0, y0): the n + 1 states."""
+    y, t, out = np.array(y0, dtype=float), t0, [np.array(y0, dtype=float)]
+    for _ in range(n):
+        k1 = f(t, y)
+        k2 = f(t + h / 2, y + h / 2 * k1)
+        k3 = f(t + h / 2, y + h / 2 * k2)
+        k4 = f(t + h, y + h * k3)
+        y = y + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        t += h
+        out.append(y)
+    return np.array(out)
+
+
+def test_clicked_trajectory_starts_at_the_page_time(driver, tmp_path):
+    """A click on a saved page whose field depends on t (a driven, damped pendulum,
+    theta'' = -(g/L) sin theta - b theta' + A cos(Omega t)) opened at t0 = 1.3 and
+    stepped 37 times (page time 1.67): the dropped trajectory (the page's float64 RK4)
+    starts at the page's time, not at 0 nor at t0.  Its first 100 steps against a
+    float64 NumPy RK4 of the pendulum from the clicked state at the page's time:
+    measured equal to the last bit (bound 1e-14); started at t = 0 the path is off by
+    4.2 rad/s, started at t0 by 1.6 (measured).  (A page with a kernel asks
+    mp.solve with t0 = the page's time instead: not exercised by a saved page.)"""
+    g, L, b, A, Om = 9.81, 1.0, 0.3, 6.0, 2.5
+    pend = mp.scenes.Pendulum(g=g, length=L, damping=b, drive_amplitude=A, drive_frequency=Om)
+    w = mp.live.phase_portrait(pend, (-3, 3), (-4, 4), particles=100, play=False,
+                               t0=1.3, dt=0.01, path_steps=100)
+    _save_open(driver, tmp_path, w, "driven")
+    t_page = driver.execute_script("return window.mechpyLive.step(37)")
+    assert t_page == pytest.approx(1.67, abs=1e-12)
+    from selenium.webdriver.common.action_chains import ActionChains
+    from selenium.webdriver.common.by import By
+    over = driver.find_elements(By.CSS_SELECTOR, ".mechpy-phase canvas")[1]
+    ActionChains(driver).move_to_element_with_offset(over, 90, -60).click().perform()
+    driver.execute_script("return 0")          # the click's (async) dropPath has run
+    paths = driver.execute_script("return window.mechpyLive.paths()")
+    assert len(paths) == 1
+    path = np.array(paths[0])
+    x0 = np.array(path[0])
+    assert x0 == pytest.approx([90 / 720 * 6, 60 / 480 * 8], abs=0.02)   # the pixel clicked
+    assert len(path) == 101 and driver.execute_script("return window.mechpyLive.time()") == t_page
+
+    def f(t, y):
+        return np.array([y[1], -g / L * np.sin(y[0]) - b * y[1] + A * np.cos(Om * t)])
+    ref = _rk4_np(f, t_page, x0, 0.01, 100)
+    np.testing.assert_allclose(path, ref, rtol=0, atol=1e-14)
