@@ -314,3 +314,41 @@ def test_client_without_dask_names_the_extra_that_installs_it(monkeypatch):
     with pytest.raises(ModuleNotFoundError) as exc:
         mp.solve_many(SCENE, (0, 1), [[0.1, 0.0]], client=object())
     assert want in str(exc.value) and "client" in str(exc.value)
+
+
+def test_events_are_refused_with_a_client_before_anything_is_submitted(client):
+    """events with a client: a ValueError naming events (the chunks' event lists are not
+    joined), raised before any task is submitted; without a client the same call runs.
+    Pins cluster._solve_many's refusal, which no other test reaches."""
+    y0s, params = _pendulum_ensemble(6, seed=4)
+
+    def cross(t, y):
+        return y[0]
+
+    local = mp.solve_many(SCENE, (0, 5), y0s, params=params, events=cross)
+    assert local.success.all()
+    before = set(client.futures)
+    with pytest.raises(ValueError, match="events are not taken with a client"):
+        _run(mp.solve_many, SCENE, (0, 5), y0s, params=params, events=cross, client=client)
+    assert set(client.futures) == before            # nothing was submitted
+
+
+def test_the_one_step_probe_runs_under_statuses(client):
+    """errors="raise" with a client on an ensemble that solves: the one-step probe (the
+    local checks on row 0, max_steps=1) exhausts its budget by design, so it must run
+    under errors="status" whatever the caller's errors; under the caller's "raise" it
+    would raise StepBudgetError for a sweep that succeeds.  The sweep equals the local
+    run field by field, and a real failure still raises its own class, naming the
+    trajectory in the whole ensemble (HeavyTop singular at row 0: SingularityError).
+    Pins the probe's errors="status" in cluster._solve_many."""
+    y0s, params = _pendulum_ensemble(12, seed=6)
+    kw = dict(params=params, t_eval=np.linspace(0.0, 5.0, 6), errors="raise")
+    local = mp.solve_many(SCENE, (0, 5), y0s, **kw)
+    assert local.success.all()
+    _assert_same(_run(mp.solve_many, SCENE, (0, 5), y0s, client=client, chunk_size=5, **kw),
+                 local)
+    top = mp.scenes.HeavyTop(1.0, 2.0, 1.0)
+    bad = np.tile([0.0, 0.5, 0.0, 1.0, 1.0, 1.0], (4, 1))
+    bad[0, 1] = 0.0                                  # theta = 0: singular Euler angles
+    with pytest.raises(mp.SingularityError, match="trajectory 0"):
+        _run(mp.solve_many, top, (0, 1), bad, client=client, chunk_size=2, errors="raise")

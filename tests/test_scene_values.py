@@ -357,3 +357,42 @@ def test_each_lane_takes_its_own_parameters(name):
                      y0, **kw)
         worst = max(worst, np.abs(e.y[i] - s.y).max() / np.abs(s.y).max())
     assert worst < 2e-13, worst      # measured at most 1.6e-14 (Pendulum)
+
+
+def test_rocket_burnout_switch_sets_the_dry_mass_and_cuts_the_thrust():
+    """The burn-out switch of csrc/models/rocket.c, through a plain mp.solve (no break
+    at the burn-out time: the engine locates the switch as an event).  After burn-out
+    the mass is exactly m_dry (==): the switch's action sets it.  The located root
+    alone mostly lands on g = m - m_dry = 0 exactly (the mass is linear in t), but
+    not always: in the cases below (found by a scan of 400 random rockets, DOP853)
+    the root is 1-4 ulps past the crossing, m_dry - m = 1.7e-18 ... 1.8e-15 without
+    the action.  And a state with m = m_dry exactly is on the coasting branch:
+    scene.rhs there is (v, -g - k v|v|/m, 0), no thrust, the closed form (one ulp
+    above m_dry the thrust u b / m is on).  Pins the action's y[2] = m_dry and the
+    branch at m = m_dry.  Measured: the mass == m_dry in all cases; rhs equal to the
+    closed forms to 1 ulp (rtol 1e-14 allowed)."""
+    g, k = 9.81, 0.02
+    cases = [  # (m_dry, burn_rate, m0, rtol)
+        (0.011450701520293923, 0.7935531956259836, 0.041209251605594556, 1e-6),
+        (0.08963644533168423, 38.13786549466965, 0.15119132240034164, 1e-6),
+        (13.747460997518361, 60.968065099494304, 17.697616350345697, 1e-6),
+        (9.015084081721588, 93.77053132748121, 42.49743973488968, 1e-12),
+        (180.0, 7.3, 950.0, 1e-10),
+    ]
+    for md, b, m0, tol in cases:
+        r = mp.scenes.Rocket(exhaust_speed=2000.0, burn_rate=b, m0=m0, m_dry=md, g=g,
+                             drag=k)
+        tf = 2 * r.burnout_time
+        s = mp.solve(r, (0.0, tf), r.initial_state(), rtol=tol, atol=tol * 1e-3)
+        assert s.success and s.t[-1] == tf
+        assert s.y[2, -1] == md, (md, s.y[2, -1] - md)
+    u, b, md = 2100.0, 7.3, 180.0
+    r = mp.scenes.Rocket(exhaust_speed=u, burn_rate=b, m0=950.0, m_dry=md, g=g, drag=k)
+    for v in (350.0, -40.0, 0.0):
+        f = r.rhs(0.0, np.array([1200.0, v, md]))
+        np.testing.assert_allclose(f, [v, -g - k * v * abs(v) / md, 0.0], rtol=1e-14,
+                                   atol=1e-14)
+        above = np.array([1200.0, v, np.nextafter(md, np.inf)])
+        np.testing.assert_allclose(r.rhs(0.0, above),
+                                   [v, (u * b - k * v * abs(v)) / above[2] - g, -b],
+                                   rtol=1e-14, atol=1e-14)
