@@ -31,12 +31,12 @@ def vdp_rhs(t, y, mu=1.0):
     return np.array([y[1], mu * (1 - y[0] ** 2) * y[1] - y[0]])
 
 
-def rk4_fixed(f, t0, y0, h, n):
-    """n classical RK4 steps of h in float64 from (t0, y0), y0 of shape (m, dim)
-    (m states at once; f(t, y) -> (m, dim)); the state after them."""
-    import numpy as np
+def rk4_path(f, t0, y0, h, n):
+    """n classical RK4 steps of h in float64 from (t0, y0) (y0 of any shape, e.g.
+    (m, dim): m states at once; f(t, y) -> y's shape): the n + 1 states, (n + 1, *shape)."""
     y = np.array(y0, dtype=float)
     t = float(t0)
+    out = [y]
     for _ in range(n):
         k1 = f(t, y)
         k2 = f(t + h / 2, y + h / 2 * k1)
@@ -44,7 +44,14 @@ def rk4_fixed(f, t0, y0, h, n):
         k4 = f(t + h, y + h * k3)
         y = y + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
         t += h
-    return y
+        out.append(y)
+    return np.array(out)
+
+
+def rk4_fixed(f, t0, y0, h, n):
+    """n classical RK4 steps of h in float64 from (t0, y0), y0 of shape (m, dim)
+    (m states at once; f(t, y) -> (m, dim)); the state after them."""
+    return rk4_path(f, t0, y0, h, n)[-1]
 
 
 def central_sensitivities(run, scene, y0, names, cols=None, h=1e-5):

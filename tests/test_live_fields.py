@@ -17,6 +17,7 @@ from mechpy.live import _field
 
 sys.path.insert(0, os.path.dirname(__file__))
 from live_browser import driver, network_requests, open_page  # noqa: E402,F401
+from ref_ode import rk4_path  # noqa: E402
 from test_live import _close, _states  # noqa: E402
 
 X, Y, U, W, A = sp.symbols("x y u w a")
@@ -266,18 +267,6 @@ def test_shader_sin_cos_of_large_arguments(driver, tmp_path):
     assert np.abs(js - rs).max() < 1e-15 and np.abs(jc - rc).max() < 1e-15   # Math.sin, cos
 
 
-def _rk4_np(f, t0, y0, h, n):
-    """float64 RK4 of y' = f(t, y) from (t0, y0): the n + 1 states."""
-    y, t, out = np.array(y0, dtype=float), t0, [np.array(y0, dtype=float)]
-    for _ in range(n):
-        k1 = f(t, y)
-        k2 = f(t + h / 2, y + h / 2 * k1)
-        k3 = f(t + h / 2, y + h / 2 * k2)
-        k4 = f(t + h, y + h * k3)
-        y = y + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-        t += h
-        out.append(y)
-    return np.array(out)
 
 
 def test_clicked_trajectory_starts_at_the_page_time(driver, tmp_path):
@@ -310,5 +299,5 @@ def test_clicked_trajectory_starts_at_the_page_time(driver, tmp_path):
 
     def f(t, y):
         return np.array([y[1], -g / L * np.sin(y[0]) - b * y[1] + A * np.cos(Om * t)])
-    ref = _rk4_np(f, t_page, x0, 0.01, 100)
+    ref = rk4_path(f, t_page, x0, 0.01, 100)
     np.testing.assert_allclose(path, ref, rtol=0, atol=1e-14)

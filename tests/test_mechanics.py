@@ -433,10 +433,10 @@ def test_singular_mass_matrix_at_y0():
         mp.solve(pend, (0, 1), [0.1, 0.0])
 
 
-def test_lagrange_with_a_holonomic_constraint():
+
+def _cartesian_pendulum():
     """The pendulum in Cartesian coordinates (x down, y across) on the circle
-    x^2 + y^2 = l^2, by LagrangesMethod with a multiplier: its angle moves as
-    the scene's, the constraint and its rate are held, and the energy is kept."""
+    x^2 + y^2 = l^2, by SymPy's LagrangesMethod with a multiplier: (method, x, y)."""
     x, y = dynamicsymbols("x y")
     g, l, m = sp.symbols("g l m", positive=True)
     N = ReferenceFrame("N")
@@ -448,6 +448,14 @@ def test_lagrange_with_a_holonomic_constraint():
     bob.potential_energy = -m * g * x
     lm = LagrangesMethod(Lagrangian(N, bob), [x, y], hol_coneqs=[x**2 + y**2 - l**2])
     lm.form_lagranges_equations()
+    return lm, x, y
+
+
+def test_lagrange_with_a_holonomic_constraint():
+    """The pendulum in Cartesian coordinates (x down, y across) on the circle
+    x^2 + y^2 = l^2, by LagrangesMethod with a multiplier: its angle moves as
+    the scene's, the constraint and its rate are held, and the energy is kept."""
+    lm, x, y = _cartesian_pendulum()
     scene = mp.mechanics(lm, PARAMS)
     th0, w0 = 1.0, 0.4
     y0 = [L * np.cos(th0), L * np.sin(th0), -L * w0 * np.sin(th0), L * w0 * np.cos(th0)]
@@ -669,17 +677,7 @@ def test_lagrange_holonomic_drift_decays_at_baumgartes_designed_rate():
     wd = sqrt(beta^2 - alpha^2).  Pins the position term beta^2 (multibody.py's Lagrange
     branch): beta in its place fails here.  Measured: |g - closed form| <= 3.4e-12 with
     g0 = 0.034 (SciPy's DOP853 at rtol 1e-12 on the scene's rhs)."""
-    x, y = dynamicsymbols("x y")
-    g, l, m = sp.symbols("g l m", positive=True)
-    N = ReferenceFrame("N")
-    O = Point("O")
-    O.set_vel(N, 0)
-    P = O.locatenew("P", x * N.x + y * N.y)
-    P.set_vel(N, x.diff() * N.x + y.diff() * N.y)
-    bob = Particle("bob", P, m)
-    bob.potential_energy = -m * g * x
-    lm = LagrangesMethod(Lagrangian(N, bob), [x, y], hol_coneqs=[x**2 + y**2 - l**2])
-    lm.form_lagranges_equations()
+    lm, x, y = _cartesian_pendulum()
     alpha, beta = 1.0, 3.0
     scene = mp.mechanics(lm, PARAMS, baumgarte=(alpha, beta))
     th0, w0, r0 = 1.0, 0.4, 1.01 * L

@@ -106,7 +106,25 @@ def _float_literal(v: float, glsl: bool) -> str:
     return f"({r})" if r.startswith("-") else r
 
 
-class _Glsl(GLSLPrinter):
+class _Literals:
+    """Every SymPy number (a Float, pi, E, EulerGamma, ..., inf, nan, zoo) as the
+    language's float literal (``_glsl``: the shader's, which has no inf or NaN)."""
+    _glsl = False
+
+    def _print_Float(self, e):
+        return _float_literal(float(e), self._glsl)
+
+    def _print_NumberSymbol(self, e):
+        return _float_literal(float(e), self._glsl)
+
+    _print_Pi = _print_Exp1 = _print_NumberSymbol
+    _print_Infinity = _print_NegativeInfinity = _print_NaN = _print_NumberSymbol
+
+    def _print_ComplexInfinity(self, e):
+        return _float_literal(float("nan"), self._glsl)
+
+
+class _Glsl(_Literals, GLSLPrinter):
     """GLSL ES 3.00 with float arithmetic only: integers and rationals as
     float literals, integer powers as products or mp_powi (GLSL's pow is
     undefined for a negative base), half-integer powers through sqrt, any
@@ -114,6 +132,8 @@ class _Glsl(GLSLPrinter):
     non-integral exponent, the sign by parity for an integral one); the
     elementary functions through the page's own float32 versions (mp_*:
     GLSL ES leaves the built-ins' precision open)."""
+
+    _glsl = True
 
     _mp_math = {"sin": "mp_sin", "cos": "mp_cos", "tan": "mp_tan", "exp": "mp_exp",
                 "log": "mp_log", "sinh": "mp_sinh", "cosh": "mp_cosh", "tanh": "mp_tanh",
@@ -135,17 +155,6 @@ class _Glsl(GLSLPrinter):
     def _print_Rational(self, e):
         return f"({int(e.p)}.0/{int(e.q)}.0)"
 
-    def _print_Float(self, e):
-        return _float_literal(float(e), True)
-
-    def _print_NumberSymbol(self, e):
-        return _float_literal(float(e), True)
-
-    _print_Pi = _print_Exp1 = _print_NumberSymbol
-    _print_Infinity = _print_NegativeInfinity = _print_NaN = _print_NumberSymbol
-
-    def _print_ComplexInfinity(self, e):
-        return _float_literal(float("nan"), True)
 
     def _print_Pow(self, e):
         b, x = e.as_base_exp()
@@ -178,7 +187,7 @@ class _Glsl(GLSLPrinter):
         return f"{self._print(e.lhs)} {e.rel_op} {self._print(e.rhs)}"
 
 
-class _Js(JavascriptCodePrinter):
+class _Js(_Literals, JavascriptCodePrinter):
     """JavaScript in double precision (Math.*), Piecewise as conditionals,
     every number constant as its float literal, powers through Math.pow (C's
     pow for a negative base: never Math.cbrt, which takes a negative base's
@@ -194,17 +203,6 @@ class _Js(JavascriptCodePrinter):
             return f"mp.{name}({self._print(e.args[0])})"
         return super()._print_Function(e)
 
-    def _print_Float(self, e):
-        return _float_literal(float(e), False)
-
-    def _print_NumberSymbol(self, e):
-        return _float_literal(float(e), False)
-
-    _print_Pi = _print_Exp1 = _print_NumberSymbol
-    _print_Infinity = _print_NegativeInfinity = _print_NaN = _print_NumberSymbol
-
-    def _print_ComplexInfinity(self, e):
-        return "NaN"
 
     def _print_Pow(self, e):
         b, x = e.as_base_exp()
