@@ -138,12 +138,12 @@ sdist_pass() {
         echo "$st" > "$out/.stamp"
     fi
     # the tests and notebooks in a folder of their own (no mechpy/ beside them), with
-    # pyproject.toml (pytest's settings), README.md and csrc/ (the tests that check the
-    # README's Layout read them); notebook kernels start from this environment's python,
-    # so they import the same copy
+    # pyproject.toml (pytest's settings), README.md (its examples run), CONTRIBUTING.md and
+    # csrc/ (the tests that check its Layout read them); notebook kernels start from this
+    # environment's python, so they import the same copy
     local run=$out/run
     rm -rf "$run"; mkdir -p "$run"
-    cp -r tests notebooks README.md pyproject.toml csrc "$run/"
+    cp -r tests notebooks README.md CONTRIBUTING.md pyproject.toml csrc "$run/"
     find "$run" -name __pycache__ -prune -exec rm -rf {} +
     say "the test suite against mechpy installed from $(basename "$(ls "$out"/mechpy_classical-*.tar.gz)")"
     # MECHPY_SOURCE_DIR: the checkout, for the test that builds a clone of it
