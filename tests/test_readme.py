@@ -15,7 +15,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-README = Path(__file__).resolve().parent.parent / "README.md"
+# the source tree: under dev.sh's sdist pass the tests run from a copy (README.md beside
+# them, not docs/ or mechpy/), and dev.sh names the checkout in MECHPY_SOURCE_DIR
+SOURCE = Path(os.environ.get("MECHPY_SOURCE_DIR") or Path(__file__).resolve().parent.parent)
+README = SOURCE / "README.md"
 SANITIZED = bool(os.environ.get("MECHPY_SANITIZED"))
 
 

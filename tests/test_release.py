@@ -219,7 +219,8 @@ def test_sdist_builds_offline_and_passes_the_core_tests(release, tmp_path):
                        env=dict(env, PYTHONSAFEPATH="1"), capture_output=True, text=True,
                        timeout=1500)
     assert r.returncode == 0, r.stdout[-4000:] + r.stderr[-2000:]
-    assert re.search(r"\d+ passed", r.stdout), r.stdout[-2000:]
+    passed = re.search(r"(\d+) passed", r.stdout)
+    assert passed and int(passed.group(1)) > 200, r.stdout[-2000:]   # 287 here
     print(f"sdist's build: install {install_s:.0f} s, core tests {time.perf_counter() - t0:.0f} s")
 
 
