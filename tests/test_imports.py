@@ -1,5 +1,5 @@
 """mechpy's import graph: no cycle among its modules' module-level imports,
-and the README's "Layout" diagram is the graph the code has."""
+and the "Layout" diagram of CONTRIBUTING.md is the graph the code has."""
 from __future__ import annotations
 
 import ast
@@ -8,7 +8,7 @@ from pathlib import Path
 
 import mechpy
 
-ROOT = Path(__file__).resolve().parents[1]          # README.md and csrc/ beside tests/
+ROOT = Path(__file__).resolve().parents[1]          # CONTRIBUTING.md and csrc/ beside tests/
 PKG = Path(mechpy.__file__).resolve().parent        # the mechpy under test (maybe installed)
 
 
@@ -108,18 +108,18 @@ def test_cycle_finder_finds_one():
     assert _cycle({"a": {"b"}, "b": set()}) is None
 
 
-#: Left out of the README diagram: the extension, the package itself, the
+#: Left out of CONTRIBUTING's diagram: the extension, the package itself, the
 #: helpers every module uses, and the tooling (benchmarks, tours).
 SKIP = {"mechpy", "mechpy._core", "mechpy._validate", "mechpy._timing"}
 TOOLING = ("mechpy.bench", "mechpy.benches", "mechpy.tours")
 
 
 def _readme_block() -> str:
-    text = (ROOT / "README.md").read_text()
+    text = (ROOT / "CONTRIBUTING.md").read_text()
     m = re.search(r"^## Layout\n(.*?)^## ", text, flags=re.M | re.S)
-    assert m, "README.md has no '## Layout' section"
+    assert m, "CONTRIBUTING.md has no '## Layout' section"
     block = re.search(r"```text\n(.*?)```", m.group(1), flags=re.S)
-    assert block, "README's Layout section has no ```text block"
+    assert block, "CONTRIBUTING's Layout section has no ```text block"
     return block.group(1)
 
 
@@ -136,7 +136,7 @@ def _edges(block: str, csrc: bool) -> dict:
     return edges
 
 
-def test_readme_layout_is_the_import_graph():
+def test_contributing_layout_is_the_import_graph():
     """Every module with mechpy imports is drawn with exactly those imports."""
     graph = {m: deps - SKIP for m, deps in import_graph().items()
              if m not in SKIP and not m.startswith(TOOLING)}
@@ -152,7 +152,7 @@ def _folder(path: str) -> str:
     return "csrc/" + parts[0] if len(parts) > 1 else "csrc"
 
 
-def test_readme_layout_is_the_csrc_include_graph():
+def test_contributing_layout_is_the_csrc_include_graph():
     """The csrc/ lines: each folder -> the folders whose headers it includes."""
     graph = {}
     for f in sorted((ROOT / "csrc").rglob("*.[ch]")):

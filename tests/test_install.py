@@ -1,19 +1,18 @@
 """Installs anywhere: without system GSL or LAPACK, without a C compiler.
 
 - The build's fallbacks (meson.build): GSL from subprojects/gsl.wrap, LAPACK
-  from the scipy-openblas32 wheel, whose symbols meson.build renames; a clean
-  clone built in a fresh environment where pkg-config finds nothing links no
-  system libgsl and passes the core test files (slow: one build, minutes).
+  from the scipy-openblas32 wheel, whose symbols meson.build renames.  The build
+  where pkg-config finds nothing (it links no system libgsl and passes the core
+  test files) is tests/test_release.py's: the sdist's offline build, one build
+  shared with the wheel's checks.
 - Compiled systems where no C compiler is found: the numba build (mechpy.
   symbolic.jit) gives the C build's solution to round-off, at its speed.
 """
 import json
 import os
 import re
-import shutil
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -94,76 +93,6 @@ def test_setup_without_root_skips_apt_and_says_what_it_uses(tmp_path):
     assert "apt-get" not in called, called     # (sudo -n true: the probe for sudo)
     assert "no root and no sudo: using GSL 2.7.1 built from subprojects/gsl.wrap" in r.stdout
     assert "OpenBLAS from the scipy-openblas32 wheel (PyPI)" in r.stdout
-
-
-# -- a clean clone, no system libraries ------------------------------------------------
-
-#: the core test files run against the fallback build: the GSL steppers and LAPACK
-#: methods (integrate), the elliptic functions (rigid), the scenes, LAPACK's
-#: eigensolvers (modes, less its interrupt test)
-CORE = ["tests/test_integrate.py", "tests/test_rigid.py", "tests/test_scenes.py",
-        "tests/test_modes.py"]
-
-
-@pytest.mark.slow
-@pytest.mark.skipif(sys.platform != "linux", reason="ldd: Linux")
-def test_clean_clone_builds_without_system_gsl_or_lapack(tmp_path):
-    if not (SOURCE / ".git").exists() or shutil.which("git") is None:
-        pytest.skip("needs a git checkout of mechpy (MECHPY_SOURCE_DIR under dev.sh)")
-    if SANITIZED:
-        pytest.skip("a build of its own: not under the sanitizers")
-    clone = tmp_path / "clone"
-    subprocess.run(["git", "clone", "-q", "--no-hardlinks", str(SOURCE), str(clone)],
-                   check=True, timeout=120)
-    cache = SOURCE / "subprojects" / "packagecache"
-    if cache.is_dir():   # the GSL tarball, if a build here has downloaded it (sha256-checked)
-        shutil.copytree(cache, clone / "subprojects" / "packagecache")
-    empty = tmp_path / "pkgconfig-empty"
-    empty.mkdir()
-    env = dict(os.environ, PKG_CONFIG_LIBDIR=str(empty), PKG_CONFIG_PATH=str(empty),
-               PIP_DISABLE_PIP_VERSION_CHECK="1")
-    for k in ("PYTHONPATH", "MECHPY_INSTALLED_COPY", "VIRTUAL_ENV"):
-        env.pop(k, None)
-    venv = tmp_path / "venv"
-    base = getattr(sys, "_base_executable", sys.executable)
-    subprocess.run([base, "-m", "venv", str(venv)], check=True, timeout=300)
-    py = str(venv / "bin" / "python")
-    t0 = time.perf_counter()
-    r = subprocess.run([py, "-m", "pip", "install", "-q", str(clone)], env=env,
-                       capture_output=True, text=True, timeout=1500)
-    build_s = time.perf_counter() - t0
-    assert r.returncode == 0, r.stdout[-3000:] + r.stderr[-3000:]
-    r = subprocess.run([py, "-c", "import json, mechpy, mechpy._core as c; print(json.dumps("
-                        "[c.__file__, c.gsl_version]))"], env=env, cwd=tmp_path,
-                       capture_output=True, text=True, timeout=120)
-    assert r.returncode == 0, r.stderr
-    so, gsl_version = json.loads(r.stdout)
-    assert gsl_version == "2.7.1"   # the subproject's, not the system's headers
-    ldd = subprocess.run(["ldd", so], capture_output=True, text=True, check=True).stdout
-    assert "libgsl" not in ldd, ldd
-    assert "libopenblas" not in ldd.replace("libscipy_openblas", ""), ldd
-    assert re.search(r"libscipy_openblas\S* => \S*site-packages/\S*scipy_openblas32/lib/", ldd), ldd
-    # the core test files against that copy, from a folder without the source tree
-    run = tmp_path / "run"
-    run.mkdir()
-    for name in ("tests", "pyproject.toml", "README.md", "csrc"):
-        src = clone / name
-        (shutil.copytree if src.is_dir() else shutil.copy)(src, run / name)
-    r = subprocess.run([py, "-m", "pip", "install", "-q", "pytest", "pytest-timeout",
-                        "scipy", "hypothesis"], env=env, capture_output=True, text=True,
-                       timeout=900)
-    assert r.returncode == 0, r.stderr[-3000:]
-    # the venv holds the build and pytest, not the test extra's optional packages
-    # (numba, ...): their tests skip there, as they do wherever those are missing (CI's
-    # rule that an extra be installed is for the suite's own environment)
-    core_env = {k: v for k, v in env.items() if k != "CI"}
-    r = subprocess.run([py, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-x",
-                        "-k", "not interrupt", *CORE], cwd=run,
-                       env=dict(core_env, PYTHONSAFEPATH="1"), capture_output=True, text=True,
-                       timeout=1500)
-    assert r.returncode == 0, r.stdout[-4000:] + r.stderr[-2000:]
-    assert re.search(r"\d+ passed", r.stdout), r.stdout[-2000:]
-    print(f"fallback build: pip install {build_s:.0f} s")
 
 
 # -- no C compiler -----------------------------------------------------------------------

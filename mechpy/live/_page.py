@@ -21,8 +21,8 @@ try:
     import anywidget
     import traitlets
 except ImportError as e:     # pragma: no cover - the live extra is missing
-    raise ImportError("mechpy.live needs anywidget (pip install anywidget, or the 'live' "
-                      "extra of mechpy)") from e
+    raise ImportError("mechpy.live needs anywidget: pip install \"mechpy-classical[live]\" "
+                      "(or pip install anywidget)") from e
 
 _STATIC = Path(__file__).with_name("static")
 

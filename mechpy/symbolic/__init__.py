@@ -162,7 +162,7 @@ def _no_compiler() -> str:
         raise build.CompileError(
             f"no C compiler: {cmd!r} is not found (set MECHPY_CC or CC, or install one), and "
             "numba, which compiles the system without one, is not installed (pip install "
-            "numba); backend='numpy' needs neither")
+            "\"mechpy-classical[jit]\", or pip install numba); backend='numpy' needs neither")
     if not _WARNED:
         import warnings
         _WARNED.append(True)
