@@ -1,8 +1,9 @@
-"""What an animation of the motion draws, in NumPy: the kind of drawing for a
-scene, the samples of a solution, and the places of the bodies.
+"""What an animation of the motion draws, in NumPy: the samples of a solution
+and the places of the bodies.
 
 :func:`mechpy.plot.animate` draws these with matplotlib and
-:func:`mechpy.live.animate` with three.js; both take their geometry from here.
+:func:`mechpy.live.animate` with three.js; both take their geometry from here,
+and the kinds of drawing from one registry, :mod:`mechpy._drawings`.
 Frames: x to the right and y up for the planar pendulums (angles from the
 downward vertical) and for a particle (one coordinate: its height, y up);
 x east, y north, z up for the Foucault pendulum; the space frame of the top
@@ -18,56 +19,9 @@ from __future__ import annotations
 import numpy as np
 
 from ._validate import as_array
-from . import scenes as S
 from .integrate import solve
 from .rigid import nutation_bounds
 from .rotation import euler_matrix, matrix_from_quat
-
-KINDS = ("pendulum", "double_pendulum", "foucault", "top", "rigid", "chain", "particle")
-#: the kinds that draw one scene class
-TYPED = {"foucault": "Foucault", "top": "HeavyTop", "rigid": "RigidBody", "chain": "SpringChain"}
-#: the default trail of each kind, as a fraction of the time span
-DEFAULT_TRAIL = {"pendulum": 0.2, "double_pendulum": 0.2, "foucault": np.inf, "top": np.inf,
-                 "rigid": 0.25, "chain": 0.0, "particle": 0.2}
-
-
-def kind_of(system, kind) -> str:
-    """The kind of drawing for ``system``: ``kind`` checked against the scene,
-    or chosen from the scene's type."""
-    if not isinstance(system, S.Scene):
-        raise TypeError("system must be a mechpy scene (the one that made sol), "
-                        f"got {type(system).__name__}")
-    dim = system.dim
-    if kind is None:
-        for k, cls in TYPED.items():
-            if isinstance(system, getattr(S, cls)):
-                return k
-        if isinstance(system, S.Pendulum):
-            return "pendulum"
-        names = system.params
-        if dim == 4 and {"l1", "l2"} <= set(names):
-            return "double_pendulum"
-        if dim == 2 and ({"length"} & set(names) or {"l"} & set(names)):
-            return "pendulum"
-        if particle_coordinates(system):
-            return "particle"
-        raise TypeError(f"animate cannot tell what to draw for a {type(system).__name__}: "
-                        f"give kind, one of {KINDS}")
-    if not isinstance(kind, str) or kind not in KINDS:
-        raise ValueError(f"kind must be one of {KINDS}, got {kind!r}")
-    if kind in TYPED and not isinstance(system, getattr(S, TYPED[kind])):
-        raise TypeError(f"kind={kind!r} draws a mp.scenes.{TYPED[kind]}, "
-                        f"got {type(system).__name__}")
-    if kind == "particle" and not particle_coordinates(system):
-        raise TypeError("kind='particle' draws a system whose state is (q, v) with one or two "
-                        f"coordinates q (its coordinates: {getattr(system, 'coordinates', None)}, "
-                        f"{dim} states)")
-    need = {"pendulum": 2, "double_pendulum": 4}.get(kind)
-    if need is not None and dim != need:
-        raise TypeError(f"kind={kind!r} needs a system of {need} states (angles from the "
-                        f"downward vertical and their rates), got {dim}")
-    return kind
-
 
 def samples(system, sol, t):
     """(t (m,), y (n, m)) from a Solution or an array (n, m) with times t."""

@@ -9,7 +9,7 @@ import warnings
 
 import numpy as np
 
-from . import _motion
+from . import _drawings, _motion
 from ._validate import as_array, as_int, as_scalar
 from .integrate import solve
 from .scenes import Pendulum, Scene, VanDerPol
@@ -519,9 +519,6 @@ def _animate_field(system, xlim, ylim, *, particles, frames, dt, trail, respawn,
 
 # ---------------------------------------------------------------- the motion itself
 
-_KINDS, _DEFAULT_TRAIL = _motion.KINDS, _motion.DEFAULT_TRAIL
-
-
 def _square_view(ax, r, xlabel, ylabel):
     """A plane view of [-r, r]^2 at equal aspect, labelled, with the origin (the pivot)
     marked."""
@@ -744,11 +741,6 @@ def _particle(ax, system, t, y, trail, lengths):
     return _dot_and_trail(ax, t, P, trail, "tab:blue", "tab:orange", 10, "particle")
 
 
-_DRAW = {"pendulum": _planar_pendulum, "double_pendulum": _planar_pendulum,
-         "foucault": _foucault, "top": _top, "rigid": _rigid, "chain": _chain,
-         "particle": _particle}
-
-
 def _save(anim, path, fps):
     """Write ``anim`` to ``path``: .html (JavaScript), .mp4 (ffmpeg), else GIF (Pillow)."""
     from matplotlib import animation
@@ -874,20 +866,21 @@ def animate(system, sol, *, kind=None, t=None, frames=None, fps=20, trail=None, 
     [0, 2, 4, 6]
     """
     plt = _plt()
-    kind = _motion.kind_of(system, kind)
+    drawing = _drawings.kind_of(system, kind)
+    kind = drawing.name
     tt, y = _motion.samples(system, sol, t)
     m = tt.size
     frames = min(m, 200) if frames is None else as_int(frames, "frames", minimum=1)
     fps = as_scalar(fps, "fps", positive=True)
     span = abs(tt[-1] - tt[0])
-    trail = (_DEFAULT_TRAIL[kind] * span if trail is None
+    trail = (drawing.trail * span if trail is None
              else as_scalar(trail, "trail", nonnegative=True, finite=False))
     if np.isnan(trail):
         raise ValueError("trail must be a non-negative time or np.inf, got nan")
-    three_d = kind in ("top", "rigid")
+    three_d = drawing.three_d
     if ax is None:
         # small and at 80 dpi: every frame is a PNG in to_jshtml
-        fig = plt.figure(figsize=(4.5, 4.5) if kind != "chain" else (7, 4), dpi=80)
+        fig = plt.figure(figsize=drawing.figsize, dpi=80)
         ax = fig.add_subplot(projection="3d" if three_d else None)
     else:
         if three_d != (getattr(ax, "name", "") == "3d"):
@@ -897,7 +890,7 @@ def animate(system, sol, *, kind=None, t=None, frames=None, fps=20, trail=None, 
     # a frame at an action's time (a time held twice) shows the state after it
     samples = np.unique(_motion.after_jumps(tt, np.linspace(0, m - 1, frames).round()
                                             .astype(np.intp)))
-    update = _DRAW[kind](ax, system, tt, y, trail, lengths)
+    update = drawing.painter("plot")(ax, system, tt, y, trail, lengths)
     clock = (ax.text2D if three_d else ax.text)(0.98, 0.98, "", transform=ax.transAxes,
                                                 ha="right", va="top", gid="time")
 

@@ -222,7 +222,7 @@ def test_bad_input():
         (lambda: a(p, sol, trail=-1.0), ValueError, "trail"),
         (lambda: a(p, sol, lengths=[1.0, 2.0]), ValueError, "lengths"),
         (lambda: a(mp.scenes.RigidBody(), np.ones((3, 2)), t=[0, 1], lengths=[1.0]),
-         ValueError, "lengths is for the pendulum"),
+         ValueError, "lengths is for kind='pendulum' or 'double_pendulum', not kind='rigid'"),
         (lambda: a(p, sol, spacing=1.0), ValueError, "spacing is for kind='chain'"),
     ]
     for call, exc, match in cases:
