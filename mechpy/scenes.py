@@ -29,8 +29,8 @@ from ._validate import as_array, as_int, as_scalar
 from .integrate import solve
 from .modes import chain, normal_modes
 
-__all__ = ["Scene", "Pendulum", "VanDerPol", "Duffing", "Kepler", "RestrictedThreeBody", "Foucault",
-           "RigidBody", "HeavyTop", "SpringChain", "Rocket", "SymbolicField"]
+#: the public names; every scene class defined below is added at the end of the module
+__all__ = ["Scene"]
 
 
 class SymbolicField(NamedTuple):
@@ -1166,3 +1166,8 @@ def _join_pieces(pieces, every_step):
         out.sol = _JoinedDense([q.sol for q in pieces])
     failed = [q for q in pieces if q.status < 0]
     return failed[0] if failed else out
+
+
+# every scene class defined here (a new scene is its class line), then the field's type
+__all__ += [c.__name__ for c in Scene.__subclasses__() if c.__module__ == __name__] + [
+    "SymbolicField"]
