@@ -110,7 +110,8 @@ def fitting(system) -> str | None:
 
 def kind_of(system, kind) -> Drawing:
     """The drawing for ``system``: ``kind`` checked against it, or the one the
-    system names (:attr:`drawing`)."""
+    system names (its ``drawing``: an entry's name, or a :class:`Drawing` of
+    its own)."""
     from .scenes import Scene
     if not isinstance(system, Scene):
         raise TypeError("system must be a mechpy scene (the one that made sol), "
@@ -120,9 +121,13 @@ def kind_of(system, kind) -> Drawing:
         if kind is None:
             raise TypeError(f"animate cannot tell what to draw for a {type(system).__name__}: "
                             f"give kind, one of {KINDS}")
-    if not isinstance(kind, str) or kind not in DRAWINGS:
+    if isinstance(kind, Drawing):          # an entry of the system's own (not registered)
+        d = kind
+    elif not isinstance(kind, str) or kind not in DRAWINGS:
         raise ValueError(f"kind must be one of {KINDS}, got {kind!r}")
-    d = DRAWINGS[kind]
+    else:
+        d = DRAWINGS[kind]
+    kind = d.name
     if d.rows and system._model not in d.rows:
         raise TypeError(f"kind={kind!r} draws a mp.scenes.{d.rows[0]}, "
                         f"got {type(system).__name__}")

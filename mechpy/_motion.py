@@ -3,7 +3,7 @@ and the places of the bodies.
 
 :func:`mechpy.plot.animate` draws these with matplotlib and
 :func:`mechpy.live.animate` with three.js; both take their geometry from here,
-and the kinds of drawing from one registry, :mod:`mechpy._drawings`.
+and the kinds of drawing from one registry, ``mechpy._drawings``.
 Frames: x to the right and y up for the planar pendulums (angles from the
 downward vertical) and for a particle (one coordinate: its height, y up);
 x east, y north, z up for the Foucault pendulum; the space frame of the top

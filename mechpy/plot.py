@@ -760,7 +760,11 @@ def animate(system, sol, *, kind=None, t=None, frames=None, fps=20, trail=None, 
             lengths=None, path=None):
     r"""An animation of the motion itself, drawn from a solution.
 
-    What is drawn depends on ``kind`` (by default chosen from the scene's type):
+    What is drawn depends on ``kind``: by default the drawing the system names
+    (``system.drawing``: a scene's C row names it; a compiled system gets the
+    first of the registry, ``mechpy._drawings``, that fits it: a pendulum of
+    two states with a parameter ``length`` or ``l``, a double pendulum of four
+    with ``l1`` and ``l2``, a particle):
 
     ``"pendulum"``
         :class:`~mechpy.scenes.Pendulum` (or any two-state scene with a

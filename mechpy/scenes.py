@@ -174,12 +174,11 @@ class Scene:
 
     def __init_subclass__(cls, row: str = "", **kwargs):
         super().__init_subclass__(**kwargs)
-        if row:
-            cls._model = row
-        if "initial_state" in cls.__dict__:
-            cls.initial_state = _takes_named_states(cls.__dict__["initial_state"])
         if not row:
             return
+        cls._model = row
+        if "initial_state" in cls.__dict__:
+            cls.initial_state = _takes_named_states(cls.__dict__["initial_state"])
         _add_row_doc(cls)
         if "__init__" in cls.__dict__:
             return
@@ -243,7 +242,7 @@ class Scene:
 
     @property
     def drawing(self) -> str | None:
-        """The name of the scene's drawing (:mod:`mechpy._drawings`), or None."""
+        """The name of the scene's drawing (``mechpy._drawings``), or None."""
         return _row(self._model)["drawing"]
 
     def _velocity_index(self, iq: int) -> int | None:

@@ -2,7 +2,7 @@
 
 The frames are computed here, in NumPy, from the solution's dense output (or
 from its samples); the page only places the bodies, draws the trails and
-plays.  The kinds are the entries of :mod:`mechpy._drawings` (each names its
+plays.  The kinds are the entries of ``mechpy._drawings`` (each names its
 painter here, a function ``(system, times, Y, **options) -> dict``); their
 geometry is :mod:`mechpy._motion`'s, the same as :func:`mechpy.plot.animate`'s.
 """
@@ -215,8 +215,8 @@ def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0,
             lengths=None, spacing=None) -> Motion:
     r"""The motion of a solution in 3D, in the browser (three.js).
 
-    What is drawn depends on ``kind`` (by default chosen from the scene's
-    type), as in :func:`mechpy.plot.animate`:
+    What is drawn depends on ``kind`` (by default the drawing the system
+    names, ``system.drawing``), as in :func:`mechpy.plot.animate`:
 
     ``"pendulum"``, ``"double_pendulum"``
         rods and bobs at :math:`(l\sin\theta, -l\cos\theta, 0)` (x right, y

@@ -13,7 +13,7 @@ import numpy as np
 
 from .. import _core
 from .._validate import as_array, as_finite_result, as_scalar, band_of_pattern
-from ..scenes import Scene
+from ..scenes import Scene, _state_vector
 
 __all__ = ["CompiledScene"]
 
@@ -449,7 +449,7 @@ class CompiledScene(Scene):
     def drawing(self) -> str | None:
         """The drawing of mechpy's animations for this system: a compiled
         system has none of its own, so the first drawing of the registry that
-        fits its description (:func:`mechpy._drawings.fitting`), or None."""
+        fits its description (``mechpy._drawings.fitting``), or None."""
         from .._drawings import fitting
         return fitting(self)
 
