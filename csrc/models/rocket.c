@@ -38,11 +38,17 @@ static int rocket_check(const double *p, char *why, size_t len)
 
 /* The branches the engine integrates: burning (thrust on for every mass > 0,
  * so that a step's stages past burn-out see the same smooth field) and
- * coasting. */
+ * coasting.  A trial stage of a long step can reach a mass <= 0 (the mass
+ * falls linearly, so nothing in the error estimate holds the step back): the
+ * field is not defined there, and NaN makes the driver reject the step and
+ * shrink it (its non-finite stage rule) rather than end the solve. */
 static int rocket_branch(const double *p, const double *y, double *f, double thrust,
                          double dm)
 {
-    if (!(y[2] > 0)) return MP_EDOM;
+    if (!(y[2] > 0)) {
+        f[0] = f[1] = f[2] = NAN;
+        return MP_OK;
+    }
     f[0] = y[1];
     f[1] = (thrust - p[RK] * y[1] * fabs(y[1])) / y[2] - p[RG];
     f[2] = dm;
