@@ -9,7 +9,7 @@ import warnings
 
 import numpy as np
 
-from . import _drawings, _motion
+from . import _motion
 from ._validate import as_array, as_int, as_scalar
 from .integrate import solve
 from .scenes import Pendulum, Scene, VanDerPol
@@ -762,7 +762,7 @@ def animate(system, sol, *, kind=None, t=None, frames=None, fps=20, trail=None, 
 
     What is drawn depends on ``kind``: by default the drawing the system names
     (``system.drawing``: a scene's C row names it; a compiled system gets the
-    first of the registry, ``mechpy._drawings``, that fits it: a pendulum of
+    first of the registry, ``mechpy._motion``, that fits it: a pendulum of
     two states with a parameter ``length`` or ``l``, a double pendulum of four
     with ``l1`` and ``l2``, a particle):
 
@@ -870,7 +870,7 @@ def animate(system, sol, *, kind=None, t=None, frames=None, fps=20, trail=None, 
     [0, 2, 4, 6]
     """
     plt = _plt()
-    drawing = _drawings.kind_of(system, kind)
+    drawing = _motion.kind_of(system, kind)
     kind = drawing.name
     tt, y = _motion.samples(system, sol, t)
     m = tt.size

@@ -242,7 +242,7 @@ class Scene:
 
     @property
     def drawing(self) -> str | None:
-        """The name of the scene's drawing (``mechpy._drawings``), or None."""
+        """The name of the scene's drawing (``mechpy._motion``), or None."""
         return _row(self._model)["drawing"]
 
     def _velocity_index(self, iq: int) -> int | None:

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 import mechpy as mp
-from mechpy import _core, _drawings
+from mechpy import _core, _motion
 
 ROOT = pathlib.Path(__file__).parents[1]
 
@@ -127,12 +127,12 @@ def _dot_live(system, times, Y):
 
 def test_a_drawing_made_as_the_recipe_says_is_drawn_by_both_painters(monkeypatch):
     (entry_src,) = _blocks(DRAWING, "python")
-    entry = eval(entry_src.strip().rstrip(","), {"Drawing": _drawings.Drawing})
+    entry = eval(entry_src.strip().rstrip(","), {"Drawing": _motion.Drawing})
     assert entry.name == "dot"
     assert entry.plot.startswith("mechpy.plot:") and entry.live.startswith("mechpy.live.motion:")
     entry = entry._replace(plot=f"{__name__}:_dot_plot", live=f"{__name__}:_dot_live",
                            rows=("Pendulum",))
-    monkeypatch.setitem(_drawings.DRAWINGS, "dot", entry)
+    monkeypatch.setitem(_motion.DRAWINGS, "dot", entry)
     p = mp.scenes.Pendulum()
     sol = mp.solve(p, (0, 1), [1.0, 0.0], t_eval=np.linspace(0, 1, 5), dense_output=True)
     anim = mp.plot.animate(p, sol, kind="dot")
@@ -151,7 +151,7 @@ def test_a_drawing_made_as_the_recipe_says_is_drawn_by_both_painters(monkeypatch
 def test_every_drawing_follows_the_painters_contract():
     """Each entry's painters take what the recipe says; the rows it names are
     rows, and each such row names it back."""
-    for d in _drawings.DRAWINGS.values():
+    for d in _motion.DRAWINGS.values():
         assert list(inspect.signature(d.painter("plot")).parameters) == [
             "ax", "system", "t", "y", "trail", "lengths"]
         live = list(inspect.signature(d.painter("live")).parameters)

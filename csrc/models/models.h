@@ -101,7 +101,7 @@ typedef struct mp_model {
     const char *const *coordinates;
     const char *const *speeds;
     /* How the animations draw it: the name of an entry of the drawing
-     * registry (mechpy/_drawings.py); NULL: no drawing of its own. */
+     * registry (mechpy/_motion.py); NULL: no drawing of its own. */
     const char *drawing;
 } mp_model;
 

@@ -2,7 +2,7 @@
 
 The frames are computed here, in NumPy, from the solution's dense output (or
 from its samples); the page only places the bodies, draws the trails and
-plays.  The kinds are the entries of ``mechpy._drawings`` (each names its
+plays.  The kinds are the entries of ``mechpy._motion`` (each names its
 painter here, a function ``(system, times, Y, **options) -> dict``); their
 geometry is :mod:`mechpy._motion`'s, the same as :func:`mechpy.plot.animate`'s.
 """
@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import _drawings, _motion
+from .. import _motion
 from .._validate import as_array, as_scalar
 from ._page import LiveWidget, pack
 
@@ -321,7 +321,7 @@ def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0,
     >>> w.times.size, w.bodies
     (101, ['bob'])
     """
-    drawing = _drawings.kind_of(system, kind)
+    drawing = _motion.kind_of(system, kind)
     kind = drawing.name
     tt, y = _motion.samples(system, sol, t)                        # checks sol's shape
     fps = as_scalar(fps, "fps", positive=True, hi=120.0)
@@ -335,7 +335,7 @@ def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0,
     options = {k: v for k, v in (("lengths", lengths), ("spacing", spacing)) if v is not None}
     for k in options:
         if k not in drawing.options:
-            takers = " or ".join(repr(d.name) for d in _drawings.DRAWINGS.values()
+            takers = " or ".join(repr(d.name) for d in _motion.DRAWINGS.values()
                                  if k in d.options)
             raise ValueError(f"{k} is for kind={takers}, not kind={kind!r}")
     Y = _states(system, sol, t, times)

@@ -449,8 +449,8 @@ class CompiledScene(Scene):
     def drawing(self) -> str | None:
         """The drawing of mechpy's animations for this system: a compiled
         system has none of its own, so the first drawing of the registry that
-        fits its description (``mechpy._drawings.fitting``), or None."""
-        from .._drawings import fitting
+        fits its description (``mechpy._motion.fitting``), or None."""
+        from .._motion import fitting
         return fitting(self)
 
     def initial_state(self, values) -> np.ndarray:
