@@ -126,6 +126,8 @@ def _dot_live(system, times, Y):
 
 
 def test_a_drawing_made_as_the_recipe_says_is_drawn_by_both_painters(monkeypatch):
+    pytest.importorskip("matplotlib")
+    pytest.importorskip("anywidget")
     (entry_src,) = _blocks(DRAWING, "python")
     entry = eval(entry_src.strip().rstrip(","), {"Drawing": _motion.Drawing})
     assert entry.name == "dot"
@@ -151,6 +153,8 @@ def test_a_drawing_made_as_the_recipe_says_is_drawn_by_both_painters(monkeypatch
 def test_every_drawing_follows_the_painters_contract():
     """Each entry's painters take what the recipe says; the rows it names are
     rows, and each such row names it back."""
+    pytest.importorskip("matplotlib")
+    pytest.importorskip("anywidget")
     for d in _motion.DRAWINGS.values():
         assert list(inspect.signature(d.painter("plot")).parameters) == [
             "ax", "system", "t", "y", "trail", "lengths"]
