@@ -287,6 +287,8 @@ def test_the_docs_table_of_scenes_is_the_rows():
     import pathlib
     import re
     page = pathlib.Path(__file__).parents[1] / "docs" / "guide" / "scenes.md"
+    if not page.exists():
+        pytest.skip("the docs are not beside these tests (a run against an installed copy)")
     lines = [ln for ln in page.read_text().splitlines() if ln.startswith("| `")]
     by_row = {c._model: c for c in CLASSES}
     rows = []
