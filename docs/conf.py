@@ -27,6 +27,7 @@ extensions = [
     "myst_nb",
     "sphinx_copybutton",
     "notebook_time",          # docs/_ext: a notebook that ran too long fails the build
+    "offline_html",           # docs/_ext: no stylesheet from another host in cell outputs
 ]
 
 source_suffix = {".rst": "restructuredtext", ".md": "myst-nb", ".ipynb": "myst-nb"}
@@ -66,6 +67,10 @@ myst_heading_anchors = 3
 # otherwise are dropped quietly rather than warned about (the build uses -W)
 nb_mime_priority_overrides = [("html", "application/vnd.jupyter.widget-view+json", None)]
 suppress_warnings = ["mystnb.unknown_mime_type"]
+# ...and so the ipywidgets scripts myst-nb adds to a page with widget state (require.js and
+# the widgets' HTML manager, from CDNs) would render nothing: none, the site asks no other
+# host (docs/_ext/offline_html.py)
+nb_ipywidgets_js = {}
 
 # ---- math: a local MathJax when the machine has one ---------------------------
 # Debian's libjs-mathjax (MathJax 2, installed by `scripts/dev.sh docs`) is copied

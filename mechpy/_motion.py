@@ -78,6 +78,8 @@ class Drawing(NamedTuple):
     #: matplotlib: 3-D Axes, and the figure's size (inches)
     three_d: bool = False
     figsize: tuple = (4.5, 4.5)
+    #: matplotlib: the figure's bottom margin (a fraction) for a legend under the axes
+    bottom: float | None = None
     #: the keyword options of mp.live.animate it takes
     options: tuple = ()
 
@@ -115,7 +117,7 @@ DRAWINGS = {d.name: d for d in (
     Drawing("rigid", "mechpy.plot:_rigid", "mechpy.live.motion:_rigid",
             rows=("RigidBody", "RigidBodyOriented"), trail=0.25, three_d=True),
     Drawing("chain", "mechpy.plot:_chain", "mechpy.live.motion:_chain", rows=("SpringChain",),
-            trail=0.0, figsize=(7, 4), options=("spacing",)),
+            trail=0.0, figsize=(7, 5), bottom=0.36, options=("spacing",)),
     Drawing("particle", "mechpy.plot:_particle", "mechpy.live.motion:_particle",
             fits=_fits_particle),
 )}

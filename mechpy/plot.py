@@ -188,7 +188,7 @@ def phase_portrait(system, xlim=(-2 * np.pi, 2 * np.pi), ylim=(-4.0, 4.0), *, t=
         _colorbar(ax, strm.lines, "speed of the flow |dy/dt| (axis units/s)")
     if handles:
         ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.16),
-                  ncol=len(handles), fontsize=7, frameon=False)
+                  ncol=min(len(handles), 2), frameon=False)
     return ax
 
 
@@ -243,7 +243,7 @@ def work_precision(rows, problem=None, *, ax=None):
     ax.set_ylabel("error at the final time (state units)")
     ax.set_title(f"work-precision: {problem}")
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5))
+    ax.legend(loc="center left", bbox_to_anchor=(1.01, 0.5))
     return ax
 
 
@@ -281,7 +281,7 @@ def modes(m, which=None, *, positions=None, ax=None, position_unit="m"):
                   else f"equilibrium position ({position_unit})")
     ax.set_ylabel(r"mode shape $a_i$ (kg$^{-1/2}$, $a^T M a = 1$)")
     ax.set_title("normal modes: shapes and angular frequencies")
-    ax.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5))
+    ax.legend(loc="center left", bbox_to_anchor=(1.01, 0.5))
     return ax
 
 
@@ -632,8 +632,8 @@ def _top(ax, system, t, y, trail, lengths):
                 ls, color="0.4", lw=1, gid="bound",
                 label=rf"$\theta$ = {th:.3f} rad")
     if bounds:
-        ax.legend(loc="upper left", bbox_to_anchor=(0.0, 1.0), fontsize=7,
-                  title="nutation bounds", title_fontsize=7)
+        ax.legend(loc="upper left", bbox_to_anchor=(0.0, 1.0),
+                  title="nutation bounds")
     tr = _trail(ax, "tab:orange")
     (axis,) = ax.plot([], [], [], "-", color="tab:blue", lw=2.5, gid="axis")
     (tip,) = ax.plot([], [], [], "o", color="tab:blue", ms=5, gid="tip")
@@ -664,7 +664,7 @@ def _rigid(ax, system, t, y, trail, lengths):
                         label=f"body axis {j + 1} ($I_{j + 1}$ = {system.moments[j]:.3g})")
         arts.append(ln)
         trails.append(_trail(ax, c))
-    ax.legend(loc="upper left", bbox_to_anchor=(0.0, 1.0), fontsize=7)
+    ax.legend(loc="upper left", bbox_to_anchor=(0.0, 1.0))
     first = _window(t, trail)
 
     def update(k):
@@ -706,7 +706,7 @@ def _chain(ax, system, t, y, trail, lengths):
     (spring,) = ax.plot([], [], "-", color="0.5", lw=1, gid="springs")
     (masses,) = ax.plot([], [], "s", color="tab:red", ms=7, gid="masses",
                         label="masses along the chain (displacement x 0.4/max|x|)")
-    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=3, fontsize=7)
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=1)
 
     def update(k):
         dots.set_data(idx, x[:, k])
@@ -886,6 +886,8 @@ def animate(system, sol, *, kind=None, t=None, frames=None, fps=20, trail=None, 
         # small and at 80 dpi: every frame is a PNG in to_jshtml
         fig = plt.figure(figsize=drawing.figsize, dpi=80)
         ax = fig.add_subplot(projection="3d" if three_d else None)
+        if drawing.bottom is not None:
+            fig.subplots_adjust(bottom=drawing.bottom)   # a legend under the axes
     else:
         if three_d != (getattr(ax, "name", "") == "3d"):
             raise ValueError(f"ax must be {'a 3-D' if three_d else 'a 2-D'} Axes for "

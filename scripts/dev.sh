@@ -181,7 +181,7 @@ if [ "$job" = docs ]; then
         "$vpy" -m pip install -q $reqs
         echo "$dstamp" > .venv/.mechpy-docs-stamp
     fi
-    "$vpy" -m sphinx -W --keep-going -b html docs docs/_build/html "$@"
+    "$vpy" -m sphinx -W --keep-going -b html -d docs/_build/doctrees docs docs/_build/html "$@"
     say "the site is in docs/_build/html/index.html"
     exit 0
 fi

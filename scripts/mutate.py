@@ -105,11 +105,12 @@ MODULES = {
                                              "tests/test_conventions.py"]),
     "modes.py": (["mechpy/modes.py"], ["tests/test_modes.py", "tests/test_chain.py", "-k", FAST]),
     "variational.py": (["mechpy/variational/*.py"], ["tests/test_variational.py", "-k", FAST]),
-    "symbolic": (["mechpy/symbolic/derive.py", "mechpy/symbolic/codegen.py"],
+    "symbolic": (["mechpy/symbolic/derive.py", "mechpy/symbolic/codegen.py", "csrc/gen/*.h"],
                  ["tests/test_compiled.py", "tests/test_lanes.py", "-k", "compiled or lane_rhs"]),
     "symbolic.build": (["mechpy/symbolic/__init__.py", "mechpy/symbolic/build.py",
                         "mechpy/symbolic/scene.py"], ["tests/test_compiled.py"]),
-    "mechanics": (["mechpy/symbolic/multibody.py", "mechpy/symbolic/models.py"],
+    "mechanics": (["mechpy/symbolic/multibody.py", "mechpy/symbolic/models.py",
+                   "mechpy/symbolic/_sympy_private.py"],
                   ["tests/test_mechanics.py"]),
     "symbolic.jit": (["mechpy/symbolic/jit.py", "mechpy/symbolic/_jit_rt.py"],
                      ["tests/test_install.py", "-k", "numba or compiler"]),
@@ -137,8 +138,8 @@ EXCLUDED = {
                        "that a test could compare with a reference",
     "mechpy/_timing.py": "timers of the benches and tours (wall-clock figures only)",
     "mechpy/benches/*.py": "benchmarks: timings of the modules above against other "
-                           "libraries, their correctness is the modules' own (test_hard_cases "
-                           "imports hard_cases' reference values, published ones)",
+                           "libraries, their correctness is the modules' own (the tests import "
+                           "problems.py's reference problems and values, published ones)",
     "mechpy/tours/*.py": "the printed demonstrations of `python -m mechpy tour`: they call "
                          "the modules above and print; test_course runs them for errors only",
 }

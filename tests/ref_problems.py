@@ -282,122 +282,22 @@ def detest() -> list[Problem]:
     return P
 
 
-# ---- the IVP test set's stiff problems ------------------------------------------
-
-def _hires(t, y):
-    f = np.empty(8)
-    f[0] = -1.71 * y[0] + 0.43 * y[1] + 8.32 * y[2] + 0.0007
-    f[1] = 1.71 * y[0] - 8.75 * y[1]
-    f[2] = -10.03 * y[2] + 0.43 * y[3] + 0.035 * y[4]
-    f[3] = 8.32 * y[1] + 1.71 * y[2] - 1.12 * y[3]
-    f[4] = -1.745 * y[4] + 0.43 * y[5] + 0.43 * y[6]
-    f[5] = -280.0 * y[5] * y[7] + 0.69 * y[3] + 1.71 * y[4] - 0.43 * y[5] + 0.69 * y[6]
-    f[6] = 280.0 * y[5] * y[7] - 1.81 * y[6]
-    f[7] = -280.0 * y[5] * y[7] + 1.81 * y[6]
-    return f
-
-
-def _hires_jac(t, y):
-    J = np.zeros((8, 8))
-    J[0, :3] = [-1.71, 0.43, 8.32]
-    J[1, :2] = [1.71, -8.75]
-    J[2, 2:5] = [-10.03, 0.43, 0.035]
-    J[3, 1:4] = [8.32, 1.71, -1.12]
-    J[4, 4:7] = [-1.745, 0.43, 0.43]
-    J[5, 3:8] = [0.69, 1.71, -280.0 * y[7] - 0.43, 0.69, -280.0 * y[5]]
-    J[6, 5:8] = [280.0 * y[7], -1.81, 280.0 * y[5]]
-    J[7, 5:8] = [-280.0 * y[7], 1.81, -280.0 * y[5]]
-    return J
-
-
-_OR_S, _OR_W, _OR_Q = 77.27, 0.161, 8.375e-6
-
-
-def _orego(t, y):
-    return np.array([_OR_S * (y[1] + y[0] * (1.0 - _OR_Q * y[0] - y[1])),
-                     (y[2] - (1.0 + y[0]) * y[1]) / _OR_S,
-                     _OR_W * (y[0] - y[2])])
-
-
-def _orego_jac(t, y):
-    return np.array([[_OR_S * (1.0 - 2.0 * _OR_Q * y[0] - y[1]), _OR_S * (1.0 - y[0]), 0.0],
-                     [-y[1] / _OR_S, -(1.0 + y[0]) / _OR_S, 1.0 / _OR_S],
-                     [_OR_W, 0.0, -_OR_W]])
-
-
-def _rober(t, y):
-    return np.array([-0.04 * y[0] + 1e4 * y[1] * y[2],
-                     0.04 * y[0] - 1e4 * y[1] * y[2] - 3e7 * y[1] ** 2,
-                     3e7 * y[1] ** 2])
-
-
-def _rober_jac(t, y):
-    return np.array([[-0.04, 1e4 * y[2], 1e4 * y[1]],
-                     [0.04, -1e4 * y[2] - 6e7 * y[1], -1e4 * y[1]],
-                     [0.0, 6e7 * y[1], 0.0]])
-
-
-_VDP_MU = 1000.0
-
-
-def _vdpol(t, y):
-    return np.array([y[1], _VDP_MU * (1.0 - y[0] ** 2) * y[1] - y[0]])
-
-
-def _vdpol_jac(t, y):
-    return np.array([[0.0, 1.0],
-                     [-2.0 * _VDP_MU * y[0] * y[1] - 1.0, _VDP_MU * (1.0 - y[0] ** 2)]])
-
-
-_E5_A, _E5_B, _E5_CM, _E5_C = 7.89e-10, 1.1e7, 1.13e9, 1.13e3
-
-
-def _e5stiff(t, y):
-    p1 = _E5_A * y[0]
-    p2 = _E5_B * y[0] * y[2]
-    p3 = _E5_CM * y[1] * y[2]
-    p4 = _E5_C * y[3]
-    f1, f2, f4 = -p1 - p2, p1 - p3, p2 - p4
-    return np.array([f1, f2, f2 - f4, f4])
-
-
-def _e5stiff_jac(t, y):
-    A, B, CM, C = _E5_A, _E5_B, _E5_CM, _E5_C
-    return np.array([
-        [-A - B * y[2], 0.0, -B * y[0], 0.0],
-        [A, -CM * y[2], -CM * y[1], 0.0],
-        [A - B * y[2], -CM * y[2], -B * y[0] - CM * y[1], C],
-        [B * y[2], 0.0, B * y[0], -C]])
-
+# ---- the IVP test set's stiff problems: mechpy.benches.problems (the benches run them too)
 
 def stiff_set() -> list[Problem]:
     """HIRES, OREGO, ROBER, VDPOL (mu = 1000, plain form) and E5 with the IVP
-    test set's published end values; each runs with an absolute tolerance below
-    the size of the components that matter (ROBER's y2 ~ 1e-13 gets 1e-20, E5's
+    test set's published end values (mechpy/benches/problems.py, one home for
+    the tests and the benches); each runs with an absolute tolerance below the
+    size of the components that matter (ROBER's y2 ~ 1e-13 gets 1e-20, E5's
     y2, y3 ~ 9e-23 get 1.7e-24)."""
     import mechpy as mp
-    how = "IVP test set"
-    return [
-        Problem("HIRES", _hires, np.array([1.0, 0, 0, 0, 0, 0, 0, 0.0057]), 321.8122,
-                np.array([0.7371312573325668e-3, 0.1442485726316185e-3,
-                          0.5888729740967575e-4, 0.1175651343283149e-2,
-                          0.2386356198831331e-2, 0.6238968252742796e-2,
-                          0.2849998395185769e-2, 0.2850001604814231e-2]), how,
-                jac=_hires_jac, atol=1e-11),
-        Problem("OREGO", _orego, np.array([1.0, 2.0, 3.0]), 360.0,
-                np.array([0.1000814870318523e1, 0.1228178521549917e4, 0.1320554942846706e3]),
-                how, jac=_orego_jac, atol=1e-8),
-        Problem("ROBER", _rober, np.array([1.0, 0.0, 0.0]), 1e11,
-                np.array([0.2083340149701255e-7, 0.8333360770334713e-13, 0.9999999791665050]),
-                how, jac=_rober_jac, atol=np.array([1e-14, 1e-20, 1e-14])),
-        Problem("VDPOL", _vdpol, np.array([2.0, 0.0]), 2000.0,
-                np.array([0.1706167732170469e1, -0.8928097010248125e-3]), how,
-                jac=_vdpol_jac, atol=1e-10, scene=lambda: mp.scenes.VanDerPol(mu=_VDP_MU)),
-        Problem("E5", _e5stiff, np.array([1.76e-3, 0.0, 0.0, 0.0]), 1e13,
-                np.array([0.1152903278711829e-290, 0.8867655517642120e-22,
-                          0.8854814626268838e-22, 0.0]), how,
-                jac=_e5stiff_jac, atol=1.7e-24),
-    ]
+    from mechpy.benches.problems import STIFF_SET, VDP_MU, VDPOL
+    scenes = {VDPOL.name: lambda: mp.scenes.VanDerPol(mu=VDP_MU)}
+    return [Problem(P.name, P.f, np.array(P.y0, dtype=float), P.t_span[1], np.array(P.ref),
+                    "IVP test set", jac=P.jac, t0=P.t_span[0],
+                    atol=np.array(P.atol) if isinstance(P.atol, tuple) else P.atol,
+                    scene=scenes.get(P.name))
+            for P in STIFF_SET]
 
 
 def error_norm(y, ref, rtol, atol):

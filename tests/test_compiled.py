@@ -291,6 +291,89 @@ def test_fixed_step_blocks_of_a_compiled_system(system, method, request, monkeyp
     assert generic.nfev == fast.nfev and np.array_equal(generic.y, fast.y)
 
 
+#: A program around csrc/gen/*.h (the C every generated system shares, as
+#: codegen pastes it: lanes.h, then lu.h, closed.h and lu_lanes.h): mp_lu and
+#: mp_lu_solve on one NA x NA system, mp_lu_lanes on MP_LANES of them (lane l's
+#: matrix is A + l I), and mp_closed_ok on A's determinant.
+_SHARED_C_MAIN = r"""
+#include <stdio.h>
+int main(void)
+{
+    double A0[NA * NA] = {A_ENTRIES}, b0[NA] = {B_ENTRIES};
+    double A[NA * NA], x[NA], dinv[NA];
+    int piv[NA];
+    for (int i = 0; i < NA * NA; i++) A[i] = A0[i];
+    for (int i = 0; i < NA; i++) x[i] = b0[i];
+    if (mp_lu(A, piv, dinv) != MP_OK) return 1;
+    mp_lu_solve(A, piv, dinv, x);
+    for (int i = 0; i < NA; i++) printf("%.17g\n", x[i]);
+    double AL[NA * NA * MP_LANES], bl[NA * MP_LANES];
+    int st[MP_LANES];
+    for (int i = 0; i < NA; i++)
+        for (int j = 0; j < NA; j++)
+            for (int l = 0; l < MP_LANES; l++)
+                AL[(i * NA + j) * MP_LANES + l] = A0[i * NA + j] + (i == j ? l : 0);
+    for (int i = 0; i < NA; i++)
+        for (int l = 0; l < MP_LANES; l++) bl[i * MP_LANES + l] = b0[i];
+    mp_lu_lanes(AL, bl, st);
+    for (int l = 0; l < MP_LANES; l++) {
+        if (st[l] != MP_OK) return 2;
+        for (int i = 0; i < NA; i++) printf("%.17g\n", bl[i * MP_LANES + l]);
+    }
+    printf("%d %d\n", mp_closed_ok(DET, ASUM, NA), mp_closed_normal(0.0));
+    return 0;
+}
+"""
+
+
+def test_shared_c_is_real_c_that_solves(tmp_path):
+    """csrc/gen/*.h are the text codegen pastes into every generated system
+    (mechpy.symbolic._ctext, embedded at build time), and compile as C with
+    -Wall -Wextra -Werror: mp_lu/mp_lu_solve and the lane solver against
+    numpy.linalg.solve, mp_closed_ok against the determinant's test."""
+    from pathlib import Path
+
+    from mechpy.symbolic import _ctext, build, codegen
+    gen = Path(__file__).resolve().parents[1] / "csrc" / "gen"
+    files = sorted(gen.glob("*.h"))
+    assert [f.stem.upper() for f in files] == ["CLOSED", "LANES", "LU", "LU_LANES"]
+    for f in files:
+        assert getattr(_ctext, f.stem.upper()) == f.read_text(), f.name
+        assert f.read_text() in codegen.RUNTIME + codegen.LANE_RUNTIME \
+            + codegen.LANE_SOLVER + codegen.CLOSED, f.name
+    if not build.have_compiler():
+        pytest.skip("no C compiler")
+    rng = np.random.default_rng(48)
+    lanes = mp._core.LANES
+    for na in (2, 5):
+        A = rng.standard_normal((na, na)) + na * np.eye(na)
+        b = rng.standard_normal(na)
+        status = "\n".join(f"#define {k} {v}" for k, v in sorted(mp._core.STATUS.items()))
+        c = lambda v: repr(float(v))  # noqa: E731
+        main = (_SHARED_C_MAIN.replace("A_ENTRIES", ", ".join(map(c, A.ravel())))
+                .replace("B_ENTRIES", ", ".join(map(c, b)))
+                .replace("DET", c(np.linalg.det(A))).replace("ASUM", c(np.abs(A).sum())))
+        src = tmp_path / f"shared{na}.c"
+        src.write_text("#include <float.h>\n#include <math.h>\n#include <stddef.h>\n"
+                       f"{status}\n#define NA {na}\n#define MP_LANES {lanes}\n"
+                       + "".join((gen / f).read_text()
+                                 for f in ("lanes.h", "lu.h", "closed.h", "lu_lanes.h"))
+                       + main)
+        exe = tmp_path / f"shared{na}"
+        subprocess.run(build.compiler() + ["-std=c99", "-O2", "-fopenmp-simd", "-Wall",
+                                           "-Wextra", "-Werror", str(src), "-o", str(exe),
+                                           "-lm"], check=True, capture_output=True)
+        out = subprocess.run([str(exe)], check=True, capture_output=True, text=True).stdout
+        lines = out.split()
+        x = np.array(lines[:na], float)
+        np.testing.assert_allclose(x, np.linalg.solve(A, b), rtol=1e-13, atol=1e-14)
+        xl = np.array(lines[na:na + na * lanes], float).reshape(lanes, na)
+        for l in range(lanes):
+            np.testing.assert_allclose(xl[l], np.linalg.solve(A + l * np.eye(na), b),
+                                       rtol=1e-13, atol=1e-14)
+        assert lines[-2:] == ["1", "0"]     # A's det is well away from 0; 0.0 is not normal
+
+
 def test_generated_blocks_are_the_engines_template():
     # the text generated systems instantiate is csrc/ode/fixed.h as built
     from pathlib import Path

@@ -4,13 +4,13 @@ Sphinx's ``-W`` does not see it when MyST's ``$...$`` pairing goes wrong: a
 ``$$`` inside a paragraph (MyST reads display math only as a block of its
 own) leaves the following ``$`` signs paired with the wrong partners, and the
 page shows fragments such as ``and\\omega(t)hastheperiod`` with the prose set
-as math.  Two checks:
+as math; and a formula typed without ``$`` shows as typed (``t_{k+1}``).  Two checks:
 
 * every Markdown source the site renders (``docs/**/*.md`` and the notebooks'
   Markdown cells) is parsed with the parser the docs use (MyST's, with
   ``docs/conf.py``'s extensions; markdown-it with MyST's dollarmath settings
   where myst-parser is not installed): no text token outside math or code may
-  hold a ``$`` or a TeX command such as ``\\omega``;
+  hold a ``$``, a TeX command such as ``\\omega`` or a braced sub- or superscript;
 * when the site has been built (``bash scripts/dev.sh docs`` writes
   ``docs/_build/html``), the visible text of each page outside math, code and
   scripts holds no ``$`` and no TeX command either (a page older than its
@@ -44,8 +44,9 @@ HTML = DOCS / "_build" / "html"
 pytestmark = pytest.mark.skipif(source_root() is None,
                                 reason="no docs/ beside or above the tests")
 
-#: a TeX command (backslash and letters) or a dollar sign: math left in the prose
-RAW_TEX = re.compile(r"\$|\\[A-Za-z]+")
+#: a TeX command (backslash and letters), a dollar sign, or a braced sub- or superscript
+#: (``t_{k+1}``, ``e^{-x}``): math left in the prose
+RAW_TEX = re.compile(r"\$|\\[A-Za-z]+|[_^]\{")
 
 
 def _conf_extensions():
@@ -138,8 +139,8 @@ def test_the_check_sees_display_math_inside_a_paragraph():
 @pytest.mark.parametrize("name,text", SOURCES, ids=[n for n, _ in SOURCES])
 def test_markdown_math_parses_as_math(name, text):
     bad = raw_tex_in_markdown(_parser(), text)
-    assert not bad, (f"{name}: TeX outside math (a $$ display inside a paragraph needs a "
-                     f"blank line before and after it): {bad[:3]}")
+    assert not bad, (f"{name}: TeX outside math (write it as $...$; a $$ display inside a "
+                     f"paragraph needs a blank line before and after it): {bad[:3]}")
 
 
 class _VisibleText(HTMLParser):

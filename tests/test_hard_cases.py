@@ -7,10 +7,10 @@ from scipy.special import ellipkm1
 
 import mechpy as mp
 # the problems and their published end values (IVP test set), as the bench runs them
-from mechpy.benches.hard_cases import ROBER_REF, VDP_REF
-from mechpy.benches.hard_cases import _rober as robertson
-from mechpy.benches.hard_cases import _vdp as vdp_stiff
-from mechpy.benches.hard_cases import _vdp_jac as vdp_stiff_jac
+from mechpy.benches.problems import ROBER, VDP_SCALED
+
+ROBER_REF, VDP_REF = np.array(ROBER.ref), np.array(VDP_SCALED.ref)
+robertson, vdp_stiff, vdp_stiff_jac = ROBER.f, VDP_SCALED.f, VDP_SCALED.jac
 
 ARENSTORF_Y0 = [0.994, 0.0, 0.0, -2.00158510637908252240537862224]
 ARENSTORF_T = 17.0652165601579625588917206249

@@ -691,3 +691,45 @@ def test_lagrange_holonomic_drift_decays_at_baumgartes_designed_rate():
     closed = g0 * np.exp(-alpha * ts) * (np.cos(wd * ts) + alpha / wd * np.sin(wd * ts))
     assert abs(g0 - 0.034) < 1e-3 and np.abs(closed).max() > 0.3 * g0
     assert np.abs(gs - closed).max() < 3e-11, np.abs(gs - closed)      # measured 3.4e-12
+
+
+# ---- SymPy's private attributes: one adapter (mechpy/symbolic/_sympy_private.py) ----------
+
+def test_sympy_private_attributes_on_this_sympy():
+    """Every private attribute the adapter reads exists on the installed SymPy
+    (the adapter was checked against the versions in CHECKED) and means what
+    the adapter takes it to mean, against public SymPy calls."""
+    from mechpy.symbolic import _sympy_private as priv
+    kane, lag = _pendulum_kane(), _cartesian_pendulum()[0]
+    P = Point("P")
+    objects = {"KanesMethod": kane, "LagrangesMethod": lag, "Point": P,
+               "dynamicsymbols": dynamicsymbols}
+    assert set(objects) == set(priv.ATTRIBUTES)
+    missing = [f"{cls}.{a}" for cls, names in priv.ATTRIBUTES.items() for a in names
+               if not hasattr(objects[cls], a)]
+    assert not missing, (f"SymPy {sp.__version__} has no {', '.join(missing)}: "
+                         "mechpy/symbolic/_sympy_private.py was checked against SymPy "
+                         f"{', '.join(priv.CHECKED)} only; adapt it to this version")
+    # their meaning, against what the public API says
+    assert dynamicsymbols("q").args == (priv.time(),)
+    assert priv.kane_formed(kane) and not priv.kane_formed(_pendulum_kane(formed=False))
+    assert not priv.kane_auxiliary_speeds(kane) and priv.kane_holonomic(kane) == []
+    assert len(priv.kane_dependent_speeds(kane)) == 0
+    x, y = _cartesian_pendulum()[1:]
+    l = sp.Symbol("l", positive=True)
+    assert priv.lagrange_holonomic(lag) == [x**2 + y**2 - l**2]
+    assert priv.lagrange_holonomic(_pendulum_lagrange()) == []
+    N = ReferenceFrame("N")
+    O = Point("O")
+    assert priv.point_velocity_set(O, N) is None
+    O.set_vel(N, 0)
+    assert priv.point_velocity_set(O, N) == 0
+    Q = O.locatenew("Q", 2 * N.x)
+    assert O in priv.point_neighbours(Q) and Q in priv.point_neighbours(O)
+
+
+def test_sympy_private_attribute_missing_is_named():
+    from mechpy.symbolic import _sympy_private as priv
+    with pytest.raises(RuntimeError, match=rf"SymPy {sp.__version__}: KanesMethod has no "
+                       r"attribute _fr, .*checked against SymPy"):
+        priv.kane_formed(object())

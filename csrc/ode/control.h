@@ -121,6 +121,16 @@ static inline int mp_ode_step_floor(const mp_ode_ctl *c, double t, double hmax, 
     return *h < hmin;
 }
 
+/* Contract: the error weight of one component, atol + rtol ay with ay = |y|
+ * (or max(|y0|, |y1|) over a step, or the larger of two magnitudes): every
+ * error norm, first-step guess and event tolerance of the engine scales by
+ * it, in both widths (a lane loop inlines and vectorises it as it did the
+ * expression), so that its form is written here only. */
+static inline double mp_ode_weight(double atol, double rtol, double ay)
+{
+    return atol + rtol * ay;
+}
+
 /* Hairer's RMS error norm sqrt(mean((e_i / (atol_i + rtol_i max(|y0_i|,
  * |y1_i|)))^2)) over n components at stride s. */
 static inline double mp_ode_rms_norm(const mp_ode_options *o, size_t n, size_t s,
@@ -128,7 +138,7 @@ static inline double mp_ode_rms_norm(const mp_ode_options *o, size_t n, size_t s
 {
     double sum = 0.0;
     for (size_t i = 0; i < n; i++) {
-        double sc = o->atol[i] + o->rtolv[i] * mp_ode_absmax(y0[i * s], y1[i * s]);
+        double sc = mp_ode_weight(o->atol[i], o->rtolv[i], mp_ode_absmax(y0[i * s], y1[i * s]));
         double q = e[i * s] / sc;
         sum += q * q;
     }
@@ -145,7 +155,7 @@ static inline double mp_ode_hinit_trial(const mp_ode_options *o, size_t n, size_
 {
     double sf2 = 0.0, sy2 = 0.0;
     for (size_t i = 0; i < n; i++) {
-        double sk = o->atol[i] + o->rtolv[i] * fabs(y[i * s]);
+        double sk = mp_ode_weight(o->atol[i], o->rtolv[i], fabs(y[i * s]));
         double qf = f[i * s] / sk, qy = y[i * s] / sk;
         sf2 += qf * qf;
         sy2 += qy * qy;
@@ -166,7 +176,7 @@ static inline double mp_ode_hinit_final(const mp_ode_options *o, size_t n, size_
 {
     double der2 = 0.0;
     for (size_t i = 0; i < n; i++) {
-        double sk = o->atol[i] + o->rtolv[i] * fabs(y[i * s]);
+        double sk = mp_ode_weight(o->atol[i], o->rtolv[i], fabs(y[i * s]));
         double d = (f1[i * s] - f[i * s]) / sk;
         der2 += d * d;
     }

@@ -1006,7 +1006,7 @@ static int impact_rests(ode_run *s, size_t k, double t, double *t_left, int *pus
     *pushed = a < 0.0;
     double x = fmax(fabs(wv[0]), fabs(w->y[im->iq]));
     return mp_ode_impact_rests(t, w->t_start, rho, a, e, x,
-                               w->o->atol[im->iq] + w->o->rtolv[im->iq] * x, t_left);
+                               mp_ode_weight(w->o->atol[im->iq], w->o->rtolv[im->iq], x), t_left);
 }
 
 /* Contract: event k's action at (s->t, w->y), the state just before it (also

@@ -12,6 +12,7 @@
  * and the multistep rows (msadams, msbdf) take short steps and use the cubic
  * Hermite interpolant through y and f at both ends. */
 #include "ode/ode.h"
+#include "ode/control.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -194,7 +195,7 @@ static double quintic_hermite(mp_ode_ws *w, double h, const double *ym, const do
         double dy = w->ynew[i] - w->y[i], chord = 0.5 * (w->y[i] + w->ynew[i]);
         double p_m = chord + 0.125 * h * (w->f[i] - w->fnew[i]); /* the cubic at s = 1/2 */
         double e1 = fabs(ym[i] - chord), e3 = fabs(ym[i] - p_m);
-        double sc = w->o->atol[i] + w->o->rtolv[i] * fabs(ym[i]);
+        double sc = mp_ode_weight(w->o->atol[i], w->o->rtolv[i], fabs(ym[i]));
         double q = e1 > 0.0 ? fmin(e3, e3 * e3 / e1) / sc : 0.0;
         est += q * q;
         double dp_m = 1.5 * dy - 0.25 * h * (w->f[i] + w->fnew[i]); /* d/ds at s = 1/2 */

@@ -474,7 +474,7 @@ static void dop853_lanes(lane_group *g, int *on, int *rc, double *err, double *r
         lane_dot(mp_dop853_e5, K, 12, c * W, e5);
         lane_dot(mp_dop853_e3, K, 12, c * W, e3);
         MP_LANE_LOOP {
-            double sk = at + rtol * mp_ode_absmax(y[l], y1[l]); /* y finite in a running lane */
+            double sk = mp_ode_weight(at, rtol, mp_ode_absmax(y[l], y1[l])); /* y finite: running */
             double r = 1.0 / sk, q5 = e5[l] * r, q3 = e3[l] * r;
             e5s[l] += q5 * q5;
             e3s[l] += q3 * q3;
@@ -758,7 +758,7 @@ __attribute__((noinline, cold)) static void lane_restart(lane_group *g, int *act
         double rho = g->rho_old[b], rin = g->rho_in[l], e = rin > 0.0 ? rho / rin : 1.0;
         double acc = im->side * (g->fnew[im->iv * W + (size_t)l] - wv[2]);
         double x = fmax(fabs(wv[0]), fabs(g->y[im->iq * W + (size_t)l]));
-        double xtol = g->o->atol[im->iq] + g->o->rtolv[im->iq] * x;
+        double xtol = mp_ode_weight(g->o->atol[im->iq], g->o->rtolv[im->iq], x);
         if (g->dir > 0.0 &&
             mp_ode_impact_rests(g->t[l], g->s0, rho, acc, e, x, xtol, &t_left)) { /* driver.c's */
             lane_end_ev(g, l, MP_OK, MP_ODE_STOP_TO_SCALAR, (size_t)g->act_k[l], 0.0);

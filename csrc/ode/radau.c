@@ -46,6 +46,7 @@
  * band 2 + 2: a dense pair took about 1.5 ms).
  */
 #include "ode/ode.h"
+#include "ode/control.h"
 #include "ode/lu.h"
 
 #include <complex.h>
@@ -451,7 +452,8 @@ static int radau_step(mp_ode_ws *w, double t, double h_req, double *err_out)
         } else {
             memset(st->Z, 0, 3 * n * sizeof(double));
         }
-        for (size_t i = 0; i < n; i++) st->scale[i] = atol[i] + fabs(w->y[i]) * rtol[i];
+        for (size_t i = 0; i < n; i++)
+            st->scale[i] = mp_ode_weight(atol[i], rtol[i], fabs(w->y[i]));
         int converged = 0;
         for (;;) {
             if (!st->have_LU || st->lu_h != h) {
@@ -483,7 +485,7 @@ static int radau_step(mp_ode_ws *w, double t, double h_req, double *err_out)
         }
         solve_real(st, e);
         for (size_t i = 0; i < n; i++)
-            st->scale[i] = atol[i] + mp_ode_absmax(w->y[i], ynew[i]) * rtol[i];
+            st->scale[i] = mp_ode_weight(atol[i], rtol[i], mp_ode_absmax(w->y[i], ynew[i]));
         err = err_rms(w, e, st->scale);
         double safety = 0.9 * (2 * NEWTON_MAXITER + 1) / (2 * NEWTON_MAXITER + iters);
         if ((rejected || st->q_h == 0) && err > 1.0) {

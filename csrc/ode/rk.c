@@ -2,6 +2,7 @@
  * 5(4) with Shampine's 4th-order dense output, and Hairer's DOP853 8(5,3)
  * with 7th-order dense output.  Step-size control lives in driver.c. */
 #include "ode/ode.h"
+#include "ode/control.h"
 #include "ode/fixed.h"
 
 #include <math.h>
@@ -183,7 +184,8 @@ static int dop853_step(mp_ode_ws *w, double t, double h, double *err)
             if (mp_dop853_e5[s] != 0.0) e5 += mp_dop853_e5[s] * K[s][i];
             if (mp_dop853_e3[s] != 0.0) e3 += mp_dop853_e3[s] * K[s][i];
         }
-        double sk = w->o->atol[i] + w->o->rtolv[i] * mp_ode_absmax(w->y[i], w->ynew[i]);
+        double sk = mp_ode_weight(w->o->atol[i], w->o->rtolv[i],
+                                  mp_ode_absmax(w->y[i], w->ynew[i]));
         e5s += (e5 / sk) * (e5 / sk);
         e3s += (e3 / sk) * (e3 / sk);
     }

@@ -6,33 +6,14 @@ import numpy as np
 
 import mechpy as mp
 from mechpy._timing import median_time
+from mechpy.benches import problems
 
 TITLE = "Hard cases: stiff, long, near a separatrix"
 ORDER = 20
 
-EPS = 1e-6
-# end values published with the IVP test set (Mazzia, Magherini; Hairer & Wanner)
-VDP_REF = np.array([1.706167732170483, -0.8928097010247975])
-ROBER_REF = np.array([0.2083340149701255e-7, 0.8333360770334713e-13, 0.9999999791665050])
-
-
-def _vdp(t, y):
-    return [y[1], ((1 - y[0] ** 2) * y[1] - y[0]) / EPS]
-
-
-def _vdp_jac(t, y):
-    return [[0.0, 1.0], [(-2 * y[0] * y[1] - 1) / EPS, (1 - y[0] ** 2) / EPS]]
-
-
-def _rober(t, y):
-    return [-0.04 * y[0] + 1e4 * y[1] * y[2],
-            0.04 * y[0] - 1e4 * y[1] * y[2] - 3e7 * y[1] ** 2, 3e7 * y[1] ** 2]
-
-
-def _rober_jac(t, y):
-    return [[-0.04, 1e4 * y[2], 1e4 * y[1]],
-            [0.04, -1e4 * y[2] - 6e7 * y[1], -1e4 * y[1]],
-            [0.0, 6e7 * y[1], 0.0]]
+# the stiff Van der Pol (scaled form) and Robertson with their published end values
+VDP = problems.VDP_SCALED
+ROBER = problems.ROBER
 
 
 def _row(problem, impl, fn, err_of, rtol, repeat=3, path=None, method=None):
@@ -48,31 +29,31 @@ def run(quick: bool):
     from scipy.integrate import solve_ivp
     rows = []
     rtols = [1e-6, 1e-8] if quick else [1e-4, 1e-6, 1e-8, 1e-10]
-    # stiff Van der Pol, eps = 1e-6
+    # stiff Van der Pol, eps = 1e-6 (atol = rtol)
     p = "stiff Van der Pol eps=1e-6, t=2 (IVP test set)"
-    err = lambda s: np.max(np.abs(s.y[:, -1] - VDP_REF))  # noqa: E731
+    err = lambda s: np.max(np.abs(s.y[:, -1] - np.array(VDP.ref)))  # noqa: E731
     for rtol in rtols:
         for m in ["radau", "auto", "gsl:bsimp"]:
             rows.append(_row(p, f"mechpy {m} (Python rhs + jac)", lambda m=m: mp.solve(
-                _vdp, (0, 2), [2.0, 0.0], method=m, rtol=rtol, atol=rtol, jac=_vdp_jac),
+                VDP.f, VDP.t_span, VDP.y0, method=m, rtol=rtol, atol=rtol, jac=VDP.jac),
                 err, rtol, path="python", method=m))
         for m in ["Radau", "BDF", "LSODA"]:
             rows.append(_row(p, f"scipy {m} (Python rhs + jac)", lambda m=m: solve_ivp(
-                _vdp, (0, 2), [2.0, 0.0], method=m, rtol=rtol, atol=rtol, jac=_vdp_jac),
+                VDP.f, VDP.t_span, VDP.y0, method=m, rtol=rtol, atol=rtol, jac=VDP.jac),
                 err, rtol, repeat=1, path="scipy", method=m.lower()))
     # Robertson
     p = "Robertson to t=1e11 (IVP test set), relative error"
-    err = lambda s: np.max(np.abs(s.y[:, -1] - ROBER_REF) / ROBER_REF)  # noqa: E731
-    atol = [1e-14, 1e-20, 1e-14]
+    ref = np.array(ROBER.ref)
+    err = lambda s: np.max(np.abs(s.y[:, -1] - ref) / ref)  # noqa: E731
     for rtol in rtols:
         for m in ["radau", "auto", "gsl:bsimp"]:
             rows.append(_row(p, f"mechpy {m} (Python rhs + jac)", lambda m=m: mp.solve(
-                _rober, (0, 1e11), [1.0, 0, 0], method=m, rtol=rtol, atol=atol,
-                jac=_rober_jac), err, rtol, path="python", method=m))
+                ROBER.f, ROBER.t_span, ROBER.y0, method=m, rtol=rtol, atol=ROBER.atol,
+                jac=ROBER.jac), err, rtol, path="python", method=m))
         for m in ["Radau", "BDF", "LSODA"]:
             rows.append(_row(p, f"scipy {m} (Python rhs + jac)", lambda m=m: solve_ivp(
-                _rober, (0, 1e11), [1.0, 0, 0], method=m, rtol=rtol, atol=atol,
-                jac=_rober_jac), err, rtol, repeat=1, path="scipy", method=m.lower()))
+                ROBER.f, ROBER.t_span, ROBER.y0, method=m, rtol=rtol, atol=ROBER.atol,
+                jac=ROBER.jac), err, rtol, repeat=1, path="scipy", method=m.lower()))
     # Kepler: energy error over many orbits
     k = mp.scenes.Kepler()
     y0 = k.initial_state(0.6)

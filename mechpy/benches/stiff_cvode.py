@@ -33,50 +33,22 @@ import numpy as np
 import mechpy as mp
 from mechpy._timing import median_time
 from mechpy._validate import band_pays
+from mechpy.benches.problems import HIRES, OREGO, ROBER, VDPOL
 
 TITLE = "Stiff set: radau and auto against CVODE (SUNDIALS, C API) on one C right-hand side"
 ORDER = 21
 
-# the IVP test set's published end values (Mazzia and Magherini, release 2.4)
-_REF = {
-    "ROBER": [0.2083340149701255e-7, 0.8333360770334713e-13, 0.9999999791665050],
-    "HIRES": [0.7371312573325668e-3, 0.1442485726316185e-3, 0.5888729740967575e-4,
-              0.1175651343283149e-2, 0.2386356198831331e-2, 0.6238968252742796e-2,
-              0.2849998395185769e-2, 0.2850001604814231e-2],
-    "VDPOL": [0.1706167732170469e1, -0.8928097010248125e-3],
-    "OREGO": [0.1000814870318523e1, 0.1228178521549917e4, 0.1320554942846706e3],
-}
-
 
 def problems(n_bruss: int = 100):
     """(name, equations, y0, (t0, tf), atol, reference or None) of each problem; the
-    equations are SymPy expressions in the symbols ``y`` (a list)."""
+    equations are SymPy expressions in the symbols ``y`` (a list).  The test set's
+    are mechpy.benches.problems' (published end values), the Brusselator this file's."""
     import sympy as sp
     out = []
-    y = sp.symbols("y0:3")
-    out.append(("ROBER", [-0.04 * y[0] + 1e4 * y[1] * y[2],
-                          0.04 * y[0] - 1e4 * y[1] * y[2] - 3e7 * y[1] ** 2,
-                          3e7 * y[1] ** 2], y, [1.0, 0.0, 0.0], (0.0, 1e11),
-                np.array([1e-14, 1e-20, 1e-14]), _REF["ROBER"]))
-    y = sp.symbols("y0:8")
-    out.append(("HIRES", [
-        -1.71 * y[0] + 0.43 * y[1] + 8.32 * y[2] + 0.0007,
-        1.71 * y[0] - 8.75 * y[1],
-        -10.03 * y[2] + 0.43 * y[3] + 0.035 * y[4],
-        8.32 * y[1] + 1.71 * y[2] - 1.12 * y[3],
-        -1.745 * y[4] + 0.43 * y[5] + 0.43 * y[6],
-        -280.0 * y[5] * y[7] + 0.69 * y[3] + 1.71 * y[4] - 0.43 * y[5] + 0.69 * y[6],
-        280.0 * y[5] * y[7] - 1.81 * y[6],
-        -280.0 * y[5] * y[7] + 1.81 * y[6]], y, [1.0, 0, 0, 0, 0, 0, 0, 0.0057],
-        (0.0, 321.8122), 1e-11, _REF["HIRES"]))
-    y = sp.symbols("y0:2")
-    out.append(("VDPOL", [y[1], 1000.0 * (1 - y[0] ** 2) * y[1] - y[0]], y, [2.0, 0.0],
-                (0.0, 2000.0), 1e-10, _REF["VDPOL"]))
-    y = sp.symbols("y0:3")
-    s, w, q = 77.27, 0.161, 8.375e-6
-    out.append(("OREGO", [s * (y[1] + y[0] * (1 - q * y[0] - y[1])),
-                          (y[2] - (1 + y[0]) * y[1]) / s, w * (y[0] - y[2])], y,
-                [1.0, 2.0, 3.0], (0.0, 360.0), 1e-8, _REF["OREGO"]))
+    for P in (ROBER, HIRES, VDPOL, OREGO):
+        y = sp.symbols(f"y0:{P.n}")
+        atol = np.array(P.atol) if isinstance(P.atol, tuple) else P.atol
+        out.append((P.name, P.equations(y), y, list(P.y0), P.t_span, atol, list(P.ref)))
     name, eqs, y, y0 = brusselator(n_bruss)
     out.append((name, eqs, y, y0, (0.0, 10.0), 1e-8, None))
     return out

@@ -72,6 +72,16 @@ const model = {
 const url = URL.createObjectURL(new Blob([src], {type: "text/javascript"}));
 const mod = await import(url);
 await mod.default.render({model, el});
+// shown in an iframe (the docs site, an exported notebook: LiveWidget.iframe), the page sets
+// the frame's height to its own, so that controls wrapped in a narrow column stay in view
+// (a frame of another origin refuses: it keeps the height it was given)
+let frame = null;
+try { frame = window.frameElement; } catch (e) { frame = null; }
+if (frame) {
+  const fit = () => { frame.style.height = `${Math.ceil(document.body.getBoundingClientRect().height)}px`; };
+  new ResizeObserver(fit).observe(document.body);
+  fit();
+}
 """
 
 
@@ -121,9 +131,11 @@ class LiveWidget(anywidget.AnyWidget):
         return data
 
     def iframe(self) -> str:
-        """The saved page (:meth:`html`) as an ``<iframe srcdoc=...>``, sized to the view."""
+        """The saved page (:meth:`html`) as an ``<iframe srcdoc=...>``: as wide as the view
+        at most, narrower in a narrower column (the view follows it), and as high as the
+        page's content once it has rendered (the page sets its frame's height)."""
         w, h = self._frame_size()
-        return (f'<iframe title="{_escape(self._view)}" style="border:0;width:{w}px;'
+        return (f'<iframe title="{_escape(self._view)}" style="display:block;border:0;width:{w}px;'
                 f'max-width:100%;height:{h}px" srcdoc="{_escape(self.html())}"></iframe>')
 
     def _frame_size(self):

@@ -15,6 +15,7 @@ import sympy as sp
 from sympy.printing.c import C99CodePrinter
 from sympy.printing.codeprinter import PrintMethodNotImplementedError
 
+from . import _ctext  # csrc/gen/*.h's text, embedded at build time (csrc/meson.build)
 from . import build
 from .build import ABI_VERSION
 
@@ -22,72 +23,10 @@ from .build import ABI_VERSION
 #: compiles as a translation unit of its own, beside the rest.
 SPLIT = 60_000
 
-#: The dense solver, written once.  NA is the size of the linear system.
-RUNTIME = r"""
-/* LU factorisation with partial pivoting of the n x n row-major matrix A,
- * in place; piv receives the row exchanges, dinv the inverses of the pivots
- * (the solve multiplies: no division waits on the right-hand side).  Returns
- * MP_ENONFINITE for a NaN
- * or inf entry, MP_ESINGULAR when a pivot is zero or below n eps max|A|
- * (numerically singular), MP_OK otherwise. */
-static MP_INLINE int mp_lu_n(double *A, int n, int *piv, double *dinv)
-{
-    double amax = 0.0;
-    for (int i = 0; i < n * n; i++) {
-        double a = fabs(A[i]);
-        if (!isfinite(a)) return MP_ENONFINITE;
-        if (a > amax) amax = a;
-    }
-    const double tol = n * DBL_EPSILON * amax;
-    for (int k = 0; k < n; k++) {
-        int p = k;
-        double best = fabs(A[k * n + k]);
-        for (int i = k + 1; i < n; i++) {
-            double a = fabs(A[i * n + k]);
-            if (a > best) { best = a; p = i; }
-        }
-        if (!(best > tol)) return MP_ESINGULAR;
-        piv[k] = p;
-        if (p != k)
-            for (int j = 0; j < n; j++) {
-                double s = A[k * n + j]; A[k * n + j] = A[p * n + j]; A[p * n + j] = s;
-            }
-        const double inv = 1.0 / A[k * n + k];
-        dinv[k] = inv;
-        for (int i = k + 1; i < n; i++) {
-            double l = A[i * n + k] * inv;
-            A[i * n + k] = l;
-            if (l != 0.0)
-                for (int j = k + 1; j < n; j++) A[i * n + j] -= l * A[k * n + j];
-        }
-    }
-    return MP_OK;
-}
-
-/* Solve A x = b in place (x holds b on entry) with the factors of mp_lu_n. */
-static MP_INLINE void mp_lu_solve_n(const double *LU, int n, const int *piv,
-                                    const double *dinv, double *x)
-{
-    for (int k = 0; k < n; k++) {
-        int p = piv[k];
-        if (p != k) { double s = x[k]; x[k] = x[p]; x[p] = s; }
-    }
-    for (int i = 1; i < n; i++) {
-        double s = x[i];
-        for (int j = 0; j < i; j++) s -= LU[i * n + j] * x[j];
-        x[i] = s;
-    }
-    for (int i = n - 1; i >= 0; i--) {
-        double s = x[i];
-        for (int j = i + 1; j < n; j++) s -= LU[i * n + j] * x[j];
-        x[i] = s * dinv[i];
-    }
-}
-
-/* The NA x NA system's (mp_gen_rhs's, the Jacobian's). */
-#define mp_lu(A, piv, dinv) mp_lu_n((A), NA, (piv), (dinv))
-#define mp_lu_solve(LU, piv, dinv, x) mp_lu_solve_n((LU), NA, (piv), (dinv), (x))
-"""
+#: The dense solver, written once (csrc/gen/lu.h): mp_lu_n and mp_lu_solve_n,
+#: and mp_lu, mp_lu_solve for the NA x NA system.  NA is the size of the
+#: linear system.
+RUNTIME = "\n" + _ctext.LU
 
 
 #: Mass-matrix systems of this size or smaller (NA = coordinates +
@@ -108,6 +47,11 @@ CLOSED_MAX = 3
 #: pendulum's 41 (its entries' form is the cheaper); the triple pendulum's 205,
 #: whose symbolic form took 0.9 s of a first build to lose to the entries'.
 CLOSED_SYMBOLIC_OPS = 100
+
+
+#: The closed form's tests of a block's determinant, mp_closed_ok and
+#: mp_closed_normal (csrc/gen/closed.h).
+CLOSED = "\n" + _ctext.CLOSED + "\n"
 
 
 def _components(A, na):
@@ -236,27 +180,7 @@ def _closed_rhs(ir) -> str | None:
     stores = [f"    dydt[{i}] = " + (f"mp_y{nc + i};" if f"mp_y{nc + i}" in used
                                        else f"y[{nc + i}];") for i in range(nc)]
     stores += [f"    dydt[{nc + i}] = mp_z{i};" for i in range(nc)]
-    return r"""
-/* Whether det, the determinant of a k x k block of A whose entries' absolute
- * values sum to asum, is clearly away from 0 and from overflow:
- * |det| > k eps asum^k and DBL_MIN < |det| <= DBL_MAX (false for a NaN). */
-static MP_INLINE int mp_closed_ok(double det, double asum, int k)
-{
-    double tol = k * DBL_EPSILON;
-    for (int i = 0; i < k; i++) tol *= asum;
-    const double d = fabs(det);
-    return d > tol && d > DBL_MIN && d <= DBL_MAX;
-}
-
-/* mp_closed_ok(det, |det|, 1), the test of a 1 x 1 block: whether det is a
- * normal number, DBL_MIN < |det| <= DBL_MAX (false for a NaN). */
-static MP_INLINE int mp_closed_normal(double det)
-{
-    const double d = fabs(det);
-    return d > DBL_MIN && d <= DBL_MAX;
-}
-
-""" + _RHS_BY_LU + r"""
+    return CLOSED + _RHS_BY_LU + r"""
 /* dy/dt = (q', q'') at (t, y); params: the parameter vector.  A z = b in
  * closed form by the blocks of A (codegen._closed_rhs), by gen_rhs_lu where
  * a block's determinant test declines.  The closed form is stored before the
@@ -282,136 +206,13 @@ int mp_gen_rhs(double t, const double *y, double *dydt, void *params)
 #: version at compile time is the one at run time: the variants glibc 2.35
 #: added are declared only from there.  Elsewhere (clang, another libc, not
 #: x86-64) every name is the plain function and the loop is the scalar one.
-LANE_RUNTIME = r"""
-/* The solvers are inlined where they are called: in the lane rhs's AVX2 clone
- * they are then compiled for AVX2 too (a call from AVX code into SSE code
- * costs more than the solve: measured 2.2 us against 0.19 us for the 8 lanes
- * of a double pendulum). */
-#if defined(__GNUC__)
-#define MP_INLINE inline __attribute__((always_inline))
-#else
-#define MP_INLINE inline
-#endif
-#define MP_LANE_LOOP _Pragma("omp simd") for (int l = 0; l < MP_LANES; l++)
-#if defined(__GNUC__) && !defined(__clang__) && __GNUC__ >= 11 && defined(__x86_64__) && \
-    defined(__GLIBC__)
-#define MP_LANE_FN __attribute__((target_clones("arch=x86-64-v3", "default")))
-#define MP_VEC1(f) __attribute__((__simd__("notinbranch"), const, nothrow)) \
-    double mp_lane_##f(double) __asm__(#f);
-#define MP_VEC2(f) __attribute__((__simd__("notinbranch"), const, nothrow)) \
-    double mp_lane_##f(double, double) __asm__(#f);
-MP_VEC1(sin) MP_VEC1(cos) MP_VEC1(exp) MP_VEC1(log) MP_VEC2(pow)
-#if __GLIBC_PREREQ(2, 35)
-MP_VEC1(tan) MP_VEC1(asin) MP_VEC1(acos) MP_VEC1(atan) MP_VEC2(atan2) MP_VEC1(sinh)
-MP_VEC1(cosh) MP_VEC1(tanh) MP_VEC1(asinh) MP_VEC1(acosh) MP_VEC1(atanh)
-#define MP_LANE_NEW 0
-#else
-#define MP_LANE_NEW 1
-#endif
-#else
-#define MP_LANE_FN
-#define MP_LANE_NEW 1
-#define mp_lane_sin sin
-#define mp_lane_cos cos
-#define mp_lane_exp exp
-#define mp_lane_log log
-#define mp_lane_pow pow
-#endif
-#if MP_LANE_NEW
-#define mp_lane_tan tan
-#define mp_lane_asin asin
-#define mp_lane_acos acos
-#define mp_lane_atan atan
-#define mp_lane_atan2 atan2
-#define mp_lane_sinh sinh
-#define mp_lane_cosh cosh
-#define mp_lane_tanh tanh
-#define mp_lane_asinh asinh
-#define mp_lane_acosh acosh
-#define mp_lane_atanh atanh
-#endif
-"""
+LANE_RUNTIME = "\n" + _ctext.LANES   # csrc/gen/lanes.h
 
 #: The solver of mp_lu and mp_lu_solve across the lanes of a lane rhs (A and b
 #: laid out lane by lane): the same operations in the same order for every
 #: lane, the pivot choice and row exchanges as selects (no branch on a lane's
 #: values), so that the loops over the lanes vectorise.
-LANE_SOLVER = r"""
-#if NA > 1
-/* For each lane l: mp_lu on the NA x NA matrix A (entry (i, j) at
- * A[(i * NA + j) * MP_LANES + l]) in place, then mp_lu_solve on b (entry i at
- * b[i * MP_LANES + l]) in place; st[l] = mp_lu's status for that lane
- * (MP_ENONFINITE before MP_ESINGULAR, as mp_lu checks).  A failed lane's
- * values are computed but meaningless. */
-static MP_INLINE void mp_lu_lanes(double *A, double *b, int *st)
-{
-    double amax[MP_LANES], tol[MP_LANES], best[MP_LANES], piv[MP_LANES], lf[MP_LANES];
-    double bad[MP_LANES], sing[MP_LANES], dinv[NA * MP_LANES];
-    MP_LANE_LOOP { amax[l] = 0.0; bad[l] = 0.0; sing[l] = 0.0; }
-    for (int i = 0; i < NA * NA; i++)
-        MP_LANE_LOOP {
-            const double a = fabs(A[i * MP_LANES + l]);
-            bad[l] = isfinite(a) ? bad[l] : 1.0;
-            amax[l] = a > amax[l] ? a : amax[l];
-        }
-    MP_LANE_LOOP tol[l] = NA * DBL_EPSILON * amax[l];
-    for (int k = 0; k < NA; k++) {
-        MP_LANE_LOOP {
-            piv[l] = k;
-            best[l] = fabs(A[(k * NA + k) * MP_LANES + l]);
-        }
-        for (int i = k + 1; i < NA; i++) {
-            const double di = i; /* (an int in the select stops the vectoriser) */
-            MP_LANE_LOOP {
-                const double a = fabs(A[(i * NA + k) * MP_LANES + l]);
-                piv[l] = a > best[l] ? di : piv[l];
-                best[l] = a > best[l] ? a : best[l];
-            }
-        }
-        MP_LANE_LOOP sing[l] = best[l] > tol[l] ? sing[l] : 1.0;
-        /* rows k and piv[l] exchanged, in A and in b */
-        for (int i = k + 1; i < NA; i++) {
-            const double di = i;
-            for (int j = 0; j < NA; j++) {
-                double *ak = A + (k * NA + j) * MP_LANES, *ai = A + (i * NA + j) * MP_LANES;
-                MP_LANE_LOOP {
-                    const double x = ak[l], y = ai[l];
-                    ak[l] = piv[l] == di ? y : x;
-                    ai[l] = piv[l] == di ? x : y;
-                }
-            }
-            MP_LANE_LOOP {
-                const double x = b[k * MP_LANES + l], y = b[i * MP_LANES + l];
-                b[k * MP_LANES + l] = piv[l] == di ? y : x;
-                b[i * MP_LANES + l] = piv[l] == di ? x : y;
-            }
-        }
-        MP_LANE_LOOP dinv[k * MP_LANES + l] = 1.0 / A[(k * NA + k) * MP_LANES + l];
-        for (int i = k + 1; i < NA; i++) {
-            MP_LANE_LOOP {
-                lf[l] = A[(i * NA + k) * MP_LANES + l] * dinv[k * MP_LANES + l];
-                A[(i * NA + k) * MP_LANES + l] = lf[l];
-            }
-            for (int j = k + 1; j < NA; j++)
-                MP_LANE_LOOP {
-                    const double a = A[(i * NA + j) * MP_LANES + l];
-                    const double u = a - lf[l] * A[(k * NA + j) * MP_LANES + l];
-                    A[(i * NA + j) * MP_LANES + l] = lf[l] != 0.0 ? u : a;
-                }
-        }
-    }
-    for (int i = 1; i < NA; i++)
-        for (int j = 0; j < i; j++)
-            MP_LANE_LOOP b[i * MP_LANES + l] -= A[(i * NA + j) * MP_LANES + l] * b[j * MP_LANES + l];
-    for (int i = NA - 1; i >= 0; i--) {
-        for (int j = i + 1; j < NA; j++)
-            MP_LANE_LOOP b[i * MP_LANES + l] -= A[(i * NA + j) * MP_LANES + l] * b[j * MP_LANES + l];
-        MP_LANE_LOOP b[i * MP_LANES + l] *= dinv[i * MP_LANES + l];
-    }
-    MP_LANE_LOOP st[l] = bad[l] != 0.0 ? MP_ENONFINITE : sing[l] != 0.0 ? MP_ESINGULAR : MP_OK;
-}
-#endif
-"""
+LANE_SOLVER = "\n" + _ctext.LU_LANES   # csrc/gen/lu_lanes.h
 
 #: Generated expression text (characters) of a lane right-hand side above
 #: which none is emitted (the ensemble then runs the scalar rhs in lanes

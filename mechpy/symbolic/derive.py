@@ -30,6 +30,8 @@ from dataclasses import dataclass, field
 import sympy as sp
 from sympy.physics.mechanics import dynamicsymbols
 
+from . import _sympy_private as _private
+
 #: Default Baumgarte stabilisation (alpha, beta) in 1/s: the constraint error
 #: obeys g'' + 2 alpha g' + beta^2 g = 0, critically damped.
 BAUMGARTE = (5.0, 5.0)
@@ -107,7 +109,7 @@ def _as_list(x, what):
 
 def _coordinate_list(q, what="q"):
     qs = _as_list(q, what)
-    t = dynamicsymbols._t
+    t = _private.time()
     out = []
     for i, qi in enumerate(qs):
         if isinstance(qi, sp.Symbol) and qi != t:
@@ -425,7 +427,7 @@ class _Diff:
 
 def lagrangian_ir(L, q, params=None, constraints=(), forces=None, baumgarte=None) -> IR:
     """The blocks of a Lagrangian system (see the module docstring)."""
-    t = dynamicsymbols._t
+    t = _private.time()
     qs = _coordinate_list(q)
     if any(isinstance(qi, sp.Symbol) for qi in qs):
         raise TypeError("coordinates of a Lagrangian must be functions of t: make them with "
@@ -558,7 +560,7 @@ def lagrangian_ir(L, q, params=None, constraints=(), forces=None, baumgarte=None
 def equations_ir(rhs, y, params=None, energy=None) -> IR:
     """The blocks of a first-order system y' = rhs(t, y): ``f`` (n), ``J``
     (n x n, df/dy row-major) and, when given, ``energy`` (1)."""
-    t = dynamicsymbols._t
+    t = _private.time()
     ys = _coordinate_list(y, "y")
     n = len(ys)
     fs = _as_list(rhs, "rhs")

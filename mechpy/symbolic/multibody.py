@@ -42,9 +42,9 @@ import math
 
 import numpy as np
 import sympy as sp
-from sympy.physics.mechanics import dynamicsymbols
 
 from .. import _core
+from . import _sympy_private as _private
 from .derive import IR, _assumptions, _check_derived, _check_input, _Diff, baumgarte_rates
 from .scene import CompiledScene, _first_over, _state_scale
 
@@ -120,10 +120,10 @@ def _method(method):
                              "call system.form_eoms() first")
         method = em
     if isinstance(method, KanesMethod):
-        if method._fr is None or method._frstar is None:
+        if not _private.kane_formed(method):
             raise ValueError("method: the KanesMethod's equations were never formed: call "
                              "kane.kanes_equations(bodies, loads) first")
-        if method._uaux:
+        if _private.kane_auxiliary_speeds(method):
             raise ValueError("method: auxiliary speeds (u_auxiliary) give constraint "
                              "forces, not motion: form the equations without them")
         return "kane", method
@@ -148,7 +148,7 @@ def _constant_loads_V(method, frame):
     the point's position is defined from; None (no energy) otherwise."""
     from sympy.physics.vector import Point, ReferenceFrame
     loads = method.loads or []
-    t = dynamicsymbols._t
+    t = _private.time()
     V = sp.S.Zero
     for load in loads:
         where, vec = load[0], load[1]
@@ -175,10 +175,10 @@ def _rest_point(P, frame):
     seen, todo = {P}, [P]
     while todo:
         x = todo.pop(0)
-        v = x._vel_dict.get(frame)
+        v = _private.point_velocity_set(x, frame)
         if v is not None and v == 0:
             return x
-        for o in x._pos_dict:
+        for o in _private.point_neighbours(x):
             if o not in seen:
                 seen.add(o)
                 todo.append(o)
@@ -192,7 +192,7 @@ def mechanics_parts(method, params, specified=None, baumgarte=None):
     adds the derivatives.  Raises the errors :func:`mechpy.mechanics` lists.
     """
     kind, m = _method(method)
-    t = dynamicsymbols._t
+    t = _private.time()
     alpha, beta = baumgarte_rates(baumgarte)
     q = list(m.q)
     n = len(q)
@@ -200,19 +200,19 @@ def mechanics_parts(method, params, specified=None, baumgarte=None):
         u = list(m.u)
         kdd = m.kindiffdict()
         qd_expr = [kdd[qi.diff(t)] for qi in q]
-        fh = list(m._f_h) if m._f_h else []
+        fh = _private.kane_holonomic(m)
         kh = len(fh)
-        mdep = len(m._udep)
+        mdep = len(_private.kane_dependent_speeds(m))
         o = len(u)
         Mdyn = m.mass_matrix
         Fdyn = list(m.forcing)
-        gv = list(m._k_nh * sp.Matrix(u) + m._f_nh) if mdep else []
+        gv = _private.kane_velocity_constraints(m, u) if mdep else []
         qdot_sub = dict(kdd)
         ind = list(range(n - kh)) + [n + i for i in range(o - mdep)]
     else:
         u = [qi.diff(t) for qi in q]
         o = n
-        fh = list(m._hol_coneqs) if m._hol_coneqs else []
+        fh = _private.lagrange_holonomic(m)
         kh = len(fh)
         cv = list(m.coneqs) if m.coneqs else []
         mdep = len(cv)

@@ -77,7 +77,7 @@ class _NumpyFunctions:
             self.f[name] = _guard(sp.lambdify(args, list(exprs), "numpy"))
 
     def _solve(self, t, y, p):
-        from .. import SingularityError
+        from ..errors import SingularityError
         A = np.array(self.f["A"](t, y, p), dtype=float).reshape(self.na, self.na)
         b = np.array(self.f["b"](t, y, p), dtype=float)
         if np.linalg.cond(A) > 1e15:

@@ -31,17 +31,20 @@ export default {
     const place = mpMotionFrame(THREE, spec);
 
     // ---- page
-    const W = Math.max(360, Math.min(el.clientWidth || 760, 960)), H = Math.round(0.62 * W);
+    // the view takes its container's width, 960 px at most (mpFollowWidth), 0.62 of it high
+    const MAXW = 960, aspect = 0.62;
+    let W = Math.max(64, Math.min(el.clientWidth || 760, MAXW)), H = Math.round(aspect * W);
     const renderer = new THREE.WebGLRenderer({antialias: true});
     renderer.setPixelRatio(Math.min(window.devicePixelRatio || 1, 2));
     renderer.setSize(W, H);
+    renderer.domElement.style.display = "block";
     renderer.setClearColor(0xffffff, 1);
     const clock = mpEl("div", {style: "position:absolute;right:8px;top:6px;font:13px monospace;"
       + "background:rgba(255,255,255,.8);padding:1px 4px"});
     const legend = mpEl("div", {style: "position:absolute;left:8px;top:6px;font-size:12px;"
       + "background:rgba(255,255,255,.8);padding:2px 4px;max-width:60%"});
-    const stage = mpEl("div", {style: `position:relative;width:${W}px;height:${H}px;`
-      + "border:1px solid #ddd"}, renderer.domElement, clock, legend);
+    const stage = mpEl("div", {style: `position:relative;width:100%;max-width:${MAXW}px;`
+      + `height:${H}px;box-sizing:border-box;border:1px solid #ddd`}, renderer.domElement, clock, legend);
     const title = mpEl("div", {style: "font-size:13px;margin:2px 0 4px"}, spec.title);
 
     // ---- scene
@@ -221,6 +224,18 @@ export default {
       playBtn, slider, speedRow,
       ...(trails.length ? [mpEl("label", {style: "font-size:13px"}, trailBox, " trails")] : []));
     el.append(mpEl("div", {class: "mechpy-live mechpy-animate"}, title, stage, bar));
+    // the canvas fills the stage inside its border (clientWidth); a new width: a new size
+    // and the camera's aspect, drawn at once
+    function fitTo(w) {
+      W = w; H = Math.round(aspect * W);
+      stage.style.height = `${H + 2}px`;
+      renderer.setSize(W, H);
+      camera.aspect = W / H;
+      camera.updateProjectionMatrix();
+      stale = true;
+    }
+    const follow = mpFollowWidth(stage, MAXW, fitTo);
+    fitTo(follow.width);
 
     const api = {
       ready: false,
@@ -251,6 +266,7 @@ export default {
     raf = requestAnimationFrame(tick);
     return () => {
       dead = true;
+      follow.stop();
       cancelAnimationFrame(raf);
       controls.dispose();
       renderer.dispose();

@@ -59,6 +59,21 @@ function mpEl(tag, attrs, ...children) {
   return e;
 }
 
+// The width of a view that follows the page: its box is `width:100%` of the container with
+// `max` px at most (the view's width= in Python), so that a view never runs past the column
+// of a docs page or a notebook; the canvas is sized to the box in device-independent pixels.
+// onResize(w) when the box's width changes (a window or a column resized); stop() ends that.
+function mpFollowWidth(box, max, onResize) {
+  const fit = () => Math.max(64, Math.min(max, Math.floor(box.clientWidth || max)));
+  let w = fit();
+  const ro = typeof ResizeObserver === "function" ? new ResizeObserver(() => {
+    const v = fit();
+    if (v !== w) { w = v; onResize(v); }
+  }) : null;
+  if (ro) ro.observe(box);
+  return {width: w, stop: () => { if (ro) ro.disconnect(); }};
+}
+
 // A labelled slider: onInput(value) on every move.
 function mpSlider(label, min, max, value, step, onInput) {
   const out = mpEl("span", {style: "display:inline-block;min-width:5em;font-variant-numeric:tabular-nums"});

@@ -393,7 +393,9 @@ function render({model, el}) {
   const offline = !!model.get("_offline");
   const dim = spec.dim, [ax, ay] = spec.axes, N = spec.particles;
   const W = Math.ceil(Math.sqrt(N)), H = Math.ceil(N / W);
-  const width = spec.width, height = spec.height;
+  // spec.width: the most the view takes (it follows its container: mpFollowWidth)
+  let width = spec.width;
+  const height = spec.height;
   const pvals = new Float32Array(Math.max(1, spec.params.length));
   spec.params.forEach((q, j) => { pvals[j] = q.value; });
   // the printed field in double precision: (state, t, parameters) -> dy/dt, with the
@@ -407,11 +409,11 @@ function render({model, el}) {
 
   // the page
   const root = mpEl("div", {class: "mechpy-live mechpy-phase", style: "font-family:system-ui,sans-serif;color:#222"});
-  const stage = mpEl("div", {style: `position:relative;width:${width}px;height:${height}px`});
+  const stage = mpEl("div", {style: `position:relative;width:100%;max-width:${spec.width}px;height:${height}px`});
   const canvas = mpEl("canvas", {width: String(width), height: String(height),
-    style: `position:absolute;left:0;top:0;width:${width}px;height:${height}px`});
+    style: "position:absolute;left:0;top:0;width:100%;height:100%"});
   const over = mpEl("canvas", {width: String(width), height: String(height),
-    style: `position:absolute;left:0;top:0;width:${width}px;height:${height}px;cursor:crosshair`});
+    style: "position:absolute;left:0;top:0;width:100%;height:100%;cursor:crosshair"});
   stage.append(canvas, over);
   const status = mpEl("span", {style: "font-size:12px;color:#555;margin-left:8px"});
   const playBtn = mpButton(playing ? "pause" : "play", () => (playing ? api.pause() : api.play()));
@@ -427,9 +429,14 @@ function render({model, el}) {
   }
   root.append(stage, controls);
   el.append(root);
+  // the canvases' pixels match the stage's width (laid out now that it is in the page)
+  const follow = mpFollowWidth(stage, spec.width, (w) => resize(w));
+  width = follow.width;
+  canvas.width = over.width = width;
 
   const gl = canvas.getContext("webgl2", {antialias: false, preserveDrawingBuffer: false});
   if (!gl || !gl.getExtension("EXT_color_buffer_float")) {
+    follow.stop();
     root.prepend(mpEl("p", {style: "color:#a00"}, "This browser has no WebGL2 with float render targets."));
     return;
   }
@@ -534,6 +541,18 @@ function render({model, el}) {
     gl.bindFramebuffer(gl.FRAMEBUFFER, null);
   }
   clearTrails();
+
+  // a new width: the trails start afresh at the new size, the overlays are redrawn
+  function resize(w) {
+    width = w;
+    canvas.width = over.width = width;
+    for (const tr of [trailA, trailB]) { gl.deleteFramebuffer(tr.fb); gl.deleteTexture(tr.t); }
+    trailA = mpTexture(gl, width, height, false);
+    trailB = mpTexture(gl, width, height, false);
+    clearTrails();
+    drawOverlay();
+    draw();
+  }
 
   // overlays: the set for the current parameters (the kernel's answer, or the nearest
   // precomputed one in a saved page)
@@ -748,6 +767,7 @@ function render({model, el}) {
   requestAnimationFrame(loop);
   return () => {
     disposed = true;
+    follow.stop();
     unregister();
     const lose = gl.getExtension("WEBGL_lose_context");
     if (lose) lose.loseContext();
