@@ -96,24 +96,20 @@ class Impact:
         """(coordinate index, its velocity's index) in a state of n values."""
         c = self.coordinate
         if isinstance(c, str):
-            names = list(getattr(system, "coordinates", None) or _SCENE_COORDINATES.get(
-                type(system).__name__, ()))
+            names = list(getattr(system, "coordinates", None) or ())
             if c not in names:
                 raise ValueError(f"impact: {c!r} is not a coordinate of the system "
                                  f"(its coordinates: {names or 'unnamed: give an index'})")
             iq = names.index(c)
         else:
             iq = as_int(c, "coordinate", minimum=0)
-        vel = _SCENE_VELOCITY.get(type(system).__name__) if _is_scene(system) else None
-        if vel is not None:
-            if iq not in vel:
+        if _is_scene(system):       # where the system says the velocity is
+            iv = system._velocity_index(iq)
+            if iv is None:
                 raise ValueError(f"impact: coordinate {iq} of {type(system).__name__} has no "
                                  "velocity in its state")
-            return iq, vel[iq]
-        if n % 2 or iq >= n // 2:
-            raise ValueError(f"impact: coordinate {iq} needs a state (q, v) with q of at least "
-                             f"{iq + 1} values and v after it (got {n} values)")
-        return iq, iq + n // 2
+            return iq, iv
+        return iq, _velocity_after(iq, n)
 
     def _standing(self, what):
         if self._moving:
@@ -148,7 +144,14 @@ class Impact:
             return True
         meta = getattr(system, "_meta", None)
         if meta is None:
-            return type(system).__name__ in _SCENE_COORDINATES or n == 2
+            # a built-in scene, by its row: explicit equations of its coordinates without
+            # a Lagrangian (no mass matrix to couple them), each velocity in the state, of
+            # a fixed size (the variable-size chain ends at the accumulation, as it did
+            # before its row named its states)
+            from .scenes import _row
+            row = _row(system._model)
+            return n == 2 or (row["dim"] != 0 and not row["lagrangian"]
+                              and system._velocity_index(iq) is not None)
         if meta["kind"] == "equations" or n == 2:
             return True
         if meta["kind"] != "lagrangian" or int(meta["k"]):
@@ -230,12 +233,13 @@ class Impact:
                 self._wall_address(system), self._may_rest(system, n, iq))
 
 
-#: Built-in scenes' coordinate names and, for the scenes whose state is not
-#: (q, v) with v after q, where each coordinate's velocity sits.
-_SCENE_COORDINATES = {"Pendulum": ("theta",), "Duffing": ("x",), "VanDerPol": ("x",),
-                      "Kepler": ("x", "y"), "RestrictedThreeBody": ("x", "y"),
-                      "Foucault": ("x", "y"), "Rocket": ("height",)}
-_SCENE_VELOCITY = {"Rocket": {0: 1}, "RigidBody": {}, "HeavyTop": {0: 3, 1: 4, 2: 5}}
+def _velocity_after(iq: int, n: int) -> int:
+    """Coordinate iq's velocity in a state (q, v) of n values, v after q (a
+    system that names no velocities: a Python function, mp.equations)."""
+    if n % 2 or iq >= n // 2:
+        raise ValueError(f"impact: coordinate {iq} needs a state (q, v) with q of at least "
+                         f"{iq + 1} values and v after it (got {n} values)")
+    return iq + n // 2
 
 
 def _wall(wall):

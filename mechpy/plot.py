@@ -521,9 +521,6 @@ def _animate_field(system, xlim, ylim, *, particles, frames, dt, trail, respawn,
 
 # ---------------------------------------------------------------- the motion itself
 
-_KINDS, _DEFAULT_TRAIL = _motion.KINDS, _motion.DEFAULT_TRAIL
-
-
 def _square_view(ax, r, xlabel, ylabel):
     """A plane view of [-r, r]^2 at equal aspect, labelled, with the origin (the pivot)
     marked."""
@@ -746,11 +743,6 @@ def _particle(ax, system, t, y, trail, lengths):
     return _dot_and_trail(ax, t, P, trail, "tab:blue", "tab:orange", 10, "particle")
 
 
-_DRAW = {"pendulum": _planar_pendulum, "double_pendulum": _planar_pendulum,
-         "foucault": _foucault, "top": _top, "rigid": _rigid, "chain": _chain,
-         "particle": _particle}
-
-
 def _save(anim, path, fps):
     """Write ``anim`` to ``path``: .html (JavaScript), .mp4 (ffmpeg), else GIF (Pillow)."""
     from matplotlib import animation
@@ -770,7 +762,11 @@ def animate(system, sol, *, kind=None, t=None, frames=None, fps=20, trail=None, 
             lengths=None, path=None):
     r"""An animation of the motion itself, drawn from a solution.
 
-    What is drawn depends on ``kind`` (by default chosen from the scene's type):
+    What is drawn depends on ``kind``: by default the drawing the system names
+    (``system.drawing``: a scene's C row names it; a compiled system gets the
+    first of the registry, ``mechpy._motion``, that fits it: a pendulum of
+    two states with a parameter ``length`` or ``l``, a double pendulum of four
+    with ``l1`` and ``l2``, a particle):
 
     ``"pendulum"``
         :class:`~mechpy.scenes.Pendulum` (or any two-state scene with a
@@ -876,23 +872,24 @@ def animate(system, sol, *, kind=None, t=None, frames=None, fps=20, trail=None, 
     [0, 2, 4, 6]
     """
     plt = _plt()
-    kind = _motion.kind_of(system, kind)
+    drawing = _motion.kind_of(system, kind)
+    kind = drawing.name
     tt, y = _motion.samples(system, sol, t)
     m = tt.size
     frames = min(m, 200) if frames is None else as_int(frames, "frames", minimum=1)
     fps = as_scalar(fps, "fps", positive=True)
     span = abs(tt[-1] - tt[0])
-    trail = (_DEFAULT_TRAIL[kind] * span if trail is None
+    trail = (drawing.trail * span if trail is None
              else as_scalar(trail, "trail", nonnegative=True, finite=False))
     if np.isnan(trail):
         raise ValueError("trail must be a non-negative time or np.inf, got nan")
-    three_d = kind in ("top", "rigid")
+    three_d = drawing.three_d
     if ax is None:
         # small and at 80 dpi: every frame is a PNG in to_jshtml
-        fig = plt.figure(figsize=(4.5, 4.5) if kind != "chain" else (7, 5), dpi=80)
+        fig = plt.figure(figsize=drawing.figsize, dpi=80)
         ax = fig.add_subplot(projection="3d" if three_d else None)
-        if kind == "chain":
-            fig.subplots_adjust(bottom=0.36)      # the legend's three rows under the axes
+        if drawing.bottom is not None:
+            fig.subplots_adjust(bottom=drawing.bottom)   # a legend under the axes
     else:
         if three_d != (getattr(ax, "name", "") == "3d"):
             raise ValueError(f"ax must be {'a 3-D' if three_d else 'a 2-D'} Axes for "
@@ -901,7 +898,7 @@ def animate(system, sol, *, kind=None, t=None, frames=None, fps=20, trail=None, 
     # a frame at an action's time (a time held twice) shows the state after it
     samples = np.unique(_motion.after_jumps(tt, np.linspace(0, m - 1, frames).round()
                                             .astype(np.intp)))
-    update = _DRAW[kind](ax, system, tt, y, trail, lengths)
+    update = drawing.painter("plot")(ax, system, tt, y, trail, lengths)
     clock = (ax.text2D if three_d else ax.text)(0.98, 0.98, "", transform=ax.transAxes,
                                                 ha="right", va="top", gid="time")
 

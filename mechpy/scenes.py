@@ -29,8 +29,8 @@ from ._validate import as_array, as_int, as_scalar
 from .integrate import solve
 from .modes import chain, normal_modes
 
-__all__ = ["Scene", "Pendulum", "VanDerPol", "Duffing", "Kepler", "RestrictedThreeBody", "Foucault",
-           "RigidBody", "HeavyTop", "SpringChain", "Rocket", "SymbolicField"]
+#: the public names; every scene class defined below is added at the end of the module
+__all__ = ["Scene"]
 
 
 class SymbolicField(NamedTuple):
@@ -81,8 +81,52 @@ def _row_doc(model: str) -> str:
     sep = row["separable"]
     sep = ("never separable" if sep is None else "separable" if sep == "always"
            else f"separable when {sep}")
+    states = ", ".join(f"``{nm}``" for nm in row["states"])
     return ("Parameters from the scene's C row: " + ", ".join(items) + f"; {sep} "
-            "(the symplectic methods need it).")
+            f"(the symplectic methods need it).  Its states, by name (:attr:`Scene.states`): "
+            f"{states}" + (" (``#``: 0 to N - 1)" if "#" in states else "") + ".")
+
+
+def _expand(row: dict, what: str, dim: int) -> list:
+    """A row's names (``what``: states, coordinates or speeds) for a state of
+    ``dim`` components: the names themselves, or for a variable-size scene
+    each pattern with "#" replaced by 0, 1, ... over its block (the row's
+    states are the blocks: dim / their number each)."""
+    per = dim // len(row["states"])
+    return [p.replace("#", str(i)) for p in row[what]
+            for i in (range(per) if "#" in p else (0,))]
+
+
+def _state_vector(names: list, values, name_of=None) -> np.ndarray:
+    """A state vector from ``values``: a dict keyed by the state ``names`` (or
+    by objects that ``name_of`` turns into them), every state once; or a
+    sequence of len(names) numbers.  ValueError naming what is missing,
+    unknown or given twice."""
+    if not isinstance(values, dict):
+        return as_array(values, "y0", shape=(len(names),))
+    out = {}
+    for k, val in values.items():
+        nm = k if isinstance(k, str) else name_of(k) if name_of else None
+        if nm not in names:
+            raise ValueError(f"y0: {k!r} is not a state of the system (its states: {names})")
+        if nm in out:
+            raise ValueError(f"y0 gives the state {nm!r} twice")
+        out[nm] = as_scalar(val, f"y0[{nm!r}]")
+    missing = [nm for nm in names if nm not in out]
+    if missing:
+        raise ValueError(f"y0 has no value for the state(s) {missing} (its states: {names})")
+    return np.array([out[nm] for nm in names])
+
+
+def _takes_named_states(fn):
+    """A scene's own ``initial_state`` that also takes the state as one dict
+    keyed by :attr:`Scene.states` (what ``mp.solve`` passes for a dict y0)."""
+    @functools.wraps(fn)
+    def initial_state(self, *args, **kwargs):
+        if len(args) == 1 and not kwargs and isinstance(args[0], dict):
+            return _state_vector(self.states, args[0])
+        return fn(self, *args, **kwargs)
+    return initial_state
 
 
 def _add_row_doc(cls) -> None:
@@ -98,7 +142,8 @@ def _add_row_doc(cls) -> None:
 class Scene:
     """Base class of the C scenes (see the module docstring).
 
-    A subclass names its C row (``_model``).  When the row's scalar
+    A subclass names its C row (``class Oscillator(Scene, row="Oscillator")``,
+    kept as ``_model``).  When the row's scalar
     parameters are the scene's own, the subclass needs nothing more: its
     signature, defaults and checks come from the row.  A scene whose
     parameters are packed into the row's vector (``RigidBody``,
@@ -127,10 +172,13 @@ class Scene:
     #: the rigid-body splitting methods (rows with "rigid") run on this scene
     _rigid_split = False
 
-    def __init_subclass__(cls, **kwargs):
+    def __init_subclass__(cls, row: str = "", **kwargs):
         super().__init_subclass__(**kwargs)
-        if not cls.__dict__.get("_model"):
+        if not row:
             return
+        cls._model = row
+        if "initial_state" in cls.__dict__:
+            cls.initial_state = _takes_named_states(cls.__dict__["initial_state"])
         _add_row_doc(cls)
         if "__init__" in cls.__dict__:
             return
@@ -170,6 +218,46 @@ class Scene:
     def params(self) -> dict:
         """The parameters (a copy)."""
         return {k: v.copy() if isinstance(v, np.ndarray) else v for k, v in self._params.items()}
+
+    # -- what the scene says about itself (its C row) ------------------------------
+    def _names(self, what: str) -> list:
+        return _expand(_row(self._model), what, self._dim)
+
+    @property
+    def states(self) -> list:
+        """The names of the state components, in order (from the scene's C row)."""
+        return self._names("states")
+
+    @property
+    def coordinates(self) -> list:
+        """The names of the coordinates among :attr:`states`."""
+        return self._names("coordinates")
+
+    @property
+    def speeds(self) -> list:
+        """The names of the coordinates' velocities, in the coordinates' order;
+        or the generalized speeds the state holds when they are no
+        coordinate's velocity (a rigid body's omega: another count)."""
+        return self._names("speeds")
+
+    @property
+    def drawing(self) -> str | None:
+        """The name of the scene's drawing (``mechpy._motion``), or None."""
+        return _row(self._model)["drawing"]
+
+    def _velocity_index(self, iq: int) -> int | None:
+        """Where coordinate ``iq``'s velocity sits in the state: from the row's
+        speeds (paired with the coordinates when as many); None when the state
+        holds none."""
+        q, v = self.coordinates, self.speeds
+        if len(q) != len(v) or not 0 <= iq < len(q):
+            return None
+        return self.states.index(v[iq])
+
+    def initial_state(self, values) -> np.ndarray:
+        """A state vector (dim,) from ``values``: a dict keyed by the names of
+        :attr:`states`, every state once, or a sequence of dim numbers."""
+        return _state_vector(self.states, values)
 
     def replace(self, **changes) -> "Scene":
         """A copy with some parameters changed."""
@@ -320,7 +408,7 @@ def _rebuild(cls, params):
     return cls(**params)
 
 
-class Pendulum(Scene):
+class Pendulum(Scene, row="Pendulum"):
     r"""The plane pendulum, optionally damped and driven.
 
     .. math:: \ddot\theta = -\frac{g}{L}\sin\theta - b\,\dot\theta + A\cos(\Omega t)
@@ -345,8 +433,6 @@ class Pendulum(Scene):
     2.0
     """
 
-    _model = "Pendulum"
-
     def period(self, amplitude) -> float:
         r"""Exact period of the free, undamped pendulum released from rest at
         ``amplitude`` (rad): :math:`T = 4\sqrt{L/g}\,K(\sin^2(\theta_0/2))` (s)."""
@@ -357,7 +443,7 @@ class Pendulum(Scene):
         return 4.0 * np.sqrt(p["length"] / p["g"]) * _core.ellipk_complement(np.cos(0.5 * a))
 
 
-class VanDerPol(Scene):
+class VanDerPol(Scene, row="VanDerPol"):
     r"""The Van der Pol oscillator :math:`\ddot x - \mu(1-x^2)\dot x + x = 0`.
 
     State ``(x, x_dot)`` (dimensionless); ``mu >= 0``.  ``energy`` is
@@ -376,10 +462,8 @@ class VanDerPol(Scene):
     (6.663287, 2.00862)
     """
 
-    _model = "VanDerPol"
 
-
-class Duffing(Scene):
+class Duffing(Scene, row="Duffing"):
     r"""The Duffing oscillator
     :math:`\ddot x + \delta\dot x + \alpha x + \beta x^3 = \gamma\cos(\omega t)`.
 
@@ -400,10 +484,8 @@ class Duffing(Scene):
     (0.75, 0.75)
     """
 
-    _model = "Duffing"
 
-
-class Kepler(Scene):
+class Kepler(Scene, row="Kepler"):
     r"""The Kepler problem in a plane: :math:`\ddot{\mathbf r} = -\mu\,\mathbf r/|\mathbf r|^3`.
 
     State ``(x, y, vx, vy)``; ``mu`` = GM (length^3/time^2).  Separable: the
@@ -426,8 +508,6 @@ class Kepler(Scene):
     -0.5
     """
 
-    _model = "Kepler"
-
     def initial_state(self, eccentricity, a=1.0):
         """State at pericentre of the orbit with semi-major axis ``a`` and the
         given eccentricity (0 <= e < 1); its period is 2 pi sqrt(a^3/mu)."""
@@ -437,7 +517,7 @@ class Kepler(Scene):
         return np.array([a * (1 - e), 0.0, 0.0, np.sqrt(mu / a * (1 + e) / (1 - e))])
 
 
-class RestrictedThreeBody(Scene):
+class RestrictedThreeBody(Scene, row="RestrictedThreeBody"):
     r"""The planar circular restricted three-body problem, rotating frame.
 
     .. math:: \ddot x = x + 2\dot y - \mu'\frac{x+\mu}{r_1^3} - \mu\frac{x-\mu'}{r_2^3},\quad
@@ -460,10 +540,8 @@ class RestrictedThreeBody(Scene):
     True
     """
 
-    _model = "RestrictedThreeBody"
 
-
-class Foucault(Scene):
+class Foucault(Scene, row="Foucault"):
     r"""The Foucault pendulum at a latitude, small swings, in the local
     horizontal plane (Marion & Thornton, Example 10.5):
 
@@ -489,8 +567,6 @@ class Foucault(Scene):
     31.78
     """
 
-    _model = "Foucault"
-
     @property
     def precession_rate(self) -> float:
         """Rate at which the plane of swing turns, Omega sin(latitude) [rad/s]
@@ -503,7 +579,7 @@ def _row_defaults(model: str, n: int) -> tuple:
     return tuple(p["default"] for p in _row(model)["param_info"][:n])
 
 
-class RigidBody(Scene):
+class RigidBody(Scene, row="RigidBody"):
     r"""A rigid body about its centre of mass: Euler's equations in the
     principal body frame,
 
@@ -540,8 +616,6 @@ class RigidBody(Scene):
     >>> round(float(body.energy(s.y[:, -1])), 10), round(float(body.energy(w0)), 10)
     (1.545, 1.545)
     """
-
-    _model = "RigidBody"
 
     _rigid_split = True
 
@@ -651,7 +725,7 @@ class RigidBody(Scene):
         return super().__reduce__()
 
 
-class HeavyTop(Scene):
+class HeavyTop(Scene, row="HeavyTop"):
     r"""The heavy symmetric top with one fixed point, in Euler angles (ZXZ).
 
     .. math:: L = \tfrac{I_1}{2}(\dot\theta^2 + \dot\phi^2\sin^2\theta)
@@ -683,8 +757,6 @@ class HeavyTop(Scene):
     True
     """
 
-    _model = "HeavyTop"
-
     def p_psi(self, y):
         """p_psi = I3 (psi_dot + phi_dot cos theta) for states (6, ...)."""
         y = as_array(y, "y", min_ndim=1)
@@ -715,7 +787,7 @@ def _chain_springs(springs, N: int, ends: str) -> np.ndarray:
     return k
 
 
-class SpringChain(Scene):
+class SpringChain(Scene, row="SpringChain"):
     r"""A one-dimensional chain of masses and springs, integrated in time,
     optionally with the Fermi-Pasta-Ulam-Tsingou (FPUT) nonlinearity.
 
@@ -770,8 +842,6 @@ class SpringChain(Scene):
     >>> bool(np.allclose(sol.y[:8, -1], md.evolve(y0[:8], y0[8:], 10.0)))
     True
     """
-
-    _model = "SpringChain"
 
     def __init__(self, masses, springs=1.0, ends: str = "fixed",
                  alpha: float = _row_defaults("SpringChain", 4)[2],
@@ -908,7 +978,7 @@ class SpringChain(Scene):
         return f"SpringChain(N={self.N}, ends={p['ends']!r}{extra})"
 
 
-class Rocket(Scene):
+class Rocket(Scene, row="Rocket"):
     r"""A rocket flying straight up (Marion & Thornton, section 9.11).
 
     .. math:: \dot h = v,\qquad \dot v = \frac{T - k\,v|v|}{m} - g,\qquad
@@ -940,8 +1010,6 @@ class Rocket(Scene):
     >>> bool(np.isclose(sol.y[1, -1], 2500.0 * np.log(1000.0 / 200.0)))
     True
     """
-
-    _model = "Rocket"
 
     @property
     def burnout_time(self) -> float:
@@ -1097,3 +1165,8 @@ def _join_pieces(pieces, every_step):
         out.sol = _JoinedDense([q.sol for q in pieces])
     failed = [q for q in pieces if q.status < 0]
     return failed[0] if failed else out
+
+
+# every scene class defined here (a new scene is its class line), then the field's type
+__all__ += [c.__name__ for c in Scene.__subclasses__() if c.__module__ == __name__] + [
+    "SymbolicField"]

@@ -591,9 +591,8 @@ TABLE = {
     "mechpy.integrate.SecondOrder": (STATE, _second_order_case),
     "mechpy.integrate.methods": (SINGLE, _single(_methods)),
     # scenes
-    **{f"mechpy.scenes.{n}": (STATE, _scenes) for n in (
-        "Scene", "Pendulum", "VanDerPol", "Duffing", "Kepler", "RestrictedThreeBody",
-        "Foucault", "RigidBody", "HeavyTop", "SpringChain", "Rocket")},
+    **{f"mechpy.scenes.{n}": (STATE, _scenes) for n in mp.scenes.__all__
+       if n != "SymbolicField"},
     # compiled scenes
     "mechpy.symbolic.lagrangian": (STATE, _lagrangian_case),
     "mechpy.symbolic.equations": (STATE, _equations_case),
@@ -715,7 +714,9 @@ _LAG, _BODY, _MODES = "mechpy.symbolic.lagrangian", "mechpy.inertia.Body", "mech
 METHODS = {
     **{f"Scene.{n}": _SCENE for n in ("replace", "ensemble_params", "rhs", "jacobian", "energy")},
     "Scene.dim": None, "Scene.params": None, "Scene.symbolic": None,
-    "CompiledScene.symbolic": None,
+    **{f"Scene.{n}": None for n in ("states", "coordinates", "speeds", "drawing")},
+    "Scene.initial_state": _SCENE,
+    "CompiledScene.symbolic": None, "CompiledScene.drawing": None,
     **{f"PhasePortrait.{n}": None for n in ("html", "precompute", "save")},
     "Solution.raise_for_status": None, "EnsembleSolution.raise_for_status": None,
     "Impact.action": "mechpy.events.impact",

@@ -111,6 +111,7 @@ def _cases():
         "scene": lambda: (P.rhs(0.0, [1.0, 0.0]), P.jacobian(0.0, [1.0, 0.0]),
                           P.energy([1.0, 0.0]), mp.scenes.VanDerPol(mu=2.0)),
         "scene row": lambda: mp._core.scene_info("SpringChain"),
+        "scene rows": mp._core.scene_rows,
         "scene rows out of their domain": lambda: mp.scenes.Pendulum().ensemble_params(
             3, g=[1.0, 2.0, -1.0]),
         "point masses": lambda: mp.inertia.point_masses([1.0, 2.0], [[1, 0, 0], [0, 1, 0]]),

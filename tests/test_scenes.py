@@ -11,14 +11,25 @@ import mechpy as mp
 from mechpy import _core
 
 S = mp.scenes
-#: the scenes whose public parameters are their row's scalars
-PLAIN = [S.Pendulum, S.VanDerPol, S.Duffing, S.Kepler, S.RestrictedThreeBody, S.Foucault,
-         S.HeavyTop]
-#: one valid instance of every scene, and its row
+#: the scene classes, one per row (RigidBody: two), from the module's list
+CLASSES = [getattr(S, n) for n in S.__all__
+           if isinstance(getattr(S, n), type) and issubclass(getattr(S, n), S.Scene)
+           and getattr(S, n)._model]
+#: the scenes whose public parameters are their row's scalars (their __init__ made by
+#: Scene from the row); the Rocket's check joins m_dry to m0 (tried in test_scene_values)
+PLAIN = [c for c in CLASSES if "__init_subclass__" in c.__init__.__code__.co_qualname
+         and c is not S.Rocket]
+#: one valid instance of every scene (of every row: the test below checks it)
 SCENES = [S.Pendulum(), S.Pendulum(damping=0.1), S.VanDerPol(), S.Duffing(1.0, 0.5),
           S.Duffing(1.0, 0.5, delta=0.2), S.Kepler(), S.RestrictedThreeBody(),
           S.Foucault(45.0, 10.0), S.HeavyTop(1.0, 0.5, 1.0, l=0.3), S.RigidBody(),
-          S.RigidBody(orientation=True), S.SpringChain(np.ones(3))]
+          S.RigidBody(orientation=True), S.SpringChain(np.ones(3)),
+          S.Rocket(2500.0, 10.0, 1000.0, 200.0)]
+
+
+def test_the_lists_cover_every_row():
+    assert {s._model for s in SCENES} == set(_core.scene_rows())
+    assert {c._model for c in CLASSES} | {"RigidBodyOriented"} == set(_core.scene_rows())
 
 
 @pytest.mark.parametrize("cls", PLAIN, ids=lambda c: c.__name__)
@@ -204,3 +215,90 @@ def test_variational_tools_take_any_scene_with_a_row_lagrangian():
     assert np.max(np.abs(r.q - exact)) < 1e-5 * b   # 1.1e-6 relative measured (O(h^2))
     with pytest.raises(TypeError, match="no Lagrangian"):
         mp.variational.stationary_path(S.VanDerPol(), 0, 1, 1.0, 50)
+
+
+# ---------------------------------------------------------- what a scene says about itself
+
+@pytest.mark.parametrize("scene", SCENES, ids=repr)
+def test_states_coordinates_and_speeds_agree_with_the_rhs(scene):
+    """The row's names: one per state component, unique; the coordinates and
+    speeds among them; and where a speed is a coordinate's velocity, the
+    right-hand side says so: d(coordinate)/dt is that component, exactly, at
+    random states and times."""
+    states, q, v = scene.states, scene.coordinates, scene.speeds
+    assert len(states) == scene.dim == len(set(states))
+    assert set(q) <= set(states) and set(v) <= set(states) and not set(q) & set(v)
+    rng = np.random.default_rng(3)
+    y = rng.uniform(0.2, 1.0, (scene.dim, 5))
+    if scene._model == "RigidBodyOriented":
+        y[3:] /= np.linalg.norm(y[3:], axis=0)
+    if scene._model == "Rocket":
+        y[2] = 500.0                                   # burning: above the dry mass
+    f = scene.rhs(0.7, y)
+    if len(q) == len(v):
+        for i, name in enumerate(q):
+            iv = scene._velocity_index(i)
+            assert states[iv] == v[i]
+            np.testing.assert_array_equal(f[states.index(name)], y[iv])
+    else:                                              # a rigid body: omega is no q's rate
+        assert scene._model.startswith("RigidBody")
+        assert all(scene._velocity_index(i) is None for i in range(len(q)))
+
+
+@pytest.mark.parametrize("scene", SCENES, ids=repr)
+def test_a_state_by_name(scene):
+    """mp.solve takes y0 as a dict keyed by the scene's state names: the same
+    solution as the array; a missing, unknown or doubled name is refused."""
+    y0 = np.linspace(0.3, 0.6, scene.dim)
+    if scene._model == "RigidBodyOriented":
+        y0[3:] /= np.linalg.norm(y0[3:])
+    if scene._model == "Rocket":
+        y0 = np.array([0.0, 0.0, 1000.0])
+    named = dict(zip(scene.states, y0))
+    np.testing.assert_array_equal(scene.initial_state(named), y0)
+    a = mp.solve(scene, (0, 0.1), y0, rtol=1e-8)
+    b = mp.solve(scene, (0, 0.1), named, rtol=1e-8)
+    np.testing.assert_array_equal(a.y, b.y)
+    with pytest.raises(ValueError, match="no value for the state"):
+        scene.initial_state(dict(list(named.items())[1:]))
+    with pytest.raises(ValueError, match="is not a state"):
+        scene.initial_state({**named, "nope": 1.0})
+
+
+def test_scene_drawings_are_registry_entries():
+    """A row names its drawing (or none); the entry made for particular rows
+    lists that row (the painters: tests/test_recipes.py)."""
+    from mechpy import _motion
+    for row in _core.scene_rows():
+        name = _core.scene_info(row)["drawing"]
+        if name is not None:
+            d = _motion.DRAWINGS[name]
+            assert not d.rows or row in d.rows
+
+
+def _signature(cls) -> str:
+    return ", ".join(n if p.default is inspect.Parameter.empty else f"{n}={p.default!r}"
+                     for n, p in inspect.signature(cls).parameters.items())
+
+
+def test_the_docs_table_of_scenes_is_the_rows():
+    """docs/guide/scenes.md's table: one line per C row, in the rows' order,
+    its states by name as the row gives them and the class's signature."""
+    import pathlib
+    import re
+    page = pathlib.Path(__file__).parents[1] / "docs" / "guide" / "scenes.md"
+    if not page.exists():
+        pytest.skip("the docs are not beside these tests (a run against an installed copy)")
+    lines = [ln for ln in page.read_text().splitlines() if ln.startswith("| `")]
+    by_row = {c._model: c for c in CLASSES}
+    rows = []
+    for ln in lines:
+        scene, states, params = [c.strip() for c in ln.strip("|").split("|")]
+        row = re.match(r"`(\w+)`", scene)[1]
+        rows.append(row)
+        info = _core.scene_info(row)
+        assert re.findall(r"`([^`]+)`", states) == list(info["states"]), row
+        cls = by_row.get(row)
+        if cls is not None:
+            assert params == f"`{_signature(cls)}`", row
+    assert rows == list(_core.scene_rows())

@@ -219,4 +219,6 @@ const mp_model mp_model_chain = {
     .name = "SpringChain", .dim = 0, .nparams = CHEAD, .params = chain_params,
     .separable = MP_SEPARABLE_ALWAYS, .check = chain_check, .bind = chain_bind,
     .energy = chain_energy, .dim_of = chain_dim_of,
+    .states = MP_NAMES("x#", "v#"), .coordinates = MP_NAMES("x#"), .speeds = MP_NAMES("v#"),
+    .drawing = "chain",
 };

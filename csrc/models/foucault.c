@@ -92,4 +92,6 @@ const mp_model mp_model_foucault = {
     .bind = foucault_bind, .energy = foucault_energy,
     .lanes = foucault_lanes,
     .field = foucault_field,
+    .states = MP_NAMES("x", "y", "vx", "vy"), .coordinates = MP_NAMES("x", "y"),
+    .speeds = MP_NAMES("vx", "vy"), .drawing = "foucault",
 };

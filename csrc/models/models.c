@@ -1,20 +1,19 @@
 /* The scene table and the one parameter check.  A new scene is one file
- * (its functions and its `const mp_model` row) plus one entry here. */
+ * (its functions and its `const mp_model` row) plus one line in
+ * models/list.h. */
 #include "models/models.h"
 
 #include <stdio.h>
 #include <string.h>
 
-extern const mp_model mp_model_pendulum, mp_model_vanderpol, mp_model_duffing, mp_model_kepler,
-    mp_model_r3b, mp_model_foucault, mp_model_rigid, mp_model_rigid_q, mp_model_heavy_top;
-extern const mp_model mp_model_chain;
-extern const mp_model mp_model_rocket;
+#define MP_MODEL(x) extern const mp_model mp_model_##x;
+#include "models/list.h"
+#undef MP_MODEL
 
 const mp_model *const mp_models[] = {
-    &mp_model_pendulum, &mp_model_vanderpol, &mp_model_duffing, &mp_model_kepler, &mp_model_r3b,
-    &mp_model_foucault, &mp_model_rigid, &mp_model_rigid_q, &mp_model_heavy_top,
-    &mp_model_chain,
-    &mp_model_rocket,
+#define MP_MODEL(x) &mp_model_##x,
+#include "models/list.h"
+#undef MP_MODEL
     NULL,
 };
 

@@ -40,6 +40,11 @@ typedef struct mp_model_param {
 #define MP_PARAM_RANGE(name, def, lo, hi) {name, def, lo, hi, 0, 0}
 #define MP_PARAM_OPEN(name, def, lo, hi) {name, def, lo, hi, 1, 1}
 
+/* A NULL-terminated list of names, for a row's states, coordinates and
+ * speeds (a file-scope compound literal: static storage). */
+#define MP_NAMES(...) ((const char *const[]){__VA_ARGS__, NULL})
+#define MP_NO_NAMES ((const char *const[]){NULL})
+
 /* How the separable flag reads: never (NULL), always, or a condition. */
 #define MP_SEPARABLE_ALWAYS "always"
 
@@ -81,6 +86,23 @@ typedef struct mp_model {
      * print to GLSL and JavaScript.  A test checks it against rhs at random
      * states and parameters.  NULL: none (a variable-size scene). */
     const char *const *field;
+    /* What the state holds, by name (NULL-terminated lists, MP_NAMES): every
+     * reader in Python (events, live views, plots, the docs' table, the
+     * tests' lists) takes them from here through _core.scene_info.
+     * states: every component, in order; a variable-size scene gives one
+     * pattern per block of equal length, "#" standing for the index in the
+     * block ("x#", "v#": x0, x1, ..., v0, v1, ...).  coordinates: the
+     * configuration among them (same rule).  speeds: the coordinates'
+     * velocities in the coordinates' order (then speeds[i] is the velocity
+     * of coordinates[i]: as many of them), or the generalized speeds the
+     * state holds when they are no coordinate's velocity (a rigid body's
+     * omega: a different count). */
+    const char *const *states;
+    const char *const *coordinates;
+    const char *const *speeds;
+    /* How the animations draw it: the name of an entry of the drawing
+     * registry (mechpy/_motion.py); NULL: no drawing of its own. */
+    const char *drawing;
 } mp_model;
 
 extern const mp_model *const mp_models[];

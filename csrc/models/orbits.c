@@ -80,6 +80,8 @@ const mp_model mp_model_kepler = {
     .separable = MP_SEPARABLE_ALWAYS, .bind = kepler_bind, .energy = kepler_energy,
     .lanes = kepler_lanes,
     .field = kepler_field,
+    .states = MP_NAMES("x", "y", "vx", "vy"), .coordinates = MP_NAMES("x", "y"),
+    .speeds = MP_NAMES("vx", "vy"),
 };
 
 /* ---- restricted three-body problem, rotating frame -------------------------
@@ -164,4 +166,6 @@ const mp_model mp_model_r3b = {
     .name = "RestrictedThreeBody", .dim = 4, .nparams = 1, .params = r3b_params,
     .bind = r3b_bind, .energy = r3b_energy, .lanes = r3b_lanes,
     .field = r3b_field,
+    .states = MP_NAMES("x", "y", "vx", "vy"), .coordinates = MP_NAMES("x", "y"),
+    .speeds = MP_NAMES("vx", "vy"),
 };

@@ -141,6 +141,8 @@ const mp_model mp_model_pendulum = {
     .separable = "damping = 0", .bind = pendulum_bind, .energy = pendulum_energy,
     .lagrangian = pendulum_lagrangian, .lanes = pendulum_lanes,
     .field = pendulum_field,
+    .states = MP_NAMES("theta", "theta'"), .coordinates = MP_NAMES("theta"),
+    .speeds = MP_NAMES("theta'"), .drawing = "pendulum",
 };
 
 /* ---- Van der Pol: x'' - mu (1 - x^2) x' + x = 0 ------------------------------ */
@@ -202,6 +204,7 @@ const mp_model mp_model_vanderpol = {
     .name = "VanDerPol", .dim = 2, .nparams = 1, .params = vdp_params, .bind = vdp_bind,
     .energy = vdp_energy, .lanes = vdp_lanes,
     .field = vdp_field,
+    .states = MP_NAMES("x", "x'"), .coordinates = MP_NAMES("x"), .speeds = MP_NAMES("x'"),
 };
 
 /* ---- Duffing: x'' + delta x' + alpha x + beta x^3 = gamma cos(omega t) ------- */
@@ -311,4 +314,5 @@ const mp_model mp_model_duffing = {
     .separable = "delta = 0", .bind = duffing_bind, .energy = duffing_energy,
     .lagrangian = duffing_lagrangian, .lanes = duffing_lanes,
     .field = duffing_field,
+    .states = MP_NAMES("x", "x'"), .coordinates = MP_NAMES("x"), .speeds = MP_NAMES("x'"),
 };

@@ -154,6 +154,8 @@ const mp_model mp_model_rigid = {
     .name = "RigidBody", .dim = 3, .nparams = 6, .params = rigid_params, .check = rigid_check,
     .bind = rigid_bind, .energy = rigid_energy,
     .field = rigid_field,
+    .states = MP_NAMES("omega1", "omega2", "omega3"), .coordinates = MP_NO_NAMES,
+    .speeds = MP_NAMES("omega1", "omega2", "omega3"), .drawing = "rigid",
 };
 static const char *const rigid_q_field[] = {
     "(I2 - I3)/I1*y1*y2 + tau1/I1",
@@ -169,6 +171,9 @@ const mp_model mp_model_rigid_q = {
     .name = "RigidBodyOriented", .dim = 7, .nparams = 6, .params = rigid_params,
     .check = rigid_check, .bind = rigid_bind_q, .energy = rigid_energy,
     .field = rigid_q_field,
+    .states = MP_NAMES("omega1", "omega2", "omega3", "qx", "qy", "qz", "qw"),
+    .coordinates = MP_NAMES("qx", "qy", "qz", "qw"),
+    .speeds = MP_NAMES("omega1", "omega2", "omega3"), .drawing = "rigid",
 };
 
 /* a torque callback: the free part, then tau / I (tau is NaN before the call, so
@@ -360,6 +365,9 @@ const mp_model mp_model_heavy_top = {
     .energy = top_energy, .lagrangian = top_lagrangian,
     .lanes = top_lanes,
     .field = top_field,
+    .states = MP_NAMES("phi", "theta", "psi", "phi'", "theta'", "psi'"),
+    .coordinates = MP_NAMES("phi", "theta", "psi"), .speeds = MP_NAMES("phi'", "theta'", "psi'"),
+    .drawing = "top",
 };
 
 /* ---- the exact torque-free motion ------------------------------------------

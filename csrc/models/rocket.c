@@ -139,4 +139,6 @@ const mp_model mp_model_rocket = {
     .name = "Rocket", .dim = 3, .nparams = RN, .params = rocket_params, .check = rocket_check,
     .bind = rocket_bind, .energy = rocket_energy,
     .field = rocket_field,
+    .states = MP_NAMES("height", "speed", "mass"), .coordinates = MP_NAMES("height"),
+    .speeds = MP_NAMES("speed"),
 };

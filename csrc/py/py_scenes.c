@@ -30,10 +30,30 @@ static PyObject *scene_param(const mp_model_param *p)
                          "hi_open", p->hi_open ? Py_True : Py_False);
 }
 
+/* A NULL-terminated list of names (the row's states, coordinates, speeds)
+ * as a tuple of str; NULL with an exception set. */
+static PyObject *names_tuple(const char *const *names)
+{
+    Py_ssize_t n = 0;
+    while (names && names[n]) n++;
+    PyObject *out = PyTuple_New(n);
+    for (Py_ssize_t i = 0; out && i < n; i++) {
+        PyObject *s = PyUnicode_FromString(names[i]);
+        if (!s) {
+            Py_CLEAR(out);
+            break;
+        }
+        PyTuple_SET_ITEM(out, i, s);
+    }
+    return out;
+}
+
 /* scene_info(name) -> the row: {"dim" (0: variable), "params" (names),
  * "param_info" (one dict each, see scene_param), "separable" (None: never,
  * "always" or a condition), "lagrangian" (bool), "field" (the right-hand
- * side as dim expression strings, or None)}. */
+ * side as dim expression strings, or None), "states", "coordinates",
+ * "speeds" (tuples of names; "#" in a variable-size scene's patterns, see
+ * models.h), "drawing" (a drawing's name, or None)}. */
 static PyObject *py_scene_info(PyObject *self, PyObject *args)
 {
     (void)self;
@@ -69,13 +89,42 @@ static PyObject *py_scene_info(PyObject *self, PyObject *args)
             PyTuple_SET_ITEM(field, (Py_ssize_t)i, e);
         }
     }
-    return Py_BuildValue("{s:n,s:N,s:N,s:z,s:O,s:N}", "dim", (Py_ssize_t)m->dim, "params", names,
-                         "param_info", info, "separable", m->separable, "lagrangian",
-                         m->lagrangian ? Py_True : Py_False, "field", field);
+    PyObject *states = names_tuple(m->states), *coords = names_tuple(m->coordinates),
+             *speeds = names_tuple(m->speeds);
+    if (!states || !coords || !speeds) {
+        Py_XDECREF(states);
+        Py_XDECREF(coords);
+        Py_XDECREF(speeds);
+        Py_DECREF(field);
+        goto fail;
+    }
+    return Py_BuildValue("{s:n,s:N,s:N,s:z,s:O,s:N,s:N,s:N,s:N,s:z}", "dim", (Py_ssize_t)m->dim,
+                         "params", names, "param_info", info, "separable", m->separable,
+                         "lagrangian", m->lagrangian ? Py_True : Py_False, "field", field,
+                         "states", states, "coordinates", coords, "speeds", speeds, "drawing",
+                         m->drawing);
 fail:
     Py_XDECREF(names);
     Py_XDECREF(info);
     return NULL;
+}
+
+/* scene_rows() -> the rows' names, in the table's order (models/list.h). */
+static PyObject *py_scene_rows(PyObject *self, PyObject *args)
+{
+    (void)self, (void)args;
+    size_t n = 0;
+    while (mp_models[n]) n++;
+    PyObject *out = PyTuple_New((Py_ssize_t)n);
+    for (size_t i = 0; out && i < n; i++) {
+        PyObject *s = PyUnicode_FromString(mp_models[i]->name);
+        if (!s) {
+            Py_CLEAR(out);
+            break;
+        }
+        PyTuple_SET_ITEM(out, (Py_ssize_t)i, s);
+    }
+    return out;
 }
 
 /* scene_check(name, params) -> dim: the row's check of a parameter vector
@@ -218,7 +267,9 @@ static PyObject *py_ellipk_complement(PyObject *self, PyObject *args)
 
 PyMethodDef mp_py_scene_methods[] = {
     {"scene_info", py_scene_info, METH_VARARGS,
-     "A scene's row: dimension, parameters (names, defaults, bounds), separability."},
+     "A scene's row: dimension, parameters (names, defaults, bounds), separability, "
+     "field, the names of its states, coordinates and speeds, its drawing."},
+    {"scene_rows", py_scene_rows, METH_NOARGS, "The scene rows' names, in the table's order."},
     {"scene_check", py_scene_check, METH_VARARGS,
      "Check a scene's parameter vector (or rows of them) against its row; -> dim."},
     {"scene_eval", py_scene_eval, METH_VARARGS, "Evaluate a scene over many states (internal)."},

@@ -2,8 +2,9 @@
 
 The frames are computed here, in NumPy, from the solution's dense output (or
 from its samples); the page only places the bodies, draws the trails and
-plays.  The geometry of each kind is :mod:`mechpy._motion`'s, the same as
-:func:`mechpy.plot.animate`'s.
+plays.  The kinds are the entries of ``mechpy._motion`` (each names its
+painter here, a function ``(system, times, Y, **options) -> dict``); their
+geometry is :mod:`mechpy._motion`'s, the same as :func:`mechpy.plot.animate`'s.
 """
 from __future__ import annotations
 
@@ -95,7 +96,7 @@ def _polyline(pts, color, label=None, dashed=False):
             "label": label, "dashed": bool(dashed)}
 
 
-def _pendulum(system, Y, lengths):
+def _pendulum(system, times, Y, lengths=None):
     two = Y.shape[0] == 4
     ls = _motion.pendulum_lengths(system, two, lengths)
     xs, ys = _motion.pendulum_bobs(Y, ls)
@@ -111,7 +112,7 @@ def _pendulum(system, Y, lengths):
                 if two else "pendulum: rod, bob and its trail (x right, y up; m)")
 
 
-def _foucault(system, Y):
+def _foucault(system, times, Y):
     B = _motion.foucault_bob(system, Y)                            # (3, frames)
     L = float(system.params["length"])
     A = float(np.max(np.hypot(B[0], B[1]))) or 0.1 * L
@@ -124,7 +125,7 @@ def _foucault(system, Y):
                 title="Foucault pendulum: the bob and its rosette (x east, y north, z up; m)")
 
 
-def _top(system, Y):
+def _top(system, times, Y):
     R = _motion.top_rotation(Y)                                    # (frames, 3, 3)
     ell = float(system.params["l"])
     mark = np.array([0.3 * ell, 0.0, ell])           # on the body's side, beside the centre of mass
@@ -172,7 +173,7 @@ def _rigid(system, times, Y):
                       "vectors) and L")
 
 
-def _chain(system, Y, spacing):
+def _chain(system, times, Y, spacing=None):
     N = system.N
     X = Y[:N]
     sp = _motion.chain_spacing(X) if spacing is None else as_scalar(spacing, "spacing",
@@ -190,11 +191,12 @@ def _chain(system, Y, spacing):
             lines.append(_polyline([[w[0], -0.4 * sp, 0], [w[0], 0.4 * sp, 0]], "#000000", "wall"))
     half = 0.5 * (N + 1) * sp
     return dict(P=P, bodies=bodies, rods=rods, lines=lines, up=[0, 1, 0], trail=[],
+                legend=[[_RED, f"{N} masses"]],
                 center=[half, 0.0, 0.0], extent=1.1 * half, camera=[0.0, 0.5, 1.0],
                 title=f"spring chain of {N} masses along x (units of x; spacing {sp:.4g})")
 
 
-def _particle(system, Y):
+def _particle(system, times, Y):
     P = _motion.particle_places(Y)                                 # (3, frames)
     names = _motion.particle_coordinates(system)
     one = Y.shape[0] == 2
@@ -213,8 +215,8 @@ def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0,
             lengths=None, spacing=None) -> Motion:
     r"""The motion of a solution in 3D, in the browser (three.js).
 
-    What is drawn depends on ``kind`` (by default chosen from the scene's
-    type), as in :func:`mechpy.plot.animate`:
+    What is drawn depends on ``kind`` (by default the drawing the system
+    names, ``system.drawing``), as in :func:`mechpy.plot.animate`:
 
     ``"pendulum"``, ``"double_pendulum"``
         rods and bobs at :math:`(l\sin\theta, -l\cos\theta, 0)` (x right, y
@@ -319,35 +321,27 @@ def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0,
     >>> w.times.size, w.bodies
     (101, ['bob'])
     """
-    kind = _motion.kind_of(system, kind)
+    drawing = _motion.kind_of(system, kind)
+    kind = drawing.name
     tt, y = _motion.samples(system, sol, t)                        # checks sol's shape
     fps = as_scalar(fps, "fps", positive=True, hi=120.0)
     speed = as_scalar(speed, "speed", lo=0.1, hi=10.0)
     times, duration = _frame_times(tt, fps, duration)
     span = abs(float(tt[-1] - tt[0]))
-    trail = (_motion.DEFAULT_TRAIL[kind] * span if trail is None
+    trail = (drawing.trail * span if trail is None
              else as_scalar(trail, "trail", nonnegative=True, finite=False))
     if np.isnan(trail):
         raise ValueError("trail must be a non-negative time or np.inf, got nan")
-    if kind not in ("pendulum", "double_pendulum") and lengths is not None:
-        raise ValueError(f"lengths is for the pendulum kinds, not kind={kind!r}")
-    if kind != "chain" and spacing is not None:
-        raise ValueError(f"spacing is for kind='chain', not kind={kind!r}")
+    options = {k: v for k, v in (("lengths", lengths), ("spacing", spacing)) if v is not None}
+    for k in options:
+        if k not in drawing.options:
+            takers = " or ".join(repr(d.name) for d in _motion.DRAWINGS.values()
+                                 if k in d.options)
+            raise ValueError(f"{k} is for kind={takers}, not kind={kind!r}")
     Y = _states(system, sol, t, times)
     if not np.all(np.isfinite(Y)):
         raise ValueError("the solution is not finite over its span (sol.sol or sol.y)")
-    if kind in ("pendulum", "double_pendulum"):
-        d = _pendulum(system, Y, lengths)
-    elif kind == "foucault":
-        d = _foucault(system, Y)
-    elif kind == "top":
-        d = _top(system, Y)
-    elif kind == "rigid":
-        d = _rigid(system, times, Y)
-    elif kind == "particle":
-        d = _particle(system, Y)
-    else:
-        d = _chain(system, Y, spacing)
+    d = drawing.painter("live")(system, times, Y, **options)
     n, nb = d["P"].shape[:2]
     dt = span / (n - 1)
     window = n if not np.isfinite(trail) else int(np.ceil(trail / dt - 1e-9)) if dt > 0 else 0
@@ -356,6 +350,7 @@ def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0,
         "duration": duration, "t": pack(times), "pos": pack(d["P"].reshape(n, nb * 3)),
         "rot": pack(d["R"].reshape(n, 9)) if "R" in d else None,
         "bodies": d["bodies"], "rods": d["rods"], "lines": d["lines"],
+        "legend": d.get("legend", [[b["color"], b["name"]] for b in d["bodies"]]),
         "trails": [{"body": b, "color": d["bodies"][b]["color"], "window": window}
                    for b in d["trail"]] if window > 0 else [],
         "solid": d.get("solid"), "up": d["up"], "center": d["center"],

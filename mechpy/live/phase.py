@@ -3,6 +3,8 @@ GPU in the browser (static/phase.js), with overlays from :mod:`mechpy.phase`."""
 from __future__ import annotations
 
 import math
+import re
+import unicodedata
 import warnings
 
 import numpy as np
@@ -30,21 +32,23 @@ def _range(v, what):
     return lo, hi
 
 
-#: the state's names of the built-in scenes a portrait can show (as ../API.md's table)
-_STATES = {"Pendulum": ["θ", "θ'"], "VanDerPol": ["x", "x'"], "Duffing": ["x", "x'"],
-           "Kepler": ["x", "y", "vx", "vy"], "RestrictedThreeBody": ["x", "y", "vx", "vy"],
-           "Foucault": ["x", "y", "vx", "vy"], "RigidBody": ["ω1", "ω2", "ω3"],
-           "Rocket": ["height", "speed", "mass"]}
+def _label(name: str) -> str:
+    """A state's name as the portrait's axes show it: a leading Greek letter's
+    name as the letter ("theta'" -> "θ'", "omega1" -> "ω1")."""
+    m = re.match(r"([A-Za-z]+)(.*)", name, flags=re.S)
+    if m:
+        case = "CAPITAL" if m[1][0].isupper() else "SMALL"
+        try:
+            return unicodedata.lookup(f"GREEK {case} LETTER {m[1].upper()}") + m[2]
+        except KeyError:
+            pass
+    return name
 
 
 def _state_names(system, dim: int) -> list:
-    meta = getattr(system, "_meta", None)
-    if isinstance(meta, dict) and meta.get("names"):
-        q = list(meta["names"])
-        names = q + [f"{n}'" for n in q] if meta.get("kind") == "lagrangian" else q
-    else:
-        names = _STATES.get(type(system).__name__, [])
-    return names if len(names) == dim else [f"y[{i}]" for i in range(dim)]
+    """The axes' names: the system's own (:attr:`states`), else y[i]."""
+    names = list(getattr(system, "states", None) or ())
+    return [_label(nm) for nm in names] if len(names) == dim else [f"y[{i}]" for i in range(dim)]
 
 
 def _states(ax: int, ay: int, h, v) -> np.ndarray:

@@ -13,7 +13,7 @@ import numpy as np
 
 from .. import _core
 from .._validate import as_array, as_finite_result, as_scalar, band_of_pattern
-from ..scenes import Scene
+from ..scenes import Scene, _state_vector
 
 __all__ = ["CompiledScene"]
 
@@ -435,6 +435,24 @@ class CompiledScene(Scene):
             return list(self._meta["names"])
         return self.coordinates + self.speeds
 
+    def _velocity_index(self, iq: int) -> int | None:
+        """Where coordinate iq's velocity sits: paired by name (mp.lagrangian's
+        q', mp.mechanics' speeds when as many as the coordinates); a
+        first-order system (mp.equations) names none: its state is read as
+        (q, v), v after q."""
+        if self._meta["kind"] == "equations":
+            from ..events import _velocity_after
+            return _velocity_after(iq, self._dim)
+        return super()._velocity_index(iq)
+
+    @property
+    def drawing(self) -> str | None:
+        """The drawing of mechpy's animations for this system: a compiled
+        system has none of its own, so the first drawing of the registry that
+        fits its description (``mechpy._motion.fitting``), or None."""
+        from .._motion import fitting
+        return fitting(self)
+
     def initial_state(self, values) -> np.ndarray:
         """A state vector (dim,) from ``values``: a dict keyed by the names of
         :attr:`states` or by the SymPy objects they name (a coordinate
@@ -457,23 +475,7 @@ class CompiledScene(Scene):
         >>> osc.initial_state({"v": 0.5, x: 1.0}).tolist()
         [1.0, 0.5]
         """
-        names = self.states
-        if not isinstance(values, dict):
-            return as_array(values, "y0", shape=(len(names),))
-        out = {}
-        for k, val in values.items():
-            nm = k if isinstance(k, str) else _state_name(k)
-            if nm not in names:
-                raise ValueError(f"y0: {k!r} is not a state of the system (its states: "
-                                 f"{names})")
-            if nm in out:
-                raise ValueError(f"y0 gives the state {nm!r} twice")
-            out[nm] = as_scalar(val, f"y0[{nm!r}]")
-        missing = [nm for nm in names if nm not in out]
-        if missing:
-            raise ValueError(f"y0 has no value for the state(s) {missing} (its states: "
-                             f"{names})")
-        return np.array([out[nm] for nm in names])
+        return _state_vector(self.states, values, _state_name)
 
     @property
     def cyclic(self) -> list:

@@ -159,8 +159,7 @@ export default {
       legend.append(mpEl("div", {}, mpEl("span", {style: "display:inline-block;width:10px;"
         + `height:10px;background:${c};margin-right:4px`}), text));
     };
-    spec.bodies.forEach((b) => { if (spec.kind !== "chain") entry(b.color, b.name); });
-    if (spec.kind === "chain") entry(spec.bodies[0].color, `${nb} masses`);
+    spec.legend.forEach(([c, name]) => entry(c, name));   // as the drawing lists it
     spec.lines.forEach((l) => entry(l.color, l.label));
 
     // ---- frames
