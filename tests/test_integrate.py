@@ -283,7 +283,28 @@ def test_methods_table():
     assert table["gsl:msbdf"]["needs_jacobian"] and table["gsl:msbdf"]["implicit"]
     assert set(table["dopri5"]) == {"name", "order", "adaptive", "implicit", "symplectic",
                                     "needs_jacobian", "dense_output", "lanes", "rigid",
-                                    "compensated"}
+                                    "compensated", "scalar_rtol"}
+
+
+@pytest.mark.parametrize("row", [m for m in mp.methods() if m["adaptive"] and not m["rigid"]],
+                         ids=lambda m: m["name"])
+def test_scalar_rtol_is_what_the_row_takes(row):
+    """A row's scalar_rtol decides whether one rtol per component is taken:
+    the solve refuses differing rtols exactly for those rows, and runs them
+    (to the looser tolerance's accuracy, against exp(-t)) for the others."""
+    def decay(t, y):
+        return -y
+    kw = dict(rtol=[1e-6, 1e-9], atol=1e-12)
+    if row["scalar_rtol"]:
+        with pytest.raises(ValueError, match="takes one rtol"):
+            mp.solve(decay, (0, 1), [1.0, 2.0], method=row["name"], **kw)
+        assert mp.solve(decay, (0, 1), [1.0, 2.0], method=row["name"],
+                        rtol=[1e-6, 1e-6], atol=1e-12).success
+        return
+    s = mp.solve(decay, (0, 1), [1.0, 2.0], method=row["name"], **kw)
+    assert s.success
+    err = np.max(np.abs(s.y[:, -1] - np.array([1.0, 2.0]) * np.exp(-1.0)))
+    assert err < 2e-9, err   # 1.7e-10 measured (dopri5)
 
 
 def test_user_jacobian_is_used():
