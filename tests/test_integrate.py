@@ -283,7 +283,7 @@ def test_methods_table():
     assert table["gsl:msbdf"]["needs_jacobian"] and table["gsl:msbdf"]["implicit"]
     assert set(table["dopri5"]) == {"name", "order", "adaptive", "implicit", "symplectic",
                                     "needs_jacobian", "dense_output", "lanes", "rigid",
-                                    "compensated", "scalar_rtol"}
+                                    "compensated", "scalar_rtol", "self_controlled"}
 
 
 @pytest.mark.parametrize("row", [m for m in mp.methods() if m["adaptive"] and not m["rigid"]],
@@ -862,3 +862,41 @@ def test_args_none_is_no_arguments_and_a_non_iterable_is_refused_as_scipy_does()
     ref = solve_ivp(rate, (0, 1), [1.0], args=[2.0], rtol=1e-10, atol=1e-12).y[0, -1]
     got = mp.solve(rate, (0, 1), [1.0], args=[2.0], rtol=1e-10, atol=1e-12).y[0, -1]
     assert abs(got - np.exp(-2.0)) < 1e-9 and abs(ref - np.exp(-2.0)) < 1e-8
+
+
+# Every row of the method table against a reference (CONTRIBUTING's "new
+# method" recipe: a new row adds its bound here): x'' = -x over [0, 10]
+# against cos t, sin t (adaptive rows at rtol 1e-8, fixed-step rows at
+# h = 0.01); a rigid-body splitting on a torque-free RigidBody against
+# dop853 at rtol 1e-13.  Each bound is about 5x the error measured.
+CROSS_CHECK = {"rk4": 3.5e-9, "dopri5": 5e-8, "dop853": 5.5e-8, "radau": 1.5e-8,
+               "auto": 5.5e-8, "verlet": 2e-4, "yoshida4": 3e-8, "yoshida6": 2e-13,
+               "gauss4": 6e-10, "gsl:rk2": 3.2e-8, "gsl:rk4": 4e-7, "gsl:rkf45": 7.5e-8,
+               "gsl:rkck": 6e-8, "gsl:rk8pd": 1.8e-9, "gsl:msadams": 3e-6,
+               "gsl:rk1imp": 1e-3, "gsl:rk2imp": 9e-6, "gsl:rk4imp": 2.8e-7,
+               "gsl:bsimp": 1.8e-9, "gsl:msbdf": 7.5e-6, "rigid:split": 1e-4,
+               "rigid:split4": 2.8e-9}
+
+
+@pytest.mark.parametrize("row", mp.methods(), ids=lambda m: m["name"])
+def test_every_method_row_against_a_reference(row):
+    name = row["name"]
+    assert name in CROSS_CHECK, f"method {name}: add its bound to CROSS_CHECK"
+    t = np.linspace(0, 10, 11)
+    kw = dict(rtol=1e-8, atol=1e-10) if row["adaptive"] else dict(h=0.01)
+    if row["rigid"]:
+        body = mp.scenes.RigidBody([1.0, 2.0, 3.0])
+        w0 = [0.3, 1.0, 0.2]
+        ref = mp.solve(body, (0, 10), w0, t_eval=t, rtol=1e-13, atol=1e-14).y
+        s = mp.solve(body, (0, 10), w0, t_eval=t, method=name, **kw)
+    else:
+        ref = np.array([np.cos(t), -np.sin(t)])
+        s = mp.solve(mp.SecondOrder(lambda t, q: -q), (0, 10), [1.0, 0.0], t_eval=t,
+                     method=name, **kw)
+    assert s.success, s.message
+    err = np.max(np.abs(s.y - ref))
+    assert err < CROSS_CHECK[name], err
+
+
+def test_cross_check_names_only_rows():
+    assert sorted(CROSS_CHECK) == sorted(m["name"] for m in mp.methods())
