@@ -339,31 +339,59 @@ static int ode_args_fill(const ode_opts *op, size_t n, ode_args *a, mp_ode_optio
     return 0;
 }
 
-/* Contract: the method row named by name (a str).  NULL with an exception set. */
-static const mp_ode_method *method_arg(PyObject *name)
+/* Contract: the one calling convention of ode_solve and ode_solve_many,
+ * (method, system, y0 or y0s, options): *m the row named by method (a str)
+ * and op the options for the call (FOR_SOLVE or FOR_MANY).  0, or -1 with an
+ * exception set. */
+static int ode_call_args(PyObject *const *argv, Py_ssize_t nargs, int call,
+                         const mp_ode_method **m, ode_opts *op)
 {
-    const char *s = PyUnicode_Check(name) ? PyUnicode_AsUTF8(name) : NULL;
+    if (nargs != 4) {
+        PyErr_Format(PyExc_TypeError, "%s takes 4 arguments (method, system, y0, options), "
+                     "got %zd", call == FOR_SOLVE ? "ode_solve" : "ode_solve_many", nargs);
+        return -1;
+    }
+    const char *s = PyUnicode_Check(argv[0]) ? PyUnicode_AsUTF8(argv[0]) : NULL;
     if (!s) {
         if (!PyErr_Occurred()) PyErr_SetString(PyExc_TypeError, "method must be a str");
-        return NULL;
+        return -1;
     }
-    const mp_ode_method *m = mp_ode_method_find(s);
-    if (!m) PyErr_Format(PyExc_ValueError, "unknown method %s", s);
-    return m;
+    if (!(*m = mp_ode_method_find(s))) {
+        PyErr_Format(PyExc_ValueError, "unknown method %s", s);
+        return -1;
+    }
+    return ode_opts_parse(argv[3], call, op);
 }
 
 /* ---- ode_solve ------------------------------------------------------------ */
 
-/* One ode_solve call: what it converted and the adapters the problem runs
- * through, dropped together by solve_call_clear. */
+/* What ode_solve and ode_solve_many both convert: the options, the
+ * tolerances and samples, the system, its band and Jacobian, the event
+ * list; dropped together by ode_call_clear. */
 typedef struct {
     ode_opts op;
     ode_args oa;
     mp_ode_options o;
-    PyArrayObject *y0, *jm;
-    size_t *perm;
-    py_event_list el;
     py_system sys;
+    size_t *perm;
+    PyArrayObject *jm;
+    py_event_list el;
+} ode_call;
+
+static void ode_call_clear(ode_call *c)
+{
+    py_system_clear(&c->sys);
+    ode_args_clear(&c->oa);
+    event_list_clear(&c->el);
+    Py_CLEAR(c->jm);
+    PyMem_Free(c->perm);
+    c->perm = NULL;
+}
+
+/* One ode_solve call: its state and the adapters the problem runs through. */
+typedef struct {
+    ode_call b;
+    PyArrayObject *y0;
     mp_ode_problem prob;
     py_with_jac wj;
     py_watched wd;
@@ -374,14 +402,9 @@ typedef struct {
 
 static void solve_call_clear(solve_call *c)
 {
-    py_system_clear(&c->sys);
-    ode_args_clear(&c->oa);
+    ode_call_clear(&c->b);
     event_fns_free(&c->pe);
-    event_list_clear(&c->el);
     Py_CLEAR(c->y0);
-    Py_CLEAR(c->jm);
-    PyMem_Free(c->perm);
-    c->perm = NULL;
 }
 
 /* Contract: ValueError unless method m can run the system of c (a
@@ -391,43 +414,43 @@ static int separable_check(const mp_ode_method *m, const solve_call *c)
 {
     if (!m->symplectic || m->implicit || c->prob.nq != 0) return 0;
     char why[256];
-    mp_model_separable_hint(c->sys.model ? c->sys.model->name : NULL, why, sizeof why);
+    mp_model_separable_hint(c->b.sys.model ? c->b.sys.model->name : NULL, why, sizeof why);
     PyErr_Format(PyExc_ValueError,
                  "method %s needs a separable system q'' = a(t, q) with y = (q, v): %s",
                  m->name, why);
     return -1;
 }
 
-/* Contract: c's problem from the system spec and y0o with c->op's options:
+/* Contract: c's problem from the system spec and y0o with c->b.op's options:
  * the system, its band, watch, Jacobian and events.  0, or -1 with an
  * exception set. */
 static int solve_prepare(solve_call *c, const mp_ode_method *m, PyObject *spec, PyObject *y0o)
 {
-    const ode_opts *op = &c->op;
+    const ode_opts *op = &c->b.op;
     c->y0 = mp_py_array(y0o, "y0", 1);
     if (!c->y0 || mp_py_require_finite(c->y0, "y0") < 0) return -1;
     size_t n = (size_t)PyArray_SIZE(c->y0);
-    if (ode_args_fill(op, n, &c->oa, &c->o) < 0 || py_system_parse(spec, n, &c->sys) < 0)
+    if (ode_args_fill(op, n, &c->b.oa, &c->b.o) < 0 || py_system_parse(spec, n, &c->b.sys) < 0)
         return -1;
-    c->prob = c->sys.prob;
-    if (band_parse(op->band, n, &c->prob, &c->perm) < 0 || separable_check(m, c) < 0) return -1;
-    c->holds_python = c->sys.holds_python;
+    c->prob = c->b.sys.prob;
+    if (band_parse(op->band, n, &c->prob, &c->b.perm) < 0 || separable_check(m, c) < 0) return -1;
+    c->holds_python = c->b.sys.holds_python;
     if (op->watch != Py_None) { /* a ctypes callback that runs Python: hold the GIL, check */
         watch_problem(&c->prob, &c->wd, op->watch);
         c->holds_python = 1;
     }
-    if (jac_parse(op->jac, n, &c->jm) < 0) return -1;
-    c->holds_python |= jac_wrap(&c->prob, op->jac, c->jm, op->args, &c->cj, &c->wj);
-    c->o.dense = op->dense;
-    if (event_list_parse(op->events, op->terminal, op->direction, &c->el, &c->o) < 0) return -1;
-    if (c->el.count) {
-        const py_system *s = &c->sys;
-        if (event_fns(op->events, c->el.count, op->args, n,
+    if (jac_parse(op->jac, n, &c->b.jm) < 0) return -1;
+    c->holds_python |= jac_wrap(&c->prob, op->jac, c->b.jm, op->args, &c->cj, &c->wj);
+    c->b.o.dense = op->dense;
+    if (event_list_parse(op->events, op->terminal, op->direction, &c->b.el, &c->b.o) < 0) return -1;
+    if (c->b.el.count) {
+        const py_system *s = &c->b.sys;
+        if (event_fns(op->events, c->b.el.count, op->args, n,
                       s->params ? PyArray_DATA(s->params) : NULL,
                       s->params ? (size_t)PyArray_SIZE(s->params) : 0, 0, &c->pe) < 0)
             return -1;
-        c->o.events_data = c->o.action_data = &c->pe;
-        c->holds_python |= !c->el.all_c; /* impacts alone run in C */
+        c->b.o.events_data = c->b.o.action_data = &c->pe;
+        c->holds_python |= !c->b.el.all_c; /* impacts alone run in C */
     }
     return 0;
 }
@@ -442,30 +465,26 @@ static int solve_prepare(solve_call *c, const mp_ode_method *m, PyObject *spec, 
 static PyObject *py_ode_solve(PyObject *self, PyObject *const *argv, Py_ssize_t nargs)
 {
     (void)self;
-    if (nargs != 4) {
-        PyErr_Format(PyExc_TypeError, "ode_solve takes 4 arguments, got %zd", nargs);
-        return NULL;
-    }
-    const mp_ode_method *m = method_arg(argv[0]);
-    if (!m) return NULL;
+    const mp_ode_method *m;
     solve_call c;
     memset(&c, 0, sizeof c);
     PyObject *result = NULL;
-    if (ode_opts_parse(argv[3], FOR_SOLVE, &c.op) < 0 || solve_prepare(&c, m, argv[1], argv[2]) < 0)
+    if (ode_call_args(argv, nargs, FOR_SOLVE, &m, &c.b.op) < 0 ||
+        solve_prepare(&c, m, argv[1], argv[2]) < 0)
         goto out;
     c.prob.replayable = !c.holds_python; /* plain C all through: a block may be run again */
     mp_ode_result r;
     int rc;
     const double *y0 = PyArray_DATA(c.y0);
     if (c.holds_python) {
-        rc = mp_ode_solve(m, &c.prob, c.op.t0, c.op.tf, y0, &c.o, &r);
+        rc = mp_ode_solve(m, &c.prob, c.b.op.t0, c.b.op.tf, y0, &c.b.o, &r);
     } else {
         Py_BEGIN_ALLOW_THREADS
-        rc = mp_ode_solve(m, &c.prob, c.op.t0, c.op.tf, y0, &c.o, &r);
+        rc = mp_ode_solve(m, &c.prob, c.b.op.t0, c.b.op.tf, y0, &c.b.o, &r);
         Py_END_ALLOW_THREADS
     }
     if (mp_status_lookup(rc)->raises == 2) mp_py_raise(rc, "solve");
-    else result = result_to_python(&c.sys, &r, c.op.dense, c.op.max_steps);
+    else result = result_to_python(&c.b.sys, &r, c.b.op.dense, c.b.op.max_steps);
     mp_ode_result_free(&r);
 out:
     solve_call_clear(&c);
@@ -684,21 +703,16 @@ nomem:
     return -1;
 }
 
-/* One ode_solve_many call: what it converted, the ensemble and the
- * adapters of its trajectories, dropped together by many_call_clear. */
+/* One ode_solve_many call: its state, the ensemble and the adapters of its
+ * trajectories, dropped together by many_call_clear. */
 typedef struct {
-    ode_opts op;
-    ode_args oa;
-    mp_ode_options o;
-    PyArrayObject *y0s, *par, *yout, *jm;
+    ode_call b;
+    PyArrayObject *y0s, *par, *yout;
     size_t k, n, np, npar; /* trajectories, states, params' columns, an event's params */
-    size_t *perm;
     mp_ode_outcome *outc;
-    py_event_list el;
     py_lane_impacts li;
     many_adapters ad;
     mp_ode_ensemble ens;
-    py_system sys;
 } many_call;
 
 static void many_call_clear(many_call *c)
@@ -707,27 +721,23 @@ static void many_call_clear(many_call *c)
     lane_impacts_clear(&c->li);
     mp_ode_ensemble_free(&c->ens);
     PyMem_Free(c->outc);
-    py_system_clear(&c->sys);
-    ode_args_clear(&c->oa);
-    event_list_clear(&c->el);
+    ode_call_clear(&c->b);
     Py_CLEAR(c->y0s);
     Py_CLEAR(c->par);
     Py_CLEAR(c->yout);
-    Py_CLEAR(c->jm);
-    PyMem_Free(c->perm);
 }
 
-/* Contract: c's inputs from the system spec and y0o with c->op's options:
+/* Contract: c's inputs from the system spec and y0o with c->b.op's options:
  * the states, tolerances and samples, the parameter rows, the system and its
  * band, the Jacobian and the event list.  0, or -1 with an exception set. */
 static int many_inputs(many_call *c, PyObject *spec, PyObject *y0o)
 {
-    const ode_opts *op = &c->op;
+    const ode_opts *op = &c->b.op;
     if (!(c->y0s = mp_py_array(y0o, "y0s", 2))) return -1;
     c->k = c->ad.k = (size_t)PyArray_DIM(c->y0s, 0);
     c->n = (size_t)PyArray_DIM(c->y0s, 1);
-    if (ode_args_fill(op, c->n, &c->oa, &c->o) < 0) return -1;
-    if (!c->oa.tev) {
+    if (ode_args_fill(op, c->n, &c->b.oa, &c->b.o) < 0) return -1;
+    if (!c->b.oa.tev) {
         PyErr_SetString(PyExc_ValueError, "solve_many needs t_eval");
         return -1;
     }
@@ -739,16 +749,16 @@ static int many_inputs(many_call *c, PyObject *spec, PyObject *y0o)
         }
         c->np = (size_t)PyArray_DIM(c->par, 1);
     }
-    const py_system *s = &c->sys;
-    if (py_system_parse(spec, c->n, &c->sys) < 0 ||
-        band_parse(op->band, c->n, &c->sys.prob, &c->perm) < 0)
+    const py_system *s = &c->b.sys;
+    if (py_system_parse(spec, c->n, &c->b.sys) < 0 ||
+        band_parse(op->band, c->n, &c->b.sys.prob, &c->b.perm) < 0)
         return -1;
     if (c->par && !s->model && !s->params && !s->holds_python && s->cfn.nq) {
         PyErr_SetString(PyExc_ValueError, "params are not supported for SecondOrder C callbacks");
         return -1;
     }
-    if (jac_parse(op->jac, c->n, &c->jm) < 0 ||
-        event_list_parse(op->events, op->terminal, op->direction, &c->el, &c->o) < 0)
+    if (jac_parse(op->jac, c->n, &c->b.jm) < 0 ||
+        event_list_parse(op->events, op->terminal, op->direction, &c->b.el, &c->b.o) < 0)
         return -1;
     /* the parameter vector each trajectory's events see (an impact's e_param) */
     size_t nparams = s->params ? (size_t)PyArray_SIZE(s->params) : 0;
@@ -760,11 +770,11 @@ static int many_inputs(many_call *c, PyObject *spec, PyObject *y0o)
  * its inputs.  0, or -1 with an exception set. */
 static int many_build(many_call *c, const mp_ode_method *m)
 {
-    const py_system *s = &c->sys;
-    const ode_opts *op = &c->op;
+    const py_system *s = &c->b.sys;
+    const ode_opts *op = &c->b.op;
     int lane_imps = 0; /* impacts alone: the lanes run them too */
-    if (c->el.count && c->el.all_c &&
-        (lane_imps = lane_impacts_parse(&c->li, op->events, &c->el, c->k, c->n, c->npar)) < 0)
+    if (c->b.el.count && c->b.el.all_c &&
+        (lane_imps = lane_impacts_parse(&c->li, op->events, &c->b.el, c->k, c->n, c->npar)) < 0)
         return -1;
     c->ens = (mp_ode_ensemble){
         .m = m, .base = s->prob, .k = c->k, .n = c->n,
@@ -775,10 +785,10 @@ static int many_build(many_call *c, const mp_ode_method *m)
         .nparams = s->params ? (size_t)PyArray_SIZE(s->params) : 0,
         .torque = s->torque.fn ? &s->torque : NULL, .lane_rhs = s->lanes,
         .holds_python = s->holds_python || op->watch != Py_None ||
-                        (op->jac != Py_None && !c->jm) || (c->el.count && !c->el.all_c),
+                        (op->jac != Py_None && !c->b.jm) || (c->b.el.count && !c->b.el.all_c),
         .want_lanes = op->lanes, .impacts = lane_imps > 0 ? c->li.imps : NULL,
         .n_impacts = lane_imps > 0 ? c->li.n : 0};
-    int rc = mp_ode_ensemble_build(&c->ens, c->op.t0, c->op.tf, &c->o);
+    int rc = mp_ode_ensemble_build(&c->ens, c->b.op.t0, c->b.op.tf, &c->b.o);
     if (rc != MP_OK) {
         ensemble_error(&c->ens, rc, s->kind->name);
         return -1;
@@ -794,11 +804,11 @@ static int many_attach(many_call *c)
 {
     many_adapters *ad = &c->ad;
     mp_ode_ensemble *ens = &c->ens;
-    const ode_opts *op = &c->op;
+    const ode_opts *op = &c->b.op;
     size_t k = c->k;
     const double *rows = c->par ? PyArray_DATA(c->par) : NULL;
     if (c->par && ens->rows_kind == MP_ENS_ROWS_CALLER &&
-        many_caller_rows(ad, ens, &c->sys, rows, c->np, op->args) < 0)
+        many_caller_rows(ad, ens, &c->b.sys, rows, c->np, op->args) < 0)
         return -1;
     if (k && op->watch != Py_None) { /* a ctypes callback that runs Python: see py_watched */
         if (!(ad->watched = PyMem_Calloc(k, sizeof *ad->watched))) goto nomem;
@@ -809,10 +819,10 @@ static int many_attach(many_call *c)
             !(ad->wjs = PyMem_Calloc(k, sizeof *ad->wjs)))
             goto nomem;
         for (size_t i = 0; i < k; i++)
-            jac_wrap(&ens->probs[i], op->jac, c->jm, ad->tuples ? ad->tuples[i] : op->args,
+            jac_wrap(&ens->probs[i], op->jac, c->b.jm, ad->tuples ? ad->tuples[i] : op->args,
                      &ad->cjs[i], &ad->wjs[i]);
     }
-    if (k && c->el.count) { /* each trajectory's event adapters (its args) and whole result */
+    if (k && c->b.el.count) { /* each trajectory's event adapters (its args) and whole result */
         if (!(ad->evs = PyMem_Calloc(k, sizeof *ad->evs)) ||
             !(ad->evdata = PyMem_Calloc(k, sizeof *ad->evdata)) ||
             !(ad->results = PyMem_Calloc(k, sizeof *ad->results)))
@@ -820,7 +830,7 @@ static int many_attach(many_call *c)
         for (size_t i = 0; i < k; i++) {
             const double *pv = rows && ens->rows_kind != MP_ENS_ROWS_CALLER ? rows + i * c->np
                                                                              : ens->params;
-            if (event_fns(op->events, c->el.count, ad->tuples ? ad->tuples[i] : op->args, c->n,
+            if (event_fns(op->events, c->b.el.count, ad->tuples ? ad->tuples[i] : op->args, c->n,
                           pv, c->npar, i, &ad->evs[i]) < 0)
                 return -1;
             ad->evdata[i] = &ad->evs[i];
@@ -840,28 +850,29 @@ static PyObject *many_run(many_call *c, const mp_ode_method *m)
     mp_ode_ensemble *ens = &c->ens;
     many_adapters *ad = &c->ad;
     if (!(c->outc = PyMem_Calloc(k ? k : 1, sizeof *c->outc))) return PyErr_NoMemory();
-    npy_intp shape[3] = {(npy_intp)k, (npy_intp)c->n, (npy_intp)c->o.n_eval};
+    npy_intp shape[3] = {(npy_intp)k, (npy_intp)c->n, (npy_intp)c->b.o.n_eval};
     if (!(c->yout = mp_py_empty(3, shape))) return NULL;
-    PyObject *progress = c->op.progress; /* False, True (a stderr line) or report(done, total) */
+    PyObject *progress = c->b.op.progress; /* False, True (a stderr line) or report(done, total) */
     many_progress_ctx pctx = {0, PyCallable_Check(progress) ? progress : NULL};
     void (*report)(size_t, size_t, void *) =
         pctx.report || PyObject_IsTrue(progress) == 1 ? many_progress : NULL;
     const double *y0s = PyArray_DATA(c->y0s);
     double *yout = PyArray_DATA(c->yout);
+    const ode_opts *op = &c->b.op;
     int rc;
     if (ens->holds_python) {
-        rc = mp_ode_solve_many(m, ens->probs, NULL, k, c->op.t0, c->op.tf, y0s, &c->o, 1, yout,
+        rc = mp_ode_solve_many(m, ens->probs, NULL, k, op->t0, op->tf, y0s, &c->b.o, 1, yout,
                                c->outc, ad->results, ad->evdata, report, &pctx);
     } else {
         Py_BEGIN_ALLOW_THREADS
-        rc = mp_ode_solve_many(m, ens->probs, ens->lanes, k, c->op.t0, c->op.tf, y0s, &c->o,
-                               c->op.threads, yout, c->outc, ad->results, ad->evdata, report,
+        rc = mp_ode_solve_many(m, ens->probs, ens->lanes, k, op->t0, op->tf, y0s, &c->b.o,
+                               op->threads, yout, c->outc, ad->results, ad->evdata, report,
                                &pctx);
         Py_END_ALLOW_THREADS
     }
     if (rc != MP_OK) return mp_py_raise(rc, "solve_many");
-    return many_result(&c->sys, c->outc, ad->results, k, c->yout, ens->lanes != NULL,
-                       c->op.max_steps);
+    return many_result(&c->b.sys, c->outc, ad->results, k, c->yout, ens->lanes != NULL,
+                       c->b.op.max_steps);
 }
 
 /* Contract: ode_solve_many(method, system, y0s, options) -> see many_result.
@@ -875,17 +886,12 @@ static PyObject *many_run(many_call *c, const mp_ode_method *m)
 static PyObject *py_ode_solve_many(PyObject *self, PyObject *const *argv, Py_ssize_t nargs)
 {
     (void)self;
-    if (nargs != 4) {
-        PyErr_Format(PyExc_TypeError, "ode_solve_many takes 4 arguments, got %zd", nargs);
-        return NULL;
-    }
-    const mp_ode_method *m = method_arg(argv[0]);
-    if (!m) return NULL;
+    const mp_ode_method *m;
     many_call c;
     memset(&c, 0, sizeof c);
     PyObject *result = NULL;
-    if (ode_opts_parse(argv[3], FOR_MANY, &c.op) == 0 && many_inputs(&c, argv[1], argv[2]) == 0 &&
-        many_build(&c, m) == 0 && many_attach(&c) == 0)
+    if (ode_call_args(argv, nargs, FOR_MANY, &m, &c.b.op) == 0 &&
+        many_inputs(&c, argv[1], argv[2]) == 0 && many_build(&c, m) == 0 && many_attach(&c) == 0)
         result = many_run(&c, m);
     many_call_clear(&c);
     return result;
