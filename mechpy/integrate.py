@@ -103,17 +103,18 @@ def _common(method, t_span, rtol, atol, n, h, first_step, max_step, max_steps,
     return method, t0, tf, rtol, atol_a, hh, fs, ms, budget
 
 
-def _options(t0, tf, rtol, atol, t_eval, h, first_step, max_step, max_steps, *, events,
-             terminal, direction, args, jac, watch, band, **call) -> dict:
+def _options(t0, tf, rtol, atol, t_eval, h, first_step, max_step, max_steps, events,
+             terminal, direction, args, jac, watch, band, own: dict) -> dict:
     """The one options object of ``_core.ode_solve`` and ``ode_solve_many``,
     built here alone and parsed in one place in C (py_ode.c's ode_opt_rows,
-    whose order the keys follow: it is the parse's fast path).  ``call``: what
-    one of the two calls alone takes (solve: ``dense``; solve_many:
-    ``params``, ``threads``, ``progress``, ``lanes``)."""
+    whose order the keys follow: it is the parse's fast path).  ``own``: the
+    options one of the two calls alone takes (solve: ``dense``; solve_many:
+    ``params``, ``threads``, ``progress``, ``lanes``).  Positional, as the
+    call is part of a small solve's fixed cost."""
     return {"t0": t0, "tf": tf, "rtol": rtol, "atol": atol, "t_eval": t_eval, "h": h,
             "first_step": first_step, "max_step": max_step, "max_steps": max_steps,
             "events": events, "terminal": terminal, "direction": direction, "args": args,
-            "jac": jac, "watch": watch, "band": band, **call}
+            "jac": jac, "watch": watch, "band": band, **own}
 
 
 def _t_eval(t_eval, t0, tf):
@@ -341,9 +342,8 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
         return _no_step(t0, tf, y0a, tev, dense_output, evs)
 
     watch = _watch_list(system)
-    opts = _options(t0, tf, rtol, atol_a, tev, hh, fs, ms, budget, events=evs or None,
-                    terminal=term, direction=dirs, args=args, jac=jac, watch=watch, band=band,
-                    dense=bool(dense_output))
+    opts = _options(t0, tf, rtol, atol_a, tev, hh, fs, ms, budget, evs or None, term, dirs,
+                    args, jac, watch, band, {"dense": bool(dense_output)})
     if watch is None:
         r = _core.ode_solve(method, spec, y0a, opts)
     else:
@@ -740,10 +740,11 @@ def solve_many(system, t_span: Sequence[float], y0s, *, params=None, t_eval=None
     want_lanes = _lanes_mode(lanes)
     watch = _watch_list(system)
     bar = _progress_bar(k) if progress else None
-    opts = _options(t0, tf, rtol, atol_a, tev, hh, fs, ms, budget, events=evs or None,
-                    terminal=term, direction=dirs, args=args, jac=jac, watch=watch, band=band,
-                    params=par, threads=int(nthreads),
-                    progress=bool(progress) if bar is None else bar.report, lanes=want_lanes)
+    opts = _options(t0, tf, rtol, atol_a, tev, hh, fs, ms, budget, evs or None, term, dirs,
+                    args, jac, watch, band,
+                    {"params": par, "threads": int(nthreads),
+                     "progress": bool(progress) if bar is None else bar.report,
+                     "lanes": want_lanes})
     try:
         with _catch_unraisable(watch) if watch is not None else contextlib.nullcontext():
             r = _core.ode_solve_many(method, spec, Y0, opts)

@@ -165,12 +165,13 @@ enum { FOR_SOLVE = 1, FOR_MANY = 2, FOR_BOTH = 3 };
 
 typedef struct {
     const char *key;
+    size_t len;     /* strlen(key) */
     int type;       /* OPT_*: what the value converts to */
     size_t offset;  /* of the field in ode_opts */
     int calls;      /* FOR_*: the calls that take it (and require it) */
 } ode_opt_row;
 
-#define OPT(key, type, calls) {#key, type, offsetof(ode_opts, key), calls}
+#define OPT(key, type, calls) {#key, sizeof #key - 1, type, offsetof(ode_opts, key), calls}
 /* In _options' order, which the parse tries first. */
 static const ode_opt_row ode_opt_rows[] = {
     OPT(t0, OPT_F64, FOR_BOTH),         OPT(tf, OPT_F64, FOR_BOTH),
@@ -194,7 +195,7 @@ static int opt_store(const ode_opt_row *r, PyObject *v, ode_opts *op)
     char *at = (char *)op + r->offset;
     switch (r->type) {
     case OPT_F64:
-        *(double *)at = PyFloat_AsDouble(v);
+        *(double *)at = PyFloat_CheckExact(v) ? PyFloat_AS_DOUBLE(v) : PyFloat_AsDouble(v);
         return *(double *)at == -1.0 && PyErr_Occurred() ? -1 : 0;
     case OPT_LONG:
         *(long *)at = PyLong_AsLong(v);
@@ -223,6 +224,15 @@ static int opt_store(const ode_opt_row *r, PyObject *v, ode_opts *op)
     return 0;
 }
 
+/* Whether key (any object) is row r's name: a length and a memcmp for the
+ * ASCII str keys _options writes (the parse's cost is a small solve's). */
+static int opt_is(const ode_opt_row *r, PyObject *key)
+{
+    if (!PyUnicode_Check(key) || !PyUnicode_IS_COMPACT_ASCII(key)) return 0;
+    return (size_t)PyUnicode_GET_LENGTH(key) == r->len &&
+           memcmp(PyUnicode_DATA(key), r->key, r->len) == 0;
+}
+
 /* Contract: the options dict d of a call (FOR_SOLVE or FOR_MANY) into op:
  * every key the call takes, no other.  0, or -1 with an exception set. */
 static int ode_opts_parse(PyObject *d, int call, ode_opts *op)
@@ -238,8 +248,7 @@ static int ode_opts_parse(PyObject *d, int call, ode_opts *op)
     size_t r = 0;
     while (PyDict_Next(d, &pos, &key, &v)) {
         size_t tries = 0; /* from the row after the last one: keys come in table order */
-        while (tries < N_OPTS && (!PyUnicode_Check(key) ||
-                                  PyUnicode_CompareWithASCIIString(key, ode_opt_rows[r].key)))
+        while (tries < N_OPTS && !opt_is(&ode_opt_rows[r], key))
             r = (r + 1) % N_OPTS, tries++;
         if (tries == N_OPTS || !(ode_opt_rows[r].calls & call)) {
             PyErr_Format(PyExc_TypeError, "unknown option %R", key);

@@ -435,6 +435,10 @@ int py_system_parse(PyObject *spec, size_t n, py_system *s)
 {
     PyObject *tag, *a, *b, *cb = NULL;
     memset(s, 0, sizeof *s);
+    if (!PyTuple_Check(spec)) {
+        PyErr_SetString(PyExc_TypeError, "a system spec must be a tuple (kind, a, b)");
+        return -1;
+    }
     if (!PyArg_ParseTuple(spec, "UOO|O!", &tag, &a, &b, &PyTuple_Type, &cb)) return -1;
     size_t nk = sizeof py_system_kinds / sizeof py_system_kinds[0];
     for (size_t i = 0; i < nk && !s->kind; i++)
