@@ -900,3 +900,47 @@ def test_every_method_row_against_a_reference(row):
 
 def test_cross_check_names_only_rows():
     assert sorted(CROSS_CHECK) == sorted(m["name"] for m in mp.methods())
+
+
+def test_core_calls_take_one_options_object():
+    """_core.ode_solve and ode_solve_many share one calling convention,
+    (method, system, y0, options), the options built by integrate._options
+    alone: a missing, unknown or foreign key is a TypeError naming it, and the
+    same options give the same solve as mp.solve."""
+    from mechpy import _core
+    from mechpy.integrate import _options
+    P = mp.scenes.Pendulum()
+    spec = ("scene", P._model, P._vector())
+    y0 = np.array([1.0, 0.0])
+
+    def opts(own, **change):
+        o = _options(0.0, 1.0, 1e-8, 1e-10, None, 0.0, 0.0, np.inf, 10**7, None, None, None,
+                     (), None, None, None, own)
+        o.update(change)
+        return o
+    r = _core.ode_solve("dop853", spec, y0, opts({"dense": False}))
+    s = mp.solve(P, (0, 1), y0)
+    assert r[0] == 0 and np.array_equal(r[3].T, s.y) and r[4] == s.nfev
+    bad = opts({"dense": False})
+    del bad["atol"]
+    with pytest.raises(TypeError, match="options lack atol"):
+        _core.ode_solve("dop853", spec, y0, bad)
+    with pytest.raises(TypeError, match="unknown option 'threads'"):
+        _core.ode_solve("dop853", spec, y0, opts({"dense": False, "threads": 1}))
+    with pytest.raises(TypeError, match="unknown option 'colour'"):
+        _core.ode_solve("dop853", spec, y0, opts({"dense": False}, colour=1))
+    with pytest.raises(TypeError, match="options lack dense"):
+        _core.ode_solve("dop853", spec, y0, opts({}))
+    with pytest.raises(TypeError, match="option args must be a tuple"):
+        _core.ode_solve("dop853", spec, y0, opts({"dense": False}, args=[]))
+    with pytest.raises(TypeError, match="options must be a dict"):
+        _core.ode_solve("dop853", spec, y0, tuple(opts({"dense": False}).values()))
+    with pytest.raises(TypeError, match="takes 4 arguments"):
+        _core.ode_solve_many("dop853", spec, y0[None])
+    with pytest.raises(TypeError, match="options lack params"):
+        _core.ode_solve_many("dop853", spec, y0[None], opts({}, t_eval=np.array([1.0])))
+    many = {"params": None, "threads": 1, "progress": False, "lanes": 0}
+    e = _core.ode_solve_many("dop853", spec, y0[None], opts(many, t_eval=np.array([1.0])))
+    assert np.array_equal(e["y"][0, :, -1], s.y[:, -1])
+    with pytest.raises(ValueError, match="unknown system kind spline"):
+        _core.ode_solve("dop853", ("spline",) + spec[1:], y0, opts({"dense": False}))

@@ -4,6 +4,7 @@
  * py_system.c's, events py_events.c's (see py_ode.h). */
 #include "py_ode.h"
 
+#include <limits.h>
 #include <math.h>
 #include <stddef.h>
 #include <string.h>
