@@ -61,11 +61,9 @@ def methods() -> list[dict]:
     (:func:`solve_many` runs it in SIMD lanes), rigid (a rigid-body
     splitting: the ``RigidBody`` scene only), compensated (its updates of
     the state are compensated sums, which keep the state's low-order part from
-    step to step: ``yoshida4`` and ``yoshida6``; see the integrators guide),
-    scalar_rtol (it takes one rtol, not one per component: GSL's steppers,
-    whose control scales the error by a single relative tolerance) and
-    self_controlled (its accepted steps are chosen by the stepper's own
-    driver, GSL's evolve, rather than mechpy's controller).
+    step to step: ``yoshida4`` and ``yoshida6``; see the integrators guide)
+    and scalar_rtol (it takes one rtol, not one per component: GSL's
+    steppers, whose control scales the error by a single relative tolerance).
 
     GSL's steppers have no interpolant of their own: the one-step rows of
     order >= 4 use a quintic Hermite interpolant (the midpoint from a half

@@ -283,7 +283,7 @@ def test_methods_table():
     assert table["gsl:msbdf"]["needs_jacobian"] and table["gsl:msbdf"]["implicit"]
     assert set(table["dopri5"]) == {"name", "order", "adaptive", "implicit", "symplectic",
                                     "needs_jacobian", "dense_output", "lanes", "rigid",
-                                    "compensated", "scalar_rtol", "self_controlled"}
+                                    "compensated", "scalar_rtol"}
 
 
 @pytest.mark.parametrize("row", [m for m in mp.methods() if m["adaptive"] and not m["rigid"]],

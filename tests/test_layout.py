@@ -1040,12 +1040,11 @@ def test_new_method_recipe_names_what_exists():
             continue
         else:
             assert name in corpus, f"{t}: named by the recipe, found in none of its files"
-    for flag in ("adaptive", "implicit", "symplectic", "needs_jacobian", "scalar_rtol",
-                 "self_controlled", "ncoef", "dense_order", "nscratch", "expo", "beta",
+    for flag in ("adaptive", "implicit", "symplectic", "needs_jacobian", "scalar_rtol", "ncoef", "dense_order", "nscratch", "expo", "beta",
                  "fac_min", "fac_max", "safety", "step", "finish", "alloc", "free", "restart",
                  "block", "lanes", "rigid"):
         assert f"`{flag}`" in recipe and re.search(rf"\b{flag}\b", row.group(1)), flag
-    for key in ("lanes", "rigid", "scalar_rtol", "self_controlled"):
+    for key in ("lanes", "rigid", "scalar_rtol"):
         assert f"`{key}`" in recipe and key in keys, key
 
 

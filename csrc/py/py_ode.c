@@ -951,14 +951,13 @@ static PyObject *py_ode_methods(PyObject *self, PyObject *unused)
     for (size_t i = 0; mp_ode_methods[i]; i++) {
         const mp_ode_method *m = mp_ode_methods[i];
         PyObject *d = Py_BuildValue(
-            "{s:s,s:i,s:O,s:O,s:O,s:O,s:i,s:O,s:O,s:O,s:O,s:O}", "name", m->name, "order", m->order,
+            "{s:s,s:i,s:O,s:O,s:O,s:O,s:i,s:O,s:O,s:O,s:O}", "name", m->name, "order", m->order,
             "adaptive", m->adaptive ? Py_True : Py_False, "implicit",
             m->implicit ? Py_True : Py_False, "symplectic", m->symplectic ? Py_True : Py_False,
             "needs_jacobian", m->needs_jacobian ? Py_True : Py_False, "dense_output",
             m->dense_order, "lanes", m->lanes != MP_LANE_NONE ? Py_True : Py_False, "rigid",
             m->rigid ? Py_True : Py_False, "compensated", m->compensated ? Py_True : Py_False,
-            "scalar_rtol", m->scalar_rtol ? Py_True : Py_False, "self_controlled",
-            m->self_controlled ? Py_True : Py_False);
+            "scalar_rtol", m->scalar_rtol ? Py_True : Py_False);
         if (!d || PyList_Append(lst, d) < 0) {
             Py_XDECREF(d);
             Py_DECREF(lst);
