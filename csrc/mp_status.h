@@ -10,6 +10,8 @@
 #ifndef MP_STATUS_H
 #define MP_STATUS_H
 
+#include <stddef.h>
+
 enum mp_status {
     MP_OK = 0,
     MP_EDOM,        /* an argument is outside its domain (NaN, negative mass, ...) */
@@ -56,5 +58,49 @@ const mp_status_info *mp_status_lookup(int status);
 
 /* The row's message (static storage). */
 const char *mp_status_message(int status);
+
+/* What a solve's message says after its status's own text, in parentheses:
+ * where it happened and, for a non-finite value, what produced it.  One row
+ * per kind (mp_status_details), its text a template whose named fields are
+ * filled from mp_status_fields: {t} (%.17g), {gap} (%.3g), {i}, {j}
+ * (%zu), {count}, {max_steps} (%ld). */
+enum mp_status_detail {
+    MP_DETAIL_NONE = 0,        /* the status's message alone */
+    MP_DETAIL_AT_T,            /* any failure: where */
+    MP_DETAIL_MAX_STEPS,       /* MP_EMAXSTEPS */
+    MP_DETAIL_EVENT_LOOP,      /* MP_EEVENT */
+    MP_DETAIL_MAX_EVENTS,      /* MP_TERMINATED: an event reached its max_events */
+    MP_DETAIL_ZENO,            /* MP_TERMINATED: events accumulate, gap > 0 */
+    MP_DETAIL_ZENO_UNRESOLVED, /* ... closer than t resolves */
+    /* MP_ENONFINITE, by what produced the value ({i}: its index) */
+    MP_DETAIL_RHS,             /* the right-hand side */
+    MP_DETAIL_EVENT,           /* event function i */
+    MP_DETAIL_JAC,             /* jac[i, j] */
+    MP_DETAIL_ACTION,          /* event i's action */
+    MP_DETAIL_STATE,           /* the state overflowed, f finite */
+    MP_DETAIL_ERR,             /* the scaled error norm overflowed */
+    MP_DETAIL_CFUNC,           /* a C callback's dydt[i] */
+    MP_DETAIL_CFUNC2,          /* a second-order C callback's acc[i] */
+    MP_DETAIL_TORQUE,          /* a RigidBody's C torque callback's tau[i] */
+    MP_NDETAIL
+};
+
+/* The values a detail's template names (unused ones are ignored). */
+typedef struct mp_status_fields {
+    double t, gap;
+    size_t i, j;
+    long count, max_steps;
+    int stiff;                 /* Hairer's stiffness test fired: a failure's message
+                                  ends with the methods to try */
+} mp_status_fields;
+
+/* The templates, one per enum mp_status_detail in enum order (NULL: none). */
+extern const char *const mp_status_details[MP_NDETAIL];
+
+/* Contract: the message of a solve's outcome into buf (len bytes, truncated,
+ * always terminated): the status's message, then " (detail)" filled from f
+ * unless detail is MP_DETAIL_NONE, then for a failure (not MP_OK nor
+ * MP_TERMINATED) with f->stiff the stiffness hint. */
+void mp_status_format(char *buf, size_t len, int status, int detail, const mp_status_fields *f);
 
 #endif

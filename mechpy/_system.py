@@ -59,9 +59,11 @@ def methods() -> list[dict]:
     """Every integration method: name, order, adaptive, implicit, symplectic,
     needs_jacobian, dense_output (the order of its interpolant), lanes
     (:func:`solve_many` runs it in SIMD lanes), rigid (a rigid-body
-    splitting: the ``RigidBody`` scene only) and compensated (its updates of
+    splitting: the ``RigidBody`` scene only), compensated (its updates of
     the state are compensated sums, which keep the state's low-order part from
-    step to step: ``yoshida4`` and ``yoshida6``; see the integrators guide).
+    step to step: ``yoshida4`` and ``yoshida6``; see the integrators guide)
+    and scalar_rtol (it takes one rtol, not one per component: GSL's
+    steppers, whose control scales the error by a single relative tolerance).
 
     GSL's steppers have no interpolant of their own: the one-step rows of
     order >= 4 use a quintic Hermite interpolant (the midpoint from a half

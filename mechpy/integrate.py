@@ -70,7 +70,7 @@ def _common(method, t_span, rtol, atol, n, h, first_step, max_step, max_steps,
             raise ValueError(f"rtol must be positive, got {rtol}")
     else:   # one per component, as SciPy's
         rtol = as_array(rtol, "rtol", shape=(n,), positive=True)
-        if method.startswith("gsl:") and np.any(rtol != rtol[0]):
+        if info["scalar_rtol"] and np.any(rtol != rtol[0]):
             raise ValueError(f"method {method!r} takes one rtol (GSL's control): give a "
                              "scalar, or use dop853, dopri5, radau, ...")
     if type(atol) is float and math.isfinite(atol) and atol >= 0:  # the common case
@@ -103,10 +103,18 @@ def _common(method, t_span, rtol, atol, n, h, first_step, max_step, max_steps,
     return method, t0, tf, rtol, atol_a, hh, fs, ms, budget
 
 
-def _options(t0, tf, rtol, atol, t_eval, h, first_step, max_step, max_steps) -> tuple:
-    """The options ``_core.ode_solve`` and ``ode_solve_many`` share, in the one
-    order the core parses them (py_ode.c's ode_args_from_argv)."""
-    return (t0, tf, rtol, atol, t_eval, h, first_step, max_step, max_steps)
+def _options(t0, tf, rtol, atol, t_eval, h, first_step, max_step, max_steps, events,
+             terminal, direction, args, jac, watch, band, own: dict) -> dict:
+    """The one options object of ``_core.ode_solve`` and ``ode_solve_many``,
+    built here alone and parsed in one place in C (py_ode.c's ode_opt_rows,
+    whose order the keys follow: it is the parse's fast path).  ``own``: the
+    options one of the two calls alone takes (solve: ``dense``; solve_many:
+    ``params``, ``threads``, ``progress``, ``lanes``).  Positional, as the
+    call is part of a small solve's fixed cost."""
+    return {"t0": t0, "tf": tf, "rtol": rtol, "atol": atol, "t_eval": t_eval, "h": h,
+            "first_step": first_step, "max_step": max_step, "max_steps": max_steps,
+            "events": events, "terminal": terminal, "direction": direction, "args": args,
+            "jac": jac, "watch": watch, "band": band, **own}
 
 
 def _t_eval(t_eval, t0, tf):
@@ -334,13 +342,13 @@ def solve(system, t_span: Sequence[float], y0, method: str = "dop853", *,
         return _no_step(t0, tf, y0a, tev, dense_output, evs)
 
     watch = _watch_list(system)
-    call = (method, spec, y0a, *_options(t0, tf, rtol, atol_a, tev, hh, fs, ms, budget),
-            dense_output, evs or None, term, dirs, args, jac, watch, band)
+    opts = _options(t0, tf, rtol, atol_a, tev, hh, fs, ms, budget, evs or None, term, dirs,
+                    args, jac, watch, band, {"dense": bool(dense_output)})
     if watch is None:
-        r = _core.ode_solve(*call)
+        r = _core.ode_solve(method, spec, y0a, opts)
     else:
         with _catch_unraisable(watch):
-            r = _core.ode_solve(*call)
+            r = _core.ode_solve(method, spec, y0a, opts)
     code, message, t, y, nfev, njev, nlu, nsteps, nreject, dense, events_out, backward = r
     if code and _raises(code, errors):
         if check is not None and code == _core.STATUS["MP_ESINGULAR"]:
@@ -730,16 +738,16 @@ def solve_many(system, t_span: Sequence[float], y0s, *, params=None, t_eval=None
     if not isinstance(progress, (bool, np.bool_)):
         raise TypeError("progress must be a bool")
     want_lanes = _lanes_mode(lanes)
-    opts = _options(t0, tf, rtol, atol_a, tev, hh, fs, ms, budget)
     watch = _watch_list(system)
     bar = _progress_bar(k) if progress else None
+    opts = _options(t0, tf, rtol, atol_a, tev, hh, fs, ms, budget, evs or None, term, dirs,
+                    args, jac, watch, band,
+                    {"params": par, "threads": int(nthreads),
+                     "progress": bool(progress) if bar is None else bar.report,
+                     "lanes": want_lanes})
     try:
         with _catch_unraisable(watch) if watch is not None else contextlib.nullcontext():
-            r = _core.ode_solve_many(method, spec, Y0, opts, params=par, args=args,
-                                     threads=int(nthreads),
-                                     progress=bool(progress) if bar is None else bar.report,
-                                     watch=watch, lanes=want_lanes, events=evs or None,
-                                     terminal=term, direction=dirs, jac=jac, band=band)
+            r = _core.ode_solve_many(method, spec, Y0, opts)
         if bar is not None:
             bar.report(k, k)    # the C side reports from one thread: it may miss the last
     finally:

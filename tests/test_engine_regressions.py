@@ -15,6 +15,7 @@ from scipy.integrate import solve_ivp
 
 import mechpy as mp
 
+# GSL's steppers, a family by name (a label: the bounds below are keyed by it)
 GSL = [m["name"] for m in mp.methods() if m["name"].startswith("gsl:")]
 # gsl:rk1imp (first order: ~10^5 steps at rtol 1e-8) drives the same output and event
 # paths as every other GSL row: under the sanitizers (-m "not slow") it is left to the
@@ -264,7 +265,7 @@ def _guarded(t0, tf):
 # sampled at t - 0.35 h ... t + 1.35 h (yoshida4), as documented; they are
 # checked against that range below
 INSIDE = [m["name"] for m in mp.methods()
-          if m["name"] not in ("yoshida4", "yoshida6") and not m["name"].startswith("rigid:")]
+          if m["name"] not in ("yoshida4", "yoshida6") and not m["rigid"]]
 
 
 @pytest.mark.parametrize("method", INSIDE)

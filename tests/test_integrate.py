@@ -283,7 +283,28 @@ def test_methods_table():
     assert table["gsl:msbdf"]["needs_jacobian"] and table["gsl:msbdf"]["implicit"]
     assert set(table["dopri5"]) == {"name", "order", "adaptive", "implicit", "symplectic",
                                     "needs_jacobian", "dense_output", "lanes", "rigid",
-                                    "compensated"}
+                                    "compensated", "scalar_rtol"}
+
+
+@pytest.mark.parametrize("row", [m for m in mp.methods() if m["adaptive"] and not m["rigid"]],
+                         ids=lambda m: m["name"])
+def test_scalar_rtol_is_what_the_row_takes(row):
+    """A row's scalar_rtol decides whether one rtol per component is taken:
+    the solve refuses differing rtols exactly for those rows, and runs them
+    (to the looser tolerance's accuracy, against exp(-t)) for the others."""
+    def decay(t, y):
+        return -y
+    kw = dict(rtol=[1e-6, 1e-9], atol=1e-12)
+    if row["scalar_rtol"]:
+        with pytest.raises(ValueError, match="takes one rtol"):
+            mp.solve(decay, (0, 1), [1.0, 2.0], method=row["name"], **kw)
+        assert mp.solve(decay, (0, 1), [1.0, 2.0], method=row["name"],
+                        rtol=[1e-6, 1e-6], atol=1e-12).success
+        return
+    s = mp.solve(decay, (0, 1), [1.0, 2.0], method=row["name"], **kw)
+    assert s.success
+    err = np.max(np.abs(s.y[:, -1] - np.array([1.0, 2.0]) * np.exp(-1.0)))
+    assert err < 2e-9, err   # 1.7e-10 measured (dopri5)
 
 
 def test_user_jacobian_is_used():
@@ -841,3 +862,85 @@ def test_args_none_is_no_arguments_and_a_non_iterable_is_refused_as_scipy_does()
     ref = solve_ivp(rate, (0, 1), [1.0], args=[2.0], rtol=1e-10, atol=1e-12).y[0, -1]
     got = mp.solve(rate, (0, 1), [1.0], args=[2.0], rtol=1e-10, atol=1e-12).y[0, -1]
     assert abs(got - np.exp(-2.0)) < 1e-9 and abs(ref - np.exp(-2.0)) < 1e-8
+
+
+# Every row of the method table against a reference (CONTRIBUTING's "new
+# method" recipe: a new row adds its bound here): x'' = -x over [0, 10]
+# against cos t, sin t (adaptive rows at rtol 1e-8, fixed-step rows at
+# h = 0.01); a rigid-body splitting on a torque-free RigidBody against
+# dop853 at rtol 1e-13.  Each bound is about 5x the error measured.
+CROSS_CHECK = {"rk4": 3.5e-9, "dopri5": 5e-8, "dop853": 5.5e-8, "radau": 1.5e-8,
+               "auto": 5.5e-8, "verlet": 2e-4, "yoshida4": 3e-8, "yoshida6": 2e-13,
+               "gauss4": 6e-10, "gsl:rk2": 3.2e-8, "gsl:rk4": 4e-7, "gsl:rkf45": 7.5e-8,
+               "gsl:rkck": 6e-8, "gsl:rk8pd": 1.8e-9, "gsl:msadams": 3e-6,
+               "gsl:rk1imp": 1e-3, "gsl:rk2imp": 9e-6, "gsl:rk4imp": 2.8e-7,
+               "gsl:bsimp": 1.8e-9, "gsl:msbdf": 7.5e-6, "rigid:split": 1e-4,
+               "rigid:split4": 2.8e-9}
+
+
+@pytest.mark.parametrize("row", mp.methods(), ids=lambda m: m["name"])
+def test_every_method_row_against_a_reference(row):
+    name = row["name"]
+    assert name in CROSS_CHECK, f"method {name}: add its bound to CROSS_CHECK"
+    t = np.linspace(0, 10, 11)
+    kw = dict(rtol=1e-8, atol=1e-10) if row["adaptive"] else dict(h=0.01)
+    if row["rigid"]:
+        body = mp.scenes.RigidBody([1.0, 2.0, 3.0])
+        w0 = [0.3, 1.0, 0.2]
+        ref = mp.solve(body, (0, 10), w0, t_eval=t, rtol=1e-13, atol=1e-14).y
+        s = mp.solve(body, (0, 10), w0, t_eval=t, method=name, **kw)
+    else:
+        ref = np.array([np.cos(t), -np.sin(t)])
+        s = mp.solve(mp.SecondOrder(lambda t, q: -q), (0, 10), [1.0, 0.0], t_eval=t,
+                     method=name, **kw)
+    assert s.success, s.message
+    err = np.max(np.abs(s.y - ref))
+    assert err < CROSS_CHECK[name], err
+
+
+def test_cross_check_names_only_rows():
+    assert sorted(CROSS_CHECK) == sorted(m["name"] for m in mp.methods())
+
+
+def test_core_calls_take_one_options_object():
+    """_core.ode_solve and ode_solve_many share one calling convention,
+    (method, system, y0, options), the options built by integrate._options
+    alone: a missing, unknown or foreign key is a TypeError naming it, and the
+    same options give the same solve as mp.solve."""
+    from mechpy import _core
+    from mechpy.integrate import _options
+    P = mp.scenes.Pendulum()
+    spec = ("scene", P._model, P._vector())
+    y0 = np.array([1.0, 0.0])
+
+    def opts(own, **change):
+        o = _options(0.0, 1.0, 1e-8, 1e-10, None, 0.0, 0.0, np.inf, 10**7, None, None, None,
+                     (), None, None, None, own)
+        o.update(change)
+        return o
+    r = _core.ode_solve("dop853", spec, y0, opts({"dense": False}))
+    s = mp.solve(P, (0, 1), y0)
+    assert r[0] == 0 and np.array_equal(r[3].T, s.y) and r[4] == s.nfev
+    bad = opts({"dense": False})
+    del bad["atol"]
+    with pytest.raises(TypeError, match="options lack atol"):
+        _core.ode_solve("dop853", spec, y0, bad)
+    with pytest.raises(TypeError, match="unknown option 'threads'"):
+        _core.ode_solve("dop853", spec, y0, opts({"dense": False, "threads": 1}))
+    with pytest.raises(TypeError, match="unknown option 'colour'"):
+        _core.ode_solve("dop853", spec, y0, opts({"dense": False}, colour=1))
+    with pytest.raises(TypeError, match="options lack dense"):
+        _core.ode_solve("dop853", spec, y0, opts({}))
+    with pytest.raises(TypeError, match="option args must be a tuple"):
+        _core.ode_solve("dop853", spec, y0, opts({"dense": False}, args=[]))
+    with pytest.raises(TypeError, match="options must be a dict"):
+        _core.ode_solve("dop853", spec, y0, tuple(opts({"dense": False}).values()))
+    with pytest.raises(TypeError, match="takes 4 arguments"):
+        _core.ode_solve_many("dop853", spec, y0[None])
+    with pytest.raises(TypeError, match="options lack params"):
+        _core.ode_solve_many("dop853", spec, y0[None], opts({}, t_eval=np.array([1.0])))
+    many = {"params": None, "threads": 1, "progress": False, "lanes": 0}
+    e = _core.ode_solve_many("dop853", spec, y0[None], opts(many, t_eval=np.array([1.0])))
+    assert np.array_equal(e["y"][0, :, -1], s.y[:, -1])
+    with pytest.raises(ValueError, match="unknown system kind spline"):
+        _core.ode_solve("dop853", ("spline",) + spec[1:], y0, opts({"dense": False}))

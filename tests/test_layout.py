@@ -909,3 +909,188 @@ def test_no_merge_conflict_markers_in_the_tree():
             if line.startswith(("<<<<<<< ", ">>>>>>> ")) or line == "=======":
                 bad.append(f"{name}:{i}")
     assert bad == []
+
+
+# ------------------------------------------------------------------ the binding
+# csrc/py is a binding that only translates: short functions, system kinds
+# as one table, and CONTRIBUTING's "new method" recipe true to the tree.
+
+_ROOT = __import__("pathlib").Path(__file__).resolve().parents[1]
+_FN_START = __import__("re").compile(r"^(?!typedef|static const|const|PyMethodDef|struct)"
+                                     r"[A-Za-z_][\w \*]*?\b(\w+)\s*\(")
+
+
+def _c_functions(text: str) -> list[tuple[str, int, int]]:
+    """(name, first line, lines from the signature to the closing brace) of
+    each function defined in a C file written in the project's style (the
+    signature at column 0, the braces of the body alone on their lines)."""
+    lines = text.split("\n")
+    out, i = [], 0
+    while i < len(lines):
+        m = _FN_START.match(lines[i])
+        j = i
+        while m and j < len(lines) and lines[j] != "{" and not lines[j].rstrip().endswith(
+                (";", "}")):
+            j += 1
+        if m and j < len(lines) and lines[j] == "{":
+            k = lines.index("}", j)
+            out.append((m.group(1), i + 1, k - i + 1))
+            i = k
+        i += 1
+    return out
+
+
+def _binding_sources():
+    files = sorted((_ROOT / "csrc" / "py").glob("*.c"))
+    if not files:
+        pytest.skip("no C sources beside the package (an installed copy)")
+    return files
+
+
+def test_no_binding_function_is_over_80_lines():
+    """Each function in csrc/py, counted from its signature line to its
+    closing brace, is at most 80 lines: the binding parses and translates,
+    the work is the engine's."""
+    found, long = {}, []
+    for f in _binding_sources():
+        for name, line, n in _c_functions(f.read_text()):
+            found[name] = n
+            if n > 80:
+                long.append(f"{f.name}:{line}: {name} has {n} lines")
+    # the walk finds the functions it must (so that it cannot pass by finding none)
+    assert {"py_ode_solve", "py_ode_solve_many", "py_system_parse", "ode_opts_parse",
+            "event_list_parse"} <= set(found)
+    assert found["py_ode_solve"] > 20
+    assert long == []
+
+
+def test_c_function_walk_counts_what_it_should():
+    text = ("static int f(int a,\n             int b)\n{\n    return a;\n}\n\n"
+            "void g(void) { h(); }\n\nint k(void)\n{\n    if (1) {\n    }\n    return 0;\n}\n")
+    assert _c_functions(text) == [("f", 1, 5), ("k", 9, 6)]
+
+
+def test_system_kinds_are_one_table():
+    """The kinds of system integrate.py describes (_system.py's specs) are
+    rows of one table in the binding; no string comparison of a kind."""
+    import re
+    kinds = set()
+    for path in ("_system.py", "symbolic/scene.py"):   # where the specs are written
+        kinds |= set(re.findall(r'return \("(\w+)", ', (_ROOT / "mechpy" / path).read_text()))
+    assert {"scene", "python", "python2", "cfunc", "cfunc2", "compiled"} <= kinds
+    # the code, comments left out (they may quote a spec)
+    sources = {f.name: re.sub(r"/\*.*?\*/", "", f.read_text(), flags=re.S)
+               for f in _binding_sources()}
+    ode = {name: text for name, text in sources.items() if '#include "py_ode.h"' in text}
+    assert set(ode) == {"py_ode.c", "py_system.c", "py_events.c"}
+    table = re.search(r"py_system_kinds\[\] = \{(.*?)\n\};", ode["py_system.c"], re.S)
+    assert table, "py_system.c's table py_system_kinds"
+    assert set(re.findall(r'\{"(\w+)", \w+', table.group(1))) == kinds
+    for name, text in ode.items():
+        assert "strcmp" not in text, name
+        for kind in kinds:   # each kind's name is written once: its row
+            n = text.count(f'"{kind}"')
+            assert n == (1 if name == "py_system.c" else 0), (name, kind, n)
+    # nor elsewhere in the binding (the variational integrands' tags are a table too)
+    tags = "|".join(sorted(kinds | {"c"}))
+    for name, text in sources.items():
+        assert not re.search(r'strcmp\([^;]*"(%s)"' % tags, text), name
+
+
+def _recipe() -> str:
+    path = _ROOT / "CONTRIBUTING.md"
+    if not path.exists():
+        pytest.skip("no CONTRIBUTING.md beside the package (an installed copy)")
+    text = path.read_text()
+    start = text.index("## Adding an integration method")
+    return text[start:text.index("\n## ", start + 3)]
+
+
+def test_new_method_recipe_names_what_exists():
+    """Every file and name CONTRIBUTING's "new method" recipe puts in
+    backticks exists: a path (bare names under csrc/ode/), a field of
+    mp_ode_method, a key of mp.methods(), an mp function, or a name defined
+    in the files the recipe names."""
+    import re
+    recipe = _recipe()
+    ticks = re.findall(r"`([^`]+)`", recipe)
+    ode_h = (_ROOT / "csrc" / "ode" / "ode.h").read_text()
+    row = re.search(r"typedef struct mp_ode_method \{(.*?)\} mp_ode_method;", ode_h, re.S)
+    fields = set(re.findall(r"[\s\*\(](\w+)(?:\)\(.*?\))?(?:, \w+)*;", row.group(1)))
+    fields |= {w for line in row.group(1).split(";") for w in re.findall(r"\b(\w+)\s*(?:,|$)",
+                                                                        line.strip())}
+    keys = set(mp.methods()[0])
+    named, texts = [], []
+    for t in ticks:
+        if re.fullmatch(r"[\w/.<>]+\.(c|h|py|md|build)", t):
+            p = _ROOT / t if "/" in t else _ROOT / "csrc" / "ode" / t
+            named.append(t)
+            if "<" not in t:
+                assert p.exists(), t
+                texts.append(p.read_text())
+    assert {"csrc/ode/methods.c", "csrc/meson.build", "tests/test_integrate.py",
+            "docs/guide/integrators.md", "csrc/mp_status.c"} <= set(named)
+    corpus = "\n".join(texts)
+    for t in ticks:
+        if t in named or not re.fullmatch(r"[\w.*\[\]()]+", t):
+            continue   # a path, or code in prose: (t, y, f), the extern line
+        name = t.rstrip("()[]").replace("_*", "_")
+        if name.startswith("mp."):
+            assert callable(getattr(mp, name[3:])), t
+        elif name in fields or name in keys:
+            continue
+        else:
+            assert name in corpus, f"{t}: named by the recipe, found in none of its files"
+    for flag in ("adaptive", "implicit", "symplectic", "needs_jacobian", "scalar_rtol", "ncoef", "dense_order", "nscratch", "expo", "beta",
+                 "fac_min", "fac_max", "safety", "step", "finish", "alloc", "free", "restart",
+                 "block", "lanes", "rigid"):
+        assert f"`{flag}`" in recipe and re.search(rf"\b{flag}\b", row.group(1)), flag
+    for key in ("lanes", "rigid", "scalar_rtol"):
+        assert f"`{key}`" in recipe and key in keys, key
+
+
+def test_new_method_recipe_steps_hold_for_every_row():
+    """The recipe's steps, checked on every row there is: each row is in
+    mp_ode_methods[] with its extern, each csrc/ode source is in c_sources,
+    each method has its bound in tests/test_integrate.py's CROSS_CHECK and is
+    named in docs/guide/integrators.md, and nothing in mechpy compares a
+    method's name."""
+    import re
+    _recipe()
+    methods_c = (_ROOT / "csrc" / "ode" / "methods.c").read_text()
+    array = re.search(r"mp_ode_methods\[\] = \{(.*?)\};", methods_c, re.S).group(1)
+    rows = re.findall(r"&(mp_ode_\w+)", array)
+    assert len(rows) == len(mp.methods())
+    externs = " ".join(re.findall(r"extern const mp_ode_method ([^;]*);", methods_c))
+    assert all(re.search(rf"\b{r}\b", externs) for r in rows)
+    meson = (_ROOT / "csrc" / "meson.build").read_text()
+    for src in (_ROOT / "csrc" / "ode").glob("*.c"):
+        assert f"'ode/{src.name}'" in meson, src.name
+    cross = (_ROOT / "tests" / "test_integrate.py").read_text()
+    block = re.search(r"CROSS_CHECK = \{(.*?)\}", cross, re.S).group(1)
+    doc = (_ROOT / "docs" / "guide" / "integrators.md").read_text()
+    names = [m["name"] for m in mp.methods()]
+    for name in names:
+        assert f'"{name}":' in block, name
+        assert f"`{name}`" in doc, name
+    alt = "|".join(map(re.escape, names))
+    compare = re.compile(r'(method|name)\w*\]?\s*(==|!=|in)\s*[(\[{]?\s*"(%s)"|'
+                         r'"(%s)"\s*(==|!=)\s*\w*(method|name)|startswith\("(gsl|rigid):'
+                         % (alt, alt))
+    hits = [f"{p.relative_to(_ROOT)}:{text.count(chr(10), 0, m.start()) + 1}"
+            for p in (_ROOT / "mechpy").rglob("*.py") if "benches" not in p.parts
+            for text in [p.read_text()] for m in compare.finditer(text)]
+    assert hits == []
+
+
+def test_solve_messages_live_in_the_status_table():
+    """The binding formats a solve's message from the status table's rows
+    (mp_status_details): no detail text of its own."""
+    import re
+    status = (_ROOT / "csrc" / "mp_status.c").read_text()
+    assert "mp_status_details[MP_NDETAIL]" in status
+    for f in _binding_sources():
+        text = f.read_text()
+        literals = " ".join(re.findall(r'"((?:[^"\\]|\\.)*)"', text))
+        for phrase in ("NaN or inf", "at t = ", "max_steps=", "appears stiff", "Zeno"):
+            assert phrase not in literals, (f.name, phrase)

@@ -253,6 +253,7 @@ static int gsl_finish(mp_ode_ws *w, double t, double h, int need_dense)
     const mp_ode_method mp_ode_gsl_##T = {                                                    \
         .name = nm, .order = ord, .adaptive = 1, .implicit = impl, .needs_jacobian = jac,      \
         .dense_order = nc - 1, .ncoef = nc, .nscratch = 0, .self_controlled = 1,              \
+        .scalar_rtol = 1,                                                                      \
         .extra = &gsl_odeiv2_step_##T, .alloc = gsl_alloc, .free = gsl_free,                  \
         .step = gsl_step, .finish = gsl_finish, .restart = gsl_restart,                       \
     }

@@ -283,6 +283,8 @@ typedef struct mp_ode_method {
                            MP_LANE_NONE: one trajectory at a time */
     int rigid;          /* a rigid-body splitting: runs on the RigidBody scene only (its
                            steps are the scene's exact free rotations) */
+    int scalar_rtol;    /* takes one rtol, not one per component (GSL's control scales
+                           its error by a single eps_rel) */
     size_t ncoef;       /* coefficient vectors of the interpolant */
     size_t nscratch;    /* n-vectors of scratch the step needs */
     /* step-size controller (Hairer): expo = 1/(q+1), beta (PI), bounds, safety */

@@ -1,486 +1,66 @@
-/* Binding for the integrator engine: system adapters (C scene, Python
- * callable, C callback), argument conversion, result building.  The one
- * callback adapter through which C calls Python lives here. */
-#include "mp_py.h"
+/* Binding for the integrator engine: the calls ode_solve and ode_solve_many
+ * (one options object, parsed in one place), their results and messages,
+ * dense output and the method table.  Systems and their adapters are
+ * py_system.c's, events py_events.c's (see py_ode.h). */
+#include "py_ode.h"
 
+#include <limits.h>
 #include <math.h>
+#include <stddef.h>
 #include <string.h>
 
-#include "models/models.h"
-#include "models/rigid.h"
-#include "ode/ensemble.h"
-#include "ode/ode.h"
+/* ---- messages ---------------------------------------------------------------- */
 
-/* ---- Python callables (called with the GIL held) -------------------------- */
-
-typedef struct {
-    PyObject *fun;    /* borrowed: alive for the whole call */
-    PyObject *args;   /* tuple of extra arguments (borrowed) */
-    size_t n;         /* length of y */
-    size_t nout;      /* expected number of outputs */
-    const char *name; /* for messages: "fun", "jac", "events[0]" */
-} py_fn;
-
-/* Call fun(t, y, *args) and copy its float64 result (nout values) to out. */
-static int py_call(const py_fn *c, double t, const double *y, double *out)
+/* Contract: the detail (enum mp_status_detail) of a solve's outcome, its
+ * fields set in f: where the failure happened and, for MP_ENONFINITE, what
+ * produced the value (an event function or action, the state, the error
+ * norm, the Jacobian, then by the system's kind: a C callback's unwritten
+ * output, the torque callback or the right-hand side). */
+static int ode_detail(const py_system *sys, const mp_ode_outcome *out, mp_status_fields *f)
 {
-    npy_intp dim = (npy_intp)c->n;
-    Py_ssize_t na = PyTuple_GET_SIZE(c->args);
-    PyObject *ya = PyArray_SimpleNew(1, &dim, NPY_DOUBLE);
-    if (!ya) return MP_ECALLBACK;
-    memcpy(PyArray_DATA((PyArrayObject *)ya), y, c->n * sizeof(double));
-    PyObject *targs = PyTuple_New(2 + na);
-    if (!targs) {
-        Py_DECREF(ya);
-        return MP_ECALLBACK;
+    static const int by_what[] = {
+        [MP_ODE_BAD_RHS] = MP_DETAIL_RHS,       [MP_ODE_BAD_EVENT] = MP_DETAIL_EVENT,
+        [MP_ODE_BAD_JAC] = MP_DETAIL_JAC,       [MP_ODE_BAD_ACTION] = MP_DETAIL_ACTION,
+        [MP_ODE_BAD_STATE] = MP_DETAIL_STATE,   [MP_ODE_BAD_ERR] = MP_DETAIL_ERR};
+    size_t i = out->bad_index, n = sys->prob.n, nq = sys->prob.nq;
+    switch (out->status) {
+    case MP_OK: return MP_DETAIL_NONE;
+    case MP_TERMINATED:
+        f->i = out->stop_event;
+        if (out->stop_reason == MP_ODE_STOP_MAX_EVENTS) return MP_DETAIL_MAX_EVENTS;
+        if (out->stop_reason != MP_ODE_STOP_ZENO) return MP_DETAIL_NONE;
+        return out->zeno_gap > 0.0 ? MP_DETAIL_ZENO : MP_DETAIL_ZENO_UNRESOLVED;
+    case MP_EMAXSTEPS: return MP_DETAIL_MAX_STEPS;
+    case MP_EEVENT: f->i = out->stop_event; return MP_DETAIL_EVENT_LOOP;
+    case MP_ENONFINITE: break;
+    default: return MP_DETAIL_AT_T;
     }
-    PyTuple_SET_ITEM(targs, 0, PyFloat_FromDouble(t));
-    PyTuple_SET_ITEM(targs, 1, ya);
-    for (Py_ssize_t i = 0; i < na; i++) {
-        PyObject *a = PyTuple_GET_ITEM(c->args, i);
-        Py_INCREF(a);
-        PyTuple_SET_ITEM(targs, 2 + i, a);
+    int what = out->bad_what >= 0 && out->bad_what < (int)(sizeof by_what / sizeof *by_what)
+                   ? by_what[out->bad_what] : MP_DETAIL_RHS;
+    if (what == MP_DETAIL_JAC) f->i = i / n, f->j = i % n;
+    if (what != MP_DETAIL_RHS) return what;
+    int own = sys->kind ? sys->kind->nonfinite : MP_DETAIL_RHS;
+    if (own == MP_DETAIL_CFUNC) return own;
+    if (own == MP_DETAIL_CFUNC2 && i >= nq) {
+        f->i = i - nq; /* the acceleration's index */
+        return own;
     }
-    PyObject *res = PyObject_Call(c->fun, targs, NULL);
-    Py_DECREF(targs);
-    if (!res) return MP_ECALLBACK;
-    if (c->nout == 1 && PyFloat_Check(res)) { /* an event function's scalar */
-        out[0] = PyFloat_AS_DOUBLE(res);
-        Py_DECREF(res);
-        return MP_OK;
-    }
-    PyArrayObject *ra = (PyArrayObject *)PyArray_FROM_OTF(res, NPY_DOUBLE, NPY_ARRAY_IN_ARRAY);
-    Py_DECREF(res);
-    if (!ra) {
-        /* a conversion failure becomes a message naming the callback; anything
-         * else (KeyboardInterrupt during the conversion, MemoryError) is kept */
-        if (PyErr_ExceptionMatches(PyExc_TypeError) || PyErr_ExceptionMatches(PyExc_ValueError)) {
-            PyErr_Clear();
-            PyErr_Format(PyExc_TypeError, "%s must return real numbers", c->name);
-        }
-        return MP_ECALLBACK;
-    }
-    if ((size_t)PyArray_SIZE(ra) != c->nout) {
-        PyObject *shape = PyObject_GetAttrString((PyObject *)ra, "shape");
-        PyErr_Format(PyExc_ValueError, "%s returned shape %R; expected %zu value(s)", c->name,
-                     shape ? shape : Py_None, c->nout);
-        Py_XDECREF(shape);
-        Py_DECREF(ra);
-        return MP_ECALLBACK;
-    }
-    memcpy(out, PyArray_DATA(ra), c->nout * sizeof(double));
-    Py_DECREF(ra);
-    return MP_OK;
+    if (sys->torque.fn && i < 3) return MP_DETAIL_TORQUE;
+    return MP_DETAIL_RHS;
 }
 
-static int py_rhs(double t, const double *y, double *dydt, void *data)
-{
-    return py_call((const py_fn *)data, t, y, dydt);
-}
-
-/* second-order systems q'' = a(t, q): y = (q, v), f = (v, a(t, q)) */
-static int py_rhs2(double t, const double *y, double *dydt, void *data)
-{
-    const py_fn *c = data; /* c->n = c->nout = nq: a(t, q, *args) */
-    memcpy(dydt, y + c->n, c->n * sizeof(double));
-    return py_call(c, t, y, dydt + c->n);
-}
-
-typedef struct {
-    mp_ode_problem inner; /* the system's own rhs (scene, callback or Python) */
-    py_fn jac;
-} py_with_jac;
-
-static int py_jac_rhs(double t, const double *y, double *dydt, void *data)
-{
-    const py_with_jac *w = data;
-    return w->inner.rhs(t, y, dydt, w->inner.data);
-}
-
-static int py_jac(double t, const double *y, double *J, void *data)
-{
-    return py_call(&((const py_with_jac *)data)->jac, t, y, J);
-}
-
-/* The event functions of one solve (one trajectory): per event a Python
- * function g(t, y, *args) (fns[k].fun) or a C impact (fns[k].fun NULL:
- * imp[k]), and per event its action: a Python callable action(t, y, *args)
- * -> y_new (acts[k].fun), an impact's own, or none. */
-typedef struct {
-    py_fn *fns;
-    py_fn *acts;
-    mp_impact *imp;       /* ode.h's: an impact's g and action, as the lanes run them */
-    const double *params; /* the trajectory's parameter vector (an impact's e_param) */
-    size_t count, n;
-    char (*names)[40];    /* "events[k]", "events[k].action": for messages */
-} py_events;
-
-static int py_events_eval(double t, const double *y, double *g, void *data)
-{
-    const py_events *e = data;
-    for (size_t k = 0; k < e->count; k++) {
-        if (!e->fns[k].fun) {
-            double w[3];
-            mp_impact_wall(&e->imp[k], t, e->params, 1, w);
-            g[k] = mp_impact_g(&e->imp[k], y[e->imp[k].iq], w[0]);
-            continue;
-        }
-        int rc = py_call(&e->fns[k], t, y, &g[k]);
-        if (rc != MP_OK) return rc;
-    }
-    return MP_OK;
-}
-
-/* mp_ode_action of the events: the impact's reflection in C, or the Python
- * action's new state (checked: n values; its finiteness is the driver's). */
-static int py_events_action(double t, double *y, size_t k, void *data)
-{
-    const py_events *e = data;
-    if (!e->fns[k].fun) {
-        const mp_impact *im = &e->imp[k];
-        double w[3];
-        mp_impact_wall(im, t, e->params, 1, w);
-        mp_impact_apply(im, mp_impact_e(im, 0, im->e_param >= 0 ? e->params[im->e_param] : 0.0),
-                        w, y, 1);
-        return MP_OK;
-    }
-    return py_call(&e->acts[k], t, y, y);
-}
-
-/* mp_ode_options' impact_of: event k's impact (NULL: a Python event) and the
- * trajectory's parameters its moving wall reads. */
-static const mp_impact *py_events_impact(size_t k, const double **params, void *data)
-{
-    const py_events *e = data;
-    *params = e->params;
-    return e->fns[k].fun ? NULL : &e->imp[k];
-}
-
-/* ---- C callbacks: void f(double t, const double *y, double *dydt, void *ud) -- */
-
-typedef void (*mp_c_rhs_fn)(double, const double *, double *, void *);
-typedef struct {
-    mp_c_rhs_fn f;
-    void *user_data;
-    size_t n;        /* outputs the callback must write (set by the caller) */
-} c_fn;
-
-/* Contract: dydt = f(t, y) by the user's C function.  dydt is filled with NaN
- * first, so that an output the callback leaves unwritten is a NonFiniteError
- * naming it, never uninitialised memory. */
-static int c_rhs(double t, const double *y, double *dydt, void *data)
-{
-    const c_fn *c = data;
-    for (size_t i = 0; i < c->n; i++) dydt[i] = NAN;
-    c->f(t, y, dydt, c->user_data);
-    return MP_OK;
-}
-
-/* a C acceleration a(t, q, acc, user_data) as a first-order system */
-typedef struct {
-    c_fn fn;
-    size_t nq;
-} c_fn2;
-
-static int c_rhs2(double t, const double *y, double *dydt, void *data)
-{
-    const c_fn2 *c = data;
-    memcpy(dydt, y + c->nq, c->nq * sizeof(double));
-    for (size_t i = 0; i < c->nq; i++) dydt[c->nq + i] = NAN; /* unwritten: NonFiniteError */
-    c->fn.f(t, y, dydt + c->nq, c->fn.user_data);
-    return MP_OK;
-}
-
-/* ---- a C callback that is Python underneath (ctypes) --------------------------
- * ctypes prints and swallows an exception raised in a Python callback (Ctrl-C
- * included) and returns with the outputs unwritten.  The Python layer catches
- * those through sys.unraisablehook into the list `caught`; the solve then runs
- * with the GIL held, and after every call of the system the list is checked:
- * the first exception caught stops the solve and is raised again. */
-
-typedef struct {
-    mp_ode_problem inner;
-    PyObject *caught;  /* a list (borrowed: alive for the whole call) */
-} py_watched;
-
-/* Contract: MP_ECALLBACK with the caught exception set when the call left one. */
-static int watch_check(const py_watched *w)
-{
-    if (PyList_GET_SIZE(w->caught) == 0) return MP_OK;
-    PyObject *e = PyList_GET_ITEM(w->caught, 0);
-    if (PyExceptionInstance_Check(e)) {
-        PyErr_SetObject((PyObject *)Py_TYPE(e), e);
-        PyObject *tb = PyException_GetTraceback(e);
-        if (tb) {
-            PyObject *tp, *v, *otb;
-            PyErr_Fetch(&tp, &v, &otb);
-            Py_XDECREF(otb);
-            PyErr_Restore(tp, v, tb);
-        }
-    } else {
-        PyErr_SetString(PyExc_RuntimeError, "a ctypes callback raised an exception");
-    }
-    return MP_ECALLBACK;
-}
-
-static int watched_rhs(double t, const double *y, double *dydt, void *data)
-{
-    const py_watched *w = data;
-    int rc = w->inner.rhs(t, y, dydt, w->inner.data);
-    return rc != MP_OK ? rc : watch_check(w);
-}
-
-static int watched_jac(double t, const double *y, double *jac, void *data)
-{
-    const py_watched *w = data;
-    int rc = w->inner.jac(t, y, jac, w->inner.data);
-    return rc != MP_OK ? rc : watch_check(w);
-}
-
-/* Contract: p becomes the watched version of itself (wd holds the original). */
-static void watch_problem(mp_ode_problem *p, py_watched *wd, PyObject *caught)
-{
-    wd->inner = *p;
-    wd->caught = caught;
-    p->rhs = watched_rhs;
-    p->jac = p->jac ? watched_jac : NULL;
-    p->data = wd;
-}
-
-/* A Jacobian given as a constant matrix (SciPy accepts an array for jac). */
-typedef struct {
-    mp_ode_problem inner;
-    const double *J;   /* n x n, row-major */
-} const_jac;
-
-static int const_jac_rhs(double t, const double *y, double *dydt, void *data)
-{
-    const const_jac *c = data;
-    return c->inner.rhs(t, y, dydt, c->inner.data);
-}
-
-static int const_jac_jac(double t, const double *y, double *jac, void *data)
-{
-    (void)t;
-    (void)y;
-    const const_jac *c = data;
-    memcpy(jac, c->J, c->inner.n * c->inner.n * sizeof(double));
-    return MP_OK;
-}
-
-/* ---- a system described by the Python layer --------------------------------
- * ("scene", name, params) | ("python", fun, args) | ("cfunc", address, user_data)
- * and the second-order ("python2", accel, args) | ("cfunc2", address, user_data),
- * or a generated library ("compiled", (rhs, jac, nq[, lanes, rk4, compose]), params)
- * with lanes its mp_lane_rhs (lanes.h; None: ensembles wrap rhs lane by lane) and
- * rk4/compose its fixed-step blocks (ode.h's mp_ode_blocks; None: the generic ones);
- * a RigidBody scene may carry a C torque: ("scene", name, params, (address, user_data)) */
-
-typedef struct {
-    mp_ode_problem prob;
-    int holds_python;         /* calls Python: keep the GIL */
-    PyArrayObject *params;    /* scene parameters (owned) */
-    const mp_model *model;    /* a scene's row (NULL: not a scene) */
-    py_fn fn;
-    c_fn2 cfn;
-    mp_rigid_torque torque;   /* a scene's C torque callback (fn NULL: none) */
-    mp_lane_rhs lanes;        /* a compiled system's lane rhs (NULL: none) */
-    mp_ode_blocks blocks;     /* ... and its fixed-step blocks (prob.blocks) */
-} py_system;
-
-static int c_address(PyObject *a, PyObject *b, c_fn *out)
-{
-    void *addr = PyLong_AsVoidPtr(a);
-    if (!addr && PyErr_Occurred()) return -1;
-    void *ud = b == Py_None ? NULL : PyLong_AsVoidPtr(b);
-    if (PyErr_Occurred()) return -1;
-    if (!addr) {
-        PyErr_SetString(PyExc_ValueError, "the C callback is a NULL function pointer");
-        return -1;
-    }
-    /* A data pointer converted to a function pointer: the one place this is
-     * done, for callbacks handed over as addresses. */
-    *(void **)&out->f = addr;
-    out->user_data = ud;
-    out->n = 0;
-    return 0;
-}
-
-static void py_system_clear(py_system *s) { Py_CLEAR(s->params); }
-
-static int py_system_parse(PyObject *spec, size_t n, py_system *s)
-{
-    const char *kind;
-    PyObject *a, *b, *cb = NULL;
-    memset(s, 0, sizeof *s);
-    if (!PyArg_ParseTuple(spec, "sOO|O!", &kind, &a, &b, &PyTuple_Type, &cb)) return -1;
-    if (cb && (strcmp(kind, "scene") != 0 || PyTuple_GET_SIZE(cb) != 2)) {
-        PyErr_SetString(PyExc_ValueError, "a callback in a system spec needs a scene and "
-                                          "(address, user_data)");
-        return -1;
-    }
-    s->prob.n = n;
-    if (strcmp(kind, "scene") == 0) {
-        const char *name = PyUnicode_AsUTF8(a);
-        if (!name) return -1;
-        const mp_model *m = mp_model_find(name);
-        if (!m) {
-            PyErr_Format(PyExc_ValueError, "unknown scene %s", name);
-            return -1;
-        }
-        s->params = mp_py_array(b, "scene parameters", 1);
-        if (!s->params) return -1;
-        size_t dim;
-        if (mp_model_prepare(m, PyArray_DATA(s->params), (size_t)PyArray_SIZE(s->params), &dim)
-            != MP_OK) {
-            mp_py_raise(MP_EDOM, "scene parameters");
-            return -1;
-        }
-        if (dim != n) {
-            PyErr_Format(PyExc_ValueError, "y0 must have %zu values for %s, got %zu", dim,
-                         m->name, n);
-            return -1;
-        }
-        m->bind(PyArray_DATA(s->params), &s->prob);
-        s->model = m;
-        if (cb) {
-            c_fn f;
-            if (c_address(PyTuple_GET_ITEM(cb, 0), PyTuple_GET_ITEM(cb, 1), &f) < 0) return -1;
-            s->torque = (mp_rigid_torque){PyArray_DATA(s->params), f.f, f.user_data};
-            if (mp_rigid_bind_torque(m, &s->torque, &s->prob) != MP_OK) {
-                PyErr_Format(PyExc_ValueError, "scene %s takes no C callback", m->name);
-                return -1;
-            }
-        }
-    } else if (strcmp(kind, "python") == 0 || strcmp(kind, "python2") == 0) {
-        int second = kind[6] == '2';
-        if (!PyCallable_Check(a) || !PyTuple_Check(b)) {
-            PyErr_SetString(PyExc_TypeError, "system must be callable and args a tuple");
-            return -1;
-        }
-        if (second && n % 2) {
-            PyErr_SetString(PyExc_ValueError, "y0 of a second-order system is (q, v): even length");
-            return -1;
-        }
-        size_t nf = second ? n / 2 : n;
-        s->fn = (py_fn){a, b, nf, nf, second ? "accel" : "fun"};
-        s->prob.rhs = second ? py_rhs2 : py_rhs;
-        s->prob.data = &s->fn;
-        s->prob.nq = second ? n / 2 : 0;
-        s->holds_python = 1;
-    } else if (strcmp(kind, "cfunc") == 0 || strcmp(kind, "cfunc2") == 0) {
-        int second = kind[5] == '2';
-        if (c_address(a, b, &s->cfn.fn) < 0) return -1;
-        if (second && n % 2) {
-            PyErr_SetString(PyExc_ValueError, "y0 of a second-order system is (q, v): even length");
-            return -1;
-        }
-        s->cfn.nq = second ? n / 2 : 0;
-        s->prob.rhs = second ? c_rhs2 : c_rhs;
-        s->prob.data = second ? (void *)&s->cfn : (void *)&s->cfn.fn;
-        s->prob.nq = s->cfn.nq;
-    } else if (strcmp(kind, "compiled") == 0) {
-        /* a generated library (mechpy.symbolic): ((rhs, jac, nq[, lanes, rk4,
-         * compose]), params), each function an address or None (rhs: never);
-         * its functions take the parameter vector as data */
-        enum { RHS, JAC, LANES, RK4, COMPOSE, NFN };
-        PyObject *fa[NFN] = {NULL, NULL, Py_None, Py_None, Py_None};
-        c_fn fn[NFN] = {{0}};
-        Py_ssize_t nq;
-        if (!PyArg_ParseTuple(a, "OOn|OOO", &fa[RHS], &fa[JAC], &nq, &fa[LANES], &fa[RK4],
-                              &fa[COMPOSE]))
-            return -1;
-        for (int i = 0; i < NFN; i++) /* each handed over as an address (see c_address) */
-            if ((i == RHS || fa[i] != Py_None) && c_address(fa[i], Py_None, &fn[i]) < 0) return -1;
-        if (nq < 0 || (size_t)nq * 2 > n) {
-            PyErr_SetString(PyExc_ValueError, "compiled system: bad second-order split nq");
-            return -1;
-        }
-        s->params = mp_py_array(b, "scene parameters", 1);
-        if (!s->params) return -1;
-        *(void **)&s->prob.rhs = *(void **)&fn[RHS].f;
-        *(void **)&s->prob.jac = *(void **)&fn[JAC].f;
-        *(void **)&s->lanes = *(void **)&fn[LANES].f;
-        s->prob.data = PyArray_DATA(s->params);
-        s->prob.nq = (size_t)nq;
-        if (fn[RK4].f) { /* its fixed-step blocks, with its rhs inlined */
-            s->blocks.rhs = s->prob.rhs;
-            *(void **)&s->blocks.rk4 = *(void **)&fn[RK4].f;
-            *(void **)&s->blocks.compose = *(void **)&fn[COMPOSE].f;
-            s->prob.blocks = &s->blocks;
-        }
-    } else {
-        PyErr_Format(PyExc_ValueError, "unknown system kind %s", kind);
-        return -1;
-    }
-    s->cfn.fn.n = n; /* the outputs a first-order C callback must write */
-    return 0;
-}
-
-/* Contract: the message of a solve's outcome as a new str: the status table's
- * message, then in parentheses where the failure happened (t, the step budget,
- * for MP_ENONFINITE what produced the value: a C callback's unwritten output,
- * the torque callback, an event function, the Jacobian or the right-hand
- * side) and, when Hairer's test found the problem stiff, the methods to try. */
+/* Contract: the message of a solve's outcome as a new str, from the status
+ * table (mp_status_format): the status's message, the detail in
+ * parentheses and, when Hairer's test found the problem stiff, the methods
+ * to try. */
 static PyObject *ode_message(const py_system *sys, const mp_ode_outcome *out, long max_steps)
 {
-    char detail[256];
-    size_t i = out->bad_index;
-    double t = out->t_fail;
-    int st = out->status;
-    if (st == MP_TERMINATED && out->stop_reason == MP_ODE_STOP_MAX_EVENTS) {
-        snprintf(detail, sizeof detail, "events[%zu] reached max_events=%ld at t = %.17g",
-                 out->stop_event, out->stop_count, t);
-        return PyUnicode_FromFormat("%s (%s)", mp_status_message(st), detail);
-    }
-    if (st == MP_TERMINATED && out->stop_reason == MP_ODE_STOP_ZENO) {
-        char gap[64] = "closer than t resolves";
-        if (out->zeno_gap > 0.0) snprintf(gap, sizeof gap, "%.3g apart in t", out->zeno_gap);
-        snprintf(detail, sizeof detail, "events[%zu] accumulate (Zeno): %ld crossings, the "
-                 "last two %s; the solve ends at their accumulation point t = %.17g",
-                 out->stop_event, out->stop_count, gap, t);
-        return PyUnicode_FromFormat("%s (%s)", mp_status_message(st), detail);
-    }
-    if (st == MP_OK || st == MP_TERMINATED) return PyUnicode_FromString(mp_status_message(st));
-    if (st == MP_EMAXSTEPS) {
-        snprintf(detail, sizeof detail, "max_steps=%ld, at t = %.17g", max_steps, t);
-    } else if (st == MP_EEVENT) {
-        snprintf(detail, sizeof detail, "events[%zu] at t = %.17g; an action must move the "
-                 "state off the event surface (reverse the velocity towards it)",
-                 out->stop_event, t);
-    } else if (st != MP_ENONFINITE) {
-        snprintf(detail, sizeof detail, "at t = %.17g", t);
-    } else if (out->bad_what == MP_ODE_BAD_ACTION) {
-        snprintf(detail, sizeof detail, "events[%zu].action returned NaN or inf at t = %.17g",
-                 i, t);
-    } else if (out->bad_what == MP_ODE_BAD_EVENT) {
-        snprintf(detail, sizeof detail, "events[%zu] returned NaN or inf at t = %.17g", i, t);
-    } else if (out->bad_what == MP_ODE_BAD_STATE) {
-        snprintf(detail, sizeof detail, "the solution's y[%zu] overflowed to NaN or inf in the "
-                 "step from t = %.17g, the right-hand side being finite", i, t);
-    } else if (out->bad_what == MP_ODE_BAD_ERR) {
-        snprintf(detail, sizeof detail, "a step's error estimate (or Newton increment), scaled "
-                 "by atol and rtol, overflowed near t = %.17g, the state and the right-hand side "
-                 "being finite: rescale the system", t);
-    } else if (out->bad_what == MP_ODE_BAD_JAC) {
-        snprintf(detail, sizeof detail, "jac[%zu, %zu] is NaN or inf near t = %.17g",
-                 i / sys->prob.n, i % sys->prob.n, t);
-    } else if (sys->prob.rhs == c_rhs) {
-        snprintf(detail, sizeof detail, "the C callback left dydt[%zu] unwritten or NaN "
-                 "(or returned inf) near t = %.17g", i, t);
-    } else if (sys->prob.rhs == c_rhs2 && i >= sys->prob.nq) {
-        snprintf(detail, sizeof detail, "the C callback left acc[%zu] unwritten or NaN "
-                 "(or returned inf) near t = %.17g", i - sys->prob.nq, t);
-    } else if (sys->torque.fn && i < 3) {
-        snprintf(detail, sizeof detail, "the torque callback left tau[%zu] unwritten or NaN "
-                 "(or the right-hand side overflowed) near t = %.17g", i, t);
-    } else {
-        snprintf(detail, sizeof detail, "the right-hand side gave dydt[%zu] = NaN or inf "
-                 "near t = %.17g", i, t);
-    }
-    return PyUnicode_FromFormat("%s (%s)%s", mp_status_message(st), detail,
-                                out->stiff ? "; the problem appears stiff: try method='radau', "
-                                             "'auto' or 'gsl:msbdf'" : "");
+    mp_status_fields f = {.t = out->t_fail, .gap = out->zeno_gap, .i = out->bad_index,
+                          .count = out->stop_count, .max_steps = max_steps,
+                          .stiff = out->stiff};
+    char buf[640];
+    mp_status_format(buf, sizeof buf, out->status, ode_detail(sys, out, &f), &f);
+    return PyUnicode_FromString(buf);
 }
 
 /* ---- results ---------------------------------------------------------------- */
@@ -566,13 +146,131 @@ fail:
     return NULL;
 }
 
-/* The options ode_solve and ode_solve_many share, as integrate.py hands them
- * over (its _options: nine values in one order), parsed here and nowhere
- * else: ode_solve's as positional arguments (its call is the one whose fixed
- * cost counts), ode_solve_many's as one tuple of the same nine. */
+/* ---- the options object -------------------------------------------------------
+ * ode_solve and ode_solve_many take one dict of options, built by
+ * integrate.py's _options and parsed here alone: one row per key, saying
+ * what it converts to, where it goes and which call takes it. */
+
 typedef struct {
-    double t0, tf, rtol, h, first_step, max_step; /* rtol: the least of the n */
+    double t0, tf, h, first_step, max_step;
     long max_steps;
+    /* borrowed (the options dict holds them for the whole call) */
+    PyObject *rtol, *atol, *t_eval, *events, *terminal, *direction, *args, *jac, *watch, *band;
+    int dense;                   /* ode_solve's */
+    PyObject *params, *progress; /* ode_solve_many's */
+    int threads, lanes;
+} ode_opts;
+
+enum { OPT_F64, OPT_LONG, OPT_INT, OPT_BOOL, OPT_OBJ, OPT_TUPLE, OPT_LIST_OR_NONE };
+enum { FOR_SOLVE = 1, FOR_MANY = 2, FOR_BOTH = 3 };
+
+typedef struct {
+    const char *key;
+    size_t len;     /* strlen(key) */
+    int type;       /* OPT_*: what the value converts to */
+    size_t offset;  /* of the field in ode_opts */
+    int calls;      /* FOR_*: the calls that take it (and require it) */
+} ode_opt_row;
+
+#define OPT(key, type, calls) {#key, sizeof #key - 1, type, offsetof(ode_opts, key), calls}
+/* In _options' order, which the parse tries first. */
+static const ode_opt_row ode_opt_rows[] = {
+    OPT(t0, OPT_F64, FOR_BOTH),         OPT(tf, OPT_F64, FOR_BOTH),
+    OPT(rtol, OPT_OBJ, FOR_BOTH),       OPT(atol, OPT_OBJ, FOR_BOTH),
+    OPT(t_eval, OPT_OBJ, FOR_BOTH),     OPT(h, OPT_F64, FOR_BOTH),
+    OPT(first_step, OPT_F64, FOR_BOTH), OPT(max_step, OPT_F64, FOR_BOTH),
+    OPT(max_steps, OPT_LONG, FOR_BOTH), OPT(events, OPT_OBJ, FOR_BOTH),
+    OPT(terminal, OPT_OBJ, FOR_BOTH),   OPT(direction, OPT_OBJ, FOR_BOTH),
+    OPT(args, OPT_TUPLE, FOR_BOTH),     OPT(jac, OPT_OBJ, FOR_BOTH),
+    OPT(watch, OPT_LIST_OR_NONE, FOR_BOTH), OPT(band, OPT_OBJ, FOR_BOTH),
+    OPT(dense, OPT_BOOL, FOR_SOLVE),    OPT(params, OPT_OBJ, FOR_MANY),
+    OPT(threads, OPT_INT, FOR_MANY),    OPT(progress, OPT_OBJ, FOR_MANY),
+    OPT(lanes, OPT_INT, FOR_MANY),
+};
+#undef OPT
+#define N_OPTS (sizeof ode_opt_rows / sizeof ode_opt_rows[0])
+
+/* Contract: the value v of row r stored in op.  0, or -1 with an exception set. */
+static int opt_store(const ode_opt_row *r, PyObject *v, ode_opts *op)
+{
+    char *at = (char *)op + r->offset;
+    switch (r->type) {
+    case OPT_F64:
+        *(double *)at = PyFloat_CheckExact(v) ? PyFloat_AS_DOUBLE(v) : PyFloat_AsDouble(v);
+        return *(double *)at == -1.0 && PyErr_Occurred() ? -1 : 0;
+    case OPT_LONG:
+        *(long *)at = PyLong_AsLong(v);
+        return *(long *)at == -1 && PyErr_Occurred() ? -1 : 0;
+    case OPT_INT: {
+        long l = PyLong_AsLong(v);
+        if (l == -1 && PyErr_Occurred()) return -1;
+        if (l < INT_MIN || l > INT_MAX) {
+            PyErr_Format(PyExc_OverflowError, "option %s is out of range", r->key);
+            return -1;
+        }
+        *(int *)at = (int)l;
+        return 0;
+    }
+    case OPT_BOOL: return (*(int *)at = PyObject_IsTrue(v)) < 0 ? -1 : 0;
+    case OPT_TUPLE:
+    case OPT_LIST_OR_NONE:
+        if (r->type == OPT_TUPLE ? !PyTuple_Check(v) : v != Py_None && !PyList_Check(v)) {
+            PyErr_Format(PyExc_TypeError, "option %s must be a %s", r->key,
+                         r->type == OPT_TUPLE ? "tuple" : "list or None");
+            return -1;
+        }
+        break;
+    }
+    *(PyObject **)at = v;
+    return 0;
+}
+
+/* Whether key (any object) is row r's name: a length and a memcmp for the
+ * ASCII str keys _options writes (the parse's cost is a small solve's). */
+static int opt_is(const ode_opt_row *r, PyObject *key)
+{
+    if (!PyUnicode_Check(key) || !PyUnicode_IS_COMPACT_ASCII(key)) return 0;
+    return (size_t)PyUnicode_GET_LENGTH(key) == r->len &&
+           memcmp(PyUnicode_DATA(key), r->key, r->len) == 0;
+}
+
+/* Contract: the options dict d of a call (FOR_SOLVE or FOR_MANY) into op:
+ * every key the call takes, no other.  0, or -1 with an exception set. */
+static int ode_opts_parse(PyObject *d, int call, ode_opts *op)
+{
+    memset(op, 0, sizeof *op);
+    if (!PyDict_CheckExact(d)) {
+        PyErr_SetString(PyExc_TypeError, "options must be a dict (integrate.py's _options)");
+        return -1;
+    }
+    unsigned char seen[N_OPTS] = {0};
+    Py_ssize_t pos = 0;
+    PyObject *key, *v;
+    size_t r = 0;
+    while (PyDict_Next(d, &pos, &key, &v)) {
+        size_t tries = 0; /* from the row after the last one: keys come in table order */
+        while (tries < N_OPTS && !opt_is(&ode_opt_rows[r], key))
+            r = (r + 1) % N_OPTS, tries++;
+        if (tries == N_OPTS || !(ode_opt_rows[r].calls & call)) {
+            PyErr_Format(PyExc_TypeError, "unknown option %R", key);
+            return -1;
+        }
+        if (opt_store(&ode_opt_rows[r], v, op) < 0) return -1;
+        seen[r] = 1;
+        r = (r + 1) % N_OPTS;
+    }
+    for (r = 0; r < N_OPTS; r++)
+        if ((ode_opt_rows[r].calls & call) && !seen[r]) {
+            PyErr_Format(PyExc_TypeError, "options lack %s", ode_opt_rows[r].key);
+            return -1;
+        }
+    return 0;
+}
+
+/* What the options convert to once n is known: the tolerances as n values
+ * each, t_eval as an array. */
+typedef struct {
+    double rtol; /* the least of the n */
     /* owned; atol/rtolv NULL: a scalar in atol1/rtol1; tev NULL: no t_eval */
     PyArrayObject *atol, *rtolv, *tev;
     double *atol1, *rtol1;     /* PyMem: n copies of a scalar atol, rtol */
@@ -617,23 +315,23 @@ static const double *ode_tolerances(PyObject *obj, const char *name, int positiv
     return PyArray_DATA(*arr);
 }
 
-/* Contract: the arrays of a from rtol and atol (each a Python float, taken as
- * n copies, or n values) and t_eval (None or m values), then o from a (o
- * points into a: clear a after the solve; o->rtol the least rtol).  0, or -1
- * with an exception set and a cleared. */
-static int ode_args_fill(PyObject *rtolo, PyObject *atolo, PyObject *tevo, size_t n,
-                         ode_args *a, mp_ode_options *o)
+/* Contract: the arrays of a from op's rtol and atol (each a Python float,
+ * taken as n copies, or n values) and t_eval (None or m values), then o from
+ * op and a (o points into a: clear a after the solve; o->rtol the least
+ * rtol).  0, or -1 with an exception set and a cleared. */
+static int ode_args_fill(const ode_opts *op, size_t n, ode_args *a, mp_ode_options *o)
 {
-    const double *rtolv = ode_tolerances(rtolo, "rtol", 1, n, &a->rtolv, &a->rtol1);
-    const double *atol = rtolv ? ode_tolerances(atolo, "atol", 0, n, &a->atol, &a->atol1)
+    memset(a, 0, sizeof *a);
+    const double *rtolv = ode_tolerances(op->rtol, "rtol", 1, n, &a->rtolv, &a->rtol1);
+    const double *atol = rtolv ? ode_tolerances(op->atol, "atol", 0, n, &a->atol, &a->atol1)
                                : NULL;
     if (!atol) {
         ode_args_clear(a);
         return -1;
     }
-    a->rtol = PyFloat_CheckExact(rtolo) ? PyFloat_AS_DOUBLE(rtolo) : INFINITY;
+    a->rtol = PyFloat_CheckExact(op->rtol) ? PyFloat_AS_DOUBLE(op->rtol) : INFINITY;
     for (size_t i = 0; i < n; i++) a->rtol = fmin(a->rtol, rtolv[i]);
-    if (tevo != Py_None && !(a->tev = mp_py_array(tevo, "t_eval", 1))) {
+    if (op->t_eval != Py_None && !(a->tev = mp_py_array(op->t_eval, "t_eval", 1))) {
         ode_args_clear(a);
         return -1;
     }
@@ -641,391 +339,165 @@ static int ode_args_fill(PyObject *rtolo, PyObject *atolo, PyObject *tevo, size_
     o->rtol = a->rtol;
     o->rtolv = rtolv;
     o->atol = atol;
-    o->first_step = a->first_step;
-    o->max_step = a->max_step;
-    o->h = a->h;
-    o->max_steps = a->max_steps;
+    o->first_step = op->first_step;
+    o->max_step = op->max_step;
+    o->h = op->h;
+    o->max_steps = op->max_steps;
     o->t_eval = a->tev ? PyArray_DATA(a->tev) : NULL;
     o->n_eval = a->tev ? (size_t)PyArray_SIZE(a->tev) : 0;
     o->interrupt = mp_py_check_interrupt;
     return 0;
 }
 
-/* Contract: the options from argv[0..8] (t0, tf, rtol, atol, t_eval, h,
- * first_step, max_step, max_steps) into a, and o filled from them (o points
- * into a's arrays: clear a after the solve).  0, or -1 with an exception set. */
-static int ode_args_from_argv(PyObject *const *argv, size_t n, ode_args *a, mp_ode_options *o)
+/* Contract: the one calling convention of ode_solve and ode_solve_many,
+ * (method, system, y0 or y0s, options): *m the row named by method (a str)
+ * and op the options for the call (FOR_SOLVE or FOR_MANY).  0, or -1 with an
+ * exception set. */
+static int ode_call_args(PyObject *const *argv, Py_ssize_t nargs, int call,
+                         const mp_ode_method **m, ode_opts *op)
 {
-    double *dst[8] = {&a->t0, &a->tf, NULL, NULL, NULL, &a->h, &a->first_step, &a->max_step};
-    memset(a, 0, sizeof *a);
-    for (int i = 0; i < 8; i++) {
-        if (!dst[i]) continue;
-        *dst[i] = PyFloat_AsDouble(argv[i]);
-        if (*dst[i] == -1.0 && PyErr_Occurred()) return -1;
-    }
-    a->max_steps = PyLong_AsLong(argv[8]);
-    if (a->max_steps == -1 && PyErr_Occurred()) return -1;
-    return ode_args_fill(argv[2], argv[3], argv[4], n, a, o);
-}
-
-/* ---- options solve and solve_many share ------------------------------------- */
-
-/* Contract: jaco as a Jacobian for n states: None (*jm NULL), a callable
- * (*jm NULL) or a constant (n, n) finite matrix (*jm a new reference).  0, or
- * -1 with an exception set. */
-static int jac_parse(PyObject *jaco, size_t n, PyArrayObject **jm)
-{
-    *jm = NULL;
-    if (jaco == Py_None || PyCallable_Check(jaco)) return 0;
-    if (!(*jm = mp_py_array(jaco, "jac", 2))) return -1;
-    if ((size_t)PyArray_DIM(*jm, 0) != n || (size_t)PyArray_DIM(*jm, 1) != n) {
-        PyErr_Format(PyExc_ValueError, "jac must have shape (%zu, %zu)", n, n);
+    if (nargs != 4) {
+        PyErr_Format(PyExc_TypeError, "%s takes 4 arguments (method, system, y0, options), "
+                     "got %zd", call == FOR_SOLVE ? "ode_solve" : "ode_solve_many", nargs);
         return -1;
     }
-    return mp_py_require_finite(*jm, "jac");
-}
-
-/* Contract: prob with the user's Jacobian (jac_parse's jaco, jm): the
- * constant matrix through cj, or the callable jac(t, y, *args) through wj;
- * returns 1 when it calls Python.  Nothing for None. */
-static int jac_wrap(mp_ode_problem *prob, PyObject *jaco, PyArrayObject *jm, PyObject *args,
-                    const_jac *cj, py_with_jac *wj)
-{
-    size_t n = prob->n;
-    if (jm) {
-        cj->inner = *prob;
-        cj->J = PyArray_DATA(jm);
-        prob->rhs = const_jac_rhs;
-        prob->jac = const_jac_jac;
-        prob->jac_const = 1;
-        prob->data = cj;
-        return 0;
-    }
-    if (jaco == Py_None) return 0;
-    wj->inner = *prob;
-    wj->jac = (py_fn){jaco, args, n, n * n, "jac"};
-    prob->rhs = py_jac_rhs;
-    prob->jac = py_jac;
-    prob->data = wj;
-    return 1;
-}
-
-/* The event list of a solve as integrate.py hands it over: terminal and
- * direction (owned), which events have an action, and whether every event
- * runs in C (impacts alone: no GIL needed). */
-typedef struct {
-    PyArrayObject *term, *dir;
-    unsigned char *has_action; /* PyMem */
-    Py_ssize_t count;
-    int all_c;
-} py_event_list;
-
-static void event_list_clear(py_event_list *el)
-{
-    Py_CLEAR(el->term);
-    Py_CLEAR(el->dir);
-    PyMem_Free(el->has_action);
-    el->has_action = NULL;
-}
-
-/* Whether entry is a C impact: ("impact", iq, iv, wall, e, side, e_param,
- * wall_fn, rest). */
-static int is_impact(PyObject *entry)
-{
-    if (!PyTuple_Check(entry) || PyTuple_GET_SIZE(entry) != 9) return 0;
-    PyObject *tag = PyTuple_GET_ITEM(entry, 0);
-    return PyUnicode_Check(tag) && PyUnicode_CompareWithASCIIString(tag, "impact") == 0;
-}
-
-/* Contract: events[k], an impact tuple ("impact", iq, iv, wall, e, side,
- * e_param, wall_fn, rest) for states of n and parameter vectors of nparams,
- * into *im (its max_events 0, its e the float e or 0: *eo is e as given,
- * borrowed: a float, or one value per trajectory when e_param < 0; wall_fn
- * the address of a compiled mp_wall_fn, 0 for a wall standing at `wall`;
- * rest 1 when the coordinate may rest on the wall).  0, or -1 with an
- * exception set (a coordinate, velocity or parameter out of range). */
-static int parse_impact(PyObject *entry, Py_ssize_t k, size_t n, size_t nparams,
-                        mp_impact *im, PyObject **eo)
-{
-    Py_ssize_t iq, iv;
-    long ep;
-    int rest;
-    unsigned long long wf;
-    double wall, side;
-    const char *tag;
-    if (!PyArg_ParseTuple(entry, "snndOdlKp", &tag, &iq, &iv, &wall, eo, &side, &ep, &wf, &rest))
-        return -1;
-    if (iq < 0 || iv < 0 || (size_t)iq >= n || (size_t)iv >= n ||
-        (ep >= 0 && (size_t)ep >= nparams)) {
-        PyErr_Format(PyExc_ValueError, "events[%zd]: an impact's coordinate, velocity "
-                     "or restitution parameter is out of range", k);
+    const char *s = PyUnicode_Check(argv[0]) ? PyUnicode_AsUTF8(argv[0]) : NULL;
+    if (!s) {
+        if (!PyErr_Occurred()) PyErr_SetString(PyExc_TypeError, "method must be a str");
         return -1;
     }
-    *im = (mp_impact){(size_t)iq, (size_t)iv, wall, side, 0.0, NULL, ep, 0, NULL, rest};
-    if (wf) *(void **)&im->wall_fn = (void *)(uintptr_t)wf; /* an address handed over */
-    if (ep < 0 && PyFloat_Check(*eo)) im->e = PyFloat_AS_DOUBLE(*eo);
-    return 0;
-}
-
-/* Contract: the event list evo (None or a list of entries: a callable g, a
- * pair (g, action) or a C impact tuple) with terminal and direction (one int
- * each) into el and o's event fields; o->events_data and o->action_data are
- * left to the caller (event_fns).  0, or -1 with an exception set. */
-static int event_list_parse(PyObject *evo, PyObject *termo, PyObject *diro, py_event_list *el,
-                            mp_ode_options *o)
-{
-    memset(el, 0, sizeof *el);
-    if (evo == Py_None) return 0;
-    if ((el->count = PyList_Size(evo)) < 0) return -1;
-    if (el->count == 0) return 0;
-    el->term = (PyArrayObject *)PyArray_FROMANY(termo, NPY_INT, 1, 1, NPY_ARRAY_IN_ARRAY);
-    el->dir = (PyArrayObject *)PyArray_FROMANY(diro, NPY_INT, 1, 1, NPY_ARRAY_IN_ARRAY);
-    if (!el->term || !el->dir) return -1;
-    if (PyArray_SIZE(el->term) != el->count || PyArray_SIZE(el->dir) != el->count) {
-        PyErr_SetString(PyExc_ValueError, "terminal and direction need one value per event");
+    if (!(*m = mp_ode_method_find(s))) {
+        PyErr_Format(PyExc_ValueError, "unknown method %s", s);
         return -1;
     }
-    if (!(el->has_action = PyMem_Calloc((size_t)el->count, 1))) {
-        PyErr_NoMemory();
-        return -1;
-    }
-    el->all_c = 1;
-    for (Py_ssize_t k = 0; k < el->count; k++) {
-        PyObject *entry = PyList_GET_ITEM(evo, k);
-        int imp = is_impact(entry), pair = !imp && PyTuple_Check(entry);
-        if (pair && (PyTuple_GET_SIZE(entry) != 2 ||
-                     !PyCallable_Check(PyTuple_GET_ITEM(entry, 0)) ||
-                     !PyCallable_Check(PyTuple_GET_ITEM(entry, 1)))) {
-            PyErr_Format(PyExc_TypeError, "events[%zd] must be callable", k);
-            return -1;
-        }
-        el->has_action[k] = (unsigned char)(imp || pair);
-        el->all_c &= imp;
-        if (imp) o->impact_of = py_events_impact;
-    }
-    o->n_events = (size_t)el->count;
-    o->events = py_events_eval;
-    o->terminal = PyArray_DATA(el->term);
-    o->direction = PyArray_DATA(el->dir);
-    o->has_action = el->has_action;
-    o->action = py_events_action;
-    return 0;
-}
-
-/* Contract: pe's adapters of the entries in evo for states of n: each Python
- * event and action called with (t, y, *args), each impact's parameters (with
- * e_rows (the trajectory's restitution per event, or NULL) and params, the
- * trajectory's parameter vector).  pe->fns, acts, imp are PyMem (the caller
- * frees them with event_fns_free).  0, or -1 with an exception set. */
-static int event_fns(PyObject *evo, Py_ssize_t count, PyObject *args, size_t n,
-                     const double *params, size_t nparams, size_t row, py_events *pe)
-{
-    memset(pe, 0, sizeof *pe);
-    pe->count = (size_t)count;
-    pe->n = n;
-    pe->params = params;
-    pe->fns = PyMem_Calloc((size_t)count, sizeof(py_fn));
-    pe->acts = PyMem_Calloc((size_t)count, sizeof(py_fn));
-    pe->imp = PyMem_Calloc((size_t)count, sizeof(mp_impact));
-    pe->names = PyMem_Calloc(2 * (size_t)count, sizeof *pe->names);
-    if (!pe->fns || !pe->acts || !pe->imp || !pe->names) {
-        PyErr_NoMemory();
-        return -1;
-    }
-    for (Py_ssize_t k = 0; k < count; k++) {
-        PyObject *entry = PyList_GET_ITEM(evo, k);
-        if (is_impact(entry)) {
-            PyObject *eo;
-            if (parse_impact(entry, k, n, nparams, &pe->imp[k], &eo) < 0) return -1;
-            if (pe->imp[k].e_param >= 0 || PyFloat_Check(eo)) continue;
-            /* one restitution per trajectory: this one's row */
-            PyArrayObject *ea = mp_py_array(eo, "restitution", 1);
-            if (!ea) return -1;
-            if ((size_t)PyArray_SIZE(ea) <= row) {
-                Py_DECREF(ea);
-                PyErr_Format(PyExc_ValueError, "events[%zd]: restitution needs one value "
-                             "per trajectory", k);
-                return -1;
-            }
-            pe->imp[k].e = ((const double *)PyArray_DATA(ea))[row];
-            Py_DECREF(ea);
-            continue;
-        }
-        PyObject *g = PyTuple_Check(entry) ? PyTuple_GET_ITEM(entry, 0) : entry;
-        snprintf(pe->names[2 * k], sizeof pe->names[0], "events[%zd]", k);
-        snprintf(pe->names[2 * k + 1], sizeof pe->names[0], "events[%zd].action", k);
-        pe->fns[k] = (py_fn){g, args, n, 1, pe->names[2 * k]};
-        if (PyTuple_Check(entry))
-            pe->acts[k] = (py_fn){PyTuple_GET_ITEM(entry, 1), args, n, n, pe->names[2 * k + 1]};
-    }
-    return 0;
-}
-
-static void event_fns_free(py_events *pe)
-{
-    PyMem_Free(pe->fns);
-    PyMem_Free(pe->acts);
-    PyMem_Free(pe->imp);
-    PyMem_Free(pe->names);
-    memset(pe, 0, sizeof *pe);
-}
-
-/* Contract: the Jacobian's band of integrate.py's _jac_band set on p (of n
- * states): None (dense), 0 <= ml, mu < n, or (ml, mu, perm) with perm a
- * permutation of 0..n-1 (a sequence of ints), copied into *perm_out, which
- * the caller frees with PyMem_Free; -1 with an exception for anything else. */
-static int band_parse(PyObject *band, size_t n, mp_ode_problem *p, size_t **perm_out)
-{
-    *perm_out = NULL;
-    if (band == Py_None) return 0;
-    Py_ssize_t ml = -1, mu = -1;
-    PyObject *permo = Py_None;
-    if (!PyTuple_Check(band) ||
-        !PyArg_ParseTuple(band, "nn|O;band must be a tuple (ml, mu[, perm])", &ml, &mu, &permo)) {
-        if (!PyErr_Occurred()) PyErr_SetString(PyExc_TypeError, "band must be a tuple (ml, mu)");
-        return -1;
-    }
-    if (ml < 0 || mu < 0 || (size_t)ml >= n || (size_t)mu >= n) {
-        PyErr_Format(PyExc_ValueError, "band (ml, mu) must be >= 0 and < n = %zu", n);
-        return -1;
-    }
-    if (permo != Py_None) {
-        PyObject *seq = PySequence_Fast(permo, "band's perm must be a sequence");
-        if (!seq) return -1;
-        size_t *perm = PyMem_Calloc(n ? n : 1, sizeof *perm);
-        unsigned char *seen = PyMem_Calloc(n ? n : 1, 1);
-        int ok = perm && seen && (size_t)PySequence_Fast_GET_SIZE(seq) == n;
-        for (size_t i = 0; ok && i < n; i++) {
-            Py_ssize_t v = PyLong_AsSsize_t(PySequence_Fast_GET_ITEM(seq, (Py_ssize_t)i));
-            ok = v >= 0 && (size_t)v < n && !seen[v];
-            if (ok) seen[v] = 1, perm[i] = (size_t)v;
-        }
-        Py_DECREF(seq);
-        PyMem_Free(seen);
-        if (!ok) {
-            PyMem_Free(perm);
-            if (!PyErr_Occurred())
-                PyErr_Format(PyExc_ValueError, "band's perm must be a permutation of 0..%zu",
-                             n ? n - 1 : 0);
-            return -1;
-        }
-        p->perm = *perm_out = perm;
-    }
-    p->banded = 1;
-    p->ml = (size_t)ml;
-    p->mu = (size_t)mu;
-    return 0;
+    return ode_opts_parse(argv[3], call, op);
 }
 
 /* ---- ode_solve ------------------------------------------------------------ */
 
-/* Contract: ode_solve(method, system, y0, t0, tf, rtol, atol, t_eval, h,
- * first_step, max_step, max_steps, dense, events, terminal, direction, args,
- * jac, watch, band), all positional (its fixed cost is the cost of a small
- * solve; integrate.py has validated them; band: None or the Jacobian's
- * (ml, mu), mp_ode_problem's) -> the tuple of result_to_python.  A
- * failure the status table marks as always raising (a callback's exception,
- * Ctrl-C, memory) raises; every other outcome is returned with its code and
- * message (integrate.py decides, from the same table, what raises). */
-static PyObject *py_ode_solve(PyObject *self, PyObject *const *argv, Py_ssize_t nargs)
-{
-    (void)self;
-    if (nargs != 20) {
-        PyErr_Format(PyExc_TypeError, "ode_solve takes 20 arguments, got %zd", nargs);
-        return NULL;
-    }
-    const char *mname = PyUnicode_Check(argv[0]) ? PyUnicode_AsUTF8(argv[0]) : NULL;
-    if (!mname) {
-        if (!PyErr_Occurred()) PyErr_SetString(PyExc_TypeError, "method must be a str");
-        return NULL;
-    }
-    PyObject *spec = argv[1], *y0o = argv[2], *evo = argv[13], *termo = argv[14],
-             *diro = argv[15], *eargs = argv[16], *jaco = argv[17], *watch = argv[18];
-    int dense = PyObject_IsTrue(argv[12]);
-    if (dense < 0) return NULL;
-    if (!PyTuple_Check(spec) || !PyTuple_Check(eargs)) {
-        PyErr_SetString(PyExc_TypeError, "system spec and args must be tuples");
-        return NULL;
-    }
-    if (watch != Py_None && !PyList_Check(watch)) {
-        PyErr_SetString(PyExc_TypeError, "watch must be a list");
-        return NULL;
-    }
-    const mp_ode_method *m = mp_ode_method_find(mname);
-    if (!m) {
-        PyErr_Format(PyExc_ValueError, "unknown method %s", mname);
-        return NULL;
-    }
-    PyArrayObject *y0 = NULL, *jm = NULL;
-    PyObject *result = NULL;
-    size_t *perm = NULL;
-    py_event_list el = {0};
-    ode_args oa = {0};
+/* What ode_solve and ode_solve_many both convert: the options, the
+ * tolerances and samples, the system, its band and Jacobian, the event
+ * list; dropped together by ode_call_clear. */
+typedef struct {
+    ode_opts op;
+    ode_args oa;
     mp_ode_options o;
     py_system sys;
+    size_t *perm;
+    PyArrayObject *jm;
+    py_event_list el;
+} ode_call;
+
+static void ode_call_clear(ode_call *c)
+{
+    py_system_clear(&c->sys);
+    ode_args_clear(&c->oa);
+    event_list_clear(&c->el);
+    Py_CLEAR(c->jm);
+    PyMem_Free(c->perm);
+    c->perm = NULL;
+}
+
+/* One ode_solve call: its state and the adapters the problem runs through. */
+typedef struct {
+    ode_call b;
+    PyArrayObject *y0;
+    mp_ode_problem prob;
     py_with_jac wj;
     py_watched wd;
     const_jac cj;
     py_events pe;
-    memset(&pe, 0, sizeof pe);
-    memset(&sys, 0, sizeof sys);
+    int holds_python;
+} solve_call;
 
-    y0 = mp_py_array(y0o, "y0", 1);
-    if (!y0 || mp_py_require_finite(y0, "y0") < 0) goto out;
-    size_t n = (size_t)PyArray_SIZE(y0);
-    if (ode_args_from_argv(argv + 3, n, &oa, &o) < 0) goto out;
-    if (py_system_parse(spec, n, &sys) < 0) goto out;
-    mp_ode_problem prob = sys.prob;
-    if (band_parse(argv[19], n, &prob, &perm) < 0) goto out;
-    int holds_python = sys.holds_python;
-    if (m->symplectic && !m->implicit && prob.nq == 0) { /* the scene rows say which are */
-        char why[256];
-        const char *kind = PyUnicode_AsUTF8(PyTuple_GET_ITEM(spec, 0));
-        mp_model_separable_hint(kind && strcmp(kind, "scene") == 0
-                                    ? PyUnicode_AsUTF8(PyTuple_GET_ITEM(spec, 1)) : NULL,
-                                why, sizeof why);
-        PyErr_Format(PyExc_ValueError,
-                     "method %s needs a separable system q'' = a(t, q) with y = (q, v): %s",
-                     m->name, why);
+static void solve_call_clear(solve_call *c)
+{
+    ode_call_clear(&c->b);
+    event_fns_free(&c->pe);
+    Py_CLEAR(c->y0);
+}
+
+/* Contract: ValueError unless method m can run the system of c (a
+ * symplectic explicit row needs q'' = a(t, q); the scene rows say which
+ * scenes are).  0, or -1 with an exception set. */
+static int separable_check(const mp_ode_method *m, const solve_call *c)
+{
+    if (!m->symplectic || m->implicit || c->prob.nq != 0) return 0;
+    char why[256];
+    mp_model_separable_hint(c->b.sys.model ? c->b.sys.model->name : NULL, why, sizeof why);
+    PyErr_Format(PyExc_ValueError,
+                 "method %s needs a separable system q'' = a(t, q) with y = (q, v): %s",
+                 m->name, why);
+    return -1;
+}
+
+/* Contract: c's problem from the system spec and y0o with c->b.op's options:
+ * the system, its band, watch, Jacobian and events.  0, or -1 with an
+ * exception set. */
+static int solve_prepare(solve_call *c, const mp_ode_method *m, PyObject *spec, PyObject *y0o)
+{
+    const ode_opts *op = &c->b.op;
+    c->y0 = mp_py_array(y0o, "y0", 1);
+    if (!c->y0 || mp_py_require_finite(c->y0, "y0") < 0) return -1;
+    size_t n = (size_t)PyArray_SIZE(c->y0);
+    if (ode_args_fill(op, n, &c->b.oa, &c->b.o) < 0 || py_system_parse(spec, n, &c->b.sys) < 0)
+        return -1;
+    c->prob = c->b.sys.prob;
+    if (band_parse(op->band, n, &c->prob, &c->b.perm) < 0 || separable_check(m, c) < 0) return -1;
+    c->holds_python = c->b.sys.holds_python;
+    if (op->watch != Py_None) { /* a ctypes callback that runs Python: hold the GIL, check */
+        watch_problem(&c->prob, &c->wd, op->watch);
+        c->holds_python = 1;
+    }
+    if (jac_parse(op->jac, n, &c->b.jm) < 0) return -1;
+    c->holds_python |= jac_wrap(&c->prob, op->jac, c->b.jm, op->args, &c->cj, &c->wj);
+    c->b.o.dense = op->dense;
+    if (event_list_parse(op->events, op->terminal, op->direction, &c->b.el, &c->b.o) < 0) return -1;
+    if (c->b.el.count) {
+        const py_system *s = &c->b.sys;
+        if (event_fns(op->events, c->b.el.count, op->args, n,
+                      s->params ? PyArray_DATA(s->params) : NULL,
+                      s->params ? (size_t)PyArray_SIZE(s->params) : 0, 0, &c->pe) < 0)
+            return -1;
+        c->b.o.events_data = c->b.o.action_data = &c->pe;
+        c->holds_python |= !c->b.el.all_c; /* impacts alone run in C */
+    }
+    return 0;
+}
+
+/* Contract: ode_solve(method, system, y0, options), options the dict of
+ * integrate.py's _options (validated there; see ode_opt_rows) -> the tuple
+ * of result_to_python.  A failure the status table marks as always raising
+ * (a callback's exception, Ctrl-C, memory) raises; every other outcome is
+ * returned with its code and message (integrate.py decides, from the same
+ * table, what raises).  METH_FASTCALL: its fixed cost is that of a small
+ * solve. */
+static PyObject *py_ode_solve(PyObject *self, PyObject *const *argv, Py_ssize_t nargs)
+{
+    (void)self;
+    const mp_ode_method *m;
+    solve_call c;
+    memset(&c, 0, sizeof c);
+    PyObject *result = NULL;
+    if (ode_call_args(argv, nargs, FOR_SOLVE, &m, &c.b.op) < 0 ||
+        solve_prepare(&c, m, argv[1], argv[2]) < 0)
         goto out;
-    }
-    if (watch != Py_None) { /* a ctypes callback that runs Python: hold the GIL, check */
-        watch_problem(&prob, &wd, watch);
-        holds_python = 1;
-    }
-    if (jac_parse(jaco, n, &jm) < 0) goto out;
-    holds_python |= jac_wrap(&prob, jaco, jm, eargs, &cj, &wj);
-    o.dense = dense;
-    if (event_list_parse(evo, termo, diro, &el, &o) < 0) goto out;
-    if (el.count) {
-        if (event_fns(evo, el.count, eargs, n, sys.params ? PyArray_DATA(sys.params) : NULL,
-                      sys.params ? (size_t)PyArray_SIZE(sys.params) : 0, 0, &pe) < 0)
-            goto out;
-        o.events_data = o.action_data = &pe;
-        holds_python |= !el.all_c; /* impacts alone run in C */
-    }
-
-    prob.replayable = !holds_python; /* plain C all through: a block may be run again */
+    c.prob.replayable = !c.holds_python; /* plain C all through: a block may be run again */
     mp_ode_result r;
     int rc;
-    if (holds_python) {
-        rc = mp_ode_solve(m, &prob, oa.t0, oa.tf, PyArray_DATA(y0), &o, &r);
+    const double *y0 = PyArray_DATA(c.y0);
+    if (c.holds_python) {
+        rc = mp_ode_solve(m, &c.prob, c.b.op.t0, c.b.op.tf, y0, &c.b.o, &r);
     } else {
         Py_BEGIN_ALLOW_THREADS
-        rc = mp_ode_solve(m, &prob, oa.t0, oa.tf, PyArray_DATA(y0), &o, &r);
+        rc = mp_ode_solve(m, &c.prob, c.b.op.t0, c.b.op.tf, y0, &c.b.o, &r);
         Py_END_ALLOW_THREADS
     }
     if (mp_status_lookup(rc)->raises == 2) mp_py_raise(rc, "solve");
-    else result = result_to_python(&sys, &r, dense, oa.max_steps);
+    else result = result_to_python(&c.b.sys, &r, c.b.op.dense, c.b.op.max_steps);
     mp_ode_result_free(&r);
 out:
-    py_system_clear(&sys);
-    ode_args_clear(&oa);
-    event_fns_free(&pe);
-    event_list_clear(&el);
-    Py_XDECREF(y0);
-    Py_XDECREF(jm);
-    PyMem_Free(perm);
+    solve_call_clear(&c);
     return result;
 }
 
@@ -1123,10 +595,7 @@ typedef struct {
     const_jac *cjs;
     py_with_jac *wjs;
     py_watched *watched;
-    size_t nimp;
     mp_ode_result *results; /* with events: each trajectory's whole result */
-    mp_impact *imps;        /* the events as the lanes run them (all impacts), or NULL */
-    PyArrayObject **imp_e;  /* ... their per-trajectory restitutions (owned) */
 } many_adapters;
 
 static void many_adapters_clear(many_adapters *a)
@@ -1146,47 +615,7 @@ static void many_adapters_clear(many_adapters *a)
     PyMem_Free(a->wjs);
     PyMem_Free(a->watched);
     PyMem_Free(a->results);
-    if (a->imp_e)
-        for (size_t q = 0; a->imps && q < a->nimp; q++) Py_XDECREF(a->imp_e[q]);
-    PyMem_Free(a->imp_e);
-    PyMem_Free(a->imps);
     memset(a, 0, sizeof *a);
-}
-
-/* Contract: the event entries evo (all C impacts: el->all_c) as the lanes run
- * them, into a->imps (n_events of them; states of n, parameter rows of
- * nparams), when each is an impact reached downwards (its direction -1): 1,
- * or 0 when the lanes cannot run them, or -1 with an exception set. */
-static int many_lane_impacts(many_adapters *a, PyObject *evo, const py_event_list *el, size_t k,
-                             size_t n, size_t nparams)
-{
-    size_t ne = (size_t)el->count;
-    const int *dir = PyArray_DATA(el->dir), *term = PyArray_DATA(el->term);
-    for (size_t q = 0; q < ne; q++)
-        if (dir[q] != -1) return 0;
-    a->imps = PyMem_Calloc(ne, sizeof *a->imps);
-    a->imp_e = PyMem_Calloc(ne, sizeof *a->imp_e);
-    a->nimp = ne;
-    if (!a->imps || !a->imp_e) {
-        PyErr_NoMemory();
-        return -1;
-    }
-    for (size_t q = 0; q < ne; q++) {
-        mp_impact *im = &a->imps[q];
-        PyObject *eo;
-        if (parse_impact(PyList_GET_ITEM(evo, (Py_ssize_t)q), (Py_ssize_t)q, n, nparams, im,
-                         &eo) < 0)
-            return -1;
-        im->max_events = term[q];
-        if (im->e_param >= 0 || PyFloat_Check(eo)) continue;
-        if (!(a->imp_e[q] = mp_py_array(eo, "restitution", 1))) return -1;
-        if ((size_t)PyArray_SIZE(a->imp_e[q]) != k) {
-            PyErr_SetString(PyExc_ValueError, "restitution needs one value per trajectory");
-            return -1;
-        }
-        im->e_rows = PyArray_DATA(a->imp_e[q]);
-    }
-    return 1;
 }
 
 /* Contract: trajectory i's rows of a Python system as leading extra
@@ -1253,190 +682,228 @@ out:
     return result;
 }
 
-/* Contract: ode_solve_many(method, system, y0s, options, *, params, args,
- * threads, progress, watch, lanes, events, terminal, direction, jac) -> see
- * many_result.  options: the nine values of ode_solve's options (integrate.py's
- * _options; t_eval required); events, terminal, direction and jac as
- * ode_solve takes them (an event function and jac are called as fun is, with
- * a trajectory's row before args).  lanes: -1 when possible, 0 never, 1
- * always (ValueError when not possible).  The binding parses and translates;
- * the ensemble's problems and its lanes are mp_ode_ensemble_build's.  An
- * ensemble stopped by a callback's exception, Ctrl-C or memory raises. */
-static PyObject *py_ode_solve_many(PyObject *self, PyObject *args, PyObject *kw)
-{
-    (void)self;
-    static char *kwlist[] = {"method", "system", "y0s", "options", "params", "args", "threads",
-                             "progress", "watch", "lanes", "events", "terminal", "direction",
-                             "jac", "band", NULL};
-    const char *mname;
-    PyObject *spec, *y0o, *opts, *paro = Py_None, *eargs = NULL, *watch = Py_None;
-    PyObject *evo = Py_None, *termo = Py_None, *diro = Py_None, *jaco = Py_None;
-    PyObject *bando = Py_None;
-    int threads = 1, want_lanes = -1;
-    PyObject *progress = Py_False; /* False, True (a stderr line) or a callable report(done, total) */
-    if (!PyArg_ParseTupleAndKeywords(args, kw, "sOOO!|$OO!iOOiOOOOO", kwlist, &mname, &spec,
-                                     &y0o, &PyTuple_Type, &opts, &paro, &PyTuple_Type, &eargs,
-                                     &threads, &progress, &watch, &want_lanes, &evo, &termo,
-                                     &diro, &jaco, &bando))
-        return NULL;
-    if (PyTuple_GET_SIZE(opts) != 9) {
-        PyErr_SetString(PyExc_TypeError, "options: t0, tf, rtol, atol, t_eval, h, first_step, "
-                                         "max_step and max_steps");
-        return NULL;
-    }
-    if (watch != Py_None && !PyList_Check(watch)) {
-        PyErr_SetString(PyExc_TypeError, "watch must be a list");
-        return NULL;
-    }
-    const mp_ode_method *m = mp_ode_method_find(mname);
-    if (!m) return PyErr_Format(PyExc_ValueError, "unknown method %s", mname);
-    if (!eargs) eargs = PyTuple_New(0);
-    else Py_INCREF(eargs);
-    if (!eargs) return NULL;
-    PyArrayObject *y0s = NULL, *par = NULL, *yout = NULL, *jm = NULL;
-    PyObject *result = NULL;
-    ode_args oa = {0};
-    mp_ode_options o;
-    mp_ode_outcome *outc = NULL;
-    py_event_list el = {0};
-    many_adapters ad = {0};
-    mp_ode_ensemble ens = {0};
-    py_system sys;
-    memset(&sys, 0, sizeof sys);
-    size_t k = 0, np = 0;
-    size_t *perm = NULL;
 
-    if (!(y0s = mp_py_array(y0o, "y0s", 2))) goto out;
-    k = ad.k = (size_t)PyArray_DIM(y0s, 0);
-    size_t n = (size_t)PyArray_DIM(y0s, 1);
-    if (ode_args_from_argv(&PyTuple_GET_ITEM(opts, 0), n, &oa, &o) < 0) goto out;
-    if (!oa.tev) {
+/* Contract: each trajectory's problem with its row (rows: k of np) where
+ * the caller passes it: a Python system's as leading arguments (its tuple:
+ * the row, then args), a C callback's as user_data.  0, or -1 with an
+ * exception set. */
+static int many_caller_rows(many_adapters *ad, mp_ode_ensemble *ens, const py_system *sys,
+                            const double *rows, size_t np, PyObject *args)
+{
+    size_t k = ad->k;
+    if (sys->holds_python) {
+        if (many_row_tuples(ad, rows, np, args) < 0) return -1;
+        if (!(ad->fns = PyMem_Calloc(k, sizeof *ad->fns))) goto nomem;
+        for (size_t i = 0; i < k; i++) {
+            ad->fns[i] = sys->fn;
+            ad->fns[i].args = ad->tuples[i];
+            ens->probs[i].data = &ad->fns[i];
+        }
+        return 0;
+    }
+    if (!(ad->cfns = PyMem_Calloc(k, sizeof *ad->cfns))) goto nomem;
+    for (size_t i = 0; i < k; i++) { /* a C callback gets a pointer to its row as user_data */
+        ad->cfns[i] = sys->cfn.fn;
+        ad->cfns[i].user_data = (double *)rows + i * np;
+        ens->probs[i].data = &ad->cfns[i];
+    }
+    return 0;
+nomem:
+    PyErr_NoMemory();
+    return -1;
+}
+
+/* One ode_solve_many call: its state, the ensemble and the adapters of its
+ * trajectories, dropped together by many_call_clear. */
+typedef struct {
+    ode_call b;
+    PyArrayObject *y0s, *par, *yout;
+    size_t k, n, np, npar; /* trajectories, states, params' columns, an event's params */
+    mp_ode_outcome *outc;
+    py_lane_impacts li;
+    many_adapters ad;
+    mp_ode_ensemble ens;
+} many_call;
+
+static void many_call_clear(many_call *c)
+{
+    many_adapters_clear(&c->ad);
+    lane_impacts_clear(&c->li);
+    mp_ode_ensemble_free(&c->ens);
+    PyMem_Free(c->outc);
+    ode_call_clear(&c->b);
+    Py_CLEAR(c->y0s);
+    Py_CLEAR(c->par);
+    Py_CLEAR(c->yout);
+}
+
+/* Contract: c's inputs from the system spec and y0o with c->b.op's options:
+ * the states, tolerances and samples, the parameter rows, the system and its
+ * band, the Jacobian and the event list.  0, or -1 with an exception set. */
+static int many_inputs(many_call *c, PyObject *spec, PyObject *y0o)
+{
+    const ode_opts *op = &c->b.op;
+    if (!(c->y0s = mp_py_array(y0o, "y0s", 2))) return -1;
+    c->k = c->ad.k = (size_t)PyArray_DIM(c->y0s, 0);
+    c->n = (size_t)PyArray_DIM(c->y0s, 1);
+    if (ode_args_fill(op, c->n, &c->b.oa, &c->b.o) < 0) return -1;
+    if (!c->b.oa.tev) {
         PyErr_SetString(PyExc_ValueError, "solve_many needs t_eval");
-        goto out;
+        return -1;
     }
-    if (paro != Py_None) {
-        if (!(par = mp_py_array(paro, "params", 2))) goto out;
-        if ((size_t)PyArray_DIM(par, 0) != k) {
+    if (op->params != Py_None) {
+        if (!(c->par = mp_py_array(op->params, "params", 2))) return -1;
+        if ((size_t)PyArray_DIM(c->par, 0) != c->k) {
             PyErr_SetString(PyExc_ValueError, "params must have one row per trajectory");
-            goto out;
+            return -1;
         }
-        np = (size_t)PyArray_DIM(par, 1);
+        c->np = (size_t)PyArray_DIM(c->par, 1);
     }
-    if (py_system_parse(spec, n, &sys) < 0) goto out;
-    if (band_parse(bando, n, &sys.prob, &perm) < 0) goto out;
-    const char *kind = PyUnicode_AsUTF8(PyTuple_GET_ITEM(spec, 0));
-    if (par && !sys.model && !sys.params && !sys.holds_python && sys.cfn.nq) {
+    const py_system *s = &c->b.sys;
+    if (py_system_parse(spec, c->n, &c->b.sys) < 0 ||
+        band_parse(op->band, c->n, &c->b.sys.prob, &c->b.perm) < 0)
+        return -1;
+    if (c->par && !s->model && !s->params && !s->holds_python && s->cfn.nq) {
         PyErr_SetString(PyExc_ValueError, "params are not supported for SecondOrder C callbacks");
-        goto out;
+        return -1;
     }
-    if (jac_parse(jaco, n, &jm) < 0 || event_list_parse(evo, termo, diro, &el, &o) < 0)
-        goto out;
-    const double *rows = par ? PyArray_DATA(par) : NULL;
+    if (jac_parse(op->jac, c->n, &c->b.jm) < 0 ||
+        event_list_parse(op->events, op->terminal, op->direction, &c->b.el, &c->b.o) < 0)
+        return -1;
     /* the parameter vector each trajectory's events see (an impact's e_param) */
-    size_t nparams = sys.params ? (size_t)PyArray_SIZE(sys.params) : 0;
-    size_t npar = par && (sys.model || sys.params) ? np : nparams;
+    size_t nparams = s->params ? (size_t)PyArray_SIZE(s->params) : 0;
+    c->npar = c->par && (s->model || s->params) ? c->np : nparams;
+    return 0;
+}
+
+/* Contract: c's ensemble (mp_ode_ensemble_build's problems and lanes) from
+ * its inputs.  0, or -1 with an exception set. */
+static int many_build(many_call *c, const mp_ode_method *m)
+{
+    const py_system *s = &c->b.sys;
+    const ode_opts *op = &c->b.op;
     int lane_imps = 0; /* impacts alone: the lanes run them too */
-    if (el.count && el.all_c &&
-        (lane_imps = many_lane_impacts(&ad, evo, &el, k, n, npar)) < 0)
-        goto out;
-    ens = (mp_ode_ensemble){
-        .m = m, .base = sys.prob, .k = k, .n = n, .rows = rows, .np = np,
-        .rows_kind = !par ? MP_ENS_ROWS_NONE : sys.model ? MP_ENS_ROWS_SCENE
-                   : sys.params ? MP_ENS_ROWS_DATA : MP_ENS_ROWS_CALLER,
-        .model = sys.model, .params = sys.params ? PyArray_DATA(sys.params) : NULL,
-        .nparams = nparams,
-        .torque = sys.torque.fn ? &sys.torque : NULL, .lane_rhs = sys.lanes,
-        .holds_python = sys.holds_python || watch != Py_None || (jaco != Py_None && !jm) ||
-                        (el.count && !el.all_c),
-        .want_lanes = want_lanes, .impacts = lane_imps > 0 ? ad.imps : NULL,
-        .n_impacts = lane_imps > 0 ? ad.nimp : 0};
-    int rc = mp_ode_ensemble_build(&ens, oa.t0, oa.tf, &o);
+    if (c->b.el.count && c->b.el.all_c &&
+        (lane_imps = lane_impacts_parse(&c->li, op->events, &c->b.el, c->k, c->n, c->npar)) < 0)
+        return -1;
+    c->ens = (mp_ode_ensemble){
+        .m = m, .base = s->prob, .k = c->k, .n = c->n,
+        .rows = c->par ? PyArray_DATA(c->par) : NULL, .np = c->np,
+        .rows_kind = !c->par ? MP_ENS_ROWS_NONE : s->model ? MP_ENS_ROWS_SCENE
+                   : s->params ? MP_ENS_ROWS_DATA : MP_ENS_ROWS_CALLER,
+        .model = s->model, .params = s->params ? PyArray_DATA(s->params) : NULL,
+        .nparams = s->params ? (size_t)PyArray_SIZE(s->params) : 0,
+        .torque = s->torque.fn ? &s->torque : NULL, .lane_rhs = s->lanes,
+        .holds_python = s->holds_python || op->watch != Py_None ||
+                        (op->jac != Py_None && !c->b.jm) || (c->b.el.count && !c->b.el.all_c),
+        .want_lanes = op->lanes, .impacts = lane_imps > 0 ? c->li.imps : NULL,
+        .n_impacts = lane_imps > 0 ? c->li.n : 0};
+    int rc = mp_ode_ensemble_build(&c->ens, c->b.op.t0, c->b.op.tf, &c->b.o);
     if (rc != MP_OK) {
-        ensemble_error(&ens, rc, kind);
-        goto out;
+        ensemble_error(&c->ens, rc, s->kind->name);
+        return -1;
     }
-    /* the caller's part: Python rows and callbacks, events, Jacobians, watches */
-    if (par && ens.rows_kind == MP_ENS_ROWS_CALLER) {
-        if (sys.holds_python) {
-            if (many_row_tuples(&ad, rows, np, eargs) < 0) goto out;
-            if (!(ad.fns = PyMem_Calloc(k, sizeof *ad.fns))) goto nomem;
-            for (size_t i = 0; i < k; i++) {
-                ad.fns[i] = sys.fn;
-                ad.fns[i].args = ad.tuples[i];
-                ens.probs[i].data = &ad.fns[i];
-            }
-        } else { /* a C callback gets a pointer to its row as user_data */
-            if (!(ad.cfns = PyMem_Calloc(k, sizeof *ad.cfns))) goto nomem;
-            for (size_t i = 0; i < k; i++) {
-                ad.cfns[i] = sys.cfn.fn;
-                ad.cfns[i].user_data = (double *)rows + i * np;
-                ens.probs[i].data = &ad.cfns[i];
-            }
-        }
+    return 0;
+}
+
+/* Contract: the caller's part of each trajectory's problem (the ensemble
+ * builds the rest): a Python system's rows as leading arguments or a C
+ * callback's row as user_data, the watch, the Jacobian, the events.  0, or
+ * -1 with an exception set. */
+static int many_attach(many_call *c)
+{
+    many_adapters *ad = &c->ad;
+    mp_ode_ensemble *ens = &c->ens;
+    const ode_opts *op = &c->b.op;
+    size_t k = c->k;
+    const double *rows = c->par ? PyArray_DATA(c->par) : NULL;
+    if (c->par && ens->rows_kind == MP_ENS_ROWS_CALLER &&
+        many_caller_rows(ad, ens, &c->b.sys, rows, c->np, op->args) < 0)
+        return -1;
+    if (k && op->watch != Py_None) { /* a ctypes callback that runs Python: see py_watched */
+        if (!(ad->watched = PyMem_Calloc(k, sizeof *ad->watched))) goto nomem;
+        for (size_t i = 0; i < k; i++) watch_problem(&ens->probs[i], &ad->watched[i], op->watch);
     }
-    if (k && watch != Py_None) { /* a ctypes callback that runs Python: see py_watched */
-        if (!(ad.watched = PyMem_Calloc(k, sizeof *ad.watched))) goto nomem;
-        for (size_t i = 0; i < k; i++) watch_problem(&ens.probs[i], &ad.watched[i], watch);
-    }
-    if (k && jaco != Py_None) {
-        if (!(ad.cjs = PyMem_Calloc(k, sizeof *ad.cjs)) ||
-            !(ad.wjs = PyMem_Calloc(k, sizeof *ad.wjs)))
+    if (k && op->jac != Py_None) {
+        if (!(ad->cjs = PyMem_Calloc(k, sizeof *ad->cjs)) ||
+            !(ad->wjs = PyMem_Calloc(k, sizeof *ad->wjs)))
             goto nomem;
         for (size_t i = 0; i < k; i++)
-            jac_wrap(&ens.probs[i], jaco, jm, ad.tuples ? ad.tuples[i] : eargs, &ad.cjs[i],
-                     &ad.wjs[i]);
+            jac_wrap(&ens->probs[i], op->jac, c->b.jm, ad->tuples ? ad->tuples[i] : op->args,
+                     &ad->cjs[i], &ad->wjs[i]);
     }
-    if (k && el.count) { /* each trajectory's event adapters (its args) and whole result */
-        if (!(ad.evs = PyMem_Calloc(k, sizeof *ad.evs)) ||
-            !(ad.evdata = PyMem_Calloc(k, sizeof *ad.evdata)) ||
-            !(ad.results = PyMem_Calloc(k, sizeof *ad.results)))
+    if (k && c->b.el.count) { /* each trajectory's event adapters (its args) and whole result */
+        if (!(ad->evs = PyMem_Calloc(k, sizeof *ad->evs)) ||
+            !(ad->evdata = PyMem_Calloc(k, sizeof *ad->evdata)) ||
+            !(ad->results = PyMem_Calloc(k, sizeof *ad->results)))
             goto nomem;
         for (size_t i = 0; i < k; i++) {
-            const double *pv = rows && ens.rows_kind != MP_ENS_ROWS_CALLER ? rows + i * np
-                                                                            : ens.params;
-            if (event_fns(evo, el.count, ad.tuples ? ad.tuples[i] : eargs, n, pv, npar, i,
-                          &ad.evs[i]) < 0)
-                goto out;
-            ad.evdata[i] = &ad.evs[i];
+            const double *pv = rows && ens->rows_kind != MP_ENS_ROWS_CALLER ? rows + i * c->np
+                                                                             : ens->params;
+            if (event_fns(op->events, c->b.el.count, ad->tuples ? ad->tuples[i] : op->args, c->n,
+                          pv, c->npar, i, &ad->evs[i]) < 0)
+                return -1;
+            ad->evdata[i] = &ad->evs[i];
         }
     }
-    if (!(outc = PyMem_Calloc(k ? k : 1, sizeof *outc))) goto nomem;
-    npy_intp shape[3] = {(npy_intp)k, (npy_intp)n, (npy_intp)o.n_eval};
-    if (!(yout = mp_py_empty(3, shape))) goto out;
+    return 0;
+nomem:
+    PyErr_NoMemory();
+    return -1;
+}
+
+/* Contract: c's ensemble run (with the GIL released unless it calls Python)
+ * into its samples and outcomes -> many_result, or NULL with an exception. */
+static PyObject *many_run(many_call *c, const mp_ode_method *m)
+{
+    size_t k = c->k;
+    mp_ode_ensemble *ens = &c->ens;
+    many_adapters *ad = &c->ad;
+    if (!(c->outc = PyMem_Calloc(k ? k : 1, sizeof *c->outc))) return PyErr_NoMemory();
+    npy_intp shape[3] = {(npy_intp)k, (npy_intp)c->n, (npy_intp)c->b.o.n_eval};
+    if (!(c->yout = mp_py_empty(3, shape))) return NULL;
+    PyObject *progress = c->b.op.progress; /* False, True (a stderr line) or report(done, total) */
     many_progress_ctx pctx = {0, PyCallable_Check(progress) ? progress : NULL};
     void (*report)(size_t, size_t, void *) =
         pctx.report || PyObject_IsTrue(progress) == 1 ? many_progress : NULL;
-    if (ens.holds_python) {
-        rc = mp_ode_solve_many(m, ens.probs, NULL, k, oa.t0, oa.tf, PyArray_DATA(y0s), &o, 1,
-                               PyArray_DATA(yout), outc, ad.results, ad.evdata, report, &pctx);
+    const double *y0s = PyArray_DATA(c->y0s);
+    double *yout = PyArray_DATA(c->yout);
+    const ode_opts *op = &c->b.op;
+    int rc;
+    if (ens->holds_python) {
+        rc = mp_ode_solve_many(m, ens->probs, NULL, k, op->t0, op->tf, y0s, &c->b.o, 1, yout,
+                               c->outc, ad->results, ad->evdata, report, &pctx);
     } else {
         Py_BEGIN_ALLOW_THREADS
-        rc = mp_ode_solve_many(m, ens.probs, ens.lanes, k, oa.t0, oa.tf, PyArray_DATA(y0s), &o,
-                               threads, PyArray_DATA(yout), outc, ad.results, ad.evdata, report,
+        rc = mp_ode_solve_many(m, ens->probs, ens->lanes, k, op->t0, op->tf, y0s, &c->b.o,
+                               op->threads, yout, c->outc, ad->results, ad->evdata, report,
                                &pctx);
         Py_END_ALLOW_THREADS
     }
-    if (rc != MP_OK) {
-        mp_py_raise(rc, "solve_many");
-        goto out;
-    }
-    result = many_result(&sys, outc, ad.results, k, yout, ens.lanes != NULL, oa.max_steps);
-    goto out;
-nomem:
-    PyErr_NoMemory();
-out:
-    many_adapters_clear(&ad);
-    mp_ode_ensemble_free(&ens);
-    PyMem_Free(outc);
-    py_system_clear(&sys);
-    ode_args_clear(&oa);
-    event_list_clear(&el);
-    Py_XDECREF(eargs);
-    Py_XDECREF(y0s);
-    Py_XDECREF(par);
-    Py_XDECREF(yout);
-    Py_XDECREF(jm);
-    PyMem_Free(perm);
+    if (rc != MP_OK) return mp_py_raise(rc, "solve_many");
+    return many_result(&c->b.sys, c->outc, ad->results, k, c->yout, ens->lanes != NULL,
+                       c->b.op.max_steps);
+}
+
+/* Contract: ode_solve_many(method, system, y0s, options) -> see many_result.
+ * options: the dict of integrate.py's _options (see ode_opt_rows; t_eval
+ * required), events, terminal, direction and jac as ode_solve takes them
+ * (an event function and jac are called as fun is, with a trajectory's row
+ * before args); lanes: -1 when possible, 0 never, 1 always (ValueError when
+ * not possible).  The binding parses and translates; the ensemble's problems
+ * and its lanes are mp_ode_ensemble_build's.  An ensemble stopped by a
+ * callback's exception, Ctrl-C or memory raises. */
+static PyObject *py_ode_solve_many(PyObject *self, PyObject *const *argv, Py_ssize_t nargs)
+{
+    (void)self;
+    const mp_ode_method *m;
+    many_call c;
+    memset(&c, 0, sizeof c);
+    PyObject *result = NULL;
+    if (ode_call_args(argv, nargs, FOR_MANY, &m, &c.b.op) == 0 &&
+        many_inputs(&c, argv[1], argv[2]) == 0 && many_build(&c, m) == 0 && many_attach(&c) == 0)
+        result = many_run(&c, m);
+    many_call_clear(&c);
     return result;
 }
 
@@ -1484,12 +951,13 @@ static PyObject *py_ode_methods(PyObject *self, PyObject *unused)
     for (size_t i = 0; mp_ode_methods[i]; i++) {
         const mp_ode_method *m = mp_ode_methods[i];
         PyObject *d = Py_BuildValue(
-            "{s:s,s:i,s:O,s:O,s:O,s:O,s:i,s:O,s:O,s:O}", "name", m->name, "order", m->order,
+            "{s:s,s:i,s:O,s:O,s:O,s:O,s:i,s:O,s:O,s:O,s:O}", "name", m->name, "order", m->order,
             "adaptive", m->adaptive ? Py_True : Py_False, "implicit",
             m->implicit ? Py_True : Py_False, "symplectic", m->symplectic ? Py_True : Py_False,
             "needs_jacobian", m->needs_jacobian ? Py_True : Py_False, "dense_output",
             m->dense_order, "lanes", m->lanes != MP_LANE_NONE ? Py_True : Py_False, "rigid",
-            m->rigid ? Py_True : Py_False, "compensated", m->compensated ? Py_True : Py_False);
+            m->rigid ? Py_True : Py_False, "compensated", m->compensated ? Py_True : Py_False,
+            "scalar_rtol", m->scalar_rtol ? Py_True : Py_False);
         if (!d || PyList_Append(lst, d) < 0) {
             Py_XDECREF(d);
             Py_DECREF(lst);
@@ -1504,7 +972,7 @@ PyMethodDef mp_py_ode_methods[] = {
     {"ode_solve", (PyCFunction)(void (*)(void))py_ode_solve, METH_FASTCALL,
      "Integrate an ODE system (internal; use mechpy.solve)."},
     {"ode_solve_many", (PyCFunction)(void (*)(void))py_ode_solve_many,
-     METH_VARARGS | METH_KEYWORDS, "Integrate an ensemble (internal; use mechpy.solve_many)."},
+     METH_FASTCALL, "Integrate an ensemble (internal; use mechpy.solve_many)."},
     {"ode_dense_eval", py_ode_dense_eval, METH_VARARGS,
      "Evaluate stored dense output (internal)."},
     {"ode_methods", py_ode_methods, METH_NOARGS, "The method table (internal)."},

@@ -108,6 +108,51 @@ static int py_var_parse_scene(PyObject *obj, py_var_spec *s, const char *what, m
     return 0;
 }
 
+/* Parse ("python", f, d) into s: f called from C with the GIL held. */
+static int py_var_parse_python(PyObject *obj, py_var_spec *s, const char *what, mp_py_refs *k)
+{
+    (void)k;
+    if (PyTuple_GET_SIZE(obj) != 3 || !PyCallable_Check(PyTuple_GET_ITEM(obj, 1))) {
+        PyErr_Format(PyExc_TypeError, "%s: (\"python\", f, d) needs a callable f", what);
+        return -1;
+    }
+    if (py_var_dim(PyTuple_GET_ITEM(obj, 2), &s->F.d, what) < 0) return -1;
+    s->fn = PyTuple_GET_ITEM(obj, 1);
+    s->F.eval = py_var_eval;
+    s->F.ctx = s;
+    return 0;
+}
+
+/* Parse ("c", capsule, params, d) into s: the compiled Lagrangian on params
+ * (held in k). */
+static int py_var_parse_c(PyObject *obj, py_var_spec *s, const char *what, mp_py_refs *k)
+{
+    PyObject *cap = PyTuple_GET_SIZE(obj) == 4 ? PyTuple_GET_ITEM(obj, 1) : NULL;
+    if (!cap || !PyCapsule_IsValid(cap, MP_VAR_CAPSULE)) {
+        PyErr_Format(PyExc_TypeError, "%s: (\"c\", capsule, params, d) needs a capsule "
+                     "from _variational_capsule", what);
+        return -1;
+    }
+    if (py_var_dim(PyTuple_GET_ITEM(obj, 3), &s->F.d, what) < 0) return -1;
+    py_var_cfun *cf = PyCapsule_GetPointer(cap, MP_VAR_CAPSULE);
+    if (!cf) return -1;
+    PyArrayObject *params = mp_py_hold(k, mp_py_array(PyTuple_GET_ITEM(obj, 2), "params", 1));
+    if (!params) return -1;
+    s->F.eval = cf->fn;
+    s->F.ctx = PyArray_DATA(params);
+    return 0;
+}
+
+/* The tagged integrand kinds, one row each (an untagged spec is a built-in). */
+static const struct {
+    const char *tag;
+    int (*parse)(PyObject *obj, py_var_spec *s, const char *what, mp_py_refs *k);
+} py_var_kinds[] = {
+    {"python", py_var_parse_python},
+    {"c", py_var_parse_c},
+    {"scene", py_var_parse_scene},
+};
+
 /* Parse a spec (see the file comment) into s; the arrays it keeps (the
  * parameters) are held in k.  -1 with an exception set. */
 static int py_var_parse(PyObject *obj, py_var_spec *s, const char *what, mp_py_refs *k)
@@ -123,34 +168,9 @@ static int py_var_parse(PyObject *obj, py_var_spec *s, const char *what, mp_py_r
     }
     const char *name = PyUnicode_AsUTF8(tag);
     if (!name) return -1;
-    if (strcmp(name, "python") == 0) {
-        if (len != 3 || !PyCallable_Check(PyTuple_GET_ITEM(obj, 1))) {
-            PyErr_Format(PyExc_TypeError, "%s: (\"python\", f, d) needs a callable f", what);
-            return -1;
-        }
-        if (py_var_dim(PyTuple_GET_ITEM(obj, 2), &s->F.d, what) < 0) return -1;
-        s->fn = PyTuple_GET_ITEM(obj, 1);
-        s->F.eval = py_var_eval;
-        s->F.ctx = s;
-        return 0;
-    }
-    if (strcmp(name, "c") == 0) {
-        PyObject *cap = len == 4 ? PyTuple_GET_ITEM(obj, 1) : NULL;
-        if (!cap || !PyCapsule_IsValid(cap, MP_VAR_CAPSULE)) {
-            PyErr_Format(PyExc_TypeError, "%s: (\"c\", capsule, params, d) needs a capsule "
-                         "from _variational_capsule", what);
-            return -1;
-        }
-        if (py_var_dim(PyTuple_GET_ITEM(obj, 3), &s->F.d, what) < 0) return -1;
-        py_var_cfun *cf = PyCapsule_GetPointer(cap, MP_VAR_CAPSULE);
-        if (!cf) return -1;
-        PyArrayObject *params = mp_py_hold(k, mp_py_array(PyTuple_GET_ITEM(obj, 2), "params", 1));
-        if (!params) return -1;
-        s->F.eval = cf->fn;
-        s->F.ctx = PyArray_DATA(params);
-        return 0;
-    }
-    if (strcmp(name, "scene") == 0) return py_var_parse_scene(obj, s, what, k);
+    for (size_t i = 0; i < sizeof py_var_kinds / sizeof py_var_kinds[0]; i++)
+        if (PyUnicode_CompareWithASCIIString(tag, py_var_kinds[i].tag) == 0)
+            return py_var_kinds[i].parse(obj, s, what, k);
     if (len != 2) {
         PyErr_Format(PyExc_TypeError, "%s: a built-in is a pair (name, params)", what);
         return -1;
