@@ -38,6 +38,8 @@ rm -rf "$out/mechpy"
 (cd mechpy && find . -type f -not -path '*/__pycache__/*' -not -name '*.so' -print0 |
     xargs -0 -I{} install -D -m 644 {} "../$out/mechpy/{}")
 cp "$out"/meson/_core*.so "$out/mechpy/"
+# what the build generates into the package (the C every generated system shares)
+cp "$out"/meson/csrc/_ctext.py "$out/mechpy/symbolic/"
 # the editable install's import hook (a .pth in .venv) would load the normal build:
 # a sitecustomize on PYTHONPATH removes it, in this interpreter and its children
 mkdir -p "$out/site"
