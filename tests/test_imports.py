@@ -3,6 +3,7 @@ and the "Layout" diagram of CONTRIBUTING.md is the graph the code has."""
 from __future__ import annotations
 
 import ast
+import importlib.util
 import re
 from pathlib import Path
 
@@ -35,6 +36,19 @@ def import_graph() -> dict:
     ``from .pkg import name`` counts as importing pkg.name when that is a
     module, else pkg (a package the module lies in does not count)."""
     files = {_module_name(p): p for p in PKG.rglob("*.py")}
+    built = set()       # modules the build generates (not files of an editable tree)
+
+    def exists(name: str) -> bool:
+        if name in files or name in built:
+            return True
+        try:
+            found = name.startswith("mechpy.") and importlib.util.find_spec(name) is not None
+        except (ImportError, ValueError):
+            found = False
+        if found:
+            built.add(name)
+        return found
+
     graph = {}
     for mod, path in files.items():
         is_pkg = path.name == "__init__.py"
@@ -46,13 +60,13 @@ def import_graph() -> dict:
             else:
                 stem = base[:len(base) - node.level + 1] if node.level else []
                 head = ".".join(stem + ([node.module] if node.module else []))
-                targets = [f"{head}.{a.name}" if f"{head}.{a.name}" in files else head
+                targets = [f"{head}.{a.name}" if exists(f"{head}.{a.name}") else head
                            for a in node.names]
             # a module's own packages are imported before it, never through it
-            deps |= {t for t in targets if t in files and t != mod
+            deps |= {t for t in targets if exists(t) and t != mod
                      and not mod.startswith(t + ".")}
         graph[mod] = deps
-    return graph
+    return graph | {m: set() for m in built if m not in graph}
 
 
 def _cycle(graph: dict):

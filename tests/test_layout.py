@@ -915,7 +915,10 @@ def test_no_merge_conflict_markers_in_the_tree():
 # csrc/py is a binding that only translates: short functions, system kinds
 # as one table, and CONTRIBUTING's "new method" recipe true to the tree.
 
-_ROOT = __import__("pathlib").Path(__file__).resolve().parents[1]
+# the checkout (dev.sh names it in MECHPY_SOURCE_DIR when the suite runs from a copy of
+# tests/ beside an installed mechpy): these tests read its sources
+_ROOT = __import__("pathlib").Path(__import__("os").environ.get("MECHPY_SOURCE_DIR")
+                                   or __import__("pathlib").Path(__file__).resolve().parents[1])
 _FN_START = __import__("re").compile(r"^(?!typedef|static const|const|PyMethodDef|struct)"
                                      r"[A-Za-z_][\w \*]*?\b(\w+)\s*\(")
 

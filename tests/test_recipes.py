@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import gc
 import inspect
+import os
 import pathlib
 import re
 import subprocess
@@ -17,7 +18,9 @@ import pytest
 import mechpy as mp
 from mechpy import _core, _motion
 
-ROOT = pathlib.Path(__file__).parents[1]
+# the checkout (dev.sh names it in MECHPY_SOURCE_DIR when the suite runs from a copy of
+# tests/ beside an installed mechpy): the recipes name its files
+ROOT = pathlib.Path(os.environ.get("MECHPY_SOURCE_DIR") or pathlib.Path(__file__).parents[1])
 
 
 def _section(title: str) -> str:
