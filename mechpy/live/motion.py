@@ -211,8 +211,138 @@ def _particle(system, times, Y):
                        f"particle: ({names[0]}, {names[1]}) in the plane"))
 
 
+#: the shapes of shapes=, and what their size is (a number: the first; the rest follow it)
+_SHAPES = {"sphere": "radius", "box": "sides (a, b, c) along the body's x, y, z",
+           "cylinder": "(radius, length), its axis the body's y",
+           "cone": "(radius, height), its axis the body's y",
+           "torus": "(radius, tube radius), its axis the body's y"}
+_PALETTE = ("#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2",
+            "#17becf")
+
+
+def _shape_of(name, given, default):
+    """(kind, size list) of shapes[name]: a kind's name or dict(kind=..., size=...);
+    ``default`` the size a number or None stands for."""
+    if isinstance(given, str):
+        kind, size = given, None
+    elif isinstance(given, dict):
+        extra = sorted(set(given) - {"kind", "size", "color"})
+        if extra or "kind" not in given:
+            raise ValueError(f"shapes[{name!r}] is dict(kind=..., size=..., color=...), got "
+                             f"keys {sorted(given)}")
+        kind, size = given["kind"], given.get("size")
+    else:
+        raise TypeError(f"shapes[{name!r}] must be a shape's name or dict(kind=..., "
+                        f"size=...), got {type(given).__name__}")
+    if kind not in _SHAPES:
+        raise ValueError(f"shapes[{name!r}]: unknown shape kind {kind!r}; one of "
+                         f"{tuple(_SHAPES)}")
+    if size is None:
+        return kind, default(kind)
+    size = np.atleast_1d(as_array(size, f"shapes[{name!r}]['size']", positive=True))
+    if size.ndim != 1 or size.size > 3:
+        raise ValueError(f"shapes[{name!r}]['size'] is a number or up to 3 numbers: "
+                         f"{_SHAPES[kind]}")
+    r = float(size[0])
+    full = {"sphere": [r], "box": [r, r, r], "cylinder": [r, 2 * r], "cone": [r, 2 * r],
+            "torus": [r, 0.08 * r]}[kind]
+    full[:size.size] = size.tolist()
+    return kind, full[:3 if kind == "box" else 1 if kind == "sphere" else 2]
+
+
+def _bodies(system, times, Y, points=None, links=None, shapes=None):
+    d = _motion.bodies_drawing(system, points)
+    P, R = _motion.bodies_places(system, d, Y)
+    n, nb = P.shape[:2]
+    names = list(d["names"])
+    lo, hi = P.reshape(-1, 3).min(axis=0), P.reshape(-1, 3).max(axis=0)
+    size = float(np.max(hi - lo))
+    if size == 0:
+        size = 1.0
+    # the solids of the bodies: a rigid body's box of its principal moments (its
+    # mass's uniform box), turned to its principal axes in its frame
+    solid, slot, k = {}, [None] * nb, 0
+    for i, kind in enumerate(d["kinds"]):
+        if kind == "rigid":
+            w, E, mass = _motion.principal(d, i, system, Y[:, 0])
+            sides = _motion.box_sides(w, mass)
+            sides = np.maximum(sides, 0.02 * (sides.max() or size))     # a flat body: a plate
+            solid[i] = ("box", sides.tolist(), E)
+            slot[i] = k
+            k += 1
+    if shapes is not None and not isinstance(shapes, dict):
+        raise TypeError(f"shapes must be a dict {{body or point name: shape}}, got "
+                        f"{type(shapes).__name__}")
+    for nm, given in (shapes or {}).items():
+        if nm not in names:
+            raise ValueError(f"shapes names {nm!r}, which is no body or point of the drawing "
+                             f"(its names: {names})")
+        i = names.index(nm)
+        ref = solid[i][1] if i in solid else [0.04 * size] * 3
+        kind, sz = _shape_of(nm, given, lambda kind: {
+            "sphere": [max(ref) / 2], "box": list(ref), "cylinder": [max(ref) / 2, min(ref)],
+            "cone": [max(ref) / 2, max(ref)], "torus": [max(ref) / 2, 0.08 * max(ref)]}[kind])
+        solid[i] = (kind, sz, None, given.get("color") if isinstance(given, dict) else None)
+    bodies = []
+    for i, nm in enumerate(names):
+        c = _PALETTE[i % len(_PALETTE)]
+        kind, sz, E, *col = solid.get(i, ("sphere", [(0.02 if d["kinds"][i] == "joint" else
+                                                      0.04) * size], None))
+        b = _body(nm, (col[0] if col and col[0] else c), max(sz), shape=kind)
+        b.update(size=[float(v) for v in sz], rot=slot[i],
+                 axes=None if E is None else E.reshape(-1).tolist())
+        bodies.append(b)
+    rods = [[int(a), int(b), _GREY] for a, b in d["links"]]
+    if links is not None:
+        if points is None:
+            raise ValueError("links join points=: a mechanics model draws its own links")
+        if isinstance(links, (str, bytes)) or not hasattr(links, "__iter__"):
+            raise TypeError(f"links must be a list of pairs of point names, got {links!r}")
+        for pair in links:
+            if isinstance(pair, (str, bytes)) or len(pair) != 2:
+                raise TypeError(f"links: each link is a pair of point names, got {pair!r}")
+            ends = []
+            for e in pair:
+                if e == "O":
+                    ends.append([0.0, 0.0, 0.0])
+                elif e in names:
+                    ends.append(names.index(e))
+                else:
+                    raise ValueError(f"links: {e!r} is no point (the points: {names}, and "
+                                     "'O' the origin)")
+            rods.append([ends[0], ends[1], _DARK])
+    lines = []
+    up = [0.0, 1.0, 0.0] if points is not None else [0.0, 0.0, 1.0]
+    if d.get("ground"):
+        from ..symbolic.kinematics import numeric
+        g = numeric(d["ground"], Y[:, 0], system._vector()).reshape(-1)
+        g = g / np.linalg.norm(g)
+        up = g.tolist()
+        a = np.cross(g, [1.0, 0.0, 0.0] if abs(g[0]) < 0.9 else [0.0, 1.0, 0.0])
+        a /= np.linalg.norm(a)
+        b2 = np.cross(g, a)
+        c0 = 0.5 * (lo + hi)
+        c0 = c0 - np.dot(c0, g) * g                       # the plane through the origin
+        h = 0.75 * size + 0.5
+        for s_ in np.linspace(-h, h, 7):
+            lines.append(_polyline([c0 + s_ * a - h * b2, c0 + s_ * a + h * b2], _GREY,
+                                   "ground plane"))
+            lines.append(_polyline([c0 - h * a + s_ * b2, c0 + h * a + s_ * b2], _GREY,
+                                   "ground plane"))
+    trail = [i for i, kd in enumerate(d["kinds"]) if kd in ("point", "particle")]
+    what = ("points of the system" if points is not None else
+            f"the bodies of the model ({', '.join(names)})")
+    out = dict(P=P, bodies=bodies, rods=rods, lines=lines, up=up, trail=trail,
+               center=(0.5 * (lo + hi)).tolist(), extent=0.75 * size + 0.1 * size,
+               camera=[0.0, 0.0, 1.0] if points is not None else [1.0, -1.4, 0.8],
+               title=f"{what}: places from the system's own kinematics")
+    if R.shape[1]:
+        out["Rs"] = R
+    return out
+
+
 def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0, trail=None,
-            lengths=None, spacing=None) -> Motion:
+            lengths=None, spacing=None, points=None, links=None, shapes=None) -> Motion:
     r"""The motion of a solution in 3D, in the browser (three.js).
 
     What is drawn depends on ``kind`` (by default the drawing the system
@@ -321,6 +451,8 @@ def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0,
     >>> w.times.size, w.bodies
     (101, ['bob'])
     """
+    if kind is None and points is not None:
+        kind = "bodies"
     drawing = _motion.kind_of(system, kind)
     kind = drawing.name
     tt, y = _motion.samples(system, sol, t)                        # checks sol's shape
@@ -332,7 +464,8 @@ def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0,
              else as_scalar(trail, "trail", nonnegative=True, finite=False))
     if np.isnan(trail):
         raise ValueError("trail must be a non-negative time or np.inf, got nan")
-    options = {k: v for k, v in (("lengths", lengths), ("spacing", spacing)) if v is not None}
+    options = {k: v for k, v in (("lengths", lengths), ("spacing", spacing), ("points", points),
+                                 ("links", links), ("shapes", shapes)) if v is not None}
     for k in options:
         if k not in drawing.options:
             takers = " or ".join(repr(d.name) for d in _motion.DRAWINGS.values()
@@ -349,6 +482,7 @@ def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0,
         "kind": kind, "title": d["title"], "n": n, "nb": nb, "fps": fps, "speed": speed,
         "duration": duration, "t": pack(times), "pos": pack(d["P"].reshape(n, nb * 3)),
         "rot": pack(d["R"].reshape(n, 9)) if "R" in d else None,
+        "rots": pack(d["Rs"].reshape(n, -1)) if "Rs" in d else None,
         "bodies": d["bodies"], "rods": d["rods"], "lines": d["lines"],
         "legend": d.get("legend", [[b["color"], b["name"]] for b in d["bodies"]]),
         "trails": [{"body": b, "color": d["bodies"][b]["color"], "window": window}

@@ -90,7 +90,8 @@ def numeric(text: str, y, p) -> np.ndarray:
     e = sp.sympify(text)
     sub = {sp.Symbol(f"mp_y{i}"): float(v) for i, v in enumerate(y)}
     sub.update({sp.Symbol(f"mp_p{i}"): float(v) for i, v in enumerate(p)})
-    return np.array(sp.Matrix(e).xreplace(sub).evalf(17), dtype=float)
+    e = e if isinstance(e, sp.MatrixBase) else sp.Matrix([e])
+    return np.array(e.xreplace(sub).evalf(17), dtype=float)
 
 
 def _plain_symbols(P):
