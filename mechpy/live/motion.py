@@ -263,13 +263,15 @@ def _bodies(system, times, Y, points=None, links=None, shapes=None):
     # mass's uniform box), turned to its principal axes in its frame
     solid, slot, k = {}, [None] * nb, 0
     for i, kind in enumerate(d["kinds"]):
-        if kind == "rigid":
+        if kind != "rigid":
+            continue
+        slot[i] = k
+        k += 1
+        if d["inertia"][i] is not None and d["mass"][i] is not None:
             w, E, mass = _motion.principal(d, i, system, Y[:, 0])
             sides = _motion.box_sides(w, mass)
             sides = np.maximum(sides, 0.02 * (sides.max() or size))     # a flat body: a plate
             solid[i] = ("box", sides.tolist(), E)
-            slot[i] = k
-            k += 1
     if shapes is not None and not isinstance(shapes, dict):
         raise TypeError(f"shapes must be a dict {{body or point name: shape}}, got "
                         f"{type(shapes).__name__}")
@@ -333,7 +335,8 @@ def _bodies(system, times, Y, points=None, links=None, shapes=None):
     what = ("points of the system" if points is not None else
             f"the bodies of the model ({', '.join(names)})")
     out = dict(P=P, bodies=bodies, rods=rods, lines=lines, up=up, trail=trail,
-               center=(0.5 * (lo + hi)).tolist(), extent=0.75 * size + 0.1 * size,
+               center=(0.5 * (lo + hi)).tolist(),
+               extent=0.6 * size + 0.6 * max(max(b["size"]) for b in bodies),   # solids in view
                camera=[0.0, 0.0, 1.0] if points is not None else [1.0, -1.4, 0.8],
                title=f"{what}: places from the system's own kinematics")
     if R.shape[1]:

@@ -135,7 +135,7 @@ def model_drawing(method, ir) -> dict:
     rest in the inertial frame N (in N's components); a rigid body turned by
     its frame's direction cosines ``N.dcm(frame)`` (body to world), with its
     central inertia and mass (for the solid of its moments); a particle as a
-    sphere.  A ``System``'s joints are links between their bodies' mass
+    sphere; a System's fixed body (the ground) is not drawn.  A ``System``'s joints are links between their bodies' mass
     centres through the joint's point on the child.  The ground plane: the
     plane through the point at rest normal to the constant loads (gravity),
     for a model that rolls (velocity constraints).  A part that cannot be
@@ -154,6 +154,16 @@ def model_drawing(method, ir) -> dict:
         return {"error": str(exc)}
 
 
+def _known(plain, e, what):
+    """``e`` in the plain symbols (srepr), or None when it holds constants the
+    equations do not (a planar model's unused moments): its solid is then a
+    sphere, still turned by its frame."""
+    try:
+        return sp.srepr(plain(e, what))
+    except ValueError:
+        return None
+
+
 def _model_drawing(kind, m, ir, joints, rest_point):
     from sympy.physics.vector import Point
     N = _inertial(m)
@@ -168,8 +178,10 @@ def _model_drawing(kind, m, ir, joints, rest_point):
     if origin is None:
         raise ValueError("no point of the model is at rest in the inertial frame (set_vel(N, "
                          "0)): the drawing measures the places from one")
+    # the ground of a System (its fixed body: the inertial frame, at rest) is not drawn
+    bodies = [b for b in bodies if not (getattr(b, "frame", None) == N
+                                        and rest_point(b.masscenter, N) is b.masscenter)]
     t = _private.time()
-    n = len(m.q)
     sub = {qi: ir.Y[i] for i, qi in enumerate(m.q)}
     sub[t] = ir.T
     coef = _plain_symbols(ir.P)
@@ -188,14 +200,14 @@ def _model_drawing(kind, m, ir, joints, rest_point):
     for b in bodies:
         names.append(b.name)
         pos += list(plain(b.masscenter.pos_from(origin).to_matrix(N), f"the place of {b.name}"))
-        mass.append(sp.srepr(plain(b.mass, f"the mass of {b.name}")))
+        mass.append(_known(plain, b.mass, f"the mass of {b.name}"))
         if hasattr(b, "frame") and hasattr(b, "central_inertia"):
             F = _frame_of(b, N)
             kinds.append("rigid")
             frames.append(str(F))
             rots.append(plain(N.dcm(F), f"the direction cosines of {b.name}'s frame {F}"))
-            inertia.append(sp.srepr(plain(b.central_inertia.to_matrix(F),
-                                          f"the inertia of {b.name}")))
+            inertia.append(_known(plain, b.central_inertia.to_matrix(F),
+                                  f"the inertia of {b.name}"))
         else:
             kinds.append("particle")
             frames.append(None)
