@@ -834,6 +834,11 @@ def animate(system, sol, *, kind=None, t=None, frames=None, fps=20, trail=None, 
         whose state is (q, v) with one or two coordinates: the point at
         (0, q), its height drawn up (a bouncing ball), or at (q1, q2), with
         a fading trail.
+    ``"bodies"``
+        an :func:`mechpy.mechanics` scene: its bodies' mass centres (and a
+        ``System``'s joints) from the model's own compiled kinematics, with
+        the links between them, in its inertial frame; the solids, the
+        ground plane and ``points=`` are :func:`mechpy.live.animate`'s.
 
     A solution with jumps (events with an action, :mod:`mechpy.events`) is
     drawn as it is: its samples hold the states before and after each
@@ -849,8 +854,8 @@ def animate(system, sol, *, kind=None, t=None, frames=None, fps=20, trail=None, 
         (n, m) as ``Solution.y`` holds them, with ``t``.  Sample at the times
         to be shown (``t_eval``): frames show samples, not interpolants.
     kind : str, optional
-        One of ``"pendulum"``, ``"double_pendulum"``, ``"foucault"``, ``"top"``,
-        ``"rigid"``, ``"chain"``, ``"particle"``.
+        One of ``"bodies"``, ``"pendulum"``, ``"double_pendulum"``, ``"foucault"``,
+        ``"top"``, ``"rigid"``, ``"chain"``, ``"particle"``.
     t : array_like, shape (m,), optional
         The times of an array ``sol`` (s); monotonic (a time held twice: the
         states before and after an action).

@@ -383,6 +383,19 @@ def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0,
         the point at (0, q, 0), its height up (a bouncing ball), or at
         (q1, q2, 0), with its trail.
 
+    ``"bodies"``
+        any other system, from its own description
+        (:mod:`mechpy.symbolic.kinematics`): an :func:`mechpy.mechanics`
+        scene's rigid bodies as the uniform box of their principal moments
+        at their mass centres, turned by their frames' direction cosines
+        (``N.dcm(frame)``, body to world), particles as spheres, a
+        ``System``'s joints as links, and the ground plane of a rolling
+        model (normal to the constant loads, through the point at rest);
+        a system of :func:`mechpy.lagrangian` or :func:`mechpy.equations`
+        from ``points``, ``links`` and ``shapes``.  The places and
+        direction cosines are printed as C and evaluated for every frame in
+        one call.
+
     The frames are the states at ``duration * fps + 1`` times evenly spread
     over the solution's span: from ``sol.sol`` (dense output) when the
     solution has it, else the cubic Hermite interpolant through the samples
@@ -394,8 +407,11 @@ def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0,
     camera, play/pause, a time slider and a speed slider, and exposes
     ``window.mechpyLive``: ``play()``, ``pause()``, ``frame(i)``, ``frames()``,
     ``time()``, ``positions()`` (the places of :attr:`Motion.bodies` at the
-    frame shown, x, y, z each, in the system's units), ``lines()`` (the fixed
-    lines: nutation bounds, L, walls), ``fps()``.
+    frame shown, x, y, z each, in the system's units), ``rotations()`` (each
+    drawn solid's rotation matrix, body to world, row-major, 9 numbers a
+    solid in the order of ``positions()``; the top's and the rigid body's
+    one solid), ``lines()`` (the fixed lines: nutation bounds, L, walls,
+    the ground plane), ``fps()``.
 
     Parameters
     ----------
@@ -405,8 +421,9 @@ def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0,
         A result of :func:`mechpy.solve` (with ``dense_output=True`` the
         frames come from its interpolant), or states (n, m) with ``t``.
     kind : str, optional
-        One of ``"pendulum"``, ``"double_pendulum"``, ``"foucault"``,
-        ``"top"``, ``"rigid"``, ``"chain"``, ``"particle"``.
+        One of ``"bodies"``, ``"pendulum"``, ``"double_pendulum"``,
+        ``"foucault"``, ``"top"``, ``"rigid"``, ``"chain"``, ``"particle"``
+        (``"bodies"`` when ``points`` is given).
     t : array_like, shape (m,), optional
         The times of an array ``sol``; monotonic (a time held twice: the
         states before and after an action).
@@ -428,6 +445,18 @@ def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0,
     spacing : float, optional
         The chain's spacing at rest, in the units of x; default the largest
         displacement over 0.4.
+    points : dict, optional
+        ``{"name": (x, y, z)}``: SymPy expressions of the coordinates and
+        parameters (by name) of an :func:`mechpy.lagrangian` or
+        :func:`mechpy.equations` system, each drawn as a sphere with a
+        trail; ``positions()`` lists them in this order.
+    links : list of (str, str), optional
+        Rods between points of ``points`` (``"O"``: the origin).
+    shapes : dict, optional
+        ``{"body or point name": kind or dict(kind=..., size=..., color=...)}``
+        with kind ``"sphere"`` (size: radius), ``"box"`` (sides), ``"cylinder"``
+        (radius, length), ``"cone"`` (radius, height) or ``"torus"`` (radius,
+        tube radius); a cylinder's, cone's or torus's axis is the body's y.
 
     Returns
     -------
@@ -443,7 +472,10 @@ def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0,
         ``kind`` is unknown; ``sol`` is empty, not finite or does not hold
         the scene's states (n, m); ``t`` is missing, of another length or not
         monotonic; bad ``fps``, ``duration``, ``speed``, ``trail``,
-        ``lengths`` or ``spacing``; more than 3600 frames.
+        ``lengths`` or ``spacing``; more than 3600 frames; a point that
+        depends on a symbol that is neither a coordinate nor a parameter, a
+        link to an unknown point, an unknown shape kind or a shape for no
+        body or point.
 
     Examples
     --------
