@@ -36,19 +36,15 @@ from . import _sympy_private as _private
 __all__ = ["model_drawing", "points_drawing", "evaluate", "numeric"]
 
 
-def _printable_ir(P, n, what):
-    """What codegen._block needs of an IR: the time and parameter symbols, the
-    state size and, for its messages, the sources."""
-    return SimpleNamespace(T=sp.Symbol("mp_t"), P=list(P), n=n, Z=[],
-                           sources={what: sp.S.Zero}, show=str)
-
-
 def _source(exprs, P, n, what) -> str:
-    """The C source of ``mp_kin(m, Y, p, out)``: the expressions at each of m
-    states (rows of Y, n each) into rows of out (len(exprs) each)."""
+    """The C source of ``mp_kin(m, Y, p, out)``: the expressions (in mp_y<i>
+    and the parameter symbols P) at each of m states (rows of Y, n each) into
+    rows of out (len(exprs) each)."""
     from . import build, codegen
-    ir = _printable_ir(P, n, what)
-    ir.sources = {what: sp.Add(*exprs, evaluate=False)}
+    # what codegen._block needs of an IR: the time and parameter symbols, the state size
+    # and, for its messages, the sources
+    ir = SimpleNamespace(T=sp.Symbol("mp_t"), P=list(P), n=n, Z=[], show=str,
+                         sources={what: sp.Add(*exprs, evaluate=False)})
     block = codegen._block("gen_kin", exprs, ir, codegen._ARGS, what)
     return "\n".join([
         "/* mechpy: the kinematics of a drawing (mechpy/symbolic/kinematics.py). */",
