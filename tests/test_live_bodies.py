@@ -182,3 +182,38 @@ def test_bad_input_is_named():
     with pytest.raises(ValueError, match="points is for kind='bodies', not kind='pendulum'"):
         mp.live.animate(pend, mp.solve(pend, (0, 1), [0.1, 0.0]), kind="pendulum",
                         points=points)
+
+
+def test_system_joints_are_links_through_their_points():
+    """A System of two links on pin joints: its ground is not drawn, each
+    joint's point is placed where SymPy puts it and links the bodies it
+    joins (no page: the places are the drawing's compiled kinematics)."""
+    me = pytest.importorskip("sympy.physics.mechanics")
+    from mechpy import _motion
+    q1, q2, u1, u2 = me.dynamicsymbols("q1 q2 u1 u2")
+    l, m, g = sp.symbols("l m g")
+    ground = me.RigidBody("ground")
+    b1, b2 = me.RigidBody("link1"), me.RigidBody("link2")
+    b1.mass = b2.mass = m
+    j1 = me.PinJoint("j1", ground, b1, coordinates=q1, speeds=u1,
+                     child_point=-l * b1.frame.y, joint_axis=ground.frame.z)
+    j2 = me.PinJoint("j2", b1, b2, coordinates=q2, speeds=u2, parent_point=l * b1.frame.y,
+                     child_point=-l * b2.frame.y, joint_axis=b1.frame.z)
+    system = me.System.from_newtonian(ground)
+    system.add_bodies(b1, b2)
+    system.add_joints(j1, j2)
+    system.apply_uniform_gravity(-g * ground.frame.y)
+    system.form_eoms()
+    scene = mp.mechanics(system, dict(l=0.5, m=1.0, g=9.81, link1_izz=0.1, link2_izz=0.1))
+    d = _motion.bodies_drawing(scene)
+    assert d["names"] == ["link1", "link2", "j1 (joint)", "j2 (joint)"]
+    assert sorted(map(tuple, d["links"])) == [(0, 2), (0, 3), (1, 3)]
+    Y = np.array([[0.3, -1.1, 2.0], [0.7, 0.2, -0.4], [0, 0, 0], [0, 0, 0]])
+    P, R = _motion.bodies_places(scene, d, Y)
+    O, N = ground.masscenter, ground.frame
+    where = [b1.masscenter, b2.masscenter, j1.child_point, j2.child_point]
+    f = sp.lambdify([q1, q2, l], sp.Matrix([p.pos_from(O).to_matrix(N).T for p in where]))
+    for k in range(Y.shape[1]):
+        ref = np.array(f(Y[0, k], Y[1, k], 0.5), dtype=float)
+        assert np.abs(P[k] - ref).max() < 1e-14                  # measured 0 m
+    assert R.shape == (3, 2, 3, 3)
