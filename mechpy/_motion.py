@@ -101,10 +101,18 @@ def _fits_particle(system) -> bool:
     return bool(particle_coordinates(system))
 
 
+def _fits_bodies(system) -> bool:
+    """A mechanics model (mp.mechanics) that carries its drawing."""
+    return bool((getattr(system, "_info", None) or {}).get("drawing"))
+
+
 _ANGLES = "angles from the downward vertical and their rates"
 
 #: The drawings, in the order a compiled system's is chosen among them.
 DRAWINGS = {d.name: d for d in (
+    Drawing("bodies", "mechpy.plot:_bodies", "mechpy.live.motion:_bodies", fits=_fits_bodies,
+            what="a mechanics model's bodies, or points=", three_d=True,
+            options=("points", "links", "shapes")),
     Drawing("pendulum", "mechpy.plot:_planar_pendulum", "mechpy.live.motion:_pendulum",
             states=2, fits=_fits_pendulum, what=_ANGLES, options=("lengths",)),
     Drawing("double_pendulum", "mechpy.plot:_planar_pendulum", "mechpy.live.motion:_pendulum",
@@ -349,3 +357,58 @@ def chain_positions(x, spacing):
 def chain_walls(system) -> list:
     """The walls' mass indices: 0 and N + 1 for fixed ends, none otherwise."""
     return [0, system.N + 1] if system.params["ends"] == "fixed" else []
+
+
+# ------------------------------------------- bodies from a system's description
+
+def bodies_drawing(system, points=None) -> dict:
+    """The drawing of a system from its own description
+    (:mod:`mechpy.symbolic.kinematics`): a mechanics model's (stored with it
+    by :func:`mechpy.mechanics`), or ``points={"name": (x, y, z)}`` of a
+    :func:`mechpy.lagrangian` or :func:`mechpy.equations` system.  Keys:
+    ``names``, ``kinds`` ("rigid", "particle", "joint", "point"), ``links``
+    (index pairs), ``nrot`` (the turned solids: the rigid bodies, in order),
+    ``source`` (the C of the kinematics), ``inertia``, ``mass``, ``ground``."""
+    from .symbolic import kinematics
+    model = (getattr(system, "_info", None) or {}).get("drawing")
+    if model is not None:
+        if points is not None:
+            raise ValueError("points is for a system of mp.lagrangian or mp.equations: an "
+                             "mp.mechanics scene draws its own bodies (shapes= changes them)")
+        if "error" in model:
+            raise ValueError(f"this mechanics model cannot be drawn: {model['error']}")
+        return model
+    if not hasattr(system, "_meta"):
+        raise TypeError("points= draws a system of mp.lagrangian or mp.equations, got a "
+                        f"{type(system).__name__}")
+    if points is None:
+        raise TypeError(f"a {type(system).__name__} of mp.lagrangian or mp.equations is drawn "
+                        "from points={'name': (x, y, z)} (SymPy expressions of its "
+                        "coordinates and parameters)")
+    d = kinematics.points_drawing(system, points)
+    return dict(d, kinds=["point"] * len(d["names"]), links=[], nrot=0, ground=None)
+
+
+def bodies_places(system, drawing, Y):
+    """The places P (frames, bodies, 3) of a drawing's points and mass centres
+    and the rotations R (frames, solids, 3, 3), body to world, at the states
+    Y (n, frames): its compiled kinematics, every frame in one call."""
+    from .symbolic import kinematics
+    out = kinematics.evaluate(drawing, Y, system._vector())
+    nb = len(drawing["names"])
+    P = out[:, :3 * nb].reshape(out.shape[0], nb, 3)
+    R = out[:, 3 * nb:].reshape(out.shape[0], drawing["nrot"], 3, 3)
+    return P, R
+
+
+def principal(drawing, i, system, y):
+    """(moments (3,), axes (3, 3): columns, a right-handed frame, in the
+    body's frame; mass) of rigid body i of a mechanics drawing, at state y
+    (the central inertia in the frame it is drawn turned by)."""
+    from .symbolic.kinematics import numeric
+    p = system._vector()
+    I = numeric(drawing["inertia"][i], y, p)
+    w, E = np.linalg.eigh(0.5 * (I + I.T))
+    if np.linalg.det(E) < 0:
+        E[:, 2] = -E[:, 2]
+    return w, E, float(numeric(drawing["mass"][i], y, p).reshape(-1)[0])

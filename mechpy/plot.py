@@ -743,6 +743,37 @@ def _particle(ax, system, t, y, trail, lengths):
     return _dot_and_trail(ax, t, P, trail, "tab:blue", "tab:orange", 10, "particle")
 
 
+def _bodies(ax, system, t, y, trail, lengths):
+    """A mechanics model's mass centres (and joints) from its own compiled
+    kinematics, the links between them, in the model's inertial frame (z up);
+    the solids, the ground and points= are the live view's
+    (:func:`mechpy.live.animate`)."""
+    d = _motion.bodies_drawing(system)
+    P, _ = _motion.bodies_places(system, d, y)                 # (m, bodies, 3)
+    lo, hi = P.reshape(-1, 3).min(axis=0), P.reshape(-1, 3).max(axis=0)
+    c, h = 0.5 * (lo + hi), 0.55 * (float(np.max(hi - lo)) or 1.0)
+    ax.set_xlim(c[0] - h, c[0] + h)
+    ax.set_ylim(c[1] - h, c[1] + h)
+    ax.set_zlim(c[2] - h, c[2] + h)
+    ax.set_box_aspect((1, 1, 1))
+    ax.set_xlabel("x")
+    ax.set_ylabel("y")
+    ax.set_zlabel("z")
+    ax.set_title("the bodies' mass centres (the system's own kinematics)")
+    dots = [ax.plot([], [], [], "o", ms=7, gid=f"body{i}", label=nm)[0]
+            for i, nm in enumerate(d["names"])]
+    rods = [ax.plot([], [], [], "-", color="0.4", lw=1.5, gid="link")[0] for _ in d["links"]]
+    ax.legend(loc="upper left", bbox_to_anchor=(0.0, 1.0), fontsize=8)
+
+    def update(k):
+        for i, dot in enumerate(dots):
+            dot.set_data_3d([P[k, i, 0]], [P[k, i, 1]], [P[k, i, 2]])
+        for (a, b), rod in zip(d["links"], rods):
+            rod.set_data_3d(*P[k, [a, b]].T)
+        return (*dots, *rods)
+    return update
+
+
 def _save(anim, path, fps):
     """Write ``anim`` to ``path``: .html (JavaScript), .mp4 (ffmpeg), else GIF (Pillow)."""
     from matplotlib import animation
@@ -803,6 +834,11 @@ def animate(system, sol, *, kind=None, t=None, frames=None, fps=20, trail=None, 
         whose state is (q, v) with one or two coordinates: the point at
         (0, q), its height drawn up (a bouncing ball), or at (q1, q2), with
         a fading trail.
+    ``"bodies"``
+        an :func:`mechpy.mechanics` scene: its bodies' mass centres (and a
+        ``System``'s joints) from the model's own compiled kinematics, with
+        the links between them, in its inertial frame; the solids, the
+        ground plane and ``points=`` are :func:`mechpy.live.animate`'s.
 
     A solution with jumps (events with an action, :mod:`mechpy.events`) is
     drawn as it is: its samples hold the states before and after each
@@ -818,8 +854,8 @@ def animate(system, sol, *, kind=None, t=None, frames=None, fps=20, trail=None, 
         (n, m) as ``Solution.y`` holds them, with ``t``.  Sample at the times
         to be shown (``t_eval``): frames show samples, not interpolants.
     kind : str, optional
-        One of ``"pendulum"``, ``"double_pendulum"``, ``"foucault"``, ``"top"``,
-        ``"rigid"``, ``"chain"``, ``"particle"``.
+        One of ``"bodies"``, ``"pendulum"``, ``"double_pendulum"``, ``"foucault"``,
+        ``"top"``, ``"rigid"``, ``"chain"``, ``"particle"``.
     t : array_like, shape (m,), optional
         The times of an array ``sol`` (s); monotonic (a time held twice: the
         states before and after an action).

@@ -134,6 +134,9 @@ def test_rigid_body_axes_from_the_quaternion(driver, tmp_path):
         A = Rotation.from_quat(sol.sol(t)[3:]).as_matrix()      # SciPy, scalar last
         # rows of positions(): the principal axes in space, the columns of R; measured 2.5e-16
         np.testing.assert_allclose(pos, A.T, rtol=0, atol=1e-12)
+        # the box's rotation, read back from the drawn solid: R itself; measured 2.2e-16
+        rot = driver.execute_script("return window.mechpyLive.rotations()")
+        np.testing.assert_allclose(np.reshape(rot, (3, 3)), A, rtol=0, atol=1e-12)
     # the dashed line of L: along L = R(q0) I omega0 with q0 the identity
     (L,) = [np.array(ln["points"]).reshape(-1, 3) for ln in
             driver.execute_script("return window.mechpyLive.lines()")

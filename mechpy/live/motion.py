@@ -211,8 +211,141 @@ def _particle(system, times, Y):
                        f"particle: ({names[0]}, {names[1]}) in the plane"))
 
 
+#: the shapes of shapes=, and what their size is (a number: the first; the rest follow it)
+_SHAPES = {"sphere": "radius", "box": "sides (a, b, c) along the body's x, y, z",
+           "cylinder": "(radius, length), its axis the body's y",
+           "cone": "(radius, height), its axis the body's y",
+           "torus": "(radius, tube radius), its axis the body's y"}
+_PALETTE = ("#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2",
+            "#17becf")
+
+
+def _shape_of(name, given, default):
+    """(kind, size list) of shapes[name]: a kind's name or dict(kind=..., size=...);
+    ``default`` the size a number or None stands for."""
+    if isinstance(given, str):
+        kind, size = given, None
+    elif isinstance(given, dict):
+        extra = sorted(set(given) - {"kind", "size", "color"})
+        if extra or "kind" not in given:
+            raise ValueError(f"shapes[{name!r}] is dict(kind=..., size=..., color=...), got "
+                             f"keys {sorted(given)}")
+        kind, size = given["kind"], given.get("size")
+    else:
+        raise TypeError(f"shapes[{name!r}] must be a shape's name or dict(kind=..., "
+                        f"size=...), got {type(given).__name__}")
+    if kind not in _SHAPES:
+        raise ValueError(f"shapes[{name!r}]: unknown shape kind {kind!r}; one of "
+                         f"{tuple(_SHAPES)}")
+    if size is None:
+        return kind, default(kind)
+    size = np.atleast_1d(as_array(size, f"shapes[{name!r}]['size']", positive=True))
+    if size.ndim != 1 or size.size > 3:
+        raise ValueError(f"shapes[{name!r}]['size'] is a number or up to 3 numbers: "
+                         f"{_SHAPES[kind]}")
+    r = float(size[0])
+    full = {"sphere": [r], "box": [r, r, r], "cylinder": [r, 2 * r], "cone": [r, 2 * r],
+            "torus": [r, 0.08 * r]}[kind]
+    full[:size.size] = size.tolist()
+    return kind, full[:3 if kind == "box" else 1 if kind == "sphere" else 2]
+
+
+def _bodies(system, times, Y, points=None, links=None, shapes=None):
+    d = _motion.bodies_drawing(system, points)
+    P, R = _motion.bodies_places(system, d, Y)
+    n, nb = P.shape[:2]
+    names = list(d["names"])
+    lo, hi = P.reshape(-1, 3).min(axis=0), P.reshape(-1, 3).max(axis=0)
+    size = float(np.max(hi - lo))
+    if size == 0:
+        size = 1.0
+    # the solids of the bodies: a rigid body's box of its principal moments (its
+    # mass's uniform box), turned to its principal axes in its frame
+    solid, slot, k = {}, [None] * nb, 0
+    for i, kind in enumerate(d["kinds"]):
+        if kind != "rigid":
+            continue
+        slot[i] = k
+        k += 1
+        if d["inertia"][i] is not None and d["mass"][i] is not None:
+            w, E, mass = _motion.principal(d, i, system, Y[:, 0])
+            sides = _motion.box_sides(w, mass)
+            sides = np.maximum(sides, 0.02 * (sides.max() or size))     # a flat body: a plate
+            solid[i] = ("box", sides.tolist(), E)
+    if shapes is not None and not isinstance(shapes, dict):
+        raise TypeError(f"shapes must be a dict {{body or point name: shape}}, got "
+                        f"{type(shapes).__name__}")
+    for nm, given in (shapes or {}).items():
+        if nm not in names:
+            raise ValueError(f"shapes names {nm!r}, which is no body or point of the drawing "
+                             f"(its names: {names})")
+        i = names.index(nm)
+        ref = solid[i][1] if i in solid else [0.04 * size] * 3
+        kind, sz = _shape_of(nm, given, lambda kind: {
+            "sphere": [max(ref) / 2], "box": list(ref), "cylinder": [max(ref) / 2, min(ref)],
+            "cone": [max(ref) / 2, max(ref)], "torus": [max(ref) / 2, 0.08 * max(ref)]}[kind])
+        solid[i] = (kind, sz, None, given.get("color") if isinstance(given, dict) else None)
+    bodies = []
+    for i, nm in enumerate(names):
+        c = _PALETTE[i % len(_PALETTE)]
+        kind, sz, E, *col = solid.get(i, ("sphere", [(0.02 if d["kinds"][i] == "joint" else
+                                                      0.04) * size], None))
+        b = _body(nm, (col[0] if col and col[0] else c), max(sz), shape=kind)
+        b.update(size=[float(v) for v in sz], rot=slot[i],
+                 axes=None if E is None else E.reshape(-1).tolist())
+        bodies.append(b)
+    rods = [[int(a), int(b), _GREY] for a, b in d["links"]]
+    if links is not None:
+        if points is None:
+            raise ValueError("links join points=: a mechanics model draws its own links")
+        if isinstance(links, (str, bytes)) or not hasattr(links, "__iter__"):
+            raise TypeError(f"links must be a list of pairs of point names, got {links!r}")
+        for pair in links:
+            if isinstance(pair, (str, bytes)) or len(pair) != 2:
+                raise TypeError(f"links: each link is a pair of point names, got {pair!r}")
+            ends = []
+            for e in pair:
+                if e == "O":
+                    ends.append([0.0, 0.0, 0.0])
+                elif e in names:
+                    ends.append(names.index(e))
+                else:
+                    raise ValueError(f"links: {e!r} is no point (the points: {names}, and "
+                                     "'O' the origin)")
+            rods.append([ends[0], ends[1], _DARK])
+    lines = []
+    up = [0.0, 1.0, 0.0] if points is not None else [0.0, 0.0, 1.0]
+    if d.get("ground"):
+        from ..symbolic.kinematics import numeric
+        g = numeric(d["ground"], Y[:, 0], system._vector()).reshape(-1)
+        g = g / np.linalg.norm(g)
+        up = g.tolist()
+        a = np.cross(g, [1.0, 0.0, 0.0] if abs(g[0]) < 0.9 else [0.0, 1.0, 0.0])
+        a /= np.linalg.norm(a)
+        b2 = np.cross(g, a)
+        c0 = 0.5 * (lo + hi)
+        c0 = c0 - np.dot(c0, g) * g                       # the plane through the origin
+        h = 0.75 * size + 0.5
+        for s_ in np.linspace(-h, h, 7):
+            lines.append(_polyline([c0 + s_ * a - h * b2, c0 + s_ * a + h * b2], _GREY,
+                                   "ground plane"))
+            lines.append(_polyline([c0 - h * a + s_ * b2, c0 + h * a + s_ * b2], _GREY,
+                                   "ground plane"))
+    trail = [i for i, kd in enumerate(d["kinds"]) if kd in ("point", "particle")]
+    what = ("points of the system" if points is not None else
+            f"the bodies of the model ({', '.join(names)})")
+    out = dict(P=P, bodies=bodies, rods=rods, lines=lines, up=up, trail=trail,
+               center=(0.5 * (lo + hi)).tolist(),
+               extent=0.6 * size + 0.6 * max(max(b["size"]) for b in bodies),   # solids in view
+               camera=[0.0, 0.0, 1.0] if points is not None else [1.0, -1.4, 0.8],
+               title=f"{what}: places from the system's own kinematics")
+    if R.shape[1]:
+        out["Rs"] = R
+    return out
+
+
 def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0, trail=None,
-            lengths=None, spacing=None) -> Motion:
+            lengths=None, spacing=None, points=None, links=None, shapes=None) -> Motion:
     r"""The motion of a solution in 3D, in the browser (three.js).
 
     What is drawn depends on ``kind`` (by default the drawing the system
@@ -250,6 +383,19 @@ def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0,
         the point at (0, q, 0), its height up (a bouncing ball), or at
         (q1, q2, 0), with its trail.
 
+    ``"bodies"``
+        any other system, from its own description
+        (:mod:`mechpy.symbolic.kinematics`): an :func:`mechpy.mechanics`
+        scene's rigid bodies as the uniform box of their principal moments
+        at their mass centres, turned by their frames' direction cosines
+        (``N.dcm(frame)``, body to world), particles as spheres, a
+        ``System``'s joints as links, and the ground plane of a rolling
+        model (normal to the constant loads, through the point at rest);
+        a system of :func:`mechpy.lagrangian` or :func:`mechpy.equations`
+        from ``points``, ``links`` and ``shapes``.  The places and
+        direction cosines are printed as C and evaluated for every frame in
+        one call.
+
     The frames are the states at ``duration * fps + 1`` times evenly spread
     over the solution's span: from ``sol.sol`` (dense output) when the
     solution has it, else the cubic Hermite interpolant through the samples
@@ -261,8 +407,11 @@ def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0,
     camera, play/pause, a time slider and a speed slider, and exposes
     ``window.mechpyLive``: ``play()``, ``pause()``, ``frame(i)``, ``frames()``,
     ``time()``, ``positions()`` (the places of :attr:`Motion.bodies` at the
-    frame shown, x, y, z each, in the system's units), ``lines()`` (the fixed
-    lines: nutation bounds, L, walls), ``fps()``.
+    frame shown, x, y, z each, in the system's units), ``rotations()`` (each
+    drawn solid's rotation matrix, body to world, row-major, 9 numbers a
+    solid in the order of ``positions()``; the top's and the rigid body's
+    one solid), ``lines()`` (the fixed lines: nutation bounds, L, walls,
+    the ground plane), ``fps()``.
 
     Parameters
     ----------
@@ -272,8 +421,9 @@ def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0,
         A result of :func:`mechpy.solve` (with ``dense_output=True`` the
         frames come from its interpolant), or states (n, m) with ``t``.
     kind : str, optional
-        One of ``"pendulum"``, ``"double_pendulum"``, ``"foucault"``,
-        ``"top"``, ``"rigid"``, ``"chain"``, ``"particle"``.
+        One of ``"bodies"``, ``"pendulum"``, ``"double_pendulum"``,
+        ``"foucault"``, ``"top"``, ``"rigid"``, ``"chain"``, ``"particle"``
+        (``"bodies"`` when ``points`` is given).
     t : array_like, shape (m,), optional
         The times of an array ``sol``; monotonic (a time held twice: the
         states before and after an action).
@@ -295,6 +445,18 @@ def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0,
     spacing : float, optional
         The chain's spacing at rest, in the units of x; default the largest
         displacement over 0.4.
+    points : dict, optional
+        ``{"name": (x, y, z)}``: SymPy expressions of the coordinates and
+        parameters (by name) of an :func:`mechpy.lagrangian` or
+        :func:`mechpy.equations` system, each drawn as a sphere with a
+        trail; ``positions()`` lists them in this order.
+    links : list of (str, str), optional
+        Rods between points of ``points`` (``"O"``: the origin).
+    shapes : dict, optional
+        ``{"body or point name": kind or dict(kind=..., size=..., color=...)}``
+        with kind ``"sphere"`` (size: radius), ``"box"`` (sides), ``"cylinder"``
+        (radius, length), ``"cone"`` (radius, height) or ``"torus"`` (radius,
+        tube radius); a cylinder's, cone's or torus's axis is the body's y.
 
     Returns
     -------
@@ -310,7 +472,10 @@ def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0,
         ``kind`` is unknown; ``sol`` is empty, not finite or does not hold
         the scene's states (n, m); ``t`` is missing, of another length or not
         monotonic; bad ``fps``, ``duration``, ``speed``, ``trail``,
-        ``lengths`` or ``spacing``; more than 3600 frames.
+        ``lengths`` or ``spacing``; more than 3600 frames; a point that
+        depends on a symbol that is neither a coordinate nor a parameter, a
+        link to an unknown point, an unknown shape kind or a shape for no
+        body or point.
 
     Examples
     --------
@@ -321,6 +486,8 @@ def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0,
     >>> w.times.size, w.bodies
     (101, ['bob'])
     """
+    if kind is None and points is not None:
+        kind = "bodies"
     drawing = _motion.kind_of(system, kind)
     kind = drawing.name
     tt, y = _motion.samples(system, sol, t)                        # checks sol's shape
@@ -332,7 +499,8 @@ def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0,
              else as_scalar(trail, "trail", nonnegative=True, finite=False))
     if np.isnan(trail):
         raise ValueError("trail must be a non-negative time or np.inf, got nan")
-    options = {k: v for k, v in (("lengths", lengths), ("spacing", spacing)) if v is not None}
+    options = {k: v for k, v in (("lengths", lengths), ("spacing", spacing), ("points", points),
+                                 ("links", links), ("shapes", shapes)) if v is not None}
     for k in options:
         if k not in drawing.options:
             takers = " or ".join(repr(d.name) for d in _motion.DRAWINGS.values()
@@ -349,6 +517,7 @@ def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0,
         "kind": kind, "title": d["title"], "n": n, "nb": nb, "fps": fps, "speed": speed,
         "duration": duration, "t": pack(times), "pos": pack(d["P"].reshape(n, nb * 3)),
         "rot": pack(d["R"].reshape(n, 9)) if "R" in d else None,
+        "rots": pack(d["Rs"].reshape(n, -1)) if "Rs" in d else None,
         "bodies": d["bodies"], "rods": d["rods"], "lines": d["lines"],
         "legend": d.get("legend", [[b["color"], b["name"]] for b in d["bodies"]]),
         "trails": [{"body": b, "color": d["bodies"][b]["color"], "window": window}

@@ -465,8 +465,9 @@ def _mechanics_build(method, params, spec, baumgarte, bar, steps):
     from . import build
     from .multibody import MechanicsScene, _digest, finish, mechanics_parts
     ir, info, parts = mechanics_parts(method, params, spec, baumgarte)
-    with open(os.path.join(os.path.dirname(__file__), "multibody.py"), "rb") as f:
-        parts.append(hashlib.sha256(f.read()).hexdigest())
+    for module in ("multibody.py", "kinematics.py"):       # what derives the stored meta
+        with open(os.path.join(os.path.dirname(__file__), module), "rb") as f:
+            parts.append(hashlib.sha256(f.read()).hexdigest())
     values = dict(params)
     functions = {}
     for nm in info["inputs"]:
@@ -488,6 +489,9 @@ def _mechanics_build(method, params, spec, baumgarte, bar, steps):
         source = codegen.c_source(ir, _core.STATUS)
         meta = _meta(ir, source)
         meta["mechanics"] = info
+        # the drawing of its bodies (mp.live.animate): their kinematics, printed as C
+        from .kinematics import model_drawing
+        info["drawing"] = model_drawing(method, ir)
         build.store_meta(key, meta)
     bar.stage(steps[3])
     return MechanicsScene(meta, values, functions=functions)

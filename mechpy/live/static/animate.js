@@ -60,8 +60,36 @@ export default {
 
     // bodies
     const where = Array.from({length: nb}, () => new THREE.Vector3());
+    // a body with a size is a solid of shapes= or of its inertia (kind "bodies"), its
+    // geometry in the body's frame (turned to its principal axes by b.axes, row-major)
+    function solidGeometry(b) {
+      const s = b.size;
+      let g;
+      if (b.shape === "box") g = new THREE.BoxGeometry(s[0], s[1], s[2]);
+      else if (b.shape === "cylinder") g = new THREE.CylinderGeometry(s[0], s[0], s[1], 40);
+      else if (b.shape === "cone") g = new THREE.ConeGeometry(s[0], s[1], 40);
+      else if (b.shape === "torus") {
+        g = new THREE.TorusGeometry(s[0], s[1], 16, 64);
+        g.rotateX(Math.PI / 2);                  // its axis: the body's y, as a cylinder's
+      } else g = new THREE.SphereGeometry(s[0], 28, 18);
+      if (b.axes) {
+        const a = b.axes;
+        g.applyMatrix4(new THREE.Matrix4().set(a[0], a[1], a[2], 0, a[3], a[4], a[5], 0,
+          a[6], a[7], a[8], 0, 0, 0, 0, 1));
+      }
+      return g;
+    }
     const meshes = spec.bodies.map((b) => {
       let g;
+      if (b.size) {
+        const mesh = new THREE.Mesh(solidGeometry(b), new THREE.MeshStandardMaterial({
+          color: color(b.color), roughness: 0.55, metalness: 0.05, transparent: b.shape !== "sphere",
+          opacity: b.shape === "sphere" ? 1 : 0.8}));
+        if (b.shape !== "sphere") mesh.add(new THREE.LineSegments(
+          new THREE.EdgesGeometry(mesh.geometry, 30), new THREE.LineBasicMaterial({color: 0x555555})));
+        scene.add(mesh);
+        return mesh;
+      }
       if (b.shape === "cube") g = new THREE.BoxGeometry(2 * b.radius, 2 * b.radius, 2 * b.radius);
       else if (b.shape === "cone") g = new THREE.ConeGeometry(b.radius, 3 * b.radius, 20);
       else g = new THREE.SphereGeometry(b.radius, 28, 18);
@@ -165,11 +193,19 @@ export default {
     // ---- frames
     let shown = -1, playing = true, head = 0, last = null, speed = spec.speed;
     let raf = 0, dead = false;
+    // the rotations of the solids of kind "bodies" (frames x solids x 9, row-major)
+    const Rs = spec.rots ? mpUnpack(spec.rots) : null, m4b = new THREE.Matrix4();
+    const nrot = spec.bodies.filter((b) => b.rot !== null && b.rot !== undefined).length;
     function show(k) {
       const q = place(k, where);
       meshes.forEach((m, i) => {
         m.position.copy(where[i]);
-        if (spec.bodies[i].shape === "cone") {     // an arrowhead along its axis
+        const b = spec.bodies[i];
+        if (Rs && b.rot !== null && b.rot !== undefined) {   // a solid turned by its frame
+          const r = Rs.subarray(9 * (k * nrot + b.rot), 9 * (k * nrot + b.rot) + 9);
+          m4b.set(r[0], r[1], r[2], 0, r[3], r[4], r[5], 0, r[6], r[7], r[8], 0, 0, 0, 0, 1);
+          m.quaternion.setFromRotationMatrix(m4b);
+        } else if (b.shape === "cone" && !b.size) {     // an arrowhead along its axis
           tmp.copy(where[i]);
           const len = tmp.length();
           if (len > 0) m.quaternion.setFromUnitVectors(Y, tmp.divideScalar(len));
@@ -256,6 +292,12 @@ export default {
       bodies: () => spec.bodies.map((b) => b.name),
       // the places of the drawn bodies at the shown frame: x, y, z each, in the system's units
       positions: () => meshes.flatMap((m) => [m.position.x, m.position.y, m.position.z]),
+      // each drawn solid's rotation, body to world, row-major (9 numbers a solid), read back
+      // from the drawn objects: the turned solid of a top or rigid body, else every body
+      rotations: () => (solid ? [solid] : meshes).flatMap((m) => {
+        const e = new THREE.Matrix4().makeRotationFromQuaternion(m.quaternion).elements;
+        return [e[0], e[4], e[8], e[1], e[5], e[9], e[2], e[6], e[10]];
+      }),
       // the fixed lines drawn (nutation bounds, L, walls, ...): [{label, points: [x, y, z, ...]}]
       lines: () => spec.lines.map((l) => ({label: l.label, points: Array.from(mpUnpack(l.pts))})),
       // frames drawn per second over the last second (a paused, untouched page draws none)
