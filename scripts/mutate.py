@@ -116,7 +116,10 @@ MODULES = {
                      ["tests/test_install.py", "-k", "numba or compiler"]),
     "cluster.py": (["mechpy/cluster.py"], ["tests/test_cluster.py"]),
     "phase.py": (["mechpy/phase.py"], ["tests/test_phase.py"]),
-    "tangent.py": (["mechpy/tangent.py"], ["tests/test_tangent.py"]),
+    # the sensitivities' jumps at events (impacts, Python actions) are tested in
+    # test_tangent_events.py
+    "tangent.py": (["mechpy/tangent.py"], ["tests/test_tangent.py",
+                                           "tests/test_tangent_events.py"]),
     "frames.py": (["mechpy/frames.py", "mechpy/particles.py"],
                   ["tests/test_frames.py", "tests/test_particles.py"]),
     "rigid.py": (["mechpy/rigid.py"], ["tests/test_rigid.py"]),

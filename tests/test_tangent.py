@@ -404,3 +404,20 @@ def test_fit_with_a_callable_observe_has_the_jacobian_and_errors_of_its_residual
                     for _ in range(40)])
     ratio = est.std(axis=0, ddof=1) / np.array([r.stderr["damping"], r.stderr["length"]])
     assert np.all(np.abs(ratio - 1) < 0.3), ratio
+
+
+def test_sign_of_zero_is_zero_in_the_sensitivities():
+    """sign as SymPy's (and numpy's): sign(0) = 0.  x' = p sign(x) from x0 = 0 stays
+    at 0 with dx/dp = 0 (a sign(0) taken as 1 would drive it to x = p t); from
+    x0 = +-0.5 it is x0 + sign(x0) p t with dx/dp = sign(x0) t and dx/dx0 = 1."""
+    x, p = sp.symbols("x p")
+    sys_ = mp.equations([p * sp.sign(x)], [x], params={"p": 2.0})
+    te = np.array([0.1, 0.5, 1.0])
+    s = mp.sensitivity(sys_, (0, 1), [0.0], params=("p",), t_eval=te, rtol=1e-12, atol=1e-14)
+    assert np.all(s.y == 0.0) and np.all(s.S[0, 0] == 0.0)
+    for x0 in (0.5, -0.5):
+        s = mp.sensitivity(sys_, (0, 1), [x0], params=("p",), t_eval=te, rtol=1e-12,
+                           atol=1e-14)
+        np.testing.assert_allclose(s.y[0], x0 + np.sign(x0) * 2.0 * te, rtol=0, atol=1e-13)
+        np.testing.assert_allclose(s.S[0, 0], np.sign(x0) * te, rtol=0, atol=1e-13)
+        np.testing.assert_allclose(s.S[0, 1], 1.0, rtol=0, atol=1e-13)
