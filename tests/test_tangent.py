@@ -421,3 +421,22 @@ def test_sign_of_zero_is_zero_in_the_sensitivities():
         np.testing.assert_allclose(s.y[0], x0 + np.sign(x0) * 2.0 * te, rtol=0, atol=1e-13)
         np.testing.assert_allclose(s.S[0, 0], np.sign(x0) * te, rtol=0, atol=1e-13)
         np.testing.assert_allclose(s.S[0, 1], 1.0, rtol=0, atol=1e-13)
+
+
+def test_fit_from_the_edge_of_an_open_domain():
+    """A scene's open domain end is nudged inwards by 1e-12 of the scale, as
+    tangent._scene_bounds documents: RestrictedThreeBody's mu in (0, 1) is fitted
+    within [1e-12, 1 - 1e-12].  A guess on either nudged end is accepted (the fit runs
+    and stays in the domain); a guess nearer the open end than that is refused,
+    naming the domain."""
+    y0 = [0.5, 0.2, 0.0, 0.3]
+    t = np.linspace(0.1, 1.0, 10)
+    r3 = mp.scenes.RestrictedThreeBody(mu=0.9)
+    data = mp.solve(r3, (0, 1), y0, t_eval=t, rtol=1e-12, atol=1e-12).y[:2]
+    for guess in (1.0 - 1e-12, 1e-12):
+        fit = mp.fit(r3, t, data, {"mu": guess}, y0=y0, observe=[0, 1])
+        assert fit.success and 1e-12 <= fit.params["mu"] <= 1.0 - 1e-12
+    for guess in (1.0 - 0.5e-12, 0.5e-12):
+        with pytest.raises(ValueError, match="outside its domain") as err:
+            mp.fit(r3, t, data, {"mu": guess}, y0=y0, observe=[0, 1])
+        assert f"[{1e-12}, {1.0 - 1e-12}]" in str(err.value)
