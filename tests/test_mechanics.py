@@ -768,3 +768,21 @@ def test_kane_with_two_configuration_constraints():
     np.testing.assert_allclose(s.y[:3], np.tile(pos, (3, 1)), rtol=0, atol=1e-10)
     np.testing.assert_allclose(s.y[3:], np.tile(vel, (3, 1)), rtol=0, atol=1e-10)
     assert np.abs(scene.constraint_residual(s.y)).max() < 1e-10
+
+
+@pytest.mark.parametrize("n", [1, 3])
+def test_n_link_cart_kinematics_and_the_free_cart_pendulum(n):
+    """n_link_cart's coordinates move at its speeds (q_i' = u_i, the cart's position and
+    each link's angle), and with one link and no force the pendulum on a free cart swings
+    at w^2 = g (m0 + m1) / (m0 l) about the hanging state (closed form; A's eigenvalues
+    are +-i w and 0, 0 for the cart's free drift)."""
+    kane, params = n_link_cart(n)
+    cart = mp.mechanics(kane, params, specified={"F": 0.0})
+    Y = np.random.default_rng(3).uniform(-1, 1, (2 * (n + 1), 4))
+    np.testing.assert_allclose(cart.rhs(0.0, Y)[:n + 1], Y[n + 1:], rtol=1e-14, atol=1e-14)
+    if n == 1:
+        hang = np.array([0.0, -np.pi / 2, 0.0, 0.0])     # angle from I.x; gravity -I.y
+        A, _ = cart.linearize(hang)
+        ev = np.sort_complex(np.linalg.eigvals(A))
+        w = np.sqrt(params["g"] * (params["m0"] + params["m1"]) / (params["m0"] * params["l0"]))
+        np.testing.assert_allclose(ev, [-1j * w, 0, 0, 1j * w], rtol=0, atol=1e-12)
