@@ -331,3 +331,15 @@ def test_piecewise_otherwise_branch_in_the_page(driver, tmp_path):
     keep_a, keep_b = ra != 0, rb != 0
     assert _rel(a[keep_a], ra[keep_a]) < 7e-7 and _rel(b[keep_b], rb[keep_b]) < 7e-7
     assert _rel(ja[keep_a], ra[keep_a]) < 4e-15 and _rel(jb[keep_b], rb[keep_b]) < 4e-15
+
+
+def test_the_largest_int32_power_keeps_a_negative_base_sign(driver, tmp_path):
+    """An integer exponent up to 2^31 - 1 (int32's largest, odd) is a power by repeated
+    squaring in the shader, which keeps a negative base's sign: a^(2^31 - 1) = -1 and
+    a^(2^31 - 2) = 1 at a = -1 (exact; float32 would round the exponent 2^31 - 1 to the
+    even 2^31), in the shader and the page's JavaScript."""
+    n = 2**31 - 1
+    seeds, a, b, ja, jb = _values(driver, tmp_path, A**n, A**(n - 1), (-1, 1), (-1, 1),
+                                  params={"a": -1.0}, n=16)
+    assert np.all(a == -1.0) and np.all(b == 1.0)
+    assert np.all(ja == -1.0) and np.all(jb == 1.0)
