@@ -352,3 +352,26 @@ def test_the_one_step_probe_runs_under_statuses(client):
     bad[0, 1] = 0.0                                  # theta = 0: singular Euler angles
     with pytest.raises(mp.SingularityError, match="trajectory 0"):
         _run(mp.solve_many, top, (0, 1), bad, client=client, chunk_size=2, errors="raise")
+
+
+def test_client_without_dask_names_the_missing_module(monkeypatch):
+    """The ModuleNotFoundError of client= without Dask carries the name of the module
+    whose import failed (as Python's own does, for tools that read ``exc.name``), and
+    "dask" when the import error names none."""
+    import importlib
+    import mechpy.cluster as cluster
+    for mod in ("dask.distributed", "distributed"):
+        monkeypatch.setitem(sys.modules, mod, None)   # an import of it now fails
+    with pytest.raises(ImportError) as ref:
+        importlib.import_module("dask.distributed")
+    assert ref.value.name                             # Python names the module
+    with pytest.raises(ModuleNotFoundError) as exc:
+        mp.solve_many(SCENE, (0, 1), [[0.1, 0.0]], client=object())
+    assert exc.value.name == ref.value.name
+
+    def unnamed(*a, **k):
+        raise ImportError("no dask here")
+    with monkeypatch.context() as m, pytest.raises(ModuleNotFoundError) as exc:
+        m.setattr("builtins.__import__", unnamed)
+        cluster._require_dask()
+    assert exc.value.name == "dask"

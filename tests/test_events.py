@@ -662,3 +662,26 @@ def test_a_lagrangian_rests_only_where_its_mass_matrix_does_not_couple(c):
     else:
         assert s.status == 1 and "events[0] accumulate (Zeno)" in s.message
         assert s.rests[0].shape == (0, 2) and s.y[1].min() > -1e-12
+
+
+@pytest.mark.parametrize("which", ["rocket", "duffing"])
+def test_a_built_in_scene_of_explicit_equations_rests_on_a_wall(which):
+    """A built-in scene rests on an impact's wall when its row is explicit equations
+    of its coordinates: a state of two (Duffing's row, a Lagrangian of one coordinate)
+    or, beyond two, a fixed-size row without a Lagrangian (the Rocket: h, v, m).  Both
+    made a ball dropped from 1 under g (Duffing with alpha = beta = delta = omega = 0,
+    gamma = -g: x'' = -g; a Rocket without fuel, m0 = m_dry: h'' = -g), e = 0.5: at
+    rest on the floor from t_inf = sqrt(2/g) + 2 e sqrt(2 g) / (g (1 - e)), to tf."""
+    if which == "rocket":
+        scene = mp.scenes.Rocket(exhaust_speed=U, burn_rate=1.0, m0=100.0, m_dry=100.0, g=G)
+        y0, rest = [1.0, 0.0, 100.0], [0.0, 0.0, 100.0]
+    else:
+        scene = mp.scenes.Duffing(alpha=0.0, beta=0.0, delta=0.0, gamma=-G, omega=0.0)
+        y0, rest = [1.0, 0.0], [0.0, 0.0]
+    s = mp.solve(scene, (0, 3), y0, rtol=1e-12, atol=1e-12,
+                 events=mp.events.impact(0, restitution=0.5))
+    t_inf = np.sqrt(2 / G) + 2 * 0.5 * np.sqrt(2 * G) / (G * 0.5)
+    assert s.status == 0 and s.t[-1] == 3.0
+    assert s.rests[0].shape == (1, 2) and s.rests[0][0, 1] == np.inf
+    assert abs(s.rests[0][0, 0] - t_inf) < 1e-11
+    np.testing.assert_allclose(s.y[:, -1], rest, rtol=0, atol=1e-12)

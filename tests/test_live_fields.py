@@ -301,3 +301,45 @@ def test_clicked_trajectory_starts_at_the_page_time(driver, tmp_path):
         return np.array([y[1], -g / L * np.sin(y[0]) - b * y[1] + A * np.cos(Om * t)])
     ref = rk4_path(f, t_page, x0, 0.01, 100)
     np.testing.assert_allclose(path, ref, rtol=0, atol=1e-14)
+
+
+def test_drop_takes_its_closed_interval():
+    """drop, the fraction of particles re-seeded per update, lies in [0, 1]: both ends
+    accepted (0: none re-seeded; 1: all), a value beyond either refused, naming it."""
+    s = mp.equations([Y, -X], [X, Y])
+    for drop in (0.0, 1.0):
+        w = mp.live.phase_portrait(s, (-1, 1), (-1, 1), particles=16, drop=drop,
+                                   overlays=False, play=False)
+        assert w.spec["drop"] == drop
+    for drop in (-1e-12, 1.0 + 1e-12):
+        with pytest.raises(ValueError, match=r"drop must lie in \[0, 1\]"):
+            mp.live.phase_portrait(s, (-1, 1), (-1, 1), particles=16, drop=drop,
+                                   overlays=False, play=False)
+
+
+def test_piecewise_otherwise_branch_in_the_page(driver, tmp_path):
+    """A Piecewise's last branch (condition True) is its value, in the page's
+    JavaScript and its shader: g1 = x for x > 0 else -2 x, g2 = y^2 for y < 0.5 else
+    3 - y, against numpy's where (float64 to 4e-15, float32 to 7e-7 as
+    test_function_values)."""
+    g1 = sp.Piecewise((X, X > 0), (-2 * X, True))
+    g2 = sp.Piecewise((Y**2, Y < 0.5), (3 - Y, True))
+    seeds, a, b, ja, jb = _values(driver, tmp_path, g1, g2, (-1, 1), (-1, 2))
+    x, y = seeds[:, 0], seeds[:, 1]
+    ra, rb = np.where(x > 0, x, -2 * x), np.where(y < 0.5, y**2, 3 - y)
+    assert (x < 0).sum() > 100 and (y >= 0.5).sum() > 100      # both branches seen
+    keep_a, keep_b = ra != 0, rb != 0
+    assert _rel(a[keep_a], ra[keep_a]) < 7e-7 and _rel(b[keep_b], rb[keep_b]) < 7e-7
+    assert _rel(ja[keep_a], ra[keep_a]) < 4e-15 and _rel(jb[keep_b], rb[keep_b]) < 4e-15
+
+
+def test_the_largest_int32_power_keeps_a_negative_base_sign(driver, tmp_path):
+    """An integer exponent up to 2^31 - 1 (int32's largest, odd) is a power by repeated
+    squaring in the shader, which keeps a negative base's sign: a^(2^31 - 1) = -1 and
+    a^(2^31 - 2) = 1 at a = -1 (exact; float32 would round the exponent 2^31 - 1 to the
+    even 2^31), in the shader and the page's JavaScript."""
+    n = 2**31 - 1
+    seeds, a, b, ja, jb = _values(driver, tmp_path, A**n, A**(n - 1), (-1, 1), (-1, 1),
+                                  params={"a": -1.0}, n=16)
+    assert np.all(a == -1.0) and np.all(b == 1.0)
+    assert np.all(ja == -1.0) and np.all(jb == 1.0)

@@ -733,3 +733,56 @@ def test_sympy_private_attribute_missing_is_named():
     with pytest.raises(RuntimeError, match=rf"SymPy {sp.__version__}: KanesMethod has no "
                        r"attribute _fr, .*checked against SymPy"):
         priv.kane_formed(object())
+
+
+def _particle_on_a_line():
+    """A particle in space held on the line x = y = z by two configuration constraints
+    (y - x = 0, z - x = 0: Kane's method with two dependent coordinates and speeds),
+    under gravity -m g N.z."""
+    x, y, z, ux, uy, uz = dynamicsymbols("x y z u_x u_y u_z")
+    g, m = sp.symbols("g m", positive=True)
+    N = ReferenceFrame("N")
+    O = Point("O")
+    O.set_vel(N, 0)
+    P = O.locatenew("P", x * N.x + y * N.y + z * N.z)
+    P.set_vel(N, ux * N.x + uy * N.y + uz * N.z)
+    kane = KanesMethod(N, [x], [ux], kd_eqs=[x.diff() - ux, y.diff() - uy, z.diff() - uz],
+                       q_dependent=[y, z], configuration_constraints=[y - x, z - x],
+                       u_dependent=[uy, uz], velocity_constraints=[uy - ux, uz - ux])
+    kane.kanes_equations([Particle("p", P, m)], [(P, -m * g * N.z)])
+    return kane
+
+
+def test_kane_with_two_configuration_constraints():
+    """The particle on the line x = y = z under gravity: the component g/sqrt(3) along
+    the line gives each coordinate the acceleration -g/3, so from (s0, s0, s0) at speed
+    v0 on each axis every coordinate is s0 + v0 t - g t^2 / 6 and every speed v0 - g t / 3
+    (closed form); both constraints held.  Each configuration constraint has its own
+    row of the system (two rows: one constraint overwriting a dynamic row goes wrong)."""
+    scene = mp.mechanics(_particle_on_a_line(), {"g": G, "m": 2.0})
+    s0, v0 = 0.5, 1.5
+    ts = np.array([0.0, 0.4, 1.0, 2.0])
+    s = mp.solve(scene, (0, 2), [s0] * 3 + [v0] * 3, t_eval=ts, rtol=1e-12, atol=1e-12)
+    assert s.success
+    pos, vel = s0 + v0 * ts - G * ts**2 / 6, v0 - G * ts / 3
+    np.testing.assert_allclose(s.y[:3], np.tile(pos, (3, 1)), rtol=0, atol=1e-10)
+    np.testing.assert_allclose(s.y[3:], np.tile(vel, (3, 1)), rtol=0, atol=1e-10)
+    assert np.abs(scene.constraint_residual(s.y)).max() < 1e-10
+
+
+@pytest.mark.parametrize("n", [1, 3])
+def test_n_link_cart_kinematics_and_the_free_cart_pendulum(n):
+    """n_link_cart's coordinates move at its speeds (q_i' = u_i, the cart's position and
+    each link's angle), and with one link and no force the pendulum on a free cart swings
+    at w^2 = g (m0 + m1) / (m0 l) about the hanging state (closed form; A's eigenvalues
+    are +-i w and 0, 0 for the cart's free drift)."""
+    kane, params = n_link_cart(n)
+    cart = mp.mechanics(kane, params, specified={"F": 0.0})
+    Y = np.random.default_rng(3).uniform(-1, 1, (2 * (n + 1), 4))
+    np.testing.assert_allclose(cart.rhs(0.0, Y)[:n + 1], Y[n + 1:], rtol=1e-14, atol=1e-14)
+    if n == 1:
+        hang = np.array([0.0, -np.pi / 2, 0.0, 0.0])     # angle from I.x; gravity -I.y
+        A, _ = cart.linearize(hang)
+        ev = np.sort_complex(np.linalg.eigvals(A))
+        w = np.sqrt(params["g"] * (params["m0"] + params["m1"]) / (params["m0"] * params["l0"]))
+        np.testing.assert_allclose(ev, [-1j * w, 0, 0, 1j * w], rtol=0, atol=1e-12)

@@ -425,3 +425,21 @@ def test_rocket_burnout_switch_sets_the_dry_mass_and_cuts_the_thrust():
         np.testing.assert_allclose(r.rhs(0.0, above),
                                    [v, (u * b - k * v * abs(v)) / above[2] - g, -b],
                                    rtol=1e-14, atol=1e-14)
+
+
+def test_rocket_symbolic_field_coasts_at_the_dry_mass():
+    """The Rocket's symbolic field (Scene.symbolic(): the sensitivities' and the live
+    pages' field) has the C rhs's burn-out branch: at m = m_dry exactly no thrust and no
+    burn, (v, -g - k v|v|/m, 0); one ulp above, the thrust u b / m and m' = -b (closed
+    forms, to 1e-14)."""
+    import sympy as sp
+    u, b, md, g, k = 2100.0, 7.3, 180.0, 9.81, 0.02
+    r = mp.scenes.Rocket(exhaust_speed=u, burn_rate=b, m0=950.0, m_dry=md, g=g, drag=k)
+    fld = r.symbolic()
+    f = sp.lambdify([fld.y], [e.subs(fld.params) for e in fld.f], "math")
+    for v in (350.0, -40.0, 0.0):
+        np.testing.assert_allclose(f([1200.0, v, md]), [v, -g - k * v * abs(v) / md, 0.0],
+                                   rtol=1e-14, atol=1e-14)
+        m = np.nextafter(md, np.inf)
+        np.testing.assert_allclose(f([1200.0, v, m]), [v, (u * b - k * v * abs(v)) / m - g, -b],
+                                   rtol=1e-14, atol=1e-14)

@@ -404,3 +404,39 @@ def test_fit_with_a_callable_observe_has_the_jacobian_and_errors_of_its_residual
                     for _ in range(40)])
     ratio = est.std(axis=0, ddof=1) / np.array([r.stderr["damping"], r.stderr["length"]])
     assert np.all(np.abs(ratio - 1) < 0.3), ratio
+
+
+def test_sign_of_zero_is_zero_in_the_sensitivities():
+    """sign as SymPy's (and numpy's): sign(0) = 0.  x' = p sign(x) from x0 = 0 stays
+    at 0 with dx/dp = 0 (a sign(0) taken as 1 would drive it to x = p t); from
+    x0 = +-0.5 it is x0 + sign(x0) p t with dx/dp = sign(x0) t and dx/dx0 = 1."""
+    x, p = sp.symbols("x p")
+    sys_ = mp.equations([p * sp.sign(x)], [x], params={"p": 2.0})
+    te = np.array([0.1, 0.5, 1.0])
+    s = mp.sensitivity(sys_, (0, 1), [0.0], params=("p",), t_eval=te, rtol=1e-12, atol=1e-14)
+    assert np.all(s.y == 0.0) and np.all(s.S[0, 0] == 0.0)
+    for x0 in (0.5, -0.5):
+        s = mp.sensitivity(sys_, (0, 1), [x0], params=("p",), t_eval=te, rtol=1e-12,
+                           atol=1e-14)
+        np.testing.assert_allclose(s.y[0], x0 + np.sign(x0) * 2.0 * te, rtol=0, atol=1e-13)
+        np.testing.assert_allclose(s.S[0, 0], np.sign(x0) * te, rtol=0, atol=1e-13)
+        np.testing.assert_allclose(s.S[0, 1], 1.0, rtol=0, atol=1e-13)
+
+
+def test_fit_from_the_edge_of_an_open_domain():
+    """A scene's open domain end is nudged inwards by 1e-12 of the scale, as
+    tangent._scene_bounds documents: RestrictedThreeBody's mu in (0, 1) is fitted
+    within [1e-12, 1 - 1e-12].  A guess on either nudged end is accepted (the fit runs
+    and stays in the domain); a guess nearer the open end than that is refused,
+    naming the domain."""
+    y0 = [0.5, 0.2, 0.0, 0.3]
+    t = np.linspace(0.1, 1.0, 10)
+    r3 = mp.scenes.RestrictedThreeBody(mu=0.9)
+    data = mp.solve(r3, (0, 1), y0, t_eval=t, rtol=1e-12, atol=1e-12).y[:2]
+    for guess in (1.0 - 1e-12, 1e-12):
+        fit = mp.fit(r3, t, data, {"mu": guess}, y0=y0, observe=[0, 1])
+        assert fit.success and 1e-12 <= fit.params["mu"] <= 1.0 - 1e-12
+    for guess in (1.0 - 0.5e-12, 0.5e-12):
+        with pytest.raises(ValueError, match="outside its domain") as err:
+            mp.fit(r3, t, data, {"mu": guess}, y0=y0, observe=[0, 1])
+        assert f"[{1e-12}, {1.0 - 1e-12}]" in str(err.value)
