@@ -94,9 +94,12 @@ MODULES = {
                 ["tests/test_modes.py", "tests/test_chain.py", "-k", FAST]),
     "variational.c": (["csrc/variational.c", "csrc/variational.h"],
                       ["tests/test_variational.py", "-k", FAST]),
+    # py_events.c (events and impacts, the lanes' restitution rows) is tested through
+    # solve and solve_many in test_events.py; py_ode.c's ensemble options in test_ensemble.py
     "binding": (["csrc/py/*.c", "csrc/py/*.h", "csrc/mp_status.c", "csrc/mp_status.h"],
                 ["tests/test_errors.py", "tests/test_integrate.py",
                  "tests/test_engine_regressions.py", "tests/test_scenes.py",
+                 "tests/test_events.py", "tests/test_ensemble.py",
                  "tests/test_inertia.py", "tests/test_rotation.py", "tests/test_modes.py",
                  "tests/test_compiled.py", "-k", FAST]),
     "inertia.py": (["mechpy/inertia.py"], ["tests/test_inertia.py", "-k", FAST]),
