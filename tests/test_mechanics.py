@@ -703,7 +703,7 @@ def test_sympy_private_attributes_on_this_sympy():
     kane, lag = _pendulum_kane(), _cartesian_pendulum()[0]
     P = Point("P")
     objects = {"KanesMethod": kane, "LagrangesMethod": lag, "Point": P,
-               "dynamicsymbols": dynamicsymbols}
+               "dynamicsymbols": dynamicsymbols, "Symbol": sp.Symbol("a", positive=True)}
     assert set(objects) == set(priv.ATTRIBUTES)
     missing = [f"{cls}.{a}" for cls, names in priv.ATTRIBUTES.items() for a in names
                if not hasattr(objects[cls], a)]
@@ -715,6 +715,9 @@ def test_sympy_private_attributes_on_this_sympy():
     assert priv.kane_formed(kane) and not priv.kane_formed(_pendulum_kane(formed=False))
     assert not priv.kane_auxiliary_speeds(kane) and priv.kane_holonomic(kane) == []
     assert len(priv.kane_dependent_speeds(kane)) == 0
+    assert priv.kane_inertial(kane).name == "N"        # KanesMethod(N, ...) in _pendulum_kane
+    # as given, not with what they imply (assumptions0 adds real, nonzero, ...)
+    assert priv.assumptions_given(sp.Symbol("a", positive=True)) == {"positive": True}
     x, y = _cartesian_pendulum()[1:]
     l = sp.Symbol("l", positive=True)
     assert priv.lagrange_holonomic(lag) == [x**2 + y**2 - l**2]

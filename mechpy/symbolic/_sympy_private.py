@@ -20,10 +20,12 @@ CHECKED = ("1.14.0",)
 
 #: The private attributes read, by the class that has them.
 ATTRIBUTES = {
-    "KanesMethod": ("_fr", "_frstar", "_uaux", "_f_h", "_udep", "_k_nh", "_f_nh"),
+    "KanesMethod": ("_fr", "_frstar", "_uaux", "_f_h", "_udep", "_k_nh", "_f_nh",
+                    "_inertial"),
     "LagrangesMethod": ("_hol_coneqs",),
     "Point": ("_vel_dict", "_pos_dict"),
     "dynamicsymbols": ("_t",),
+    "Symbol": ("_assumptions_orig",),
 }
 
 
@@ -47,6 +49,12 @@ def kane_formed(m) -> bool:
     """Whether a KanesMethod's equations were formed (``kanes_equations`` ran)."""
     return (_get(m, "_fr", "KanesMethod") is not None
             and _get(m, "_frstar", "KanesMethod") is not None)
+
+
+def kane_inertial(m):
+    """A KanesMethod's inertial frame (the frame it was made with; a
+    LagrangesMethod has it public, as ``inertial``)."""
+    return _get(m, "_inertial", "KanesMethod")
 
 
 def kane_auxiliary_speeds(m):
@@ -86,3 +94,11 @@ def point_velocity_set(P, frame):
 def point_neighbours(P):
     """The points P's position was given from or to (its position tree's edges)."""
     return _get(P, "_pos_dict", "Point")
+
+
+def assumptions_given(s) -> dict:
+    """A symbol's assumptions as its author gave them (``_assumptions_orig``,
+    for a message); the public ``assumptions0`` (the given ones with what they
+    imply) where a SymPy release lacks it: a message only, so no error."""
+    a = getattr(s, "_assumptions_orig", None)
+    return dict(s.assumptions0 if a is None else a)

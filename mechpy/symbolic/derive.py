@@ -181,9 +181,8 @@ def _params(params, exprs, t, allowed_extra=(), states=()):
 
 def _assumptions(s):
     """A symbol's assumptions as given (for a message)."""
-    a = getattr(s, "_assumptions_orig", None)
-    a = dict(s.assumptions0 if a is None else a)
-    a = {k: v for k, v in a.items() if not (k == "commutative" and v)}
+    a = {k: v for k, v in _private.assumptions_given(s).items()
+         if not (k == "commutative" and v)}
     return "{" + ", ".join(f"{k}={v}" for k, v in sorted(a.items())) + "}" if a else "none"
 
 

@@ -97,10 +97,6 @@ def _plain_symbols(P):
 
 # ------------------------------------------------------------ a mechanics model
 
-def _inertial(m):
-    return getattr(m, "_inertial", None) if hasattr(m, "_inertial") else m.inertial
-
-
 def _frame_of(body, N):
     """The frame a body is drawn turned by: its own when its orientation in N
     is known, else the one its inertia is written in (a wheel whose angle is
@@ -162,7 +158,7 @@ def _known(plain, e, what):
 
 def _model_drawing(kind, m, ir, joints, rest_point):
     from sympy.physics.vector import Point
-    N = _inertial(m)
+    N = _private.kane_inertial(m) if kind == "kane" else m.inertial
     bodies = list(m.bodies or [])
     if N is None or not bodies:
         raise ValueError("the model names no bodies or no inertial frame to draw")

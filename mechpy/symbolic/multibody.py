@@ -317,7 +317,7 @@ def mechanics_parts(method, params, specified=None, baumgarte=None):
                      + [f"velocity-level constraint {i} ({gv[i]} = 0)" for i in range(mdep)])
 
     # the energy, when the loads are constant forces
-    frame = getattr(m, "_inertial", None) if kind == "kane" else m.inertial
+    frame = _private.kane_inertial(m) if kind == "kane" else m.inertial
     V = _constant_loads_V(m, frame)
     energy = None
     if V is not None:
