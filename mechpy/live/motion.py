@@ -250,6 +250,53 @@ def _shape_of(name, given, default):
     return kind, full[:3 if kind == "box" else 1 if kind == "sphere" else 2]
 
 
+def _user_links(links, points, names) -> list:
+    """The rods of ``links=[("O", "p1"), ...]`` between the named points ("O":
+    the origin), as [end, end, colour] (an end: a point's index or a place)."""
+    if links is None:
+        return []
+    if points is None:
+        raise ValueError("links join points=: a mechanics model draws its own links")
+    if isinstance(links, (str, bytes)) or not hasattr(links, "__iter__"):
+        raise TypeError(f"links must be a list of pairs of point names, got {links!r}")
+    rods = []
+    for pair in links:
+        if isinstance(pair, (str, bytes)) or len(pair) != 2:
+            raise TypeError(f"links: each link is a pair of point names, got {pair!r}")
+        ends = []
+        for e in pair:
+            if e == "O":
+                ends.append([0.0, 0.0, 0.0])
+            elif e in names:
+                ends.append(names.index(e))
+            else:
+                raise ValueError(f"links: {e!r} is no point (the points: {names}, and "
+                                 "'O' the origin)")
+        rods.append([ends[0], ends[1], _DARK])
+    return rods
+
+
+def _ground(system, ground, y, centre, size):
+    """(up, lines) of a rolling model's ground plane: ``ground`` the direction
+    of the constant loads reversed (a stored expression) at the state y; the
+    plane through the origin under the drawing's centre, a 7 x 7 grid."""
+    from ..symbolic.kinematics import numeric
+    g = numeric(ground, y, system._vector()).reshape(-1)
+    g = g / np.linalg.norm(g)
+    a = np.cross(g, [1.0, 0.0, 0.0] if abs(g[0]) < 0.9 else [0.0, 1.0, 0.0])
+    a /= np.linalg.norm(a)
+    b2 = np.cross(g, a)
+    c0 = centre - np.dot(centre, g) * g                  # the plane through the origin
+    h = 0.75 * size + 0.5
+    lines = []
+    for s_ in np.linspace(-h, h, 7):
+        lines.append(_polyline([c0 + s_ * a - h * b2, c0 + s_ * a + h * b2], _GREY,
+                               "ground plane"))
+        lines.append(_polyline([c0 - h * a + s_ * b2, c0 + h * a + s_ * b2], _GREY,
+                               "ground plane"))
+    return g.tolist(), lines
+
+
 def _bodies(system, times, Y, points=None, links=None, shapes=None):
     d = _motion.bodies_drawing(system, points)
     P, R = _motion.bodies_places(system, d, Y)
@@ -294,43 +341,11 @@ def _bodies(system, times, Y, points=None, links=None, shapes=None):
         b.update(size=[float(v) for v in sz], rot=slot[i],
                  axes=None if E is None else E.reshape(-1).tolist())
         bodies.append(b)
-    rods = [[int(a), int(b), _GREY] for a, b in d["links"]]
-    if links is not None:
-        if points is None:
-            raise ValueError("links join points=: a mechanics model draws its own links")
-        if isinstance(links, (str, bytes)) or not hasattr(links, "__iter__"):
-            raise TypeError(f"links must be a list of pairs of point names, got {links!r}")
-        for pair in links:
-            if isinstance(pair, (str, bytes)) or len(pair) != 2:
-                raise TypeError(f"links: each link is a pair of point names, got {pair!r}")
-            ends = []
-            for e in pair:
-                if e == "O":
-                    ends.append([0.0, 0.0, 0.0])
-                elif e in names:
-                    ends.append(names.index(e))
-                else:
-                    raise ValueError(f"links: {e!r} is no point (the points: {names}, and "
-                                     "'O' the origin)")
-            rods.append([ends[0], ends[1], _DARK])
+    rods = [[int(a), int(b), _GREY] for a, b in d["links"]] + _user_links(links, points, names)
     lines = []
     up = [0.0, 1.0, 0.0] if points is not None else [0.0, 0.0, 1.0]
     if d.get("ground"):
-        from ..symbolic.kinematics import numeric
-        g = numeric(d["ground"], Y[:, 0], system._vector()).reshape(-1)
-        g = g / np.linalg.norm(g)
-        up = g.tolist()
-        a = np.cross(g, [1.0, 0.0, 0.0] if abs(g[0]) < 0.9 else [0.0, 1.0, 0.0])
-        a /= np.linalg.norm(a)
-        b2 = np.cross(g, a)
-        c0 = 0.5 * (lo + hi)
-        c0 = c0 - np.dot(c0, g) * g                       # the plane through the origin
-        h = 0.75 * size + 0.5
-        for s_ in np.linspace(-h, h, 7):
-            lines.append(_polyline([c0 + s_ * a - h * b2, c0 + s_ * a + h * b2], _GREY,
-                                   "ground plane"))
-            lines.append(_polyline([c0 - h * a + s_ * b2, c0 + h * a + s_ * b2], _GREY,
-                                   "ground plane"))
+        up, lines = _ground(system, d["ground"], Y[:, 0], 0.5 * (lo + hi), size)
     trail = [i for i, kd in enumerate(d["kinds"]) if kd in ("point", "particle")]
     what = ("points of the system" if points is not None else
             f"the bodies of the model ({', '.join(names)})")
