@@ -12,6 +12,7 @@ import numpy as np
 
 from .. import _motion
 from .._validate import as_array, as_scalar
+from . import _simulate
 from ._page import LiveWidget, pack
 
 __all__ = ["animate", "Motion"]
@@ -51,7 +52,8 @@ class Motion(LiveWidget):
     _three = True
 
     def __init__(self, spec: dict, kind: str, times: np.ndarray, bodies: list):
-        super().__init__(spec)
+        # a page that simulates (spec["sim"]) carries its integrator (static/simulate.js)
+        super().__init__(spec, extra=("simulate.js",) if spec.get("sim") else ())
         self.kind = kind
         self.times = times
         self.bodies = bodies
@@ -360,7 +362,8 @@ def _bodies(system, times, Y, points=None, links=None, shapes=None):
 
 
 def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0, trail=None,
-            lengths=None, spacing=None, points=None, links=None, shapes=None) -> Motion:
+            lengths=None, spacing=None, points=None, links=None, shapes=None, params=None,
+            y0=None) -> Motion:
     r"""The motion of a solution in 3D, in the browser (three.js).
 
     What is drawn depends on ``kind`` (by default the drawing the system
@@ -505,6 +508,9 @@ def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0,
         kind = "bodies"
     drawing = _motion.kind_of(system, kind)
     kind = drawing.name
+    simulate = params is not None or y0 is not None
+    if sol is None and simulate:                     # the span t = (t0, t1), framed by a solve
+        sol, t = _simulate.framing(system, t, y0), None
     tt, y = _motion.samples(system, sol, t)                        # checks sol's shape
     fps = as_scalar(fps, "fps", positive=True, hi=120.0)
     speed = as_scalar(speed, "speed", lo=0.1, hi=10.0)
@@ -525,6 +531,13 @@ def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0,
     if not np.all(np.isfinite(Y)):
         raise ValueError("the solution is not finite over its span (sol.sol or sol.y)")
     d = drawing.painter("live")(system, times, Y, **options)
+    sim = None
+    if simulate:
+        if tt.size > 1 and np.any(np.diff(tt) == 0):
+            raise ValueError("the page simulates without events: sol has actions (a time held "
+                             "twice); animate it without params= and y0=")
+        sim = _simulate.simulation(system, drawing, options, params,
+                                   y[:, 0] if y0 is None else y0, times)
     n, nb = d["P"].shape[:2]
     dt = span / (n - 1)
     window = n if not np.isfinite(trail) else int(np.ceil(trail / dt - 1e-9)) if dt > 0 else 0
@@ -540,4 +553,6 @@ def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0,
         "solid": d.get("solid"), "up": d["up"], "center": d["center"],
         "extent": float(d["extent"]), "camera": d["camera"],
     }
+    if sim is not None:                         # the page computes the frames itself
+        spec.update(pos=None, rots=None, sim=sim)
     return Motion(spec, kind, times, [b["name"] for b in d["bodies"]])
