@@ -20,6 +20,7 @@ from __future__ import annotations
 import numpy as np
 import sympy as sp
 
+from .. import _motion
 from .._validate import as_scalar
 from . import _field
 
@@ -113,7 +114,7 @@ def simulation(system, drawing, options: dict, params, y0, times) -> dict:
     if drawing.geometry is None:
         raise ValueError(f"the page cannot simulate kind={drawing.name!r}: it simulates the "
                          "kinds with a symbolic geometry ("
-                         + ", ".join(repr(d) for d, e in _registry().items() if e.geometry)
+                         + ", ".join(repr(k) for k, e in _motion.DRAWINGS.items() if e.geometry)
                          + ")")
     fd, nc = _dynamics(system)
     points = drawing.painter("geometry")(system, **options)
@@ -134,11 +135,6 @@ def simulation(system, drawing, options: dict, params, y0, times) -> dict:
             "names": fd.names, "values": fd.values, "sliders": sliders,
             "y0": state.tolist(), "rtol": RTOL, "atol": ATOL,
             "max_steps": STEPS_PER_FRAME * len(times)}
-
-
-def _registry():
-    from .. import _motion
-    return _motion.DRAWINGS
 
 
 def framing(system, t, y0):

@@ -1,6 +1,8 @@
 // mechpy.live.animate: the motion of a solution in 3D (three.js).  Every frame is computed
 // in Python (spec.pos: the bodies' places, spec.rot: the body-to-space matrix of a top or a
 // rigid body); the page places the bodies, draws rods, trails and fixed lines, and plays.
+// A page that simulates (spec.sim: mp.live.animate's params=, y0=) computes the places itself
+// (static/simulate.js, loaded before this file) and again when a slider moves.
 
 function mpMotionFrame(THREE, spec, sim) {
   const n = spec.n, nb = spec.nb;
