@@ -22,6 +22,7 @@ import sympy as sp
 
 from .. import _motion
 from .._validate import as_scalar
+from ..integrate import solve
 from . import _field
 
 #: the page's tolerances (weighted RMS norm of the local error estimate, as Hairer's
@@ -142,7 +143,6 @@ def framing(system, t, y0):
     from ``y0`` over ``t = (t0, t1)`` with dense output (rtol 1e-10), which the
     drawing is laid out from (its extent, its centre); the page's frames are
     its own."""
-    from ..integrate import solve
     if y0 is None:
         raise ValueError("sol=None: the page simulates from y0, give it (and t=(t0, t1))")
     if t is None or isinstance(t, (str, bytes)) or np.ndim(t) != 1 or len(t) != 2:
