@@ -204,3 +204,22 @@ def test_what_the_page_cannot_simulate_is_named():
     assert np.any(np.diff(hop.t) == 0)
     with pytest.raises(ValueError, match="the page simulates without events"):
         a(pend, hop, params={"g": (1, 20)})
+
+
+def test_pendulum_kinds_symbolic_geometry_is_the_painters(double_pendulum, rng):
+    """The registry's symbolic bobs (what a simulating page prints) equal the
+    NumPy painter's (mechpy._motion.pendulum_bobs), for both kinds and for
+    lengths= given as numbers."""
+    from mechpy import _motion
+    for system, ls, given in ((mp.scenes.Pendulum(length=1.5), [1.5], None),
+                              (double_pendulum, [1.0, 0.5], None),
+                              (double_pendulum, [0.3, 0.9], [0.3, 0.9])):
+        g = _motion.DRAWINGS[system.drawing].painter("geometry")(system, lengths=given)
+        y = rng.uniform(-3, 3, (system.dim, 7))
+        f = sp.lambdify([sp.symbols(f"y0:{system.dim}")] + [sp.Symbol(k) for k in system.params],
+                        sp.Matrix(g))
+        got = np.stack([np.array(f(y[:, k], *system.params.values()), dtype=float)
+                        for k in range(y.shape[1])])                   # (m, bobs, 3)
+        xs, ys = _motion.pendulum_bobs(y, np.array(ls))
+        assert np.abs(got[..., 0] - xs.T).max() < 1e-15
+        assert np.abs(got[..., 1] - ys.T).max() < 1e-15 and not got[..., 2].any()
