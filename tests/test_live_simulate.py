@@ -39,7 +39,7 @@ def _agrees(pos, system, y0, lengths, truth=5e-10, **changes):
     """The page's bobs ``pos`` (bobs, 3) at the end of SPAN against mp.solve's
     state there: at rtol 1e-10 to 1e-7 (the contract: mp.solve's own error
     dominates), and at rtol 1e-13 to ``truth`` (the page's own error: measured 4.6e-11
-    m at most, the pendulum; 2.8e-12 m the double pendulums)."""
+    m at most, the pendulum; 4.6e-12 m the double pendulums)."""
     nq = len(lengths)
     got = [np.abs(pos - _bobs(_reference(system, y0, rtol=r, **changes)[:nq], lengths)).max()
            for r in (1e-10, 1e-13)]
