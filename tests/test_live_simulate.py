@@ -100,6 +100,12 @@ def test_pendulum_page_simulates_and_its_sliders_rerun(driver, tmp_path):
     assert msg and "step budget" in msg[0][0] and msg[0][1] == "block"
     assert _set(driver, "g", 9.81)["status"] == "done"
     _agrees(_last(driver)[1], p, y0, [2.25], length=2.25)
+    # parameters without a slider, through setParam: damping and a drive (the field's t)
+    _set(driver, "damping", 0.3)
+    _set(driver, "drive_frequency", 2.0)
+    assert _set(driver, "drive_amplitude", 1.5)["status"] == "done"
+    _agrees(_last(driver)[1], p, y0, [2.25], length=2.25, damping=0.3, drive_frequency=2.0,
+            drive_amplitude=1.5)
 
 
 def test_double_pendulum_through_the_mass_matrix(driver, tmp_path, double_pendulum):
