@@ -1,10 +1,13 @@
 // mechpy.live.animate: the motion of a solution in 3D (three.js).  Every frame is computed
 // in Python (spec.pos: the bodies' places, spec.rot: the body-to-space matrix of a top or a
 // rigid body); the page places the bodies, draws rods, trails and fixed lines, and plays.
+// A page that simulates (spec.sim: mp.live.animate's params=, y0=) computes the places itself
+// (static/simulate.js, loaded before this file) and again when a slider moves.
 
-function mpMotionFrame(THREE, spec) {
+function mpMotionFrame(THREE, spec, sim) {
   const n = spec.n, nb = spec.nb;
-  const P = mpUnpack(spec.pos), R = spec.rot ? mpUnpack(spec.rot) : null;
+  // a page that simulates (static/simulate.js) computes the places itself, into sim.P
+  const P = sim ? sim.P : mpUnpack(spec.pos), R = spec.rot ? mpUnpack(spec.rot) : null;
   const m4 = new THREE.Matrix4(), q = new THREE.Quaternion();
   // the places of the bodies at frame k (world coordinates, the system's units)
   return function (k, out) {
@@ -28,7 +31,9 @@ export default {
     const {THREE, OrbitControls} = await mpThree();
     const n = spec.n, nb = spec.nb, ext = spec.extent;
     const T = mpUnpack(spec.t);
-    const place = mpMotionFrame(THREE, spec);
+    const sim = spec.sim ? mpSimulation(spec) : null;
+    if (sim) sim.run();
+    const place = mpMotionFrame(THREE, spec, sim);
 
     // ---- page
     // the view takes its container's width, 960 px at most (mpFollowWidth), 0.62 of it high
@@ -44,7 +49,8 @@ export default {
     const legend = mpEl("div", {style: "position:absolute;left:8px;top:6px;font-size:12px;"
       + "background:rgba(255,255,255,.8);padding:2px 4px;max-width:60%"});
     const stage = mpEl("div", {style: `position:relative;width:100%;max-width:${MAXW}px;`
-      + `height:${H}px;box-sizing:border-box;border:1px solid #ddd`}, renderer.domElement, clock, legend);
+      + `height:${H}px;box-sizing:border-box;border:1px solid #ddd`}, renderer.domElement, clock, legend,
+      ...(sim ? [sim.message] : []));
     const title = mpEl("div", {style: "font-size:13px;margin:2px 0 4px"}, spec.title);
 
     // ---- scene
@@ -131,18 +137,26 @@ export default {
     }
     // trails: the whole path of a body, drawn from the window's first frame to the shown one
     const trails = spec.trails.map((tr) => {
-      const arr = new Float32Array(3 * n), all = where.map(() => new THREE.Vector3());
-      for (let k = 0; k < n; k++) {
-        place(k, all);
-        all[tr.body].toArray(arr, 3 * k);
-      }
       const g = new THREE.BufferGeometry();
-      g.setAttribute("position", new THREE.BufferAttribute(arr, 3));
+      g.setAttribute("position", new THREE.BufferAttribute(new Float32Array(3 * n), 3));
       const line = new THREE.Line(g, new THREE.LineBasicMaterial({color: color(tr.color),
         transparent: true, opacity: 0.85}));
       scene.add(line);
-      return {line, window: tr.window};
+      return {line, window: tr.window, body: tr.body};
     });
+    function fillTrails() {                    // again after a simulating page's re-run
+      const all = where.map(() => new THREE.Vector3());
+      for (const tr of trails) {
+        const attr = tr.line.geometry.getAttribute("position");
+        for (let k = 0; k < n; k++) {
+          place(k, all);
+          all[tr.body].toArray(attr.array, 3 * k);
+        }
+        attr.needsUpdate = true;
+        tr.line.geometry.computeBoundingSphere();
+      }
+    }
+    fillTrails();
     // a solid turned by spec.rot: the top (a cone, apex at the pivot) or the box of the moments
     let solid = null;
     if (spec.solid) {
@@ -258,7 +272,10 @@ export default {
     const bar = mpEl("div", {style: "display:flex;flex-wrap:wrap;gap:12px;align-items:center;"
       + "margin-top:6px"},
       playBtn, slider, speedRow,
-      ...(trails.length ? [mpEl("label", {style: "font-size:13px"}, trailBox, " trails")] : []));
+      ...(trails.length ? [mpEl("label", {style: "font-size:13px"}, trailBox, " trails")] : []),
+      ...(sim ? sim.controls(rerun) : []));
+    // a simulating page's re-run (a slider, setParam): new trails, the shown frame again
+    function rerun() { fillTrails(); show(Math.max(shown, 0)); }
     el.append(mpEl("div", {class: "mechpy-live mechpy-animate"}, title, stage, bar));
     // the canvas fills the stage inside its border (clientWidth); a new width: a new size
     // and the camera's aspect, drawn at once
@@ -303,6 +320,18 @@ export default {
       // frames drawn per second over the last second (a paused, untouched page draws none)
       fps: () => fps.value(),
     };
+    if (sim) {
+      // a page that simulates: a parameter changed as its slider does (the run's report),
+      // the parameters' values, and the last run's {steps, rejected, evals, ms, status, t}
+      api.setParam = (name, value) => {
+        const r = sim.setParam(name, value);
+        rerun();
+        draw(performance.now());
+        return r;
+      };
+      api.params = sim.params;
+      api.simulation = sim.report;
+    }
     const unregister = mpRegister(api);
     show(0);
     raf = requestAnimationFrame(tick);
