@@ -34,14 +34,54 @@ RTOL, ATOL = 1e-12, 1e-12
 STEPS_PER_FRAME = 1000
 
 
+def _mechanics(system):
+    """(Field, na) of an :func:`mechpy.mechanics` scene: the expressions are A
+    (na x na, row-major) then b of the linear system A z = b its C solves at
+    each evaluation (:class:`mechpy.symbolic.multibody.SymPyForm`, the same
+    expressions), dy/dt = z[:dim].  ValueError when the scene has no SymPy
+    form in memory or a specified input is a Python callable."""
+    form = system._sympy
+    if form is None:
+        raise ValueError("this mechanics scene holds no SymPy form (an unpickled scene): "
+                         "make it again with mp.mechanics(method, params) in this session")
+    if system._functions:
+        raise ValueError(f"the specified input(s) {sorted(system._functions)} are Python "
+                         "callables, which the page cannot call: give them values (a "
+                         "parameter)")
+    exprs = form.A + form.b
+    td = any(form.T in sp.sympify(e).free_symbols for e in exprs)
+    fd = _field.Field(exprs, form.Y, form.T, form.P, list(form.param_names),
+                      [float(v) for v in system._vector()], td)
+    return fd, len(form.b)
+
+
+def _locked(system, fd) -> dict:
+    """{name: why} of the parameters that a slider or setParam may not change: a
+    mechanics scene's parameters in its constraints (the initial state, placed
+    on the constraints at the system's values, would leave them, and mp.solve
+    refuses such a state)."""
+    form = getattr(system, "_sympy", None)
+    if form is None or not form.G:
+        return {}
+    used = set().union(*(sp.sympify(g).free_symbols for g in form.G))
+    return {nm: (f"{nm} enters the model's constraints: the initial state, on the "
+                 "constraints at its value, would leave them at another")
+            for nm, s in zip(fd.names, fd.p) if s in used}
+
+
 def _dynamics(system):
-    """(Field, nc): the field printed for the page; ``nc`` > 0 for a mass-matrix
-    form (the field's expressions are then M row-major, then F), 0 for y' = f.
-    ValueError naming why a system cannot be simulated by the page."""
+    """(Field, nc, na): the field printed for the page; ``nc`` > 0 for a
+    Lagrangian's mass-matrix form (the field's expressions are then M
+    row-major, then F: M q'' = F), ``na`` > 0 for a mechanics scene's linear
+    system (A row-major, then b: dy/dt = z[:dim] of A z = b), both 0 for y' =
+    f.  ValueError naming why a system cannot be simulated by the page."""
     why = "the page cannot simulate this system: "
     mass = getattr(system, "_mass_form", None)
+    na = 0
     try:
-        if mass is not None and system._meta["kind"] == "lagrangian" and system._nc >= 2:
+        if (getattr(system, "_meta", None) or {}).get("kind") == "mechanics":
+            (fd, na), nc = _mechanics(system), 0
+        elif mass is not None and system._meta["kind"] == "lagrangian" and system._nc >= 2:
             M, F, y, t, params = mass()
             exprs = list(M) + list(F)
             td = any(t in sp.sympify(e).free_symbols for e in exprs)
@@ -53,7 +93,7 @@ def _dynamics(system):
         _field._check_printable(fd)
     except ValueError as e:
         raise ValueError(why + str(e)) from None
-    return fd, nc
+    return fd, nc, na
 
 
 def _renamed(exprs, fd):
@@ -74,8 +114,9 @@ def _renamed(exprs, fd):
     return out
 
 
-def _sliders(params, fd) -> list:
-    """[{name, index, min, max, value}] of ``params={"name": (min, max)}``."""
+def _sliders(params, fd, locked) -> list:
+    """[{name, index, min, max, value}] of ``params={"name": (min, max)}``
+    (ValueError for a ``locked`` one, with its reason)."""
     if params is None:
         return []
     if not isinstance(params, dict):
@@ -90,6 +131,9 @@ def _sliders(params, fd) -> list:
             raise ValueError(f"params[{nm!r}] must be (min, max), got {rng!r}")
         lo = as_scalar(rng[0], f"params[{nm!r}][0]")
         hi = as_scalar(rng[1], f"params[{nm!r}][1]")
+        if nm in locked:
+            raise ValueError(f"params[{nm!r}]: the page cannot re-run the motion at another "
+                             f"value: {locked[nm]}")
         j = fd.names.index(nm)
         v = fd.values[j]
         if not lo < hi or not lo <= v <= hi:
@@ -117,23 +161,36 @@ def simulation(system, drawing, options: dict, params, y0, times) -> dict:
                          "kinds with a symbolic geometry ("
                          + ", ".join(repr(k) for k, e in _motion.DRAWINGS.items() if e.geometry)
                          + ")")
-    fd, nc = _dynamics(system)
-    points = drawing.painter("geometry")(system, **options)
-    geom = _field.Field(_renamed([c for xyz in points for c in xyz], fd), fd.y, fd.t, fd.p,
-                        fd.names, fd.values, False)
-    sliders = _sliders(params, fd)
+    fd, nc, na = _dynamics(system)
+    nrot = 0
+    if na:           # a mechanics model: its drawing's places, then its solids' rotations
+        try:
+            exprs = system._sympy.kinematics()
+        except ValueError as e:
+            raise ValueError(f"this mechanics model cannot be drawn: {e}") from None
+        nrot = _motion.bodies_drawing(system)["nrot"]
+    else:
+        exprs = _renamed([c for xyz in drawing.painter("geometry")(system, **options)
+                          for c in xyz], fd)
+    geom = _field.Field(exprs, fd.y, fd.t, fd.p, fd.names, fd.values, False)
+    locked = _locked(system, fd)
+    sliders = _sliders(params, fd, locked)
     state = np.asarray(system.initial_state(y0), dtype=float).reshape(-1)
     if not np.all(np.isfinite(state)):
         raise ValueError("y0 must be finite")
     if times[-1] <= times[0]:
         raise ValueError("the page integrates forward in time: the span must run from an "
                          "earlier to a later time")
+    check = getattr(system, "_check_initial", None)      # y0 that mp.solve refuses, named
+    if check is not None:
+        check(float(times[0]), state)
     try:
         field_js, geom_js = _field.javascript(fd), _field.javascript(geom)
     except ValueError as e:
         raise ValueError("the page cannot simulate this system: " + str(e)) from None
-    return {"dim": system.dim, "nc": nc, "field": field_js, "geometry": geom_js,
-            "names": fd.names, "values": fd.values, "sliders": sliders,
+    return {"dim": system.dim, "nc": nc, "na": na, "nrot": nrot, "field": field_js,
+            "geometry": geom_js, "names": fd.names, "values": fd.values, "sliders": sliders,
+            "locked": locked,
             "y0": state.tolist(), "rtol": RTOL, "atol": ATOL,
             "max_steps": STEPS_PER_FRAME * len(times)}
 

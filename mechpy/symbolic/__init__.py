@@ -463,7 +463,7 @@ def _mechanics_build(method, params, spec, baumgarte, bar, steps):
 
     from .. import _core
     from . import build
-    from .multibody import MechanicsScene, _digest, finish, mechanics_parts
+    from .multibody import MechanicsScene, SymPyForm, _digest, finish, mechanics_parts
     ir, info, parts = mechanics_parts(method, params, spec, baumgarte)
     for module in ("multibody.py", "kinematics.py"):       # what derives the stored meta
         with open(os.path.join(os.path.dirname(__file__), module), "rb") as f:
@@ -494,4 +494,6 @@ def _mechanics_build(method, params, spec, baumgarte, bar, steps):
         info["drawing"] = model_drawing(method, ir)
         build.store_meta(key, meta)
     bar.stage(steps[3])
-    return MechanicsScene(meta, values, functions=functions)
+    scene = MechanicsScene(meta, values, functions=functions)
+    scene._sympy = SymPyForm(method, ir)          # in memory: what a page that simulates prints
+    return scene

@@ -33,7 +33,7 @@ import sympy as sp
 
 from . import _sympy_private as _private
 
-__all__ = ["model_drawing", "points_drawing", "evaluate", "numeric"]
+__all__ = ["model_drawing", "model_kinematics", "points_drawing", "evaluate", "numeric"]
 
 
 def _source(exprs, P, n, what) -> str:
@@ -133,6 +133,28 @@ def model_drawing(method, ir) -> dict:
     for a model that rolls (velocity constraints).  A part that cannot be
     drawn gives ``{"error": message}`` (raised when it is drawn).
     """
+    try:
+        d, exprs, P = _model_parts(method, ir)
+    except ValueError as exc:
+        return {"error": str(exc)}
+    return dict(d, nout=len(exprs),
+                source=_source(exprs, P, ir.n, "the places of the bodies and their frames' "
+                                               "direction cosines"))
+
+
+def model_kinematics(method, ir) -> list:
+    """The expressions :func:`model_drawing` prints, as SymPy: the places (3 a
+    drawn point) then the direction cosines (9 a turned solid, row-major), in
+    the plain state symbols ``ir.Y`` and the parameter symbols ``mp_p<j>`` (j
+    the index in ``ir.P``); what a page that simulates prints as JavaScript.
+    ValueError when the model cannot be drawn (as :func:`model_drawing`'s
+    ``error``)."""
+    return _model_parts(method, ir)[1]
+
+
+def _model_parts(method, ir):
+    """(description, expressions, parameter symbols) of :func:`_model_drawing`
+    for a KanesMethod, LagrangesMethod or System."""
     from .multibody import _method, _rest_point
     try:
         from sympy.physics.mechanics import System
@@ -140,10 +162,7 @@ def model_drawing(method, ir) -> dict:
         System = ()
     joints = list(method.joints) if System and isinstance(method, System) else []
     kind, m = _method(method)
-    try:
-        return _model_drawing(kind, m, ir, joints, _rest_point)
-    except ValueError as exc:
-        return {"error": str(exc)}
+    return _model_drawing(kind, m, ir, joints, _rest_point)
 
 
 def _known(plain, e, what):
@@ -233,10 +252,8 @@ def _model_drawing(kind, m, ir, joints, rest_point):
                     break
     exprs = pos + [e for R in rots for e in R]
     P = [coef[s] for s in ir.P]
-    return dict(names=names, kinds=kinds, frames=frames, inertia=inertia, mass=mass,
-                links=links, ground=ground, n=ir.n, nrot=len(rots), nout=len(exprs),
-                source=_source(exprs, P, ir.n, "the places of the bodies and their "
-                                                 "frames' direction cosines"))
+    return (dict(names=names, kinds=kinds, frames=frames, inertia=inertia, mass=mass,
+                 links=links, ground=ground, n=ir.n, nrot=len(rots)), exprs, P)
 
 
 # ------------------------------------------------------ points of any system

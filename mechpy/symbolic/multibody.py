@@ -48,7 +48,7 @@ from . import _sympy_private as _private
 from .derive import IR, _assumptions, _check_derived, _check_input, _Diff, baumgarte_rates
 from .scene import CompiledScene, _first_over, _state_scale
 
-__all__ = ["mechanics_parts", "MechanicsScene"]
+__all__ = ["mechanics_parts", "MechanicsScene", "SymPyForm"]
 
 
 def _dag(exprs):
@@ -375,6 +375,43 @@ def mechanics_parts(method, params, specified=None, baumgarte=None):
     return ir, info, key_parts
 
 
+class SymPyForm:
+    """What a :class:`MechanicsScene` keeps in memory of the model it was built
+    from, for a page that simulates (:mod:`mechpy.live._simulate`): the linear
+    system A z = b exactly as :mod:`.codegen` prints it as C (A row-major, NA x
+    NA; dy/dt = z[:NS]; the dependent speeds' rows and the holonomic
+    constraints' rows with their Baumgarte terms), the constraint residuals G,
+    in the plain symbols (state ``Y``, time ``T``, parameters ``P`` in the
+    order of ``param_names``), and the method, whose drawing's kinematics
+    (:func:`.kinematics.model_kinematics`) are derived when a page asks.
+
+    Made by every :func:`mechpy.mechanics` call, also when the compiled code
+    comes from the cache (the expressions are derived before the cache is
+    looked up); never stored on disk nor pickled (an unpickled scene has
+    none)."""
+
+    def __init__(self, method, ir):
+        self.method = method
+        self.A, self.b = list(ir.blocks["A"]), list(ir.blocks["b"])
+        self.G = list(ir.blocks["G"])
+        self.T, self.Y, self.P = ir.T, list(ir.Y), list(ir.P)
+        self.param_names = list(ir.param_names)
+        self._n = ir.n
+        self._kin = None
+
+    def kinematics(self) -> list:
+        """The drawing's places then direction cosines (see
+        :func:`.kinematics.model_kinematics`) in ``Y`` and ``P``; derived once."""
+        if self._kin is None:
+            from types import SimpleNamespace
+
+            from .kinematics import model_kinematics
+            ir = SimpleNamespace(n=self._n, Y=self.Y, T=self.T, P=self.P)
+            back = {sp.Symbol(f"mp_p{j}"): s for j, s in enumerate(self.P)}
+            self._kin = [sp.sympify(e).xreplace(back) for e in model_kinematics(self.method, ir)]
+        return self._kin
+
+
 def finish(ir, info):
     """The derivatives: D (NA x (NS + nr)) and GJ (nres x NS)."""
     d = _Diff()
@@ -404,6 +441,10 @@ class MechanicsScene(CompiledScene):
 
     _EXTRA = {"residual": "mp_gen_residual", "residual_jac": "mp_gen_residual_jac",
               "linear": "mp_gen_linear"}
+
+    #: the model's SymPy form (:class:`SymPyForm`), set by :func:`mechpy.mechanics`
+    #: and kept by :meth:`replace`; None for an unpickled scene
+    _sympy = None
 
     def __init__(self, meta, params, backend="c", numpy_fns=None, functions=None):
         super().__init__(meta, params, "c")
@@ -707,7 +748,9 @@ class MechanicsScene(CompiledScene):
             else:
                 fns.pop(k, None)
                 p[k] = v
-        return MechanicsScene(self._meta, p, functions=fns)
+        out = MechanicsScene(self._meta, p, functions=fns)
+        out._sympy = self._sympy
+        return out
 
     def __repr__(self):
         args = ", ".join(f"{k}={v!r}" for k, v in self._params.items()

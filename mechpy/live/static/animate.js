@@ -208,7 +208,8 @@ export default {
     let shown = -1, playing = true, head = 0, last = null, speed = spec.speed;
     let raf = 0, dead = false;
     // the rotations of the solids of kind "bodies" (frames x solids x 9, row-major)
-    const Rs = spec.rots ? mpUnpack(spec.rots) : null, m4b = new THREE.Matrix4();
+    const Rs = sim && sim.R ? sim.R : spec.rots ? mpUnpack(spec.rots) : null;  // sim: its own
+    const m4b = new THREE.Matrix4();
     const nrot = spec.bodies.filter((b) => b.rot !== null && b.rot !== undefined).length;
     function show(k) {
       const q = place(k, where);

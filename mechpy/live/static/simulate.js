@@ -6,8 +6,12 @@
 // solution in the weighted RMS norm sqrt(mean((err_i / (atol + rtol max(|y0_i|, |y1_i|)))^2))
 // with Hairer's step control (safety 0.9, the step 0.2 to 10 times the last) and initial step
 // (dopri5's hinit), and Hairer's 4th-order dense output (contd5) for the states at the
-// frames' times.  A mass-matrix system (sim.nc > 0: the printed field returns M(q) row-major,
-// then F(q, q', t)) is solved by LU with partial pivoting at every evaluation.
+// frames' times.  A mass-matrix system is solved by LU with partial pivoting at every
+// evaluation: a Lagrangian's (sim.nc > 0: the printed field returns M(q) row-major, then
+// F(q, q', t); y' = (q', M^-1 F)) or an mp.mechanics model's (sim.na > 0: A (na x na)
+// row-major, then b, the linear system its C solves; y' = the first dim unknowns of A z = b).
+// The printed geometry returns the places (3 a body), then for a mechanics model the
+// rotations of its solids (9 each, row-major, body to world: sim.nrot of them), into R.
 // A run takes at most sim.max_steps steps (frames x a cap): a runaway stops there, the
 // frames after it hold the last state reached, and the page says so.
 
@@ -56,23 +60,30 @@ function mpLuSolve(A, b, n) {
 }
 
 // The simulation of spec (spec.sim): {P (frames x bodies x 3, rewritten by every run),
-// run(), setParam(name, value), report(), controls(onRun), message (an element)}.
+// R (frames x solids x 9, or null), run(), setParam(name, value), report(),
+// controls(onRun), message (an element)}.
 function mpSimulation(spec) {
   const sim = spec.sim, n = spec.n, nb = spec.nb, dim = sim.dim, nc = sim.nc;
+  const na = sim.na || 0, nrot = sim.nrot || 0;
   const T = mpUnpack(spec.t);
   const p = sim.values.slice();
   const field = new Function("s", "t", "p", "mp", sim.field);
   const geometry = new Function("s", "t", "p", "mp", sim.geometry);
-  const rhs = nc > 0
+  const rhs = na > 0
     ? (t, s) => {
       const out = field(s, t, p, MP_JS_MATH);
-      const acc = mpLuSolve(out.slice(0, nc * nc), out.slice(nc * nc), nc);
-      const f = new Array(dim);
-      for (let i = 0; i < nc; i++) { f[i] = s[nc + i]; f[nc + i] = acc[i]; }
-      return f;
+      return mpLuSolve(out.slice(0, na * na), out.slice(na * na), na).slice(0, dim);
     }
-    : (t, s) => field(s, t, p, MP_JS_MATH);
-  const P = new Float64Array(n * nb * 3);
+    : nc > 0
+      ? (t, s) => {
+        const out = field(s, t, p, MP_JS_MATH);
+        const acc = mpLuSolve(out.slice(0, nc * nc), out.slice(nc * nc), nc);
+        const f = new Array(dim);
+        for (let i = 0; i < nc; i++) { f[i] = s[nc + i]; f[nc + i] = acc[i]; }
+        return f;
+      }
+      : (t, s) => field(s, t, p, MP_JS_MATH);
+  const P = new Float64Array(n * nb * 3), R = nrot ? new Float64Array(n * nrot * 9) : null;
   const message = mpEl("div", {style: "position:absolute;left:8px;bottom:6px;font-size:12px;"
     + "color:#b00;background:rgba(255,255,255,.85);padding:1px 4px;display:none"});
   let last = {steps: 0, rejected: 0, evals: 0, ms: 0, status: "not run", t: T[0]};
@@ -86,6 +97,7 @@ function mpSimulation(spec) {
   function place(k, y) {
     const g = geometry(y, T[k], p, MP_JS_MATH);
     for (let i = 0; i < 3 * nb; i++) P[3 * nb * k + i] = g[i];
+    for (let i = 0; i < 9 * nrot; i++) R[9 * nrot * k + i] = g[3 * nb + i];
   }
   // Hairer's initial step (dopri5's hinit, order 5)
   function firstStep(t0, y0, f0, tend, rtol, atol) {
@@ -177,12 +189,13 @@ function mpSimulation(spec) {
   function setParam(name, value) {
     const j = sim.names.indexOf(name);
     if (j < 0) throw new Error(`${name} is not a parameter (${sim.names.join(", ")})`);
+    if (sim.locked && sim.locked[name]) throw new Error(sim.locked[name]);
     p[j] = Number(value);
     sliders.forEach((sl) => { if (sl.name === name) sl.row.set(p[j]); });
     return run();
   }
   return {
-    P, run, setParam, message,
+    P, R, run, setParam, message,
     params: () => Object.fromEntries(sim.names.map((nm, j) => [nm, p[j]])),
     report: () => Object.assign({}, last),
     // one slider a params entry; onRun() after each re-run (the view redraws)
