@@ -195,15 +195,7 @@ def test_what_the_page_cannot_simulate_is_named():
                                          "constraints"):
         a(con, mp.solve(con, (0, 1), [0.1, 0.1, 0.0, 0.0]), points={"p": (q1, q2, 0)},
           y0=[0.1, 0.1, 0.0, 0.0])
-    # a mechanics model: its right-hand side solves the mass-matrix system in C, no
-    # symbolic field to print
-    from mechpy.symbolic.models import rolling_disc
-    kane, prm = rolling_disc()
-    disc = mp.mechanics(kane, prm)
-    still = np.zeros((disc.dim, 2))
-    with pytest.raises(ValueError, match="cannot simulate this system: a mechanics model has "
-                                         "no symbolic field"):
-        a(disc, still, t=[0.0, 1.0], y0=still[:, 0])
+    # (a mechanics model: tests/test_live_simulate_bodies.py)
     # a solution with actions (events): the page has none
     hop = mp.solve(pend, (0, 2), [0.5, 0.0], dense_output=True,
                    events=[mp.events.impact("theta", wall=0.0, restitution=0.5)])

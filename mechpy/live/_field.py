@@ -234,15 +234,18 @@ def _names(fd: Field, glsl: bool) -> dict:
 
 def _check_printable(fd: Field) -> None:
     """ValueError naming what in the field a page cannot evaluate (and what it can)."""
-    bad = set()
-    for e in fd.f:
-        for a in sp.preorder_traversal(e):
-            if isinstance(a, (sp.Derivative, sp.Integral, sp.Sum)) or a.has(sp.I):
-                bad.add(type(a).__name__)
-            elif isinstance(a, sp.core.function.AppliedUndef):
-                bad.add(str(a))
-            elif isinstance(a, sp.Function) and type(a).__name__ not in SUPPORTED:
-                bad.add(type(a).__name__)
+    from ..symbolic.multibody import _dag
+    bad, has_i = set(), {}
+    # each distinct sub-expression once, children first (a mechanics model's equations
+    # share their subtrees: a tree walk meets the bicycle's millions of times)
+    for a in _dag([sp.sympify(e) for e in fd.f]):
+        has_i[a] = a is sp.I or any(has_i[x] for x in a.args)
+        if isinstance(a, (sp.Derivative, sp.Integral, sp.Sum)) or has_i[a]:
+            bad.add(type(a).__name__)
+        elif isinstance(a, sp.core.function.AppliedUndef):
+            bad.add(str(a))
+        elif isinstance(a, sp.Function) and type(a).__name__ not in SUPPORTED:
+            bad.add(type(a).__name__)
     if bad:
         raise ValueError(f"the field holds {', '.join(sorted(bad))}, which a live page cannot "
                          f"evaluate; it evaluates +, -, *, /, powers, {', '.join(SUPPORTED)} "
@@ -251,14 +254,17 @@ def _check_printable(fd: Field) -> None:
 
 def _prepare(fd: Field, glsl: bool) -> list:
     """The field's expressions in the printed names, reciprocal functions as 1/(...)."""
+    from ..symbolic.multibody import _dag, _replace
     _check_printable(fd)
     sub = _names(fd, glsl)
-    out = []
-    for e in fd.f:
-        e = sp.sympify(e)
+    exprs = [sp.sympify(e) for e in fd.f]
+    present = {type(a) for a in _dag(exprs)} & set(_RECIPROCAL)     # replace walks the tree
+    out, memo = [], {}
+    for e in exprs:
         for rf, f in _RECIPROCAL.items():
-            e = e.replace(rf, lambda a, f=f: 1 / f(a, evaluate=False))
-        out.append(e.xreplace(sub))
+            if rf in present:
+                e = e.replace(rf, lambda a, f=f: 1 / f(a, evaluate=False))
+        out.append(_replace(e, sub, memo))      # xreplace, each shared subtree once
     return out
 
 
