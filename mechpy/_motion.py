@@ -420,10 +420,12 @@ def points_geometry(system, points=None, links=None, shapes=None) -> list:
     """The places of ``points=`` (kind "bodies") as SymPy expressions in the
     state symbols ``y0, y1, ...`` and the parameters' symbols (by name):
     ``kinematics.points_drawing``'s own, renamed.  ValueError for a mechanics
-    model (its kinematics are stored as compiled C only)."""
+    model (a page that simulates it prints its SymPy form's kinematics,
+    :meth:`mechpy.symbolic.multibody.SymPyForm.kinematics`)."""
     import sympy as sp
     if (getattr(system, "_info", None) or {}).get("drawing") is not None:
-        raise ValueError("a mechanics model's bodies are not simulated by the page")
+        raise ValueError("a mechanics model's geometry is its SymPy form's "
+                         "(SymPyForm.kinematics), not points=")
     d = bodies_drawing(system, points)
     names = list(system._meta["param_names"])
     sub = {sp.Symbol(f"mp_y{i}"): sp.Symbol(f"y{i}") for i in range(system.dim)}

@@ -8,9 +8,13 @@ JavaScript by :mod:`._field` (the phase portrait's printer).  A Lagrangian of
 two or more coordinates is printed as its mass matrix M(q) and its forces
 F(q, q', t) (:meth:`mechpy.symbolic.scene.CompiledScene._mass_form`), and the
 page solves M q'' = F by LU with partial pivoting at each evaluation (no
-symbolic inverse).  The places drawn are printed from the drawing's own
-geometry (``mechpy._motion.DRAWINGS``' ``geometry``: the bobs of a pendulum,
-the ``points=`` of a system), so the page computes every frame it shows.
+symbolic inverse).  An :func:`mechpy.mechanics` scene is printed as the
+linear system A z = b that its C solves (the same expressions, kept in memory
+by the scene: :class:`mechpy.symbolic.multibody.SymPyForm`), solved likewise,
+dy/dt the first ``dim`` unknowns.  The places drawn are printed from the
+drawing's own geometry (``mechpy._motion.DRAWINGS``' ``geometry``: the bobs of
+a pendulum, the ``points=`` of a system; a mechanics model's places and its
+solids' direction cosines), so the page computes every frame it shows.
 
 In the printed code the state is ``s[i]``, the time ``t`` and parameter j is
 ``p[j]`` (the order of the field's parameters), as in the phase portrait.

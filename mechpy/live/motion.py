@@ -491,8 +491,12 @@ def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0,
         right-hand side printed as JavaScript (:mod:`mechpy.live._field`, as
         the phase portrait's; a Lagrangian of two or more coordinates as
         M(q) and F(q, q', t), solved by LU with partial pivoting at each
-        evaluation), and places the bodies by the drawing's printed SymPy
-        geometry (``points``; the pendulum kinds' bobs).  A run takes at most
+        evaluation; an :func:`mechpy.mechanics` scene as the linear system A z
+        = b its C solves, the same expressions, solved likewise), and places
+        the bodies by the drawing's printed SymPy geometry (``points``; the
+        pendulum kinds' bobs; a mechanics model's places and direction
+        cosines).  A parameter that enters a mechanics model's constraints has
+        no slider (``y0``, on the constraints, would leave them).  A run takes at most
         1000 steps a frame, then stops and says so.  ``window.mechpyLive``
         adds ``setParam(name, value)``, ``params()`` and ``simulation()``
         (the last run's steps, evaluations, milliseconds and status).
@@ -516,14 +520,17 @@ def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0,
         depends on a symbol that is neither a coordinate nor a parameter, a
         link to an unknown point, an unknown shape kind or a shape for no
         body or point.  With ``params`` or ``y0``: what the page cannot
-        simulate, named before any page is made (no printed form: an
-        :func:`mechpy.mechanics` scene, whose right-hand side solves its
-        mass-matrix system in C; a Lagrangian with constraints, whose accelerations carry multipliers;
-        a function the page does not evaluate; a kind other than
-        ``"pendulum"``, ``"double_pendulum"`` or ``"bodies"`` with
-        ``points``), a name that is not a parameter, a range (min, max)
-        that does not hold the system's value, a bad ``y0``, a span that
-        runs backward, a solution with actions of events; ``sol=None``
+        simulate, named before any page is made (no printed form: a
+        Lagrangian with constraints, whose accelerations carry multipliers;
+        a function the page does not evaluate; an :func:`mechpy.mechanics`
+        scene with a callable specified input, or unpickled (its SymPy form
+        is kept in memory only); a kind other than
+        ``"pendulum"``, ``"double_pendulum"`` or ``"bodies"`` (``points`` or
+        a mechanics model)), a name that is not a parameter, a range (min, max)
+        that does not hold the system's value or a parameter of a mechanics
+        model's constraints, a bad ``y0`` (one off the constraints, as
+        :func:`mechpy.solve` refuses it), a span that runs backward, a
+        solution with actions of events; ``sol=None``
         without ``y0`` or without ``t = (t0, t1)``.
 
     Examples
