@@ -172,7 +172,11 @@ def simulation(system, drawing, options: dict, params, y0, times) -> dict:
             exprs = system._sympy.kinematics()
         except ValueError as e:
             raise ValueError(f"this mechanics model cannot be drawn: {e}") from None
-        nrot = _motion.bodies_drawing(system)["nrot"]
+        d = _motion.bodies_drawing(system)
+        nrot = d["nrot"]
+        if len(exprs) != 3 * len(d["names"]) + 9 * nrot:      # the stored drawing's layout
+            raise ValueError("the page cannot simulate this mechanics model: its method's "
+                             "bodies are not those of its stored drawing")
     else:
         exprs = _renamed([c for xyz in drawing.painter("geometry")(system, **options)
                           for c in xyz], fd)

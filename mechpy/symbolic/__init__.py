@@ -468,6 +468,8 @@ def _mechanics_build(method, params, spec, baumgarte, bar, steps):
     for module in ("multibody.py", "kinematics.py"):       # what derives the stored meta
         with open(os.path.join(os.path.dirname(__file__), module), "rb") as f:
             parts.append(hashlib.sha256(f.read()).hexdigest())
+    from .kinematics import drawing_key
+    parts.append(drawing_key(method))                      # and the drawing's bodies
     values = dict(params)
     functions = {}
     for nm in info["inputs"]:

@@ -142,6 +142,16 @@ def model_drawing(method, ir) -> dict:
                                                "direction cosines"))
 
 
+def drawing_key(method) -> str:
+    """What a model's stored drawing depends on besides its equations, for the
+    cache key of :func:`mechpy.mechanics`: its inertial frame and the names of
+    its bodies and joints (a model with the same equations but bodies given,
+    or named, otherwise derives its drawing anew)."""
+    kind, m, joints = _formed(method)
+    N = _private.kane_inertial(m) if kind == "kane" else m.inertial
+    return repr((str(N), [b.name for b in (m.bodies or [])], [j.name for j in joints]))
+
+
 def model_kinematics(method, ir) -> list:
     """The expressions :func:`model_drawing` prints, as SymPy: the places (3 a
     drawn point) then the direction cosines (9 a turned solid, row-major), in
@@ -155,14 +165,21 @@ def model_kinematics(method, ir) -> list:
 def _model_parts(method, ir):
     """(description, expressions, parameter symbols) of :func:`_model_drawing`
     for a KanesMethod, LagrangesMethod or System."""
-    from .multibody import _method, _rest_point
+    from .multibody import _rest_point
+    kind, m, joints = _formed(method)
+    return _model_drawing(kind, m, ir, joints, _rest_point)
+
+
+def _formed(method):
+    """(kind, the eom method, a System's joints or []) of a formed model."""
+    from .multibody import _method
     try:
         from sympy.physics.mechanics import System
     except ImportError:       # SymPy < 1.13
         System = ()
     joints = list(method.joints) if System and isinstance(method, System) else []
     kind, m = _method(method)
-    return _model_drawing(kind, m, ir, joints, _rest_point)
+    return kind, m, joints
 
 
 def _known(plain, e, what):
