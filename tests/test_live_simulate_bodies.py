@@ -11,7 +11,6 @@ import pickle
 
 import numpy as np
 import pytest
-import sympy as sp
 
 import mechpy as mp
 from mechpy import _motion
@@ -20,6 +19,7 @@ pytest.importorskip("anywidget")
 from live_browser import driver, network_requests, open_page  # noqa: E402,F401
 from test_live_bodies import _every_frame  # noqa: E402
 from test_live_motion import _page  # noqa: E402
+from test_mechanics import _cartesian_pendulum  # noqa: E402
 
 
 def _solved(system, span, y0, times, rtol, **changes):
@@ -115,26 +115,11 @@ def test_lagrange_method_with_a_multiplier_page_simulates(driver, tmp_path):
     x^2 + y^2 = l^2 by LagrangesMethod with a multiplier: the page solves
     mass_matrix_full z = forcing_full (with the constraint row's Baumgarte
     terms), 5 x 5; its bob keeps to the circle and follows mp.solve."""
-    from sympy.physics.mechanics import (LagrangesMethod, Lagrangian, Particle, Point,
-                                         ReferenceFrame, dynamicsymbols)
-    x, y = dynamicsymbols("x y")
-    g, l, m = sp.symbols("g l m", positive=True)
-    N = ReferenceFrame("N")
-    O = Point("O")
-    O.set_vel(N, 0)
-    P = O.locatenew("P", x * N.x + y * N.y)
-    P.set_vel(N, x.diff() * N.x + y.diff() * N.y)
-    bob = Particle("bob", P, m)
-    bob.potential_energy = -m * g * x
     prm = {"g": 9.81, "l": 1.3, "m": 2.0}
-    # the same equations without the bodies and frame named: no drawing; the cache keeps
-    # the two apart (its key holds the drawing's frame and bodies)
-    bare = LagrangesMethod(Lagrangian(N, bob), [x, y], hol_coneqs=[x**2 + y**2 - l**2])
-    bare.form_lagranges_equations()
-    assert "error" in mp.mechanics(bare, prm)._info["drawing"]
-    lm = LagrangesMethod(Lagrangian(N, bob), [x, y], hol_coneqs=[x**2 + y**2 - l**2],
-                         bodies=[bob], frame=N)
-    lm.form_lagranges_equations()
+    # the same equations without the bob and frame named: no drawing; the cache keeps the
+    # two apart (its key holds the drawing's frame and bodies)
+    assert "error" in mp.mechanics(_cartesian_pendulum()[0], prm)._info["drawing"]
+    lm = _cartesian_pendulum(drawn=True)[0]
     scene = mp.mechanics(lm, prm)
     span, th, w0 = (0.0, 5.0), 1.0, 0.4
     y0 = [1.3 * np.cos(th), 1.3 * np.sin(th), -1.3 * w0 * np.sin(th), 1.3 * w0 * np.cos(th)]

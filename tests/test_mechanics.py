@@ -434,9 +434,10 @@ def test_singular_mass_matrix_at_y0():
 
 
 
-def _cartesian_pendulum():
+def _cartesian_pendulum(drawn=False):
     """The pendulum in Cartesian coordinates (x down, y across) on the circle
-    x^2 + y^2 = l^2, by SymPy's LagrangesMethod with a multiplier: (method, x, y)."""
+    x^2 + y^2 = l^2, by SymPy's LagrangesMethod with a multiplier: (method, x, y);
+    ``drawn``: with its bob and inertial frame named (mp.live.animate draws it)."""
     x, y = dynamicsymbols("x y")
     g, l, m = sp.symbols("g l m", positive=True)
     N = ReferenceFrame("N")
@@ -446,7 +447,8 @@ def _cartesian_pendulum():
     P.set_vel(N, x.diff() * N.x + y.diff() * N.y)
     bob = Particle("bob", P, m)
     bob.potential_energy = -m * g * x
-    lm = LagrangesMethod(Lagrangian(N, bob), [x, y], hol_coneqs=[x**2 + y**2 - l**2])
+    lm = LagrangesMethod(Lagrangian(N, bob), [x, y], hol_coneqs=[x**2 + y**2 - l**2],
+                         **(dict(bodies=[bob], frame=N) if drawn else {}))
     lm.form_lagranges_equations()
     return lm, x, y
 
