@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import _motion
+from .. import _motion, _series
 from .._validate import as_array, as_scalar
 from ._page import LiveWidget, pack
 
@@ -360,7 +360,8 @@ def _bodies(system, times, Y, points=None, links=None, shapes=None):
 
 
 def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0, trail=None,
-            lengths=None, spacing=None, points=None, links=None, shapes=None) -> Motion:
+            lengths=None, spacing=None, points=None, links=None, shapes=None,
+            plots=None) -> Motion:
     r"""The motion of a solution in 3D, in the browser (three.js).
 
     What is drawn depends on ``kind`` (by default the drawing the system
@@ -525,6 +526,7 @@ def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0,
     if not np.all(np.isfinite(Y)):
         raise ValueError("the solution is not finite over its span (sol.sol or sol.y)")
     d = drawing.painter("live")(system, times, Y, **options)
+    drawn = [] if plots is None else _series.series(system, plots, times, Y)
     n, nb = d["P"].shape[:2]
     dt = span / (n - 1)
     window = n if not np.isfinite(trail) else int(np.ceil(trail / dt - 1e-9)) if dt > 0 else 0
@@ -539,5 +541,7 @@ def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0,
                    for b in d["trail"]] if window > 0 else [],
         "solid": d.get("solid"), "up": d["up"], "center": d["center"],
         "extent": float(d["extent"]), "camera": d["camera"],
+        "plots": [{"name": nm, "y": pack(v), "color": _PALETTE[i % len(_PALETTE)]}
+                  for i, (nm, v) in enumerate(drawn)],
     }
     return Motion(spec, kind, times, [b["name"] for b in d["bodies"]])
