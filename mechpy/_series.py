@@ -105,15 +105,14 @@ def labels(system, plots) -> list:
 def _energy_values(system, times, Y):
     """The system's own energy at the states Y (n, frames) at ``times``."""
     fn = getattr(system, "energy", None)
-    what = type(system).__name__
     if fn is None:
-        raise ValueError(f"plots: 'energy' asked of a {what}, which has no energy")
+        raise ValueError(f"plots: 'energy' asked of {system!r}, which has no energy")
     try:
         if hasattr(system, "_meta"):        # a compiled system: its energy may hold t
             return np.asarray(fn(Y, times), dtype=float)
         return np.asarray(fn(Y), dtype=float)
     except (AttributeError, NotImplementedError) as exc:
-        raise ValueError(f"plots: 'energy' asked of a {what}, which has none ({exc})") from None
+        raise ValueError(f"plots: 'energy' asked of {system!r}, which has none ({exc})") from None
 
 
 def series(system, plots, times, Y) -> list:
@@ -198,7 +197,7 @@ def _symbolic_energy(system):
     meta = getattr(system, "_meta", None)
     if not meta or not meta.get("has_energy"):
         if meta is not None:
-            raise ValueError(f"plots: 'energy' asked of a {type(system).__name__}, which has "
+            raise ValueError(f"plots: 'energy' asked of {system!r}, which has "
                              "none (mp.equations: give energy=; mp.mechanics: its loads must "
                              "be constant forces)")
         return None
