@@ -913,7 +913,8 @@ def animate(system, sol, *, kind=None, t=None, frames=None, fps=20, trail=None, 
         Its attribute ``samples`` (frames,) holds the sample index each frame
         shows; with ``plots``, ``series_axes`` holds the series' Axes (the
         curve's label: the entry's, a state's name, ``"energy"`` or
-        ``str(expr)``; the cursor: the line with gid ``"cursor"``).  In a notebook: ``IPython.display.HTML(anim.to_jshtml())``;
+        ``str(expr)``; the cursor: the line with gid ``"cursor"``).  In a
+        notebook: ``IPython.display.HTML(anim.to_jshtml())``;
         ``anim.save("motion.gif", writer="pillow")`` writes a file.
 
     Raises

@@ -88,7 +88,8 @@ function mpPlotPanels(spec, T, maxWidth, onSeek) {
       const {lo, hi, yt, ylab} = P, tt = mpTicks(Math.min(t0, t1), Math.max(t0, t1), 8), R = 12;
       const top = 15, h = MP_PLOT_H - top - 18, W = Math.max(10, w - L - R);
       Object.assign(P, {L, W, top, h});
-      const X = (t) => L + ((t - t0) / (t1 - t0 || 1)) * W, Yp = (v) => top + ((hi - v) / (hi - lo)) * h;
+      const X = (t) => L + ((t - t0) / (t1 - t0 || 1)) * W;
+      const Yp = (v) => top + ((hi - v) / (hi - lo)) * h;
       // axes, grid and ticks
       g.strokeStyle = "#e4e4e4";
       g.fillStyle = "#333";
@@ -325,7 +326,9 @@ export default {
           drawn.push(c.x, c.y, c.z, sr);
         }
       }
-      for (const [a, b] of spec.rods) for (const e of [a, b]) if (typeof e !== "number") drawn.push(e[0], e[1], e[2], 0);
+      for (const e of spec.rods.flatMap(([a, b]) => [a, b])) {
+        if (typeof e !== "number") drawn.push(e[0], e[1], e[2], 0);
+      }
       for (const ln of spec.lines) {
         const pts = mpUnpack(ln.pts);
         for (let j = 0; j < pts.length; j += 3) drawn.push(pts[j], pts[j + 1], pts[j + 2], 0);
@@ -342,7 +345,10 @@ export default {
       for (let j = 0; j < drawn.length; j += 4) {
         p.set(drawn[j], drawn[j + 1], drawn[j + 2]);
         const r = drawn[j + 3], u = [p.dot(x), p.dot(y), p.dot(z)];
-        for (let a = 0; a < 3; a++) { lo[a] = Math.min(lo[a], u[a] - r); hi[a] = Math.max(hi[a], u[a] + r); }
+        for (let a = 0; a < 3; a++) {
+          lo[a] = Math.min(lo[a], u[a] - r);
+          hi[a] = Math.max(hi[a], u[a] + r);
+        }
       }
       if (!(hi[0] >= lo[0])) { lo = [0, 0, 0]; hi = [0, 0, 0]; }
       const mid = lo.map((v, a) => 0.5 * (v + hi[a]));
