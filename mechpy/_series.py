@@ -76,21 +76,17 @@ def _in_states(system, entry, states):
                              f"state of the system (its states: {states})")
         sub[d] = y[states.index(nm)]
     e = entry.xreplace(sub)
-    for f in e.atoms(sp.core.function.AppliedUndef):
-        nm = f.func.__name__
-        if nm not in states:
-            raise ValueError(f"plots[{str(entry)!r}] depends on {f}, which is no state of the "
-                             f"system (its states: {states})")
-        sub[f] = y[states.index(nm)]
-    e = e.xreplace(sub)
+    # the states by name (a symbol, or a function of t), t, the parameters by name
     named = {}
-    for s in e.free_symbols - set(sub.values()):
-        if s.name in states:
-            named[s] = y[states.index(s.name)]
-        elif s.name == "t":
+    for s in e.atoms(sp.Symbol, sp.core.function.AppliedUndef) - set(sub.values()):
+        applied = isinstance(s, sp.core.function.AppliedUndef)
+        nm = s.func.__name__ if applied else s.name
+        if nm in states:
+            named[s] = y[states.index(nm)]
+        elif not applied and nm == "t":
             named[s] = t
-        elif s.name in params:
-            named[s] = sp.Symbol(s.name)
+        elif not applied and nm in params:
+            named[s] = sp.Symbol(nm)
         else:
             raise ValueError(f"plots[{str(entry)!r}] depends on {s}, which is neither a "
                              f"state ({states}) nor a parameter ({params}) of the system")

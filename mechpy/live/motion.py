@@ -427,7 +427,10 @@ def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0,
     drawn solid's rotation matrix, body to world, row-major, 9 numbers a
     solid in the order of ``positions()``; the top's and the rigid body's
     one solid), ``lines()`` (the fixed lines: nutation bounds, L, walls,
-    the ground plane), ``fps()``.
+    the ground plane), ``plot(name)`` (a series of ``plots``), ``fps()``.
+    The camera looks from the drawing's direction and frames everything
+    drawn over all frames (bodies, solids, rods, fixed lines, trails) for
+    the canvas's aspect.
 
     Parameters
     ----------
@@ -473,6 +476,20 @@ def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0,
         with kind ``"sphere"`` (size: radius), ``"box"`` (sides), ``"cylinder"``
         (radius, length), ``"cone"`` (radius, height) or ``"torus"`` (radius,
         tube radius); a cylinder's, cone's or torus's axis is the body's y.
+    plots : list, optional
+        Time series drawn under the 3D view, one panel an entry, with a
+        cursor at the shown frame's time (it follows play, the slider and
+        ``frame(i)``; a click on a panel shows that time): a state's name
+        (``system.states``), ``"energy"`` (the system's own ``energy``: a
+        built-in scene's, the Jacobi integral of :func:`mechpy.lagrangian`,
+        the ``energy=`` of :func:`mechpy.equations`, T + V of an
+        :func:`mechpy.mechanics` model with constant loads) or a SymPy
+        expression of the states (symbols named as the states; a coordinate
+        of :func:`mechpy.coordinates` and its ``diff(t)``), ``t`` and the
+        parameters (by name, at the system's values), each evaluated at every
+        frame's state (:mod:`mechpy._series`).  ``window.mechpyLive.plot(name)``
+        returns a series as drawn, ``{t: [...], y: [...]}``, ``name`` the
+        entry as given (a state's name, ``"energy"`` or ``str(expr)``).
 
     Returns
     -------
@@ -491,7 +508,11 @@ def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0,
         ``lengths`` or ``spacing``; more than 3600 frames; a point that
         depends on a symbol that is neither a coordinate nor a parameter, a
         link to an unknown point, an unknown shape kind or a shape for no
-        body or point.
+        body or point; in ``plots``, an unknown state name, an expression
+        with a symbol that is neither a state nor a parameter, ``"energy"``
+        for a system without one, a name given twice or a series that is not
+        finite (each named).  ``plots`` that is not a list, or an entry that
+        is neither a string nor a SymPy expression, is a TypeError.
 
     Examples
     --------
