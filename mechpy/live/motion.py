@@ -119,9 +119,11 @@ def _foucault(system, times, Y):
     bodies = [_body("bob", _RED, 0.06 * A)]
     lines = [_polyline([[-A, 0, 0], [A, 0, 0]], _GREY, "x: east"),
              _polyline([[0, -A, 0], [0, A, 0]], _GREY, "y: north")]
+    # the rod runs up out of the view to its suspension point (L >> A): the camera frames
+    # the bob and its rosette, not the rod's top (frame_rods)
     return dict(P=B.T[:, None, :], bodies=bodies, rods=[[[0.0, 0.0, L], 0, _DARK]], lines=lines,
                 up=[0, 0, 1], trail=[0], center=[0.0, 0.0, 0.0], extent=1.3 * A,
-                camera=[0.35, -0.6, 1.0],
+                camera=[0.35, -0.6, 1.0], frame_rods=False,
                 title="Foucault pendulum: the bob and its rosette (x east, y north, z up; m)")
 
 
@@ -562,6 +564,7 @@ def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0,
                    for b in d["trail"]] if window > 0 else [],
         "solid": d.get("solid"), "up": d["up"], "center": d["center"],
         "extent": float(d["extent"]), "camera": d["camera"],
+        "frame_rods": bool(d.get("frame_rods", True)),
         "plots": [{"name": nm, "y": pack(v), "color": _PALETTE[i % len(_PALETTE)]}
                   for i, (nm, v) in enumerate(drawn)],
     }

@@ -294,11 +294,13 @@ export default {
     }
 
     // ---- camera
-    // It looks along -spec.camera with spec.up up, and frames what is drawn: every body over
-    // all frames (its bounding sphere), the fixed ends of rods, the fixed lines (trails are
-    // the bodies' paths).  Target: the middle of that in the view's plane; distance: the
-    // least that keeps every sphere inside the frustum for the canvas's aspect (a margin of
-    // 8 %).  Refitted when the canvas's shape changes, until the user moves the camera.
+    // It looks along -spec.camera with spec.up up, and frames what is drawn: every body
+    // over all frames (its bounding sphere), the fixed ends of rods (unless
+    // spec.frame_rods is false: a rod that runs out of the view, the Foucault
+    // pendulum's), the fixed lines (trails are the bodies' paths).  Target: the middle of
+    // that in the view's plane; distance: the least that keeps every sphere inside the
+    // frustum for the canvas's aspect (a margin of 8 %).  Refitted when the canvas's shape
+    // changes, until the user moves the camera.
     const FOV = 40;
     const camera = new THREE.PerspectiveCamera(FOV, W / H, 0.005 * ext, 200 * ext);
     camera.up.copy(V(spec.up));
@@ -326,7 +328,7 @@ export default {
           drawn.push(c.x, c.y, c.z, sr);
         }
       }
-      for (const e of spec.rods.flatMap(([a, b]) => [a, b])) {
+      for (const e of spec.frame_rods === false ? [] : spec.rods.flatMap(([a, b]) => [a, b])) {
         if (typeof e !== "number") drawn.push(e[0], e[1], e[2], 0);
       }
       for (const ln of spec.lines) {
