@@ -431,8 +431,9 @@ def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0,
     one solid), ``lines()`` (the fixed lines: nutation bounds, L, walls,
     the ground plane), ``plot(name)`` (a series of ``plots``), ``fps()``.
     The camera looks from the drawing's direction and frames everything
-    drawn over all frames (bodies, solids, rods, fixed lines, trails) for
-    the canvas's aspect.
+    drawn over all frames (bodies, solids, rods, fixed lines, trails; the
+    Foucault pendulum's rod runs up out of the view) for the canvas's
+    aspect.
 
     Parameters
     ----------
