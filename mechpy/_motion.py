@@ -82,9 +82,14 @@ class Drawing(NamedTuple):
     bottom: float | None = None
     #: the keyword options of mp.live.animate it takes
     options: tuple = ()
+    #: its geometry as SymPy expressions, "module:function" ``(system, **options) ->
+    #: [(x, y, z), ...]`` in the state symbols ``y0, y1, ...`` and the parameters'
+    #: symbols (by name), the places of the bodies it draws in their order: what a page
+    #: that simulates (mp.live.animate's params=, y0=) prints; None: not simulated
+    geometry: str | None = None
 
     def painter(self, which: str):
-        """The painter ``which`` ("plot" or "live"), imported."""
+        """The painter ``which`` ("plot", "live" or "geometry"), imported."""
         module, _, name = getattr(self, which).partition(":")
         return getattr(importlib.import_module(module), name)
 
@@ -112,12 +117,13 @@ _ANGLES = "angles from the downward vertical and their rates"
 DRAWINGS = {d.name: d for d in (
     Drawing("bodies", "mechpy.plot:_bodies", "mechpy.live.motion:_bodies", fits=_fits_bodies,
             what="a mechanics model's bodies, or points=", three_d=True,
-            options=("points", "links", "shapes")),
+            options=("points", "links", "shapes"), geometry="mechpy._motion:points_geometry"),
     Drawing("pendulum", "mechpy.plot:_planar_pendulum", "mechpy.live.motion:_pendulum",
-            states=2, fits=_fits_pendulum, what=_ANGLES, options=("lengths",)),
+            states=2, fits=_fits_pendulum, what=_ANGLES, options=("lengths",),
+            geometry="mechpy._motion:pendulum_geometry"),
     Drawing("double_pendulum", "mechpy.plot:_planar_pendulum", "mechpy.live.motion:_pendulum",
             states=4, fits=lambda s: _lengths_named(s, ("l1", "l2")), what=_ANGLES,
-            options=("lengths",)),
+            options=("lengths",), geometry="mechpy._motion:pendulum_geometry"),
     Drawing("foucault", "mechpy.plot:_foucault", "mechpy.live.motion:_foucault",
             rows=("Foucault",), trail=np.inf),
     Drawing("top", "mechpy.plot:_top", "mechpy.live.motion:_top", rows=("HeavyTop",),
@@ -280,6 +286,27 @@ def pendulum_bobs(y, ls):
     return xs, ys
 
 
+def pendulum_geometry(system, lengths=None) -> list:
+    r"""The bobs of :func:`pendulum_bobs` as SymPy expressions (x right, y up):
+    :math:`\sum_{j\le k} l_j(\sin y_j, -\cos y_j, 0)`, each length the scene's
+    parameter by name (``l1``, ``l2``, ``length`` or ``l``) or the number of
+    ``lengths``."""
+    import sympy as sp
+    two = system.dim == 4
+    if lengths is not None:
+        ls = list(pendulum_lengths(system, two, lengths))
+    else:
+        pendulum_lengths(system, two, None)                 # the same message when none
+        p = system.params
+        ls = [sp.Symbol(k) for k in (("l1", "l2") if two else
+                                     ("length",) if "length" in p else ("l",))]
+    out, x, y = [], sp.S.Zero, sp.S.Zero
+    for j, lj in enumerate(ls):
+        x, y = x + lj * sp.sin(sp.Symbol(f"y{j}")), y - lj * sp.cos(sp.Symbol(f"y{j}"))
+        out.append((x, y, sp.S.Zero))
+    return out
+
+
 def foucault_bob(system, y):
     r"""The Foucault bob (3, m): x east, y north (the state) and its height
     above the lowest point, :math:`z = L - \sqrt{L^2 - x^2 - y^2}` (m); the
@@ -387,6 +414,22 @@ def bodies_drawing(system, points=None) -> dict:
                         "coordinates and parameters)")
     d = kinematics.points_drawing(system, points)
     return dict(d, kinds=["point"] * len(d["names"]), links=[], nrot=0, ground=None)
+
+
+def points_geometry(system, points=None, links=None, shapes=None) -> list:
+    """The places of ``points=`` (kind "bodies") as SymPy expressions in the
+    state symbols ``y0, y1, ...`` and the parameters' symbols (by name):
+    ``kinematics.points_drawing``'s own, renamed.  ValueError for a mechanics
+    model (its kinematics are stored as compiled C only)."""
+    import sympy as sp
+    if (getattr(system, "_info", None) or {}).get("drawing") is not None:
+        raise ValueError("a mechanics model's bodies are not simulated by the page")
+    d = bodies_drawing(system, points)
+    names = list(system._meta["param_names"])
+    sub = {sp.Symbol(f"mp_y{i}"): sp.Symbol(f"y{i}") for i in range(system.dim)}
+    sub.update({sp.Symbol(f"mp_p{i}"): sp.Symbol(nm) for i, nm in enumerate(names)})
+    e = [sp.sympify(v).xreplace(sub) for v in d["exprs"]]
+    return [tuple(e[3 * i:3 * i + 3]) for i in range(len(e) // 3)]
 
 
 def bodies_places(system, drawing, Y):

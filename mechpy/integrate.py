@@ -120,9 +120,10 @@ def _options(t0, tf, rtol, atol, t_eval, h, first_step, max_step, max_steps, eve
 def _t_eval(t_eval, t0, tf):
     lo, hi = min(t0, tf), max(t0, tf)
     if type(t_eval) in (list, tuple) and len(t_eval) <= 8 and \
-            all(type(v) is float for v in t_eval):
-        # a few plain floats (t_eval=[tf], the common case): checked without
-        # NumPy's reductions, which cost more than a short solve
+            all(type(v) is float and v - v == 0.0 for v in t_eval):
+        # a few plain finite floats (t_eval=[tf], the common case): checked
+        # without NumPy's reductions, which cost more than a short solve (a NaN
+        # or an inf takes the array path, whose message names it)
         for a, b in zip(t_eval, t_eval[1:]):
             if not (b > a if tf > t0 else b < a):
                 raise ValueError("t_eval must be strictly increasing" if tf > t0 else

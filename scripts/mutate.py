@@ -70,7 +70,9 @@ LANES = ["csrc/ode/lanes.c", "csrc/ode/lanes.h", "csrc/ode/fixed.h"]
 # EXCLUDED (tests/test_mutate_modules.py checks it against the tree).
 MODULES = {
     "ode": (["csrc/ode/*.c", "csrc/ode/*.h"],
-            ENGINE_TESTS + ["tests/test_rigid.py", "tests/test_lanes.py", "tests/test_events.py",
+            ENGINE_TESTS + ["tests/test_tableaux.py", "tests/test_ode_contracts.py",
+                            "tests/test_rigid.py", "tests/test_lanes.py",
+                            "tests/test_events.py",
                             "tests/test_events_gsl.py", "tests/test_events_pins.py",
                             "tests/test_widths.py", "-k", FAST]),
     # fixed.h's kick-drift-kick steps run in the method rows too (verlet, yoshida):

@@ -944,3 +944,40 @@ def test_core_calls_take_one_options_object():
     assert np.array_equal(e["y"][0, :, -1], s.y[:, -1])
     with pytest.raises(ValueError, match="unknown system kind spline"):
         _core.ode_solve("dop853", ("spline",) + spec[1:], y0, opts({"dense": False}))
+
+
+@pytest.mark.parametrize("errors", ["quiet", "Raise", "", None, 1, ("raise",)])
+def test_errors_mode_outside_the_table_is_refused_before_any_solve(errors):
+    """errors is one of "auto", "raise", "status": any other value, a string
+    or not, is a ValueError naming the three, for solve and solve_many, and
+    the right-hand side is never called."""
+    calls = []
+
+    def f(t, y):
+        calls.append(t)
+        return -y
+
+    for call in (lambda: mp.solve(f, (0, 1), [1.0], errors=errors),
+                 lambda: mp.solve_many(mp.scenes.Pendulum(), (0, 1), [[1.0, 0.0]],
+                                       errors=errors)):
+        with pytest.raises(ValueError, match=r"errors must be one of \('auto', 'raise', "
+                                             r"'status'\)"):
+            call()
+    assert calls == []
+
+
+@pytest.mark.parametrize("t_eval, error, match", [
+    ([0.0, float("nan")], ValueError, "t_eval must be finite"),
+    ((0.5, float("inf")), ValueError, "t_eval must be finite"),
+    (np.array([0.0, np.nan]), ValueError, "t_eval must be finite"),
+    ([[0.0, 0.5], [1.0, 1.5]], ValueError, r"t_eval must have 1 dimension\(s\)"),
+    ([0.0, 0.5, [1.0]], ValueError, "t_eval"),
+    (["a"] * 10, TypeError, "t_eval must be a real numeric array"),
+    ([0.1 * k for k in range(12)] + [0.5], ValueError, "strictly increasing"),
+    ([0.0, 0.5, 3.0], ValueError, "within t_span"),
+])
+def test_t_eval_of_every_form_gets_the_message_that_names_its_fault(t_eval, error, match):
+    # a short list of floats is checked on a fast path of its own (integrate._t_eval):
+    # it must say what the array path says
+    with pytest.raises(error, match=match):
+        mp.solve(mp.scenes.Pendulum(), (0, 2), [1.0, 0.0], t_eval=t_eval)

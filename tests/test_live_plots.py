@@ -205,6 +205,8 @@ def test_bad_plots_are_named():
         mp.live.animate(scene, sol, plots="energy", **kw)
     with pytest.raises(ValueError, match=r"plots names \['a'\] more than once"):
         mp.live.animate(scene, sol, plots=["a", "a"], **kw)
+    with pytest.raises(ValueError, match="plots= is not drawn on a page that simulates"):
+        mp.live.animate(scene, sol, plots=["a"], params={"l": (0.5, 1.0)}, **kw)
     x, v = sp.symbols("x v")
     osc = mp.equations([v, -x], [x, v])
     with pytest.raises(ValueError, match=r"'energy' asked of CompiledScene\(equations.*which "

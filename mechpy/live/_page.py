@@ -36,12 +36,14 @@ def _read(name: str) -> str:
 
 
 @functools.lru_cache(maxsize=None)
-def esm(view: str, three: bool = False) -> str:
-    """The ES module of ``view``: common.js, three.js's sources when asked, the view."""
+def esm(view: str, three: bool = False, extra: tuple = ()) -> str:
+    """The ES module of ``view``: common.js, three.js's sources when asked, the
+    ``extra`` files (static/, helpers the view calls when its spec asks), the view."""
     parts = [_read("common.js")]
     if three:
         srcs = {name: _read("vendor/" + name) for name in _THREE}
         parts.append("const MP_THREE_SOURCES = " + json.dumps(srcs) + ";")
+    parts += [_read(name) for name in extra]
     parts.append(_read(view + ".js"))
     return "\n".join(parts)
 
@@ -97,8 +99,9 @@ class LiveWidget(anywidget.AnyWidget):
     _view = ""
     _three = False
 
-    def __init__(self, spec: dict, **kwargs):
-        super().__init__(spec=spec, _esm=esm(self._view, self._three), **kwargs)
+    def __init__(self, spec: dict, extra: tuple = (), **kwargs):
+        super().__init__(spec=spec, _esm=esm(self._view, self._three, tuple(extra)), **kwargs)
+        self._extra = tuple(extra)
         self.on_msg(self._on_page_message)
 
     def _on_page_message(self, widget, content, buffers):
@@ -153,7 +156,7 @@ class LiveWidget(anywidget.AnyWidget):
             "<div id=\"mechpy-live\"></div>"
             f"<script type=\"application/json\" id=\"mechpy-state\">{_script_json(state)}</script>"
             "<script type=\"application/json\" id=\"mechpy-esm\">"
-            f"{_script_json(esm(self._view, self._three))}</script>"
+            f"{_script_json(esm(self._view, self._three, self._extra))}</script>"
             f"<script type=\"module\">{_BOOT}</script></body></html>\n")
 
     def save(self, path, *, title: str = "mechpy live view") -> Path:

@@ -12,6 +12,7 @@ import numpy as np
 
 from .. import _motion, _series
 from .._validate import as_array, as_scalar
+from . import _simulate
 from ._page import LiveWidget, pack
 
 __all__ = ["animate", "Motion"]
@@ -51,7 +52,8 @@ class Motion(LiveWidget):
     _three = True
 
     def __init__(self, spec: dict, kind: str, times: np.ndarray, bodies: list):
-        super().__init__(spec)
+        # a page that simulates (spec["sim"]) carries its integrator (static/simulate.js)
+        super().__init__(spec, extra=("simulate.js",) if spec.get("sim") else ())
         self.kind = kind
         self.times = times
         self.bodies = bodies
@@ -363,7 +365,7 @@ def _bodies(system, times, Y, points=None, links=None, shapes=None):
 
 def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0, trail=None,
             lengths=None, spacing=None, points=None, links=None, shapes=None,
-            plots=None) -> Motion:
+            plots=None, params=None, y0=None) -> Motion:
     r"""The motion of a solution in 3D, in the browser (three.js).
 
     What is drawn depends on ``kind`` (by default the drawing the system
@@ -439,16 +441,18 @@ def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0,
     ----------
     system : Scene
         The scene that made ``sol``.
-    sol : Solution or array_like, shape (n, m)
+    sol : Solution or array_like, shape (n, m), or None
         A result of :func:`mechpy.solve` (with ``dense_output=True`` the
-        frames come from its interpolant), or states (n, m) with ``t``.
+        frames come from its interpolant), or states (n, m) with ``t``; None
+        for a page that simulates (``y0`` given) over ``t = (t0, t1)``.
     kind : str, optional
         One of ``"bodies"``, ``"pendulum"``, ``"double_pendulum"``,
         ``"foucault"``, ``"top"``, ``"rigid"``, ``"chain"``, ``"particle"``
         (``"bodies"`` when ``points`` is given).
     t : array_like, shape (m,), optional
         The times of an array ``sol``; monotonic (a time held twice: the
-        states before and after an action).
+        states before and after an action).  With ``sol=None``: the span
+        (t0, t1), t0 < t1.
     fps : float
         Frames per second of the playback at speed 1 (at most 120).
     duration : float, optional
@@ -493,6 +497,25 @@ def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0,
         frame's state (:mod:`mechpy._series`).  ``window.mechpyLive.plot(name)``
         returns a series as drawn, ``{t: [...], y: [...]}``, ``name`` the
         entry as given (a state's name, ``"energy"`` or ``str(expr)``).
+    params : dict, optional
+        ``{"name": (min, max)}``: the page simulates (below) and puts each
+        parameter on a slider over its range, starting at the system's value;
+        moving it re-runs the motion in the page, with no kernel.
+    y0 : array_like, shape (n,), or dict, optional
+        The initial state of a page that simulates (an array or a dict of
+        state names, as :meth:`~mechpy.scenes.Scene.initial_state` takes);
+        default the solution's first state.  ``params`` or ``y0`` make the
+        page simulate: it integrates the system itself over the solution's
+        span (Dormand-Prince 5(4) in double precision with its 4th-order
+        dense output at the frames' times, rtol = atol = 1e-12), from the
+        right-hand side printed as JavaScript (:mod:`mechpy.live._field`, as
+        the phase portrait's; a Lagrangian of two or more coordinates as
+        M(q) and F(q, q', t), solved by LU with partial pivoting at each
+        evaluation), and places the bodies by the drawing's printed SymPy
+        geometry (``points``; the pendulum kinds' bobs).  A run takes at most
+        1000 steps a frame, then stops and says so.  ``window.mechpyLive``
+        adds ``setParam(name, value)``, ``params()`` and ``simulation()``
+        (the last run's steps, evaluations, milliseconds and status).
 
     Returns
     -------
@@ -503,7 +526,8 @@ def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0,
     ------
     TypeError
         ``system`` is not a scene, its kind cannot be told, ``kind`` names a
-        scene of another type, or ``sol`` is neither a Solution nor an array.
+        scene of another type, ``sol`` is neither a Solution nor an array (nor
+        None for a page that simulates), or ``params`` is not a dict.
     ValueError
         ``kind`` is unknown; ``sol`` is empty, not finite or does not hold
         the scene's states (n, m); ``t`` is missing, of another length or not
@@ -514,8 +538,19 @@ def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0,
         body or point; in ``plots``, an unknown state name, an expression
         with a symbol that is neither a state nor a parameter, ``"energy"``
         for a system without one, a name given twice or a series that is not
-        finite (each named).  ``plots`` that is not a list, or an entry that
-        is neither a string nor a SymPy expression, is a TypeError.
+        finite (each named), or ``plots`` with ``params`` or ``y0`` (a page
+        that simulates draws no series yet).  ``plots`` that is not a list,
+        or an entry that is neither a string nor a SymPy expression, is a
+        TypeError.  With ``params`` or ``y0``: what the page cannot
+        simulate, named before any page is made (no printed form: an
+        :func:`mechpy.mechanics` scene, whose right-hand side solves its
+        mass-matrix system in C; a Lagrangian with constraints, whose accelerations carry multipliers;
+        a function the page does not evaluate; a kind other than
+        ``"pendulum"``, ``"double_pendulum"`` or ``"bodies"`` with
+        ``points``), a name that is not a parameter, a range (min, max)
+        that does not hold the system's value, a bad ``y0``, a span that
+        runs backward, a solution with actions of events; ``sol=None``
+        without ``y0`` or without ``t = (t0, t1)``.
 
     Examples
     --------
@@ -530,6 +565,12 @@ def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0,
         kind = "bodies"
     drawing = _motion.kind_of(system, kind)
     kind = drawing.name
+    simulate = params is not None or y0 is not None
+    if plots is not None and simulate:
+        raise ValueError("plots= is not drawn on a page that simulates (params= or y0=): its "
+                         "series come from sol and would not follow the page's runs")
+    if sol is None and simulate:                     # the span t = (t0, t1), framed by a solve
+        sol, t = _simulate.framing(system, t, y0), None
     tt, y = _motion.samples(system, sol, t)                        # checks sol's shape
     fps = as_scalar(fps, "fps", positive=True, hi=120.0)
     speed = as_scalar(speed, "speed", lo=0.1, hi=10.0)
@@ -550,6 +591,13 @@ def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0,
     if not np.all(np.isfinite(Y)):
         raise ValueError("the solution is not finite over its span (sol.sol or sol.y)")
     d = drawing.painter("live")(system, times, Y, **options)
+    sim = None
+    if simulate:
+        if tt.size > 1 and np.any(np.diff(tt) == 0):
+            raise ValueError("the page simulates without events: sol has actions (a time held "
+                             "twice); animate it without params= and y0=")
+        sim = _simulate.simulation(system, drawing, options, params,
+                                   y[:, 0] if y0 is None else y0, times)
     drawn = [] if plots is None else _series.series(system, plots, times, Y)
     n, nb = d["P"].shape[:2]
     dt = span / (n - 1)
@@ -569,4 +617,6 @@ def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0,
         "plots": [{"name": nm, "y": pack(v), "color": _PALETTE[i % len(_PALETTE)]}
                   for i, (nm, v) in enumerate(drawn)],
     }
+    if sim is not None:                         # the page computes the frames itself
+        spec.update(pos=None, rots=None, sim=sim)
     return Motion(spec, kind, times, [b["name"] for b in d["bodies"]])

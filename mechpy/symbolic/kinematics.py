@@ -291,6 +291,6 @@ def points_drawing(system, points) -> dict:
                                      "the system")
                 e = e.xreplace(sub2)
             exprs.append(e)
-    return dict(names=list(points), n=n, nout=len(exprs),
+    return dict(names=list(points), n=n, nout=len(exprs), exprs=exprs,
                 source=_source(exprs, Pp, n, "the places of the points"))
 

@@ -498,30 +498,53 @@ class CompiledScene(Scene):
         import sympy as sp
 
         from ..scenes import SymbolicField
-        eqs = self.equations
         n, nc = self._dim, self._nc
-        y = list(sp.symbols(f"y0:{n}"))
-        t = sp.Symbol("t")
         if self._meta["kind"] == "lagrangian":
-            if self._k:
-                raise ValueError("a system with constraints has no symbolic field of its own "
-                                 "(its accelerations carry the Lagrange multipliers)")
-            q = [sp.Function(nm)(t) for nm in self._meta["names"]]
-            a = sp.symbols(f"mp_a0:{nc}")
-            sub = {qi.diff(t, 2): ai for qi, ai in zip(q, a)}
-            sub2 = {qi.diff(t): y[nc + i] for i, qi in enumerate(q)}
-            sub3 = {qi: y[i] for i, qi in enumerate(q)}
-            rows = [(e.lhs - e.rhs).subs(sub).subs(sub2).subs(sub3) for e in eqs]
-            M, b = sp.linear_eq_to_matrix(rows, a)
+            M, b, y, t, params = self._mass_form()
             acc = list(M.LUsolve(b)) if nc > 1 else [b[0] / M[0, 0]]
             f = y[nc:] + [sp.simplify(e) if nc <= 2 else e for e in acc]
         else:
+            y = list(sp.symbols(f"y0:{n}"))
+            t = sp.Symbol("t")
+            eqs = self.equations
             states = [e.lhs.args[0] for e in eqs]
             sub = dict(zip(states, y))
             f = [e.rhs.xreplace(sub) for e in eqs]
-        byname = {str(s): s for e in f for s in e.free_symbols}
-        params = {byname.get(nm, sp.Symbol(nm)): v for nm, v in self._params.items()}
+            params = self._param_symbols(f)
         return SymbolicField(f, y, t, params)
+
+    def _mass_form(self):
+        """A Lagrangian's equations as M(q) q'' = F(q, q', t) in the state
+        symbols: ``(M (nc, nc), F (nc, 1), y, t, params)`` (SymPy matrices; y,
+        t and params as :meth:`symbolic` names them), for an evaluator that
+        solves the linear system numerically at each state (the live page's
+        LU) rather than through a symbolic inverse.  ValueError for a system
+        with constraints (its accelerations carry the multipliers) or of
+        :func:`mechpy.equations` (first order: no mass matrix)."""
+        import sympy as sp
+        if self._meta["kind"] != "lagrangian":
+            raise ValueError("a first-order system (mp.equations) has no mass matrix")
+        if self._k:
+            raise ValueError("a system with constraints has no symbolic field of its own "
+                             "(its accelerations carry the Lagrange multipliers)")
+        n, nc = self._dim, self._nc
+        y = list(sp.symbols(f"y0:{n}"))
+        t = sp.Symbol("t")
+        q = [sp.Function(nm)(t) for nm in self._meta["names"]]
+        a = sp.symbols(f"mp_a0:{nc}")
+        sub = {qi.diff(t, 2): ai for qi, ai in zip(q, a)}
+        sub2 = {qi.diff(t): y[nc + i] for i, qi in enumerate(q)}
+        sub3 = {qi: y[i] for i, qi in enumerate(q)}
+        rows = [(e.lhs - e.rhs).subs(sub).subs(sub2).subs(sub3) for e in self.equations]
+        M, b = sp.linear_eq_to_matrix(rows, a)
+        return M, b, y, t, self._param_symbols(list(M) + list(b))
+
+    def _param_symbols(self, exprs) -> dict:
+        """{symbol: value} of the parameters, each symbol as ``exprs`` hold it
+        (with its assumptions), else a plain one of its name."""
+        import sympy as sp
+        byname = {str(s): s for e in exprs for s in sp.sympify(e).free_symbols}
+        return {byname.get(nm, sp.Symbol(nm)): v for nm, v in self._params.items()}
 
     @property
     def equations(self) -> list:

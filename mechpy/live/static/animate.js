@@ -1,10 +1,13 @@
 // mechpy.live.animate: the motion of a solution in 3D (three.js).  Every frame is computed
 // in Python (spec.pos: the bodies' places, spec.rot: the body-to-space matrix of a top or a
 // rigid body); the page places the bodies, draws rods, trails and fixed lines, and plays.
+// A page that simulates (spec.sim: mp.live.animate's params=, y0=) computes the places itself
+// (static/simulate.js, loaded before this file) and again when a slider moves.
 
-function mpMotionFrame(THREE, spec) {
+function mpMotionFrame(THREE, spec, sim) {
   const n = spec.n, nb = spec.nb;
-  const P = mpUnpack(spec.pos), R = spec.rot ? mpUnpack(spec.rot) : null;
+  // a page that simulates (static/simulate.js) computes the places itself, into sim.P
+  const P = sim ? sim.P : mpUnpack(spec.pos), R = spec.rot ? mpUnpack(spec.rot) : null;
   const m4 = new THREE.Matrix4(), q = new THREE.Quaternion();
   // the places of the bodies at frame k (world coordinates, the system's units)
   return function (k, out) {
@@ -150,7 +153,9 @@ export default {
     const {THREE, OrbitControls} = await mpThree();
     const n = spec.n, nb = spec.nb, ext = spec.extent;
     const T = mpUnpack(spec.t);
-    const place = mpMotionFrame(THREE, spec);
+    const sim = spec.sim ? mpSimulation(spec) : null;
+    if (sim) sim.run();
+    const place = mpMotionFrame(THREE, spec, sim);
 
     // ---- page
     // the view takes its container's width, 960 px at most (mpFollowWidth), 0.62 of it high
@@ -167,7 +172,8 @@ export default {
     const legend = mpEl("div", {style: "position:absolute;left:8px;top:6px;font-size:12px;"
       + "background:rgba(255,255,255,.8);padding:2px 4px;max-width:60%"});
     const stage = mpEl("div", {style: `position:relative;width:100%;max-width:${MAXW}px;`
-      + `height:${H}px;box-sizing:border-box;border:1px solid #ddd`}, renderer.domElement, clock, legend);
+      + `height:${H}px;box-sizing:border-box;border:1px solid #ddd`}, renderer.domElement, clock, legend,
+      ...(sim ? [sim.message] : []));
     const title = mpEl("div", {style: "font-size:13px;margin:2px 0 4px"}, spec.title);
 
     // ---- scene
@@ -256,18 +262,26 @@ export default {
     }
     // trails: the whole path of a body, drawn from the window's first frame to the shown one
     const trails = spec.trails.map((tr) => {
-      const arr = new Float32Array(3 * n), all = where.map(() => new THREE.Vector3());
-      for (let k = 0; k < n; k++) {
-        place(k, all);
-        all[tr.body].toArray(arr, 3 * k);
-      }
       const g = new THREE.BufferGeometry();
-      g.setAttribute("position", new THREE.BufferAttribute(arr, 3));
+      g.setAttribute("position", new THREE.BufferAttribute(new Float32Array(3 * n), 3));
       const line = new THREE.Line(g, new THREE.LineBasicMaterial({color: color(tr.color),
         transparent: true, opacity: 0.85}));
       scene.add(line);
-      return {line, window: tr.window};
+      return {line, window: tr.window, body: tr.body};
     });
+    function fillTrails() {                    // again after a simulating page's re-run
+      const all = where.map(() => new THREE.Vector3());
+      for (const tr of trails) {
+        const attr = tr.line.geometry.getAttribute("position");
+        for (let k = 0; k < n; k++) {
+          place(k, all);
+          all[tr.body].toArray(attr.array, 3 * k);
+        }
+        attr.needsUpdate = true;
+        tr.line.geometry.computeBoundingSphere();
+      }
+    }
+    fillTrails();
     // a solid turned by spec.rot: the top (a cone, apex at the pivot) or the box of the moments
     let solid = null;
     if (spec.solid) {
@@ -300,24 +314,23 @@ export default {
     // pendulum's), the fixed lines (trails are the bodies' paths).  Target: the middle of
     // that in the view's plane; distance: the least that keeps every sphere inside the
     // frustum for the canvas's aspect (a margin of 8 %).  Refitted when the canvas's shape
-    // changes, until the user moves the camera.
+    // changes and when a simulating page re-runs, until the user moves the camera.
     const FOV = 40;
     const camera = new THREE.PerspectiveCamera(FOV, W / H, 0.005 * ext, 200 * ext);
     camera.up.copy(V(spec.up));
-    const drawn = [];                                  // x, y, z, radius, ...
-    {
+    // the bodies' bounding radii, and the turned solid's bounding sphere in its own frame
+    // (taken here, before any frame turns it)
+    const rad = meshes.map((m) => {
+      m.geometry.computeBoundingSphere();
+      return m.geometry.boundingSphere.radius;
+    });
+    const solidSphere = new THREE.Sphere();
+    if (solid) new THREE.Box3().setFromObject(solid).getBoundingSphere(solidSphere);
+    const sc = solidSphere.center, sr = solidSphere.radius;
+    // the bounding spheres of what is drawn over all frames: x, y, z, radius, ...
+    function whatIsDrawn() {
+      const drawn = [];
       const at = Array.from({length: nb}, () => new THREE.Vector3());
-      const rad = meshes.map((m) => {
-        m.geometry.computeBoundingSphere();
-        return m.geometry.boundingSphere.radius;
-      });
-      let sc = null, sr = 0;                           // the turned solid's bounding sphere
-      if (solid) {
-        const b = new THREE.Box3().setFromObject(solid), sph = new THREE.Sphere();
-        b.getBoundingSphere(sph);
-        sc = sph.center;
-        sr = sph.radius;
-      }
       const c = new THREE.Vector3();
       for (let k = 0; k < n; k++) {
         const q = place(k, at);
@@ -335,10 +348,12 @@ export default {
         const pts = mpUnpack(ln.pts);
         for (let j = 0; j < pts.length; j += 3) drawn.push(pts[j], pts[j + 1], pts[j + 2], 0);
       }
+      return drawn;
     }
     const center = V(spec.center);
     const dir = V(spec.camera).normalize();
     function fitCamera() {
+      const drawn = whatIsDrawn();
       const z = dir.clone(), x = new THREE.Vector3().crossVectors(camera.up, z).normalize();
       const y = new THREE.Vector3().crossVectors(z, x);
       const tv = 0.92 * Math.tan((FOV * Math.PI) / 360), th = tv * camera.aspect;
@@ -459,7 +474,14 @@ export default {
     const bar = mpEl("div", {style: "display:flex;flex-wrap:wrap;gap:12px;align-items:center;"
       + "margin-top:6px"},
       playBtn, slider, speedRow,
-      ...(trails.length ? [mpEl("label", {style: "font-size:13px"}, trailBox, " trails")] : []));
+      ...(trails.length ? [mpEl("label", {style: "font-size:13px"}, trailBox, " trails")] : []),
+      ...(sim ? sim.controls(rerun) : []));
+    // a simulating page's re-run (a slider, setParam): new trails, the shown frame again
+    function rerun() {
+      fillTrails();
+      if (!moved) fitCamera();
+      show(Math.max(shown, 0));
+    }
     el.append(mpEl("div", {class: "mechpy-live mechpy-animate"}, title, stage, plots.box, bar));
     // the canvas fills the stage inside its border (clientWidth); a new width: a new size
     // and the camera's aspect, drawn at once
@@ -513,6 +535,18 @@ export default {
       // frames drawn per second over the last second (a paused, untouched page draws none)
       fps: () => fps.value(),
     };
+    if (sim) {
+      // a page that simulates: a parameter changed as its slider does (the run's report),
+      // the parameters' values, and the last run's {steps, rejected, evals, ms, status, t}
+      api.setParam = (name, value) => {
+        const r = sim.setParam(name, value);
+        rerun();
+        draw(performance.now());
+        return r;
+      };
+      api.params = sim.params;
+      api.simulation = sim.report;
+    }
     const unregister = mpRegister(api);
     show(0);
     raf = requestAnimationFrame(tick);

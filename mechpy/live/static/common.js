@@ -95,6 +95,37 @@ function mpButton(text, onClick) {
     style: "font-size:13px;padding:2px 10px;margin-right:4px"}, text);
 }
 
+// erf and erfc in double precision for a printed field, the phase portrait's and a
+// simulating page's (JavaScript's Math has neither; mechpy.live._field prints them as
+// mp.erf, mp.erfc): erf below 2.5 by its series
+// exp(-a^2) sum (2a^2)^n a / (2n+1)!! (positive terms), erfc by 1 - erf below 2 and by its
+// continued fraction (80 terms) from 2 on; exp(-a^2) with a^2 split (Dekker) so that its
+// rounding does not count a^2 times.
+function mpExpMsq(a) {
+  const c = 134217729 * a, ah = c - (c - a), al = a - ah;
+  return Math.exp(-ah * ah) * Math.exp(-al * (ah + a));
+}
+function mpErfSeries(a) {
+  let term = a, sum = a;
+  const z = 2 * a * a;
+  for (let n = 1; n < 200 && term > 1e-17 * sum; n++) { term *= z / (2 * n + 1); sum += term; }
+  return 1.1283791670955126 * mpExpMsq(a) * sum;
+}
+function mpErfcPos(a) {
+  if (a < 2) return 1 - mpErfSeries(a);
+  if (a > 27.3) return 0;
+  let f = a;
+  for (let n = 80; n > 0; n--) f = a + 0.5 * n / f;
+  return mpExpMsq(a) / (1.7724538509055160 * f);
+}
+const MP_JS_MATH = {
+  erf(x) {
+    const a = Math.abs(x), r = a < 2.5 ? mpErfSeries(a) : 1 - mpErfcPos(a);
+    return x < 0 ? -r : r;
+  },
+  erfc(x) { return x < 0 ? 2 - mpErfcPos(-x) : mpErfcPos(x); },
+};
+
 // viridis, as 9 stops: colour of s in [0, 1].
 const MP_VIRIDIS = [[68, 1, 84], [72, 40, 120], [62, 74, 137], [49, 104, 142], [38, 130, 142],
   [31, 158, 137], [53, 183, 121], [109, 205, 89], [253, 231, 37]];
