@@ -205,8 +205,12 @@ def test_bad_plots_are_named():
         mp.live.animate(scene, sol, plots="energy", **kw)
     with pytest.raises(ValueError, match=r"plots names \['a'\] more than once"):
         mp.live.animate(scene, sol, plots=["a", "a"], **kw)
-    with pytest.raises(ValueError, match="plots= is not drawn on a page that simulates"):
-        mp.live.animate(scene, sol, plots=["a"], params={"l": (0.5, 1.0)}, **kw)
+    # a page that simulates computes its series: a built-in scene's energy (C only) it cannot
+    pend = mp.scenes.Pendulum()
+    with pytest.raises(ValueError, match=r"cannot recompute the series \['energy'\]: a "
+                                         "built-in scene's energy is computed in C only"):
+        mp.live.animate(pend, mp.solve(pend, (0, 1), [0.5, 0.0]), plots=["theta", "energy"],
+                        params={"g": (1.0, 20.0)})
     x, v = sp.symbols("x v")
     osc = mp.equations([v, -x], [x, v])
     with pytest.raises(ValueError, match=r"'energy' asked of CompiledScene\(equations.*which "

@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 import sympy as sp
 
-from .. import _motion
+from .. import _motion, _series
 from .._validate import as_scalar
 from ..integrate import solve
 from . import _field
@@ -56,10 +56,12 @@ def _dynamics(system):
     return fd, nc
 
 
-def _renamed(exprs, fd):
-    """The geometry's expressions (state ``y<i>``, parameters by name) in the
-    field's own symbols, so that they print as s[i] and p[j]."""
+def _renamed(exprs, fd, what="drawing"):
+    """The geometry's (or the series') expressions (state ``y<i>``, time ``t``,
+    parameters by name) in the field's own symbols, so that they print as
+    s[i], t and p[j]."""
     byname = {str(s): s for s in fd.y}
+    byname[str(fd.t)] = fd.t
     byname.update({nm: s for nm, s in zip(fd.names, fd.p)})
     out = []
     for e in exprs:
@@ -67,8 +69,8 @@ def _renamed(exprs, fd):
         sub = {}
         for s in e.free_symbols:
             if s.name not in byname:
-                raise ValueError(f"the page cannot simulate this drawing: its geometry "
-                                 f"depends on {s}, which is neither a state nor a parameter")
+                raise ValueError(f"the page cannot simulate this {what}: it depends on {s}, "
+                                 "which is neither a state nor a parameter")
             sub[s] = byname[s.name]
         out.append(e.xreplace(sub))
     return out
@@ -99,10 +101,29 @@ def _sliders(params, fd) -> list:
     return out
 
 
-def simulation(system, drawing, options: dict, params, y0, times) -> dict:
+def _series_field(system, plots, fd):
+    """The Field of ``plots``' series (:func:`mechpy._series.expressions`) in
+    the field's symbols, for the page to evaluate at each frame's state; None
+    without plots.  ValueError for a series the page cannot compute (a
+    built-in scene's energy, which is in C only)."""
+    if not plots:
+        return None
+    exprs = _series.expressions(system, plots)
+    missing = [label for label, e in exprs if e is None]
+    if missing:
+        raise ValueError(f"the page cannot recompute the series {missing}: a built-in "
+                         "scene's energy is computed in C only; plot a SymPy expression of "
+                         "the states instead, or animate without params= and y0=")
+    return _field.Field(_renamed([e for _, e in exprs], fd, "series"), fd.y, fd.t, fd.p,
+                        fd.names, fd.values, True)
+
+
+def simulation(system, drawing, options: dict, params, y0, times, plots=None) -> dict:
     """The ``sim`` entry of the page's spec: the printed field and geometry,
-    the parameters and their sliders, the initial state, the tolerances and
-    the step budget.  The frames' times are the page's ``t``.
+    the series of ``plots`` (evaluated at each frame's state, time and the
+    parameters of the run), the parameters and their sliders, the initial
+    state, the tolerances and the step budget.  The frames' times are the
+    page's ``t``.
 
     Raises
     ------
@@ -121,6 +142,7 @@ def simulation(system, drawing, options: dict, params, y0, times) -> dict:
     points = drawing.painter("geometry")(system, **options)
     geom = _field.Field(_renamed([c for xyz in points for c in xyz], fd), fd.y, fd.t, fd.p,
                         fd.names, fd.values, False)
+    series = _series_field(system, plots, fd)
     sliders = _sliders(params, fd)
     state = np.asarray(system.initial_state(y0), dtype=float).reshape(-1)
     if not np.all(np.isfinite(state)):
@@ -130,9 +152,11 @@ def simulation(system, drawing, options: dict, params, y0, times) -> dict:
                          "earlier to a later time")
     try:
         field_js, geom_js = _field.javascript(fd), _field.javascript(geom)
+        series_js = None if series is None else _field.javascript(series)
     except ValueError as e:
         raise ValueError("the page cannot simulate this system: " + str(e)) from None
     return {"dim": system.dim, "nc": nc, "field": field_js, "geometry": geom_js,
+            "series": series_js,
             "names": fd.names, "values": fd.values, "sliders": sliders,
             "y0": state.tolist(), "rtol": RTOL, "atol": ATOL,
             "max_steps": STEPS_PER_FRAME * len(times)}

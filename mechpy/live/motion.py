@@ -494,7 +494,9 @@ def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0,
         expression of the states (symbols named as the states; a coordinate
         of :func:`mechpy.coordinates` and its ``diff(t)``), ``t`` and the
         parameters (by name, at the system's values), each evaluated at every
-        frame's state (:mod:`mechpy._series`).  ``window.mechpyLive.plot(name)``
+        frame's state (:mod:`mechpy._series`; on a page that simulates, the
+        page evaluates their printed expressions at its own frames, with the
+        parameters of each run).  ``window.mechpyLive.plot(name)``
         returns a series as drawn, ``{t: [...], y: [...]}``, ``name`` the
         entry as given (a state's name, ``"energy"`` or ``str(expr)``).
     params : dict, optional
@@ -538,8 +540,8 @@ def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0,
         body or point; in ``plots``, an unknown state name, an expression
         with a symbol that is neither a state nor a parameter, ``"energy"``
         for a system without one, a name given twice or a series that is not
-        finite (each named), or ``plots`` with ``params`` or ``y0`` (a page
-        that simulates draws no series yet).  ``plots`` that is not a list,
+        finite (each named), or, on a page that simulates, a built-in
+        scene's ``"energy"`` (computed in C only).  ``plots`` that is not a list,
         or an entry that is neither a string nor a SymPy expression, is a
         TypeError.  With ``params`` or ``y0``: what the page cannot
         simulate, named before any page is made (no printed form: an
@@ -566,9 +568,6 @@ def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0,
     drawing = _motion.kind_of(system, kind)
     kind = drawing.name
     simulate = params is not None or y0 is not None
-    if plots is not None and simulate:
-        raise ValueError("plots= is not drawn on a page that simulates (params= or y0=): its "
-                         "series come from sol and would not follow the page's runs")
     if sol is None and simulate:                     # the span t = (t0, t1), framed by a solve
         sol, t = _simulate.framing(system, t, y0), None
     tt, y = _motion.samples(system, sol, t)                        # checks sol's shape
@@ -597,8 +596,10 @@ def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0,
             raise ValueError("the page simulates without events: sol has actions (a time held "
                              "twice); animate it without params= and y0=")
         sim = _simulate.simulation(system, drawing, options, params,
-                                   y[:, 0] if y0 is None else y0, times)
-    drawn = [] if plots is None else _series.series(system, plots, times, Y)
+                                   y[:, 0] if y0 is None else y0, times, plots)
+    # a page that simulates computes its series with its frames (sim's printed series)
+    drawn = ([] if plots is None else _series.series(system, plots, times, Y) if sim is None
+             else [(nm, None) for nm in _series.labels(system, plots)])
     n, nb = d["P"].shape[:2]
     dt = span / (n - 1)
     window = n if not np.isfinite(trail) else int(np.ceil(trail / dt - 1e-9)) if dt > 0 else 0
@@ -614,7 +615,8 @@ def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0,
         "solid": d.get("solid"), "up": d["up"], "center": d["center"],
         "extent": float(d["extent"]), "camera": d["camera"],
         "frame_rods": bool(d.get("frame_rods", True)),
-        "plots": [{"name": nm, "y": pack(v), "color": _PALETTE[i % len(_PALETTE)]}
+        "plots": [{"name": nm, "y": None if v is None else pack(v),
+                   "color": _PALETTE[i % len(_PALETTE)]}
                   for i, (nm, v) in enumerate(drawn)],
     }
     if sim is not None:                         # the page computes the frames itself

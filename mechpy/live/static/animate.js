@@ -41,10 +41,10 @@ function mpTicks(lo, hi, n) {
   return {ticks: out, decimals: Math.max(0, -Math.floor(Math.log10(step) + 1e-9))};
 }
 
-function mpPlotPanels(spec, T, maxWidth, onSeek) {
+function mpPlotPanels(spec, T, maxWidth, onSeek, sim) {
   const box = mpEl("div", {class: "mechpy-plots", style: `width:100%;max-width:${maxWidth}px`});
-  const panels = (spec.plots || []).map((p) => {
-    const y = mpUnpack(p.y);
+  const panels = (spec.plots || []).map((p, i) => {
+    const y = sim ? sim.S[i] : mpUnpack(p.y);       // a page that simulates: its own series
     const canvas = mpEl("canvas", {style: "display:block"});
     const cursor = mpEl("div", {class: "mechpy-cursor", style: "position:absolute;width:0;"
       + "border-left:2px solid #d62728;pointer-events:none"});
@@ -464,7 +464,7 @@ export default {
     const playBtn = mpButton("pause", () => (playing ? api.pause() : api.play()));
     const seek = (i) => { api.pause(); show(i); head = i; };
     const slider = mpSlider("frame", 0, n - 1, 0, 1, seek);
-    const plots = mpPlotPanels(spec, T, MAXW, seek);
+    const plots = mpPlotPanels(spec, T, MAXW, seek, sim);
     const speedRow = mpSlider("speed", 0.1, 10, speed, 0.1, (v) => { speed = v; });
     const trailBox = mpEl("input", {type: "checkbox", checked: "", "aria-label": "trails",
       onchange: () => {
@@ -480,6 +480,7 @@ export default {
     function rerun() {
       fillTrails();
       if (!moved) fitCamera();
+      plots.draw(W);                              // the new series, their new ranges
       show(Math.max(shown, 0));
     }
     el.append(mpEl("div", {class: "mechpy-live mechpy-animate"}, title, stage, plots.box, bar));
