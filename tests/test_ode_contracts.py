@@ -64,21 +64,28 @@ int main(void)
 """
 
 
-@pytest.fixture(scope="module")
-def control(tmp_path_factory):
-    """call(lines) -> the harness's output lines for the given input lines."""
+def _harness(tmp_path_factory, name: str, source: str):
+    """A program of ``source`` compiled against csrc/ (-Wall -Wextra -Werror):
+    run(text) -> its standard output for ``text`` on its standard input."""
     if not build.have_compiler():
         pytest.skip("no C compiler")
-    d = tmp_path_factory.mktemp("control")
-    src, exe = d / "control.c", d / "control"
-    src.write_text(_MAIN)
+    d = tmp_path_factory.mktemp(name)
+    src, exe = d / f"{name}.c", d / name
+    src.write_text(source)
     subprocess.run(build.compiler() + ["-std=c11", "-O1", "-fopenmp-simd", "-Wall", "-Wextra",
                                        "-Werror", f"-I{ROOT / 'csrc'}", str(src), "-o", str(exe),
                                        "-lm"], check=True, capture_output=True)
+    return lambda text: subprocess.run([str(exe)], input=text, check=True, capture_output=True,
+                                       text=True).stdout
+
+
+@pytest.fixture(scope="module")
+def control(tmp_path_factory):
+    """call(lines) -> the harness's output lines for the given input lines."""
+    run = _harness(tmp_path_factory, "control", _MAIN)
 
     def call(lines):
-        out = subprocess.run([str(exe)], input="\n".join(lines) + "\n", check=True,
-                             capture_output=True, text=True).stdout.split("\n")
+        out = run("\n".join(lines) + "\n").split("\n")
         assert float(out[0].split()[1]) == ZENO
         return [ln.split() for ln in out[1:] if ln]
     return call
@@ -206,14 +213,7 @@ int main(void)
 @pytest.fixture(scope="module")
 def lu_solve(tmp_path_factory):
     """solve(kind, factors, ipiv 0-based, b, kl, ku) -> x from lu.h."""
-    if not build.have_compiler():
-        pytest.skip("no C compiler")
-    d = tmp_path_factory.mktemp("lu")
-    src, exe = d / "lu.c", d / "lu"
-    src.write_text(_LU_MAIN)
-    subprocess.run(build.compiler() + ["-std=c11", "-O1", "-Wall", "-Wextra", "-Werror",
-                                       f"-I{ROOT / 'csrc'}", str(src), "-o", str(exe), "-lm"],
-                   check=True, capture_output=True)
+    run = _harness(tmp_path_factory, "lu", _LU_MAIN)
 
     def solve(kind, F, ipiv, b, kl=0, ku=0):
         cplx = np.iscomplexobj(F)
@@ -222,9 +222,7 @@ def lu_solve(tmp_path_factory):
         text = " ".join([kind, str(len(b)), str(kl), str(ku),
                          *map(repr, map(float, flat(np.asarray(F).T.ravel()))),
                          *(str(int(p) + 1) for p in ipiv), *map(repr, map(float, flat(b)))])
-        out = subprocess.run([str(exe)], input=text + "\n", check=True, capture_output=True,
-                             text=True).stdout.split()
-        x = np.array(out, float)
+        x = np.array(run(text + "\n").split(), float)
         return x[0::2] + 1j * x[1::2] if cplx else x
     return solve
 
