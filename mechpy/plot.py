@@ -9,7 +9,7 @@ import warnings
 
 import numpy as np
 
-from . import _motion
+from . import _motion, _series
 from ._validate import as_array, as_int, as_scalar
 from .integrate import solve
 from .scenes import Pendulum, Scene, VanDerPol
@@ -774,6 +774,24 @@ def _bodies(ax, system, t, y, trail, lengths):
     return update
 
 
+def _series_axes(fig, grid, drawn, t) -> list:
+    """The Axes of the series under the motion (the rows of ``grid``), one a
+    series: its curve over the samples' times ``t``, its label as legend."""
+    axes = []
+    for j, (label, v) in enumerate(drawn):
+        a = fig.add_subplot(grid[j], sharex=axes[0] if axes else None)
+        a.plot(t, v, color=f"C{j}", lw=1.3, label=label, gid="series")
+        a.legend(loc="upper right", fontsize=8, frameon=False)
+        a.tick_params(labelsize=8)
+        a.ticklabel_format(axis="y", useOffset=True, style="sci", scilimits=(-3, 4))
+        a.grid(alpha=0.3)
+        if j < len(drawn) - 1:
+            a.tick_params(labelbottom=False)
+        axes.append(a)
+    axes[-1].set_xlabel("t", fontsize=9)
+    return axes
+
+
 def _save(anim, path, fps):
     """Write ``anim`` to ``path``: .html (JavaScript), .mp4 (ffmpeg), else GIF (Pillow)."""
     from matplotlib import animation
@@ -790,7 +808,7 @@ def _save(anim, path, fps):
 
 
 def animate(system, sol, *, kind=None, t=None, frames=None, fps=20, trail=None, ax=None,
-            lengths=None, path=None):
+            lengths=None, path=None, plots=None):
     r"""An animation of the motion itself, drawn from a solution.
 
     What is drawn depends on ``kind``: by default the drawing the system names
@@ -879,12 +897,24 @@ def animate(system, sol, *, kind=None, t=None, frames=None, fps=20, trail=None, 
     path : str or Path, optional
         Also write the animation there: ``.gif`` (Pillow), ``.mp4`` (needs
         ffmpeg) or ``.html`` (JavaScript).
+    plots : list, optional
+        Time series drawn in axes under the motion, one an entry, with a
+        vertical cursor line at the frame's time: a state's name
+        (``system.states``), ``"energy"`` (the system's own ``energy``) or a
+        SymPy expression of the states (symbols named as the states; a
+        coordinate of :func:`mechpy.coordinates` and its ``diff(t)``), ``t``
+        and the parameters (by name, at the system's values); each evaluated
+        at every sample (:mod:`mechpy._series`, as :func:`mechpy.live.animate`
+        does at its frames).  Needs a new figure (not ``ax``).
 
     Returns
     -------
     matplotlib.animation.FuncAnimation
         Its attribute ``samples`` (frames,) holds the sample index each frame
-        shows.  In a notebook: ``IPython.display.HTML(anim.to_jshtml())``;
+        shows; with ``plots``, ``series_axes`` holds the series' Axes (the
+        curve's label: the entry's, a state's name, ``"energy"`` or
+        ``str(expr)``; the cursor: the line with gid ``"cursor"``).  In a
+        notebook: ``IPython.display.HTML(anim.to_jshtml())``;
         ``anim.save("motion.gif", writer="pillow")`` writes a file.
 
     Raises
@@ -896,7 +926,10 @@ def animate(system, sol, *, kind=None, t=None, frames=None, fps=20, trail=None, 
         ``kind`` is unknown; ``sol`` is empty, not finite or does not hold the
         scene's states (n, m); ``t`` is missing, of another length or not
         monotonic; ``ax`` is not 3-D for a 3-D kind; bad ``frames``, ``fps``,
-        ``trail`` or ``lengths``.
+        ``trail`` or ``lengths``; ``plots`` with ``ax``, an unknown state
+        name in ``plots``, an expression with a symbol that is neither a
+        state nor a parameter, ``"energy"`` for a system without one, or a
+        series that is not finite (each named).
 
     Examples
     --------
@@ -920,11 +953,25 @@ def animate(system, sol, *, kind=None, t=None, frames=None, fps=20, trail=None, 
     if np.isnan(trail):
         raise ValueError("trail must be a non-negative time or np.inf, got nan")
     three_d = drawing.three_d
+    drawn = [] if plots is None else _series.series(system, plots, tt, y)
+    if drawn and ax is not None:
+        raise ValueError("plots= draws the series in a figure of its own: give ax=None")
+    series_axes = []
     if ax is None:
         # small and at 80 dpi: every frame is a PNG in to_jshtml
-        fig = plt.figure(figsize=drawing.figsize, dpi=80)
-        ax = fig.add_subplot(projection="3d" if three_d else None)
-        if drawing.bottom is not None:
+        w, h = drawing.figsize
+        fig = plt.figure(figsize=(w, h + 1.25 * len(drawn)), dpi=80)
+        if drawn:
+            # the motion above, the series below (their own spacing: a row's height)
+            grid = fig.add_gridspec(2, 1, height_ratios=[h, 1.25 * len(drawn)], hspace=0.18,
+                                    left=0.17, right=0.95, top=0.95,
+                                    bottom=0.45 / (h + 1.25 * len(drawn)))
+            ax = fig.add_subplot(grid[0], projection="3d" if three_d else None)
+            series_axes = _series_axes(fig, grid[1].subgridspec(len(drawn), 1, hspace=0.3),
+                                       drawn, tt)
+        else:
+            ax = fig.add_subplot(projection="3d" if three_d else None)
+        if drawing.bottom is not None and not drawn:
             fig.subplots_adjust(bottom=drawing.bottom)   # a legend under the axes
     else:
         if three_d != (getattr(ax, "name", "") == "3d"):
@@ -938,19 +985,24 @@ def animate(system, sol, *, kind=None, t=None, frames=None, fps=20, trail=None, 
     clock = (ax.text2D if three_d else ax.text)(0.98, 0.98, "", transform=ax.transAxes,
                                                 ha="right", va="top", gid="time")
 
+    cursors = [a.axvline(tt[0], color="tab:red", lw=1.2, gid="cursor") for a in series_axes]
+
     def frame(i):
         k = samples[i]
         clock.set_text(f"t = {tt[k]:.2f} s")
-        return (*update(k), clock)
+        for c in cursors:
+            c.set_xdata([tt[k], tt[k]])
+        return (*update(k), clock, *cursors)
 
     frame(0)
-    if fig.get_layout_engine() is None:
+    if fig.get_layout_engine() is None and not series_axes:
         fig.tight_layout()
         # tight_layout leaves a placeholder engine behind, which makes every savefig
         # (every frame of to_jshtml) draw the figure twice
         fig.set_layout_engine(None)
     anim = _func_animation(fig, frame, frames=samples.size, interval=1000.0 / fps, blit=False)
     anim.samples = samples
+    anim.series_axes = series_axes
     if path is not None:
         _save(anim, path, fps)
     return anim

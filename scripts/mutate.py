@@ -70,7 +70,7 @@ LANES = ["csrc/ode/lanes.c", "csrc/ode/lanes.h", "csrc/ode/fixed.h"]
 # EXCLUDED (tests/test_mutate_modules.py checks it against the tree).
 MODULES = {
     "ode": (["csrc/ode/*.c", "csrc/ode/*.h"],
-            ENGINE_TESTS + ["tests/test_tableaux.py", "tests/test_control_contracts.py",
+            ENGINE_TESTS + ["tests/test_tableaux.py", "tests/test_ode_contracts.py",
                             "tests/test_rigid.py", "tests/test_lanes.py",
                             "tests/test_events.py",
                             "tests/test_events_gsl.py", "tests/test_events_pins.py",
@@ -130,9 +130,11 @@ MODULES = {
                   ["tests/test_frames.py", "tests/test_particles.py"]),
     "rigid.py": (["mechpy/rigid.py"], ["tests/test_rigid.py"]),
     "stress.py": (["mechpy/stress.py"], ["tests/test_stress.py"]),
-    "plot.py": (["mechpy/plot.py", "mechpy/_motion.py"], ["tests/test_plot.py"]),
+    "plot.py": (["mechpy/plot.py", "mechpy/_motion.py", "mechpy/_series.py"],
+                ["tests/test_plot.py", "tests/test_live_plots.py"]),
     "live": (["mechpy/live/*.py"], ["tests/test_live.py", "tests/test_live_motion.py",
-                                    "tests/test_live_bodies.py", "tests/test_live_fields.py"]),
+                                    "tests/test_live_bodies.py", "tests/test_live_fields.py",
+                                    "tests/test_live_plots.py"]),
     "progress": (["mechpy/_progress.py"], ["tests/test_progress.py"]),
     "support": (["mechpy/_validate.py", "mechpy/errors.py", "mechpy/__init__.py"],
                 ["tests/test_validate.py", "tests/test_errors.py", "tests/test_integrate.py",

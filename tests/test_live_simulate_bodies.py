@@ -57,7 +57,8 @@ def test_rolling_disc_page_simulates(driver, tmp_path):
     span = (0.0, 3.0)
     y0 = disc.project([0.0, 0.2, 0.0, 0.0, 0.0, 0.3, 0.0, 4.0, 0.0, 0.0])
     w = mp.live.animate(disc, None, t=span, fps=10, params={"g": (1.0, 20.0)}, y0=y0,
-                        shapes={"disc": dict(kind="cylinder", size=(0.5, 0.02))})
+                        shapes={"disc": dict(kind="cylinder", size=(0.5, 0.02))},
+                        plots=["energy"])
     sim = w.spec["sim"]
     assert w.kind == "bodies" and sim["na"] == 10 and sim["nrot"] == 1 and w.spec["pos"] is None
     _page(driver, tmp_path, w, "disc_sim")
@@ -71,7 +72,16 @@ def test_rolling_disc_page_simulates(driver, tmp_path):
     print(f"  disc: rim above the ground {contact:.2g} m")
     assert contact < 1e-15                     # measured 5.6e-17 m: the exact geometry
     assert _set(driver, "g", 4.0)["status"] == "done"
-    _agrees(driver, disc, span, y0, 3e-11, g=4.0)
+    t, _, _ = _agrees(driver, disc, span, y0, 3e-11, g=4.0)
+    # the energy plotted beside it, recomputed by the page with the run: the scene's energy
+    # (compiled) at mp.solve's states, g = 4
+    got = driver.execute_script("return window.mechpyLive.plot('energy')")
+    slow = disc.replace(g=4.0)
+    ref = slow.energy(mp.solve(slow, span, y0, dense_output=True, rtol=1e-13,
+                               atol=1e-15).sol(t))
+    err = np.abs(np.array(got["y"]) - ref).max()
+    print(f"  disc energy plot (g = 4) - the scene's energy: {err:.2g} J")
+    assert np.array_equal(got["t"], t) and err < 1e-11           # measured 1.4e-12 J
     # r enters the rolling constraints: setParam refuses it, as params= does
     with pytest.raises(Exception, match="r enters the model's constraints"):
         _set(driver, "r", 0.6)

@@ -245,6 +245,32 @@ def test_animate_chain_masses_and_modes():
     plt.close("all")
 
 
+def test_plot_animate_series_axes_and_cursor():
+    import sympy as sp
+    p = mp.scenes.Pendulum(length=1.3)
+    sol = mp.solve(p, (0, 4), [2.0, 0.0], t_eval=np.linspace(0, 4, 81))
+    th = sp.Symbol("theta")
+    anim = mp.plot.animate(p, sol, frames=41, plots=["energy", "theta'", p.params["g"] * sp.cos(th)
+                                                     * sp.Symbol("length")])
+    axes = anim.series_axes
+    assert len(axes) == 3 and all(a in anim._fig.axes for a in axes)
+    th, om = sol.y
+    # per unit mass: L^2 theta'^2 / 2 + g L (1 - cos theta)
+    refs = [1.3 ** 2 * om ** 2 / 2 + 9.81 * 1.3 * (1 - np.cos(th)), om, 9.81 * 1.3 * np.cos(th)]
+    for a, ref in zip(axes, refs):
+        (curve,) = [ln for ln in a.get_lines() if ln.get_gid() == "series"]
+        assert np.array_equal(curve.get_xdata(), sol.t)
+        np.testing.assert_allclose(curve.get_ydata(), ref, rtol=1e-13, atol=1e-13)
+    for i in (0, 13, 40):
+        changed = anim._func(i)
+        cursors = [ln for a in axes for ln in a.get_lines() if ln.get_gid() == "cursor"]
+        assert len(cursors) == 3 and all(c in changed for c in cursors)
+        assert all(list(c.get_xdata()) == [sol.t[anim.samples[i]]] * 2 for c in cursors)
+    with pytest.raises(ValueError, match="give ax=None"):
+        mp.plot.animate(p, sol, plots=["theta"], ax=plt.figure().add_subplot())
+    plt.close("all")
+
+
 def test_animate_saves_a_gif_that_pil_opens(tmp_path):
     from PIL import Image
     p = mp.scenes.Pendulum()

@@ -259,3 +259,22 @@ def _lagrange_coeffs(c):
                 p = np.convolve(p, np.array([-c[m], 1.0]) / (c[j] - c[m]))
         out.append(p)
     return out
+
+
+def test_the_pages_dormand_prince_is_the_engines():
+    """The page that simulates (mechpy/live/static/simulate.js) carries its own
+    copy of the dopri5 tables, as JavaScript: it must be the C header's, entry
+    for entry (to rounding: the page writes the fractions, the header some as
+    decimals)."""
+    js = (ROOT / "mechpy" / "live" / "static" / "simulate.js").read_text()
+    body = re.search(r"const MP_DOPRI = \{(.*?)\n\};", js, re.S).group(1)
+    body = re.sub(r"//[^\n]*", "", body)
+    page = eval("{" + re.sub(r"(\b[a-z])\s*:", r'"\1":', body) + "}", {}, {})  # noqa: S307
+    t = _c_tables(ODE / "dopri5_tableau.h")
+    np.testing.assert_allclose(page["c"], t["dp_c"], rtol=1e-15, atol=0)
+    A = np.zeros((7, 6))
+    for i, row in enumerate(page["a"]):
+        A[i, :len(row)] = row
+    np.testing.assert_allclose(A, t["dp_a"], rtol=1e-15, atol=0)
+    np.testing.assert_allclose(page["e"], t["dp_e"], rtol=1e-15, atol=0)
+    np.testing.assert_allclose(page["d"], t["dp_d"], rtol=1e-15, atol=0)

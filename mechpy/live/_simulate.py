@@ -24,7 +24,7 @@ from __future__ import annotations
 import numpy as np
 import sympy as sp
 
-from .. import _motion
+from .. import _motion, _series
 from .._validate import as_scalar
 from ..integrate import solve
 from . import _field
@@ -100,10 +100,15 @@ def _dynamics(system):
     return fd, nc, na
 
 
-def _renamed(exprs, fd):
-    """The geometry's expressions (state ``y<i>``, parameters by name) in the
-    field's own symbols, so that they print as s[i] and p[j]."""
-    byname = {str(s): s for s in fd.y}
+def _renamed(exprs, fd, what="drawing"):
+    """The geometry's (or the series') expressions (state ``y<i>``, time ``t``,
+    parameters by name) in the field's own symbols, so that they print as
+    s[i], t and p[j]."""
+    # the contract's y<i> and t (a mechanics field's own symbols are mp_y<i>, mp_t)
+    byname = {f"y{i}": s for i, s in enumerate(fd.y)}
+    byname["t"] = fd.t
+    byname.update({str(s): s for s in fd.y})
+    byname[str(fd.t)] = fd.t
     byname.update({nm: s for nm, s in zip(fd.names, fd.p)})
     out = []
     for e in exprs:
@@ -111,8 +116,8 @@ def _renamed(exprs, fd):
         sub = {}
         for s in e.free_symbols:
             if s.name not in byname:
-                raise ValueError(f"the page cannot simulate this drawing: its geometry "
-                                 f"depends on {s}, which is neither a state nor a parameter")
+                raise ValueError(f"the page cannot simulate this {what}: it depends on {s}, "
+                                 "which is neither a state nor a parameter")
             sub[s] = byname[s.name]
         out.append(e.xreplace(sub))
     return out
@@ -147,10 +152,29 @@ def _sliders(params, fd, locked) -> list:
     return out
 
 
-def simulation(system, drawing, options: dict, params, y0, times) -> dict:
+def _series_field(system, plots, fd):
+    """The Field of ``plots``' series (:func:`mechpy._series.expressions`) in
+    the field's symbols, for the page to evaluate at each frame's state; None
+    without plots.  ValueError for a series the page cannot compute (a
+    built-in scene's energy, which is in C only)."""
+    if not plots:
+        return None
+    exprs = _series.expressions(system, plots)
+    missing = [label for label, e in exprs if e is None]
+    if missing:
+        raise ValueError(f"the page cannot recompute the series {missing}: a built-in "
+                         "scene's energy is computed in C only; plot a SymPy expression of "
+                         "the states instead, or animate without params= and y0=")
+    return _field.Field(_renamed([e for _, e in exprs], fd, "series"), fd.y, fd.t, fd.p,
+                        fd.names, fd.values, True)
+
+
+def simulation(system, drawing, options: dict, params, y0, times, plots=None) -> dict:
     """The ``sim`` entry of the page's spec: the printed field and geometry,
-    the parameters and their sliders, the initial state, the tolerances and
-    the step budget.  The frames' times are the page's ``t``.
+    the series of ``plots`` (evaluated at each frame's state, time and the
+    parameters of the run), the parameters and their sliders, the initial
+    state, the tolerances and the step budget.  The frames' times are the
+    page's ``t``.
 
     Raises
     ------
@@ -181,6 +205,7 @@ def simulation(system, drawing, options: dict, params, y0, times) -> dict:
         exprs = _renamed([c for xyz in drawing.painter("geometry")(system, **options)
                           for c in xyz], fd)
     geom = _field.Field(exprs, fd.y, fd.t, fd.p, fd.names, fd.values, False)
+    series = _series_field(system, plots, fd)
     locked = _locked(system, fd)
     sliders = _sliders(params, fd, locked)
     state = np.asarray(system.initial_state(y0), dtype=float).reshape(-1)
@@ -194,11 +219,12 @@ def simulation(system, drawing, options: dict, params, y0, times) -> dict:
         check(float(times[0]), state)
     try:
         field_js, geom_js = _field.javascript(fd), _field.javascript(geom)
+        series_js = None if series is None else _field.javascript(series)
     except ValueError as e:
         raise ValueError("the page cannot simulate this system: " + str(e)) from None
     return {"dim": system.dim, "nc": nc, "na": na, "nrot": nrot, "field": field_js,
-            "geometry": geom_js, "names": fd.names, "values": fd.values, "sliders": sliders,
-            "locked": locked,
+            "geometry": geom_js, "series": series_js, "names": fd.names, "values": fd.values,
+            "sliders": sliders, "locked": locked,
             "y0": state.tolist(), "rtol": RTOL, "atol": ATOL,
             "max_steps": STEPS_PER_FRAME * len(times)}
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import _motion
+from .. import _motion, _series
 from .._validate import as_array, as_scalar
 from . import _simulate
 from ._page import LiveWidget, pack
@@ -121,9 +121,11 @@ def _foucault(system, times, Y):
     bodies = [_body("bob", _RED, 0.06 * A)]
     lines = [_polyline([[-A, 0, 0], [A, 0, 0]], _GREY, "x: east"),
              _polyline([[0, -A, 0], [0, A, 0]], _GREY, "y: north")]
+    # the rod runs up out of the view to its suspension point (L >> A): the camera frames
+    # the bob and its rosette, not the rod's top (frame_rods)
     return dict(P=B.T[:, None, :], bodies=bodies, rods=[[[0.0, 0.0, L], 0, _DARK]], lines=lines,
                 up=[0, 0, 1], trail=[0], center=[0.0, 0.0, 0.0], extent=1.3 * A,
-                camera=[0.35, -0.6, 1.0],
+                camera=[0.35, -0.6, 1.0], frame_rods=False,
                 title="Foucault pendulum: the bob and its rosette (x east, y north, z up; m)")
 
 
@@ -362,8 +364,8 @@ def _bodies(system, times, Y, points=None, links=None, shapes=None):
 
 
 def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0, trail=None,
-            lengths=None, spacing=None, points=None, links=None, shapes=None, params=None,
-            y0=None) -> Motion:
+            lengths=None, spacing=None, points=None, links=None, shapes=None,
+            plots=None, params=None, y0=None) -> Motion:
     r"""The motion of a solution in 3D, in the browser (three.js).
 
     What is drawn depends on ``kind`` (by default the drawing the system
@@ -429,7 +431,11 @@ def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0,
     drawn solid's rotation matrix, body to world, row-major, 9 numbers a
     solid in the order of ``positions()``; the top's and the rigid body's
     one solid), ``lines()`` (the fixed lines: nutation bounds, L, walls,
-    the ground plane), ``fps()``.
+    the ground plane), ``plot(name)`` (a series of ``plots``), ``fps()``.
+    The camera looks from the drawing's direction and frames everything
+    drawn over all frames (bodies, solids, rods, fixed lines, trails; the
+    Foucault pendulum's rod runs up out of the view) for the canvas's
+    aspect.
 
     Parameters
     ----------
@@ -477,6 +483,22 @@ def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0,
         with kind ``"sphere"`` (size: radius), ``"box"`` (sides), ``"cylinder"``
         (radius, length), ``"cone"`` (radius, height) or ``"torus"`` (radius,
         tube radius); a cylinder's, cone's or torus's axis is the body's y.
+    plots : list, optional
+        Time series drawn under the 3D view, one panel an entry, with a
+        cursor at the shown frame's time (it follows play, the slider and
+        ``frame(i)``; a click on a panel shows that time): a state's name
+        (``system.states``), ``"energy"`` (the system's own ``energy``: a
+        built-in scene's, the Jacobi integral of :func:`mechpy.lagrangian`,
+        the ``energy=`` of :func:`mechpy.equations`, T + V of an
+        :func:`mechpy.mechanics` model with constant loads) or a SymPy
+        expression of the states (symbols named as the states; a coordinate
+        of :func:`mechpy.coordinates` and its ``diff(t)``), ``t`` and the
+        parameters (by name, at the system's values), each evaluated at every
+        frame's state (:mod:`mechpy._series`; on a page that simulates, the
+        page evaluates their printed expressions at its own frames, with the
+        parameters of each run).  ``window.mechpyLive.plot(name)``
+        returns a series as drawn, ``{t: [...], y: [...]}``, ``name`` the
+        entry as given (a state's name, ``"energy"`` or ``str(expr)``).
     params : dict, optional
         ``{"name": (min, max)}``: the page simulates (below) and puts each
         parameter on a slider over its range, starting at the system's value;
@@ -519,7 +541,13 @@ def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0,
         ``lengths`` or ``spacing``; more than 3600 frames; a point that
         depends on a symbol that is neither a coordinate nor a parameter, a
         link to an unknown point, an unknown shape kind or a shape for no
-        body or point.  With ``params`` or ``y0``: what the page cannot
+        body or point; in ``plots``, an unknown state name, an expression
+        with a symbol that is neither a state nor a parameter, ``"energy"``
+        for a system without one, a name given twice or a series that is not
+        finite (each named), or, on a page that simulates, a built-in
+        scene's ``"energy"`` (computed in C only).  ``plots`` that is not a list,
+        or an entry that is neither a string nor a SymPy expression, is a
+        TypeError.  With ``params`` or ``y0``: what the page cannot
         simulate, named before any page is made (no printed form: a
         Lagrangian with constraints, whose accelerations carry multipliers;
         a function the page does not evaluate; an :func:`mechpy.mechanics`
@@ -575,7 +603,10 @@ def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0,
             raise ValueError("the page simulates without events: sol has actions (a time held "
                              "twice); animate it without params= and y0=")
         sim = _simulate.simulation(system, drawing, options, params,
-                                   y[:, 0] if y0 is None else y0, times)
+                                   y[:, 0] if y0 is None else y0, times, plots)
+    # a page that simulates computes its series with its frames (sim's printed series)
+    drawn = ([] if plots is None else _series.series(system, plots, times, Y) if sim is None
+             else [(nm, None) for nm in _series.labels(system, plots)])
     n, nb = d["P"].shape[:2]
     dt = span / (n - 1)
     window = n if not np.isfinite(trail) else int(np.ceil(trail / dt - 1e-9)) if dt > 0 else 0
@@ -590,6 +621,10 @@ def animate(system, sol, *, kind=None, t=None, fps=30, duration=None, speed=1.0,
                    for b in d["trail"]] if window > 0 else [],
         "solid": d.get("solid"), "up": d["up"], "center": d["center"],
         "extent": float(d["extent"]), "camera": d["camera"],
+        "frame_rods": bool(d.get("frame_rods", True)),
+        "plots": [{"name": nm, "y": None if v is None else pack(v),
+                   "color": _PALETTE[i % len(_PALETTE)]}
+                  for i, (nm, v) in enumerate(drawn)],
     }
     if sim is not None:                         # the page computes the frames itself
         spec.update(pos=None, rots=None, sim=sim)

@@ -13,7 +13,7 @@ import os
 
 __all__ = ["coordinates", "lagrangian", "equations", "mechanics", "CompileError"]
 
-_SOURCES = ("derive.py", "codegen.py")
+_SOURCES = ("derive.py", "codegen.py", "__init__.py")   # __init__: the meta
 _GEN_HASH = None
 
 
@@ -106,6 +106,11 @@ def _meta(ir, source, constraints=(), numpy_blocks=False):
                 has_energy="energy" in ir.blocks, source=source,
                 equations=sp.srepr(ir.equations, order="none"),
                 constraints=[str(g) for g in constraints])
+    if "energy" in ir.blocks:
+        # the energy in y<i>, t and the parameters' names (mechpy._series.expressions)
+        sub = {ir.T: sp.Symbol("t"), **{Yi: sp.Symbol(f"y{i}") for i, Yi in enumerate(ir.Y)},
+               **{p: sp.Symbol(nm) for p, nm in zip(ir.P, ir.param_names)}}
+        meta["energy"] = sp.srepr(sp.sympify(ir.blocks["energy"][0]).xreplace(sub))
     if ir.jac_nonzeros is not None:
         meta["jac_nonzeros"] = [list(e) for e in ir.jac_nonzeros]
     if numpy_blocks:

@@ -25,6 +25,128 @@ function mpMotionFrame(THREE, spec, sim) {
   };
 }
 
+// The time series of plots= under the 3D view: one panel a series (its curve, axes, ticks and
+// name), a cursor (a vertical line) at the shown frame's time.  Each panel's canvas is drawn
+// once a width; the cursor is a positioned element moved by show(k).  The panel's plot area
+// (CSS px from its left) and time range are its data-left, data-width, data-t0, data-t1.
+const MP_PLOT_H = 92, MP_PLOT_FONT = "11px sans-serif";
+
+// about n "nice" ticks over [lo, hi] (steps 1, 2, 5 x 10^k) and the decimals they need
+function mpTicks(lo, hi, n) {
+  const raw = (hi - lo) / n, mag = Math.pow(10, Math.floor(Math.log10(raw)));
+  const step = [1, 2, 5, 10].map((f) => f * mag).find((s) => s >= raw) || 10 * mag;
+  const out = [];
+  for (let v = Math.ceil(lo / step) * step; v <= hi + 1e-9 * step; v += step) out.push(v);
+  if (out.length < 2 && n < 64) return mpTicks(lo, hi, 2 * n);     // at least two
+  return {ticks: out, decimals: Math.max(0, -Math.floor(Math.log10(step) + 1e-9))};
+}
+
+function mpPlotPanels(spec, T, maxWidth, onSeek, sim) {
+  const box = mpEl("div", {class: "mechpy-plots", style: `width:100%;max-width:${maxWidth}px`});
+  const panels = (spec.plots || []).map((p, i) => {
+    const y = sim ? sim.S[i] : mpUnpack(p.y);       // a page that simulates: its own series
+    const canvas = mpEl("canvas", {style: "display:block"});
+    const cursor = mpEl("div", {class: "mechpy-cursor", style: "position:absolute;width:0;"
+      + "border-left:2px solid #d62728;pointer-events:none"});
+    const el = mpEl("div", {class: "mechpy-plot", "data-name": p.name, style: "position:relative;"
+      + `height:${MP_PLOT_H}px;box-sizing:content-box;border:1px solid #ddd;border-top:none;`
+      + "cursor:crosshair"},
+      canvas, cursor);
+    el.addEventListener("click", (ev) => {
+      const r = el.getBoundingClientRect(), L = Number(el.dataset.left);
+      const f = (ev.clientX - r.left - L) / Number(el.dataset.width);
+      if (f >= 0 && f <= 1) onSeek(Math.round(f * (T.length - 1)));
+    });
+    box.append(el);
+    return {p, y, canvas, cursor, el, L: 0, W: 0, top: 0, h: 0};
+  });
+  const t0 = T[0], t1 = T[T.length - 1];
+  // draw every panel at width w (CSS px)
+  function draw(w) {
+    const dpr = Math.min(window.devicePixelRatio || 1, 2);
+    // the ticks of each panel, then one left margin for all: the time axes line up
+    const measure = document.createElement("canvas").getContext("2d");
+    measure.font = MP_PLOT_FONT;
+    let L = 0;
+    for (const P of panels) {
+      let lo = Infinity, hi = -Infinity;
+      for (const v of P.y) { lo = Math.min(lo, v); hi = Math.max(hi, v); }
+      const pad = hi > lo ? 0.06 * (hi - lo) : Math.max(Math.abs(hi) * 1e-6, 1e-12);
+      P.lo = lo - pad;
+      P.hi = hi + pad;
+      P.yt = mpTicks(P.lo, P.hi, 4);
+      P.ylab = P.yt.ticks.map((v) => v.toFixed(Math.min(P.yt.decimals, 15)));
+      L = Math.max(L, 14 + Math.max(...P.ylab.map((t) => measure.measureText(t).width)));
+    }
+    for (const P of panels) {
+      const {canvas, y, p} = P;
+      canvas.width = Math.round(w * dpr);
+      canvas.height = Math.round(MP_PLOT_H * dpr);
+      canvas.style.width = `${w}px`;
+      canvas.style.height = `${MP_PLOT_H}px`;
+      const g = canvas.getContext("2d");
+      g.setTransform(dpr, 0, 0, dpr, 0, 0);
+      g.clearRect(0, 0, w, MP_PLOT_H);
+      g.font = MP_PLOT_FONT;
+      const {lo, hi, yt, ylab} = P, tt = mpTicks(Math.min(t0, t1), Math.max(t0, t1), 8), R = 12;
+      const top = 15, h = MP_PLOT_H - top - 18, W = Math.max(10, w - L - R);
+      Object.assign(P, {L, W, top, h});
+      const X = (t) => L + ((t - t0) / (t1 - t0 || 1)) * W;
+      const Yp = (v) => top + ((hi - v) / (hi - lo)) * h;
+      // axes, grid and ticks
+      g.strokeStyle = "#e4e4e4";
+      g.fillStyle = "#333";
+      g.lineWidth = 1;
+      g.textAlign = "right";
+      g.textBaseline = "middle";
+      yt.ticks.forEach((v, i) => {
+        g.beginPath(); g.moveTo(L, Yp(v)); g.lineTo(L + W, Yp(v)); g.stroke();
+        g.fillText(ylab[i], L - 5, Yp(v));
+      });
+      g.textAlign = "center";
+      g.textBaseline = "top";
+      for (const v of tt.ticks) {
+        g.beginPath(); g.moveTo(X(v), top); g.lineTo(X(v), top + h); g.stroke();
+        g.fillText(v.toFixed(tt.decimals), X(v), top + h + 4);
+      }
+      g.strokeStyle = "#888";
+      g.strokeRect(L, top, W, h);
+      // the name (legend) and the time axis's
+      g.textAlign = "left";
+      g.textBaseline = "middle";
+      g.fillStyle = p.color;
+      g.fillRect(L, 6, 16, 3);
+      g.fillStyle = "#222";
+      g.fillText(p.name, L + 22, 7);
+      g.textAlign = "right";
+      g.fillText("t", L + W, 7);
+      // the series, one vertex a frame
+      g.strokeStyle = p.color;
+      g.lineWidth = 1.6;
+      g.beginPath();
+      for (let k = 0; k < y.length; k++) {
+        if (k) g.lineTo(X(T[k]), Yp(y[k])); else g.moveTo(X(T[k]), Yp(y[k]));
+      }
+      g.stroke();
+      Object.assign(P.el.dataset, {left: String(L), width: String(W), t0: String(t0),
+        t1: String(t1)});
+      P.cursor.style.top = `${top}px`;
+      P.cursor.style.height = `${h}px`;
+    }
+  }
+  // the cursor at frame k's time (its centre on the time's abscissa)
+  function at(k) {
+    for (const P of panels) {
+      const x = P.L + ((T[k] - t0) / (t1 - t0 || 1)) * P.W;
+      P.cursor.style.left = `${x - 1}px`;
+      P.cursor.dataset.t = String(T[k]);
+      P.cursor.dataset.x = String(x);
+    }
+  }
+  const byName = new Map(panels.map((P) => [P.p.name, P.y]));
+  return {box, draw, at, series: byName};
+}
+
 export default {
   async render({model, el}) {
     const spec = model.get("spec");
@@ -37,7 +159,8 @@ export default {
 
     // ---- page
     // the view takes its container's width, 960 px at most (mpFollowWidth), 0.62 of it high
-    const MAXW = 960, aspect = 0.62;
+    // (0.46 above plots, so that the view and three panels fit a screen)
+    const MAXW = 960, aspect = (spec.plots || []).length ? 0.46 : 0.62;
     let W = Math.max(64, Math.min(el.clientWidth || 760, MAXW)), H = Math.round(aspect * W);
     const renderer = new THREE.WebGLRenderer({antialias: true});
     renderer.setPixelRatio(Math.min(window.devicePixelRatio || 1, 2));
@@ -103,10 +226,12 @@ export default {
       scene.add(mesh);
       return mesh;
     });
-    // rods: thin cylinders between two bodies or a body and a fixed point
+    // rods: thin cylinders between two bodies or a body and a fixed point, thinner than the
+    // smallest body (a chain's masses show on its springs)
     const Y = new THREE.Vector3(0, 1, 0), tmp = new THREE.Vector3();
+    const rodR = Math.min(0.008 * ext, 0.3 * Math.min(...spec.bodies.map((b) => b.radius)));
     const rods = spec.rods.map(([a, b, c]) => {
-      const mesh = new THREE.Mesh(new THREE.CylinderGeometry(0.008 * ext, 0.008 * ext, 1, 12),
+      const mesh = new THREE.Mesh(new THREE.CylinderGeometry(rodR, rodR, 1, 12),
         solidMat(c));
       scene.add(mesh);
       return {a, b, mesh};
@@ -183,15 +308,89 @@ export default {
     }
 
     // ---- camera
-    const camera = new THREE.PerspectiveCamera(40, W / H, 0.005 * ext, 200 * ext);
+    // It looks along -spec.camera with spec.up up, and frames what is drawn: every body
+    // over all frames (its bounding sphere), the fixed ends of rods (unless
+    // spec.frame_rods is false: a rod that runs out of the view, the Foucault
+    // pendulum's), the fixed lines (trails are the bodies' paths).  Target: the middle of
+    // that in the view's plane; distance: the least that keeps every sphere inside the
+    // frustum for the canvas's aspect (a margin of 8 %).  Refitted when the canvas's shape
+    // changes and when a simulating page re-runs, until the user moves the camera.
+    const FOV = 40;
+    const camera = new THREE.PerspectiveCamera(FOV, W / H, 0.005 * ext, 200 * ext);
     camera.up.copy(V(spec.up));
+    // the bodies' bounding radii, and the turned solid's bounding sphere in its own frame
+    // (taken here, before any frame turns it)
+    const rad = meshes.map((m) => {
+      m.geometry.computeBoundingSphere();
+      return m.geometry.boundingSphere.radius;
+    });
+    const solidSphere = new THREE.Sphere();
+    if (solid) new THREE.Box3().setFromObject(solid).getBoundingSphere(solidSphere);
+    const sc = solidSphere.center, sr = solidSphere.radius;
+    // the bounding spheres of what is drawn over all frames: x, y, z, radius, ...
+    function whatIsDrawn() {
+      const drawn = [];
+      const at = Array.from({length: nb}, () => new THREE.Vector3());
+      const c = new THREE.Vector3();
+      for (let k = 0; k < n; k++) {
+        const q = place(k, at);
+        for (let i = 0; i < nb; i++) drawn.push(at[i].x, at[i].y, at[i].z, rad[i]);
+        if (solid) {
+          c.copy(sc);
+          if (q) c.applyQuaternion(q);
+          drawn.push(c.x, c.y, c.z, sr);
+        }
+      }
+      for (const e of spec.frame_rods === false ? [] : spec.rods.flatMap(([a, b]) => [a, b])) {
+        if (typeof e !== "number") drawn.push(e[0], e[1], e[2], 0);
+      }
+      for (const ln of spec.lines) {
+        const pts = mpUnpack(ln.pts);
+        for (let j = 0; j < pts.length; j += 3) drawn.push(pts[j], pts[j + 1], pts[j + 2], 0);
+      }
+      return drawn;
+    }
     const center = V(spec.center);
     const dir = V(spec.camera).normalize();
-    camera.position.copy(center).addScaledVector(dir, ext / Math.tan((20 * Math.PI) / 180));
+    function fitCamera() {
+      const drawn = whatIsDrawn();
+      const z = dir.clone(), x = new THREE.Vector3().crossVectors(camera.up, z).normalize();
+      const y = new THREE.Vector3().crossVectors(z, x);
+      const tv = 0.92 * Math.tan((FOV * Math.PI) / 360), th = tv * camera.aspect;
+      let lo = [Infinity, Infinity, Infinity], hi = [-Infinity, -Infinity, -Infinity];
+      const p = new THREE.Vector3();
+      for (let j = 0; j < drawn.length; j += 4) {
+        p.set(drawn[j], drawn[j + 1], drawn[j + 2]);
+        const r = drawn[j + 3], u = [p.dot(x), p.dot(y), p.dot(z)];
+        for (let a = 0; a < 3; a++) {
+          lo[a] = Math.min(lo[a], u[a] - r);
+          hi[a] = Math.max(hi[a], u[a] + r);
+        }
+      }
+      if (!(hi[0] >= lo[0])) { lo = [0, 0, 0]; hi = [0, 0, 0]; }
+      const mid = lo.map((v, a) => 0.5 * (v + hi[a]));
+      // the target: the middle across the view; distance along z from there
+      center.set(0, 0, 0).addScaledVector(x, mid[0]).addScaledVector(y, mid[1])
+        .addScaledVector(z, mid[2]);
+      let D = 1e-3 * ext;
+      for (let j = 0; j < drawn.length; j += 4) {
+        p.set(drawn[j], drawn[j + 1], drawn[j + 2]).sub(center);
+        const r = drawn[j + 3];
+        D = Math.max(D, p.dot(z) + r + (Math.abs(p.dot(x)) + r) / th,
+          p.dot(z) + r + (Math.abs(p.dot(y)) + r) / tv);
+      }
+      camera.position.copy(center).addScaledVector(z, D);
+      camera.near = 2e-3 * D;
+      camera.far = 100 * D;
+      camera.updateProjectionMatrix();
+      controls.target.copy(center);
+      controls.update();
+    }
     const controls = new OrbitControls(camera, renderer.domElement);
-    controls.target.copy(center);
     controls.enableDamping = true;
-    controls.update();
+    let moved = false;                                  // the user has moved the camera
+    controls.addEventListener("start", () => { moved = true; });
+    fitCamera();
 
     // ---- legend
     const seen = new Set();
@@ -228,6 +427,7 @@ export default {
       });
       if (solid && q) solid.quaternion.copy(q);
       rods.forEach(placeRod);
+      plots.at(k);
       for (const tr of trails) {
         const first = Math.max(0, k - tr.window);
         tr.line.geometry.setDrawRange(first, k - first + 1);
@@ -263,7 +463,9 @@ export default {
 
     // ---- controls
     const playBtn = mpButton("pause", () => (playing ? api.pause() : api.play()));
-    const slider = mpSlider("frame", 0, n - 1, 0, 1, (i) => { api.pause(); show(i); head = i; });
+    const seek = (i) => { api.pause(); show(i); head = i; };
+    const slider = mpSlider("frame", 0, n - 1, 0, 1, seek);
+    const plots = mpPlotPanels(spec, T, MAXW, seek, sim);
     const speedRow = mpSlider("speed", 0.1, 10, speed, 0.1, (v) => { speed = v; });
     const trailBox = mpEl("input", {type: "checkbox", checked: "", "aria-label": "trails",
       onchange: () => {
@@ -276,8 +478,13 @@ export default {
       ...(trails.length ? [mpEl("label", {style: "font-size:13px"}, trailBox, " trails")] : []),
       ...(sim ? sim.controls(rerun) : []));
     // a simulating page's re-run (a slider, setParam): new trails, the shown frame again
-    function rerun() { fillTrails(); show(Math.max(shown, 0)); }
-    el.append(mpEl("div", {class: "mechpy-live mechpy-animate"}, title, stage, bar));
+    function rerun() {
+      fillTrails();
+      if (!moved) fitCamera();
+      plots.draw(W);                              // the new series, their new ranges
+      show(Math.max(shown, 0));
+    }
+    el.append(mpEl("div", {class: "mechpy-live mechpy-animate"}, title, stage, plots.box, bar));
     // the canvas fills the stage inside its border (clientWidth); a new width: a new size
     // and the camera's aspect, drawn at once
     function fitTo(w) {
@@ -286,6 +493,9 @@ export default {
       renderer.setSize(W, H);
       camera.aspect = W / H;
       camera.updateProjectionMatrix();
+      if (!moved) fitCamera();
+      plots.draw(W);
+      if (shown >= 0) plots.at(shown);
       stale = true;
     }
     const follow = mpFollowWidth(stage, MAXW, fitTo);
@@ -318,6 +528,12 @@ export default {
       }),
       // the fixed lines drawn (nutation bounds, L, walls, ...): [{label, points: [x, y, z, ...]}]
       lines: () => spec.lines.map((l) => ({label: l.label, points: Array.from(mpUnpack(l.pts))})),
+      // the series of plots=[...] as drawn: {t: [...], y: [...]} (name: the entry's label)
+      plot(name) {
+        const y = plots.series.get(String(name));
+        if (!y) throw new Error(`no plot named ${name}; the plots: ${[...plots.series.keys()]}`);
+        return {t: Array.from(T), y: Array.from(y)};
+      },
       // frames drawn per second over the last second (a paused, untouched page draws none)
       fps: () => fps.value(),
     };

@@ -60,8 +60,9 @@ function mpLuSolve(A, b, n) {
 }
 
 // The simulation of spec (spec.sim): {P (frames x bodies x 3, rewritten by every run),
-// R (frames x solids x 9, or null), run(), setParam(name, value), report(),
-// controls(onRun), message (an element)}.
+// R (frames x solids x 9, or null), S (a Float64Array of frames a series of plots=,
+// rewritten by every run), run(), setParam(name, value), report(), controls(onRun),
+// message (an element)}.
 function mpSimulation(spec) {
   const sim = spec.sim, n = spec.n, nb = spec.nb, dim = sim.dim, nc = sim.nc;
   const na = sim.na || 0, nrot = sim.nrot || 0;
@@ -69,6 +70,9 @@ function mpSimulation(spec) {
   const p = sim.values.slice();
   const field = new Function("s", "t", "p", "mp", sim.field);
   const geometry = new Function("s", "t", "p", "mp", sim.geometry);
+  // the series of plots= (spec.plots' order), at each frame's state: S[i][k]
+  const series = sim.series ? new Function("s", "t", "p", "mp", sim.series) : null;
+  const S = (spec.plots || []).map(() => new Float64Array(n));
   const rhs = na > 0
     ? (t, s) => {
       const out = field(s, t, p, MP_JS_MATH);
@@ -98,6 +102,10 @@ function mpSimulation(spec) {
     const g = geometry(y, T[k], p, MP_JS_MATH);
     for (let i = 0; i < 3 * nb; i++) P[3 * nb * k + i] = g[i];
     for (let i = 0; i < 9 * nrot; i++) R[9 * nrot * k + i] = g[3 * nb + i];
+    if (series) {
+      const v = series(y, T[k], p, MP_JS_MATH);
+      for (let i = 0; i < S.length; i++) S[i][k] = v[i];
+    }
   }
   // Hairer's initial step (dopri5's hinit, order 5)
   function firstStep(t0, y0, f0, tend, rtol, atol) {
@@ -195,7 +203,7 @@ function mpSimulation(spec) {
     return run();
   }
   return {
-    P, R, run, setParam, message,
+    P, R, S, run, setParam, message,
     params: () => Object.fromEntries(sim.names.map((nm, j) => [nm, p[j]])),
     report: () => Object.assign({}, last),
     // one slider a params entry; onRun() after each re-run (the view redraws)
