@@ -61,3 +61,28 @@ def run(out: Path) -> None:
          ref=f"lambdify + solve_ivp {np.abs(f_sp().y[:, -1] - ref).max():.1e}",
          t_mp=median_time(f_mp, repeat=5), t_ref=median_time(f_sp, repeat=3),
          ref_name="lambdify + solve_ivp")
+    _live_bicycle(out, bike, params, y0, line)
+
+
+def _live_bicycle(out: Path, bike, params, y0, line) -> None:
+    """The bicycle in 3D as a page that simulates (mp.live.animate with params=
+    and y0=): the page integrates the printed model itself, so its sliders for
+    g and the rear frame's mass re-run the ride offline, with the roll and the
+    steer plotted under it."""
+    import time
+
+    try:
+        from .. import live
+    except ImportError:  # pragma: no cover - the live extra is missing
+        line("bicycle in 3D, simulated in the page", "skipped: needs anywidget")
+        return
+    t0 = time.perf_counter()
+    w = live.animate(bike, None, t=(0, 10), y0=y0, params={"g": (1.0, 20.0),
+                                                             "mB": (40.0, 140.0)},
+                     shapes={"R": dict(kind="torus", size=params["rR"]),
+                             "F": dict(kind="torus", size=params["rF"])},
+                     plots=["q2", "q5"])
+    path = w.save(out / "live_bicycle.html", title="mechpy: the Whipple bicycle, simulated")
+    line("bicycle in 3D, simulated in the page",
+         f"{w.times.size} frames, sliders g and mB, a {path.stat().st_size / 1e6:.2f} MB "
+         f"offline page ({time.perf_counter() - t0:.1f} s): {path}")
