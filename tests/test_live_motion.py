@@ -181,6 +181,14 @@ def test_foucault_and_chain_places(driver, tmp_path):
     xs = sol.sol(t)[:5]
     np.testing.assert_allclose(pos, np.column_stack([2.0 * np.arange(1, 6) + xs, np.zeros(5),
                                                      np.zeros(5)]), rtol=0, atol=1e-12)
+    # fixed ends: a wall where mass 0 and mass N + 1 would rest (x = 0 and 6 s), each a
+    # segment across the chain's line, centred on it, in the plane of the drawing
+    walls = [np.array(ln["points"]).reshape(-1, 3) for ln in
+             driver.execute_script("return window.mechpyLive.lines()") if ln["label"] == "wall"]
+    assert len(walls) == 2
+    for wall, x in zip(walls, (0.0, 12.0)):
+        assert np.all(wall[:, 0] == x) and np.all(wall[:, 2] == 0.0)
+        assert wall[0, 1] == -wall[-1, 1] and wall[-1, 1] > 0
 
 
 def test_frames_and_defaults():

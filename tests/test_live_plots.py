@@ -124,6 +124,29 @@ def test_triple_pendulum_plots_energy_angle_and_an_expression(driver, tmp_path):
     _framed(driver, (0, n // 2, n - 1))
 
 
+def test_points_are_drawn_with_y_up(driver, tmp_path):
+    """A drawing from points= shows y up: the triple pendulum hanging at rest is
+    a vertical line on the screen (its top and bottom rows of ink one above
+    the other), whatever the camera's distance."""
+    scene, points = _triple_pendulum()
+    w = mp.live.animate(scene, np.zeros((6, 2)), t=[0.0, 1.0], points=points, links=LINKS)
+    _page(driver, tmp_path, w, "triple-at-rest")
+    from PIL import Image
+    from selenium.webdriver.common.by import By
+    _drawn_box(driver)                                 # hides the legend and the clock
+    canvas = driver.find_element(By.CSS_SELECTOR, ".mechpy-animate canvas")
+    img = np.asarray(Image.open(io.BytesIO(canvas.screenshot_as_png)).convert("RGB"))
+    ink = np.argwhere((img < 235).any(axis=2))
+    top, bottom = ink[:, 0].min(), ink[:, 0].max()
+    height = bottom - top
+    x_of = lambda rows: ink[np.isin(ink[:, 0], rows), 1].mean()    # noqa: E731
+    x_top = x_of(np.arange(top, top + height // 10))
+    x_bottom = x_of(np.arange(bottom - height // 10, bottom + 1))
+    # measured: 0.003 px apart over a height of 538 px (a roll of 1 degree puts them 9 px
+    # apart; the up of (0.1, 1, 0), 49 px)
+    assert height > 200 and abs(x_top - x_bottom) < 2.0, (height, x_top, x_bottom)
+
+
 def test_chain_of_40_masses_fills_the_view(driver, tmp_path):
     chain = mp.scenes.SpringChain(np.ones(40), 1.0)
     y0 = np.zeros(80)
