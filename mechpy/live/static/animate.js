@@ -271,15 +271,15 @@ export default {
     });
     function fillTrails() {                    // again after a simulating page's re-run
       const all = where.map(() => new THREE.Vector3());
-      for (const tr of trails) {
-        const attr = tr.line.geometry.getAttribute("position");
-        for (let k = 0; k < n; k++) {
-          place(k, all);
-          all[tr.body].toArray(attr.array, 3 * k);
-        }
-        attr.needsUpdate = true;
-        tr.line.geometry.computeBoundingSphere();
+      const attrs = trails.map((tr) => tr.line.geometry.getAttribute("position"));
+      for (let k = 0; k < n; k++) {            // each frame placed once for all the trails
+        place(k, all);
+        trails.forEach((tr, i) => all[tr.body].toArray(attrs[i].array, 3 * k));
       }
+      trails.forEach((tr, i) => {
+        attrs[i].needsUpdate = true;
+        tr.line.geometry.computeBoundingSphere();
+      });
     }
     fillTrails();
     // a solid turned by spec.rot: the top (a cone, apex at the pivot) or the box of the moments
